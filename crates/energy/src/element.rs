@@ -1,0 +1,126 @@
+//! The `Element` trait and the link-time registry of element kinds.
+//!
+//! An element kind turns part of a [`System`] into potential-energy terms. Gravity, springs
+//! and wire stretch are registered here; plug-in crates under `elements/` register more with
+//! `inventory::submit!`, and the core never names them. A crate that nothing names can be
+//! dropped by the linker (inventory issue #50), so the `pendkit` facade names every bundled
+//! element crate and a test asserts the registered set.
+
+use nalgebra::Vector3;
+use pendkit_geometry::FrameMap;
+
+use crate::{BodyId, EndDirection, EnergyError, Stage, System, Term, Wire};
+
+/// The configuration an element builds its terms around: the equilibrium, or the start
+/// position when plug-in terms join the equilibrium search early.
+#[derive(Clone, Copy, Debug)]
+pub struct Reference<'a> {
+    /// The model.
+    pub system: &'a System,
+    /// Full coordinate vector (m, rad).
+    pub coords: &'a [f64],
+}
+
+impl Reference<'_> {
+    /// Lab positions (m) of the two attachment points of `wire`.
+    pub fn wire_points(&self, wire: &Wire) -> [Vector3<f64>; 2] {
+        wire.ends.each_ref().map(|end| {
+            self.system.bodies[end.body]
+                .frame
+                .eval(self.coords)
+                .point(&end.point)
+        })
+    }
+
+    /// Chord length (m) of `wire`.
+    pub fn wire_length(&self, wire: &Wire) -> f64 {
+        let [p0, p1] = self.wire_points(wire);
+        (p1 - p0).norm()
+    }
+
+    /// Static tension (N) of `wire`: k (l - l0).
+    pub fn wire_tension(&self, wire: &Wire) -> f64 {
+        wire.stiffness * (self.wire_length(wire) - wire.unstretched_length)
+    }
+
+    /// Clamp direction of each end in that end's body coordinates, pointing into the wire;
+    /// `Auto` ends get the direction of the chord here (straight wire); hinged ends give
+    /// `None`.
+    pub fn wire_end_directions(&self, wire: &Wire) -> [Option<Vector3<f64>>; 2] {
+        let [p0, p1] = self.wire_points(wire);
+        let chord = (p1 - p0).normalize();
+        std::array::from_fn(|k| {
+            let end = &wire.ends[k];
+            let rotation = self.system.bodies[end.body]
+                .frame
+                .eval(self.coords)
+                .rotation;
+            let into_wire = if k == 0 { chord } else { -chord };
+            match &end.direction {
+                EndDirection::Hinged => None,
+                EndDirection::Auto => Some(rotation.transpose() * into_wire),
+                EndDirection::Explicit(v) => Some(v.normalize()),
+            }
+        })
+    }
+}
+
+/// A kind of element: produces potential-energy terms for a model.
+pub trait Element: Sync {
+    /// Kind name, e.g. `wire-bending`.
+    fn kind(&self) -> &'static str;
+    /// The stage at which the kind's terms join the calculation.
+    fn stage(&self) -> Stage;
+    /// One line saying what the kind models.
+    fn summary(&self) -> &'static str;
+    /// The kind's terms for `reference.system`, built around `reference`.
+    fn terms(&self, reference: &Reference) -> Result<Vec<Term>, EnergyError>;
+}
+
+/// A registry entry; submit one per element kind with `inventory::submit!`.
+pub struct Registration(pub &'static dyn Element);
+
+inventory::collect!(Registration);
+
+/// All linked element kinds, ordered by stage then kind name.
+pub fn registry() -> Vec<&'static dyn Element> {
+    let mut kinds: Vec<&'static dyn Element> = inventory::iter::<Registration>
+        .into_iter()
+        .map(|r| r.0)
+        .collect();
+    kinds.sort_by_key(|k| (k.stage(), k.kind()));
+    kinds
+}
+
+/// The registered kind called `name`.
+pub fn find_kind(name: &str) -> Option<&'static dyn Element> {
+    registry().into_iter().find(|k| k.kind() == name)
+}
+
+/// Frames of several bodies over one shared local coordinate vector: the union of the
+/// coordinates the bodies depend on, and each frame renumbered into it.
+#[derive(Clone, Debug)]
+pub struct LocalFrames {
+    /// Global indices of the local coordinates, ascending.
+    pub coords: Vec<usize>,
+    /// One frame per requested body, reading the local vector.
+    pub frames: Vec<FrameMap>,
+}
+
+impl LocalFrames {
+    /// Collects the frames of `bodies` of `system`.
+    pub fn new(system: &System, bodies: &[BodyId]) -> Self {
+        let coords: Vec<usize> = bodies
+            .iter()
+            .flat_map(|&b| system.bodies[b].frame.vars())
+            .collect::<std::collections::BTreeSet<_>>()
+            .into_iter()
+            .collect();
+        let local = |g: usize| coords.binary_search(&g).unwrap_or(0);
+        let frames = bodies
+            .iter()
+            .map(|&b| system.bodies[b].frame.remap(&local))
+            .collect();
+        LocalFrames { coords, frames }
+    }
+}

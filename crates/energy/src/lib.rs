@@ -1,0 +1,60 @@
+//! Potential-energy terms of bodies, wires and springs, generic over the dual-number
+//! scalar; the `Element` trait and the link-time registry of element kinds; and the numeric
+//! description of a model (`System`) that elements read.
+
+mod core;
+mod element;
+mod extra;
+mod stage;
+mod system;
+mod term;
+
+pub use crate::core::{GRAVITY_TAG, GravityEnergy, SpringEnergy, WireStretchEnergy};
+pub use element::{Element, LocalFrames, Reference, Registration, find_kind, registry};
+pub use extra::{CONSTRAINT_TAG, constraint_terms, extra_terms};
+pub use pendkit_rotations::Real;
+pub use stage::{Stage, UnknownStage};
+pub use system::*;
+pub use term::{LocalDerivatives, Potential, TensionOff, Term};
+
+/// Re-exported so plug-in crates can register without depending on `inventory` directly.
+pub use inventory;
+
+/// Errors raised while turning a model into terms.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum EnergyError {
+    /// A wire whose attachment points coincide.
+    #[error("wire '{wire}' has zero length: its attachment points coincide")]
+    ZeroLengthWire {
+        /// Wire name.
+        wire: String,
+    },
+    /// A plug-in element instance names a kind nobody registered.
+    #[error("element '{element}' has unknown kind '{kind}' (registered: {known})")]
+    UnknownKind {
+        /// Instance name.
+        element: String,
+        /// The kind it asks for.
+        kind: String,
+        /// Registered kinds, comma separated.
+        known: String,
+    },
+    /// A user-written extra term that does not compile.
+    #[error("extra term '{term}': {message}")]
+    ExtraTerm {
+        /// Term name.
+        term: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// An element kind could not build its terms.
+    #[error("{kind} '{element}': {message}")]
+    Element {
+        /// Kind name.
+        kind: &'static str,
+        /// Instance name.
+        element: String,
+        /// What is wrong.
+        message: String,
+    },
+}

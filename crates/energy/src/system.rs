@@ -1,0 +1,276 @@
+//! The numeric description of a suspension: coordinates, bodies, wires, springs and extra
+//! terms, with every quantity in SI units. Built by `pendkit-model`; read by elements.
+
+use std::collections::BTreeMap;
+
+use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
+use pendkit_expr::Expr;
+use pendkit_geometry::FrameMap;
+
+use crate::Stage;
+
+/// Index of a coordinate in [`System::coords`].
+pub type CoordId = usize;
+/// Index of a body in [`System::bodies`].
+pub type BodyId = usize;
+
+/// The three classes of coordinates of the source document (§3.1.2).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum CoordKind {
+    /// Carries inertia through a body; a normal-mode coordinate (x).
+    Variable,
+    /// A massless junction between elastic elements, eliminated by Schur complement (q).
+    Float,
+    /// Externally driven (the support): fixed for modes, an input for transfer functions (s).
+    Parameter,
+}
+
+/// One coordinate of the model (a length in m or an angle in rad).
+#[derive(Clone, Debug)]
+pub struct Coordinate {
+    /// Name, e.g. `x1`, `pitch3`, `x00`.
+    pub name: String,
+    /// Variable, float or parameter.
+    pub kind: CoordKind,
+    /// Start of the equilibrium search for variables and floats; nominal value for
+    /// parameters (m or rad).
+    pub start: f64,
+    /// Held at `start` during the equilibrium search (the source's `nonoptcoords`).
+    pub pinned: bool,
+}
+
+/// A rigid body (or a massless frame such as the support).
+#[derive(Clone, Debug)]
+pub struct Body {
+    /// Name, e.g. `support`, `mass1`.
+    pub name: String,
+    /// How the body's frame follows the coordinates.
+    pub frame: FrameMap,
+    /// Mass (kg).
+    pub mass: f64,
+    /// Inertia tensor about the centre of mass in body axes (kg m^2); products allowed.
+    pub inertia: Matrix3<f64>,
+    /// Centre of mass in body coordinates (m); the origin unless the body says otherwise.
+    pub centre_of_mass: Vector3<f64>,
+}
+
+/// How a wire leaves the body at one end.
+#[derive(Clone, Debug, PartialEq)]
+pub enum EndDirection {
+    /// Clamped along the direction that makes the wire straight at equilibrium.
+    Auto,
+    /// Clamped along this vector in body coordinates, pointing into the wire.
+    Explicit(Vector3<f64>),
+    /// Free to pivot: no bending moment at this end.
+    Hinged,
+}
+
+/// One end of a wire: a point on a body and how the wire leaves it.
+#[derive(Clone, Debug)]
+pub struct WireEnd {
+    /// The body the end is fixed to.
+    pub body: BodyId,
+    /// Attachment point in body coordinates (m).
+    pub point: Vector3<f64>,
+    /// Clamp direction or hinge.
+    pub direction: EndDirection,
+}
+
+/// Elastic properties of a wire's cross-section, used by the plug-in wire elements.
+#[derive(Clone, Debug)]
+pub struct WireSection {
+    /// Young's modulus (Pa).
+    pub youngs_modulus: f64,
+    /// Shear modulus (Pa).
+    pub shear_modulus: f64,
+    /// Cross-sectional area (m^2).
+    pub area: f64,
+    /// Second moment of area about the first principal axis (m^4).
+    pub moment_1: f64,
+    /// Second moment of area about the second principal axis (m^4).
+    pub moment_2: f64,
+    /// Direction of the first principal axis, in the coordinates of the body at end 1.
+    pub principal_axis: Vector3<f64>,
+    /// Torsion constant J_e (m^4).
+    pub torsion_constant: f64,
+    /// Polar moment of area J (m^4).
+    pub polar_moment: f64,
+    /// Linear density (kg/m), for reporting and violin-mode models.
+    pub linear_density: f64,
+}
+
+impl WireSection {
+    /// A round wire of radius `r` (m) with Young's modulus `e` and shear modulus `g` (Pa)
+    /// and density `rho` (kg/m^3): A = πr², I = πr⁴/4, J = J_e = πr⁴/2.
+    pub fn round(r: f64, e: f64, g: f64, rho: f64) -> Self {
+        let pi = std::f64::consts::PI;
+        WireSection {
+            youngs_modulus: e,
+            shear_modulus: g,
+            area: pi * r * r,
+            moment_1: pi * r.powi(4) / 4.0,
+            moment_2: pi * r.powi(4) / 4.0,
+            principal_axis: Vector3::x(),
+            torsion_constant: pi * r.powi(4) / 2.0,
+            polar_moment: pi * r.powi(4) / 2.0,
+            linear_density: rho * pi * r * r,
+        }
+    }
+}
+
+/// Damping tag names of a wire's three kinds of elasticity.
+#[derive(Clone, Debug)]
+pub struct WireTags {
+    /// Tag of the longitudinal stretch (and of the stage-2 extra stretch).
+    pub stretch: String,
+    /// Tag of bending.
+    pub bending: String,
+    /// Tag of torsion.
+    pub torsion: String,
+}
+
+/// A massless wire between points on two bodies.
+#[derive(Clone, Debug)]
+pub struct Wire {
+    /// Name, e.g. `fibre1`.
+    pub name: String,
+    /// The two ends (end 0 is usually the upper one).
+    pub ends: [WireEnd; 2],
+    /// Longitudinal stiffness k (N/m), a constant (E A / l_eq in the bundled models).
+    pub stiffness: f64,
+    /// Unstretched length l0 (m).
+    pub unstretched_length: f64,
+    /// Cross-section properties.
+    pub section: WireSection,
+    /// Damping tags.
+    pub tags: WireTags,
+}
+
+/// One end of a spring: a point on a body and the fixed angles that turn the body's axes
+/// into the spring's.
+#[derive(Clone, Debug)]
+pub struct SpringEnd {
+    /// The body the end is fixed to.
+    pub body: BodyId,
+    /// Attachment point in body coordinates (m).
+    pub point: Vector3<f64>,
+    /// Attachment angles (yaw, pitch, roll) relative to the body axes (rad).
+    pub angles: [f64; 3],
+}
+
+/// A zero-length six-axis spring (blade, flexure, debugging constraint).
+#[derive(Clone, Debug)]
+pub struct Spring {
+    /// Name, e.g. `blade1`.
+    pub name: String,
+    /// The two ends; the relative pose of end 1 seen from end 0 is the spring's deflection.
+    pub ends: [SpringEnd; 2],
+    /// Stiffness on (x, y, z, yaw, pitch, roll) deflection (N/m, N/rad, N m/m, N m/rad).
+    pub stiffness: Matrix6<f64>,
+    /// Preload force/torque at zero deflection (N, N m), in the spring's axes.
+    pub preload: Vector6<f64>,
+    /// Damping tag.
+    pub tag: String,
+}
+
+/// When a user-written potential term joins the calculation (the source's
+/// `preeqtermlist` / `posteqtermlist`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ExtraPhase {
+    /// Part of the potential that is minimised.
+    BeforeEquilibrium,
+    /// Added after the equilibrium is found; may use `<coordinate>.eq` symbols.
+    AfterEquilibrium,
+}
+
+/// A user-written potential term (J) as an expression of the coordinates.
+#[derive(Clone, Debug)]
+pub struct ExtraTerm {
+    /// Name for reports.
+    pub name: String,
+    /// Potential energy (J) as an expression of coordinate names (and `<name>.eq`).
+    pub energy: Expr,
+    /// Damping tag.
+    pub tag: String,
+    /// Before or after the equilibrium.
+    pub phase: ExtraPhase,
+}
+
+/// An instance of an element kind that lives in a plug-in crate, described by data only.
+#[derive(Clone, Debug)]
+pub struct PluginElement {
+    /// Registered kind name, e.g. `viscous-spring`.
+    pub kind: String,
+    /// Instance name for reports.
+    pub name: String,
+    /// Bodies the element connects.
+    pub bodies: Vec<BodyId>,
+    /// Points on those bodies (m, body coordinates), one per body.
+    pub points: Vec<Vector3<f64>>,
+    /// Named numbers (SI units documented by the kind).
+    pub values: BTreeMap<String, f64>,
+    /// Damping tag.
+    pub tag: String,
+}
+
+/// Whether plug-in wire terms join the equilibrium search (the source's `wiretermsearly`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum EarlyWireTerms {
+    /// Plug-in terms are added after the equilibrium (the default).
+    #[default]
+    No,
+    /// Plug-in terms join the equilibrium and the stage-0A matrices.
+    Yes,
+    /// Plug-in terms join the equilibrium only.
+    EquilibriumOnly,
+}
+
+/// A complete numeric model.
+#[derive(Clone, Debug, Default)]
+pub struct System {
+    /// All coordinates: variables, floats and parameters.
+    pub coords: Vec<Coordinate>,
+    /// All bodies, massive or not.
+    pub bodies: Vec<Body>,
+    /// All wires.
+    pub wires: Vec<Wire>,
+    /// All springs.
+    pub springs: Vec<Spring>,
+    /// User-written extra potential terms.
+    pub extra_terms: Vec<ExtraTerm>,
+    /// Instances of plug-in element kinds.
+    pub plugin_elements: Vec<PluginElement>,
+    /// Gravitational acceleration g (m/s^2), acting along -z.
+    pub gravity: f64,
+    /// Per-coordinate stiffness to the equilibrium (N/m or N m/rad), for debugging; zero
+    /// entries add nothing.
+    pub constraint_stiffness: BTreeMap<CoordId, f64>,
+    /// Whether plug-in wire terms join the equilibrium.
+    pub early_wire_terms: EarlyWireTerms,
+    /// Highest stage whose plug-in terms may join the equilibrium early.
+    pub early_stage_limit: Option<Stage>,
+}
+
+impl System {
+    /// Index of the coordinate called `name`.
+    pub fn coord(&self, name: &str) -> Option<CoordId> {
+        self.coords.iter().position(|c| c.name == name)
+    }
+
+    /// Index of the body called `name`.
+    pub fn body(&self, name: &str) -> Option<BodyId> {
+        self.bodies.iter().position(|b| b.name == name)
+    }
+
+    /// Start (or nominal) values of all coordinates.
+    pub fn start(&self) -> Vec<f64> {
+        self.coords.iter().map(|c| c.start).collect()
+    }
+
+    /// Indices of the coordinates of one kind, in definition order.
+    pub fn coords_of(&self, kind: CoordKind) -> Vec<CoordId> {
+        (0..self.coords.len())
+            .filter(|&i| self.coords[i].kind == kind)
+            .collect()
+    }
+}

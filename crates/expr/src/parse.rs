@@ -1,0 +1,313 @@
+//! Lexer and recursive-descent parser.
+
+use crate::{BinOp, Expr, ExprError, Func};
+
+/// Deepest expression tree (and parser recursion) accepted, so that evaluating, printing or
+/// dropping a parsed tree can never overflow the stack.
+const MAX_DEPTH: usize = 400;
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Kind {
+    Num(f64),
+    Ident,
+    Punct(char),
+    End,
+}
+
+#[derive(Debug, Clone)]
+struct Token {
+    kind: Kind,
+    /// 1-based character column.
+    col: usize,
+    text: String,
+}
+
+/// Parses an expression.
+///
+/// Grammar, lowest to highest precedence (whitespace allowed anywhere):
+///
+/// ```text
+/// sum     := product (('+' | '-') product)*
+/// product := unary (('*' | '/') unary)*
+/// unary   := ('-' | '+') unary | power
+/// power   := atom ('^' unary)?            right-associative, so -2^2 = -(2^2)
+/// atom    := number | name | func '(' sum (',' sum)* ')' | '(' sum ')'
+/// number  := 1 | 2.5 | .5 | 1e-3 ...      name := [A-Za-z_][A-Za-z0-9_.]*
+/// ```
+///
+/// `func` is one of sqrt sin cos tan asin acos atan atan2 exp log abs min max; `pi` is π.
+/// Trees deeper than a few hundred levels are rejected.
+/// Errors are one line and name the column and the input, e.g.
+/// `expected ')' at column 6 in "sin(a"`.
+pub fn parse(src: &str) -> Result<Expr, ExprError> {
+    let mut parser = Parser {
+        src,
+        tokens: lex(src)?,
+        pos: 0,
+        nesting: 0,
+    };
+    let (expr, _) = parser.sum()?;
+    let next = parser.peek();
+    if next.kind != Kind::End {
+        return Err(parser.unexpected());
+    }
+    Ok(expr)
+}
+
+fn syntax(src: &str, message: String, column: usize) -> ExprError {
+    ExprError::Syntax {
+        message,
+        column,
+        input: src.to_string(),
+    }
+}
+
+fn lex(src: &str) -> Result<Vec<Token>, ExprError> {
+    let chars: Vec<char> = src.chars().collect();
+    let is_digit = |i: usize| chars.get(i).is_some_and(char::is_ascii_digit);
+    let mut tokens = Vec::new();
+    let mut i = 0;
+    while let Some(&c) = chars.get(i) {
+        let start = i;
+        let kind = if c.is_whitespace() {
+            i += 1;
+            continue;
+        } else if c.is_ascii_digit() || (c == '.' && is_digit(i + 1)) {
+            while is_digit(i) {
+                i += 1;
+            }
+            if chars.get(i) == Some(&'.') {
+                i += 1;
+                while is_digit(i) {
+                    i += 1;
+                }
+            }
+            if matches!(chars.get(i), Some('e' | 'E')) {
+                let j = if matches!(chars.get(i + 1), Some('+' | '-')) {
+                    i + 2
+                } else {
+                    i + 1
+                };
+                if is_digit(j) {
+                    i = j;
+                    while is_digit(i) {
+                        i += 1;
+                    }
+                }
+            }
+            let text: String = chars[start..i].iter().collect();
+            match text.parse::<f64>() {
+                Ok(x) if x.is_finite() => Kind::Num(x),
+                _ => {
+                    return Err(syntax(
+                        src,
+                        format!("number out of range '{text}'"),
+                        start + 1,
+                    ));
+                }
+            }
+        } else if c.is_ascii_alphabetic() || c == '_' {
+            i += 1;
+            while chars
+                .get(i)
+                .is_some_and(|&c| c.is_ascii_alphanumeric() || c == '_' || c == '.')
+            {
+                i += 1;
+            }
+            Kind::Ident
+        } else if "+-*/^(),".contains(c) {
+            i += 1;
+            Kind::Punct(c)
+        } else {
+            return Err(syntax(
+                src,
+                format!("unexpected character '{c}'"),
+                start + 1,
+            ));
+        };
+        tokens.push(Token {
+            kind,
+            col: start + 1,
+            text: chars[start..i].iter().collect(),
+        });
+    }
+    tokens.push(Token {
+        kind: Kind::End,
+        col: chars.len() + 1,
+        text: String::new(),
+    });
+    Ok(tokens)
+}
+
+/// An expression and the depth of its tree.
+type Parsed = Result<(Expr, usize), ExprError>;
+
+struct Parser<'a> {
+    src: &'a str,
+    /// Always ends with a `Kind::End` token, which is never consumed.
+    tokens: Vec<Token>,
+    pos: usize,
+    nesting: usize,
+}
+
+impl Parser<'_> {
+    fn peek(&self) -> &Token {
+        let last = self.tokens.len().saturating_sub(1);
+        &self.tokens[self.pos.min(last)]
+    }
+
+    fn advance(&mut self) {
+        if self.peek().kind != Kind::End {
+            self.pos += 1;
+        }
+    }
+
+    /// Consumes the next token if it is the punctuation `c`.
+    fn eat(&mut self, c: char) -> bool {
+        let found = self.peek().kind == Kind::Punct(c);
+        if found {
+            self.advance();
+        }
+        found
+    }
+
+    fn error_here(&self, message: String) -> ExprError {
+        syntax(self.src, message, self.peek().col)
+    }
+
+    fn unexpected(&self) -> ExprError {
+        let t = self.peek();
+        match t.kind {
+            Kind::End => self.error_here("unexpected end of input".into()),
+            _ => self.error_here(format!("unexpected '{}'", t.text)),
+        }
+    }
+
+    /// Wraps a new node, enforcing [`MAX_DEPTH`].
+    fn node(&self, expr: Expr, depth: usize) -> Parsed {
+        if depth > MAX_DEPTH {
+            return Err(self.error_here("expression nested too deeply".into()));
+        }
+        Ok((expr, depth))
+    }
+
+    fn binary(&self, op: BinOp, (l, dl): (Expr, usize), (r, dr): (Expr, usize)) -> Parsed {
+        self.node(Expr::Binary(op, Box::new(l), Box::new(r)), dl.max(dr) + 1)
+    }
+
+    fn sum(&mut self) -> Parsed {
+        let mut left = self.product()?;
+        loop {
+            let op = match self.peek().kind {
+                Kind::Punct('+') => BinOp::Add,
+                Kind::Punct('-') => BinOp::Sub,
+                _ => return Ok(left),
+            };
+            self.advance();
+            let right = self.product()?;
+            left = self.binary(op, left, right)?;
+        }
+    }
+
+    fn product(&mut self) -> Parsed {
+        let mut left = self.unary()?;
+        loop {
+            let op = match self.peek().kind {
+                Kind::Punct('*') => BinOp::Mul,
+                Kind::Punct('/') => BinOp::Div,
+                _ => return Ok(left),
+            };
+            self.advance();
+            let right = self.unary()?;
+            left = self.binary(op, left, right)?;
+        }
+    }
+
+    /// Every recursion of the parser passes through here, so this bounds its stack use.
+    fn unary(&mut self) -> Parsed {
+        self.nesting += 1;
+        if self.nesting > MAX_DEPTH {
+            return Err(self.error_here("expression nested too deeply".into()));
+        }
+        let result = if self.eat('-') {
+            let (e, d) = self.unary()?;
+            self.node(Expr::Neg(Box::new(e)), d + 1)
+        } else if self.eat('+') {
+            self.unary()
+        } else {
+            self.power()
+        };
+        self.nesting -= 1;
+        result
+    }
+
+    fn power(&mut self) -> Parsed {
+        let base = self.atom()?;
+        if self.eat('^') {
+            let exponent = self.unary()?;
+            return self.binary(BinOp::Pow, base, exponent);
+        }
+        Ok(base)
+    }
+
+    fn atom(&mut self) -> Parsed {
+        let token = self.peek().clone();
+        match token.kind {
+            Kind::Num(x) => {
+                self.advance();
+                Ok((Expr::Num(x), 1))
+            }
+            Kind::Ident => {
+                self.advance();
+                if self.eat('(') {
+                    self.call(&token)
+                } else if Func::from_name(&token.text).is_some() {
+                    Err(self.error_here(format!("expected '(' after function '{}'", token.text)))
+                } else {
+                    Ok((Expr::Sym(token.text), 1))
+                }
+            }
+            Kind::Punct('(') => {
+                self.advance();
+                let inner = self.sum()?;
+                if !self.eat(')') {
+                    return Err(self.error_here("expected ')'".into()));
+                }
+                Ok(inner)
+            }
+            Kind::End => Err(self.error_here("expected an expression".into())),
+            Kind::Punct(_) => Err(self.unexpected()),
+        }
+    }
+
+    /// Parses the arguments of a call; the name and `(` are already consumed.
+    fn call(&mut self, name: &Token) -> Parsed {
+        let func = Func::from_name(&name.text).ok_or_else(|| ExprError::UnknownFunction {
+            name: name.text.clone(),
+            column: name.col,
+            input: self.src.to_string(),
+        })?;
+        let mut args = Vec::new();
+        let mut depth = 0;
+        if !self.eat(')') {
+            loop {
+                let (arg, d) = self.sum()?;
+                args.push(arg);
+                depth = depth.max(d);
+                if self.eat(')') {
+                    break;
+                }
+                if !self.eat(',') {
+                    return Err(self.error_here("expected ')'".into()));
+                }
+            }
+        }
+        if !func.accepts(args.len()) {
+            return Err(ExprError::WrongArity {
+                func,
+                got: args.len(),
+            });
+        }
+        self.node(Expr::Call(func, args), depth + 1)
+    }
+}

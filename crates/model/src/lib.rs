@@ -1,0 +1,579 @@
+//! The model builder: a named, validated library API that turns coordinates, bodies, wires,
+//! springs and extra terms into a [`System`], and the [`Model`] trait through which bundled
+//! and downstream models offer default parameters and a build function.
+//!
+//! Every quantity is in SI units: lengths in m, angles in rad, masses in kg, inertias in
+//! kg m^2, stiffnesses in N/m (or N m/rad), forces in N, moduli in Pa.
+
+use std::collections::BTreeMap;
+
+use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
+use pendkit_energy::{
+    Body, BodyId, CoordId, CoordKind, Coordinate, EarlyWireTerms, EndDirection, ExtraPhase,
+    ExtraTerm, PluginElement, Spring, SpringEnd, System, Wire, WireEnd, WireSection, WireTags,
+};
+use pendkit_expr::Slot;
+use pendkit_geometry::{FrameMap, PoseMap};
+use pendkit_params::{ParamError, ParamSet, Resolved};
+
+/// Errors in a model definition; each names the item and what is wrong with it.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum BuildError {
+    /// Two items of one kind with the same name.
+    #[error("duplicate {what} name '{name}'")]
+    Duplicate {
+        /// "coordinate", "body", "wire", ...
+        what: &'static str,
+        /// The repeated name.
+        name: String,
+    },
+    /// A name that does not refer to anything defined.
+    #[error("{context}: unknown {what} '{name}'")]
+    Unknown {
+        /// Where the name was used.
+        context: String,
+        /// "coordinate", "body", ...
+        what: &'static str,
+        /// The name.
+        name: String,
+    },
+    /// An expression that does not parse or compile.
+    #[error("{context}: {message}")]
+    Expression {
+        /// Where the expression was used.
+        context: String,
+        /// The parser's message.
+        message: String,
+    },
+    /// A physically impossible value.
+    #[error("{item}: {message}")]
+    Invalid {
+        /// The item, e.g. `body 'mass1'`.
+        item: String,
+        /// What is wrong, with the value and its unit.
+        message: String,
+    },
+    /// A parameter problem while building from a parameter set.
+    #[error(transparent)]
+    Parameter(#[from] ParamError),
+}
+
+/// A body to add: name, pose expressions, mass properties.
+#[derive(Clone, Debug)]
+pub struct BodySpec {
+    name: String,
+    parent: Option<BodyId>,
+    pose: [String; 6],
+    mass: f64,
+    inertia: Matrix3<f64>,
+    centre_of_mass: Vector3<f64>,
+}
+
+impl BodySpec {
+    /// A massless body fixed at the lab origin; set its pose and mass properties next.
+    pub fn new(name: impl Into<String>) -> Self {
+        BodySpec {
+            name: name.into(),
+            parent: None,
+            pose: std::array::from_fn(|_| "0".to_string()),
+            mass: 0.0,
+            inertia: Matrix3::zeros(),
+            centre_of_mass: Vector3::zeros(),
+        }
+    }
+
+    /// Pose (x, y, z in m; yaw, pitch, roll in rad) as expressions of coordinate names.
+    pub fn pose(mut self, pose: [&str; 6]) -> Self {
+        self.pose = pose.map(str::to_string);
+        self
+    }
+
+    /// The six pose coordinates `x<s> y<s> z<s> yaw<s> pitch<s> roll<s>`.
+    pub fn pose_suffix(self, suffix: &str) -> Self {
+        let names = ["x", "y", "z", "yaw", "pitch", "roll"].map(|n| format!("{n}{suffix}"));
+        self.pose(names.each_ref().map(String::as_str))
+    }
+
+    /// Pose relative to another body's frame instead of the lab.
+    pub fn on(mut self, parent: BodyId) -> Self {
+        self.parent = Some(parent);
+        self
+    }
+
+    /// Mass (kg).
+    pub fn mass(mut self, mass: f64) -> Self {
+        self.mass = mass;
+        self
+    }
+
+    /// Full inertia tensor about the centre of mass in body axes (kg m^2).
+    pub fn inertia(mut self, inertia: Matrix3<f64>) -> Self {
+        self.inertia = inertia;
+        self
+    }
+
+    /// Principal moments about the body x, y, z axes (kg m^2).
+    pub fn inertia_diag(self, ix: f64, iy: f64, iz: f64) -> Self {
+        self.inertia(Matrix3::from_diagonal(&Vector3::new(ix, iy, iz)))
+    }
+
+    /// Centre of mass in body coordinates (m), if it is not the body origin.
+    pub fn centre_of_mass(mut self, com: Vector3<f64>) -> Self {
+        self.centre_of_mass = com;
+        self
+    }
+}
+
+/// A wire to add.
+#[derive(Clone, Debug)]
+pub struct WireSpec {
+    /// Name.
+    pub name: String,
+    /// Upper (or first) and lower (or second) ends.
+    pub ends: [WireEnd; 2],
+    /// Longitudinal stiffness k (N/m).
+    pub stiffness: f64,
+    /// Unstretched length l0 (m).
+    pub unstretched_length: f64,
+    /// Cross-section.
+    pub section: WireSection,
+    /// Damping tags.
+    pub tags: WireTags,
+}
+
+impl WireSpec {
+    /// A wire of equilibrium length `length` (m) carrying static tension `tension` (N):
+    /// k = E A / length (the parameter sets' convention) and l0 = length - T / k.
+    pub fn from_tension(
+        name: impl Into<String>,
+        ends: [WireEnd; 2],
+        section: WireSection,
+        length: f64,
+        tension: f64,
+        tags: WireTags,
+    ) -> Self {
+        let stiffness = section.youngs_modulus * section.area / length;
+        WireSpec {
+            name: name.into(),
+            ends,
+            stiffness,
+            unstretched_length: length - tension / stiffness,
+            section,
+            tags,
+        }
+    }
+}
+
+/// Builds a [`System`] from named parts, checking each as it is added.
+#[derive(Debug, Default)]
+pub struct SystemBuilder {
+    system: System,
+}
+
+fn check_finite(item: &str, what: &str, value: f64, unit: &str) -> Result<(), BuildError> {
+    if value.is_finite() {
+        Ok(())
+    } else {
+        Err(BuildError::Invalid {
+            item: item.to_string(),
+            message: format!("{what} is not a finite number ({value} {unit})"),
+        })
+    }
+}
+
+impl SystemBuilder {
+    /// An empty model with gravitational acceleration `g` (m/s^2) along -z.
+    pub fn new(g: f64) -> Self {
+        let mut b = SystemBuilder::default();
+        b.system.gravity = g;
+        b
+    }
+
+    fn coordinate(
+        &mut self,
+        name: &str,
+        kind: CoordKind,
+        start: f64,
+    ) -> Result<CoordId, BuildError> {
+        if self.system.coord(name).is_some() {
+            return Err(BuildError::Duplicate {
+                what: "coordinate",
+                name: name.to_string(),
+            });
+        }
+        check_finite(&format!("coordinate '{name}'"), "start value", start, "")?;
+        self.system.coords.push(Coordinate {
+            name: name.to_string(),
+            kind,
+            start,
+            pinned: false,
+        });
+        Ok(self.system.coords.len() - 1)
+    }
+
+    /// A variable (carries inertia) starting the equilibrium search at `start` (m or rad).
+    pub fn variable(&mut self, name: &str, start: f64) -> Result<CoordId, BuildError> {
+        self.coordinate(name, CoordKind::Variable, start)
+    }
+
+    /// A float (massless junction) starting at `start` (m or rad).
+    pub fn float(&mut self, name: &str, start: f64) -> Result<CoordId, BuildError> {
+        self.coordinate(name, CoordKind::Float, start)
+    }
+
+    /// A parameter (externally driven, e.g. the support) at its nominal value (m or rad).
+    pub fn parameter(&mut self, name: &str, nominal: f64) -> Result<CoordId, BuildError> {
+        self.coordinate(name, CoordKind::Parameter, nominal)
+    }
+
+    /// The six support parameters `x00 ... roll00` at zero.
+    pub fn support_parameters(&mut self) -> Result<(), BuildError> {
+        for n in ["x00", "y00", "z00", "yaw00", "pitch00", "roll00"] {
+            self.parameter(n, 0.0)?;
+        }
+        Ok(())
+    }
+
+    fn coord_id(&self, context: &str, name: &str) -> Result<CoordId, BuildError> {
+        self.system.coord(name).ok_or_else(|| BuildError::Unknown {
+            context: context.to_string(),
+            what: "coordinate",
+            name: name.to_string(),
+        })
+    }
+
+    /// Holds a variable or float at its start value during the equilibrium search.
+    pub fn pin(&mut self, name: &str) -> Result<(), BuildError> {
+        let i = self.coord_id("pin", name)?;
+        self.system.coords[i].pinned = true;
+        Ok(())
+    }
+
+    /// A stiffness (N/m or N m/rad) tying a coordinate to its equilibrium, for debugging.
+    pub fn constraint_stiffness(&mut self, name: &str, k: f64) -> Result<(), BuildError> {
+        let i = self.coord_id("constraint stiffness", name)?;
+        check_finite(&format!("constraint on '{name}'"), "stiffness", k, "N/m")?;
+        self.system.constraint_stiffness.insert(i, k);
+        Ok(())
+    }
+
+    /// Whether plug-in wire terms join the equilibrium search.
+    pub fn early_wire_terms(&mut self, mode: EarlyWireTerms) {
+        self.system.early_wire_terms = mode;
+    }
+
+    /// Index of a body by name.
+    pub fn body_id(&self, name: &str) -> Option<BodyId> {
+        self.system.body(name)
+    }
+
+    /// Adds a body, checking its pose expressions and mass properties.
+    pub fn body(&mut self, spec: BodySpec) -> Result<BodyId, BuildError> {
+        let item = format!("body '{}'", spec.name);
+        if self.system.body(&spec.name).is_some() {
+            return Err(BuildError::Duplicate {
+                what: "body",
+                name: spec.name,
+            });
+        }
+        check_finite(&item, "mass", spec.mass, "kg")?;
+        if spec.mass < 0.0 {
+            return Err(BuildError::Invalid {
+                item,
+                message: format!("negative mass ({} kg)", spec.mass),
+            });
+        }
+        check_inertia(&item, &spec.inertia)?;
+        let labels = ["x", "y", "z", "yaw", "pitch", "roll"];
+        let mut entries = Vec::with_capacity(6);
+        for (text, label) in spec.pose.iter().zip(labels) {
+            let context = format!("{item} pose {label}");
+            let expr = pendkit_expr::parse(text).map_err(|e| BuildError::Expression {
+                context: context.clone(),
+                message: e.to_string(),
+            })?;
+            if let Some(unknown) = expr
+                .symbols()
+                .into_iter()
+                .find(|s| self.system.coord(s).is_none())
+            {
+                return Err(BuildError::Unknown {
+                    context,
+                    what: "coordinate",
+                    name: unknown,
+                });
+            }
+            let slot = |s: &str| self.system.coord(s).map(Slot::Var);
+            entries.push(expr.compile(&slot).map_err(|e| BuildError::Expression {
+                context,
+                message: e.to_string(),
+            })?);
+        }
+        let pose = PoseMap {
+            entries: entries.try_into().map_err(|_| BuildError::Invalid {
+                item: item.clone(),
+                message: "pose needs six entries".into(),
+            })?,
+        };
+        let frame = match spec.parent {
+            None => FrameMap::root(pose),
+            Some(p) => self
+                .system
+                .bodies
+                .get(p)
+                .ok_or_else(|| BuildError::Invalid {
+                    item: item.clone(),
+                    message: format!("parent body index {p} does not exist"),
+                })?
+                .frame
+                .child(pose),
+        };
+        self.system.bodies.push(Body {
+            name: spec.name,
+            frame,
+            mass: spec.mass,
+            inertia: spec.inertia,
+            centre_of_mass: spec.centre_of_mass,
+        });
+        Ok(self.system.bodies.len() - 1)
+    }
+
+    fn check_end_body(&self, item: &str, body: BodyId) -> Result<(), BuildError> {
+        if body < self.system.bodies.len() {
+            Ok(())
+        } else {
+            Err(BuildError::Invalid {
+                item: item.to_string(),
+                message: format!("body index {body} does not exist"),
+            })
+        }
+    }
+
+    /// Adds a wire, checking its length, stiffness and section.
+    pub fn wire(&mut self, spec: WireSpec) -> Result<usize, BuildError> {
+        let item = format!("wire '{}'", spec.name);
+        if self.system.wires.iter().any(|w| w.name == spec.name) {
+            return Err(BuildError::Duplicate {
+                what: "wire",
+                name: spec.name,
+            });
+        }
+        for end in &spec.ends {
+            self.check_end_body(&item, end.body)?;
+            if let EndDirection::Explicit(v) = &end.direction {
+                if !(v.norm() > 0.0) {
+                    return Err(BuildError::Invalid {
+                        item,
+                        message: "explicit end direction is a zero vector".into(),
+                    });
+                }
+            }
+        }
+        check_finite(&item, "stiffness", spec.stiffness, "N/m")?;
+        check_finite(&item, "unstretched length", spec.unstretched_length, "m")?;
+        if !(spec.unstretched_length > 0.0) {
+            return Err(BuildError::Invalid {
+                item,
+                message: format!(
+                    "zero-length wire: unstretched length {} m must be positive",
+                    spec.unstretched_length
+                ),
+            });
+        }
+        if !(spec.stiffness > 0.0) {
+            return Err(BuildError::Invalid {
+                item,
+                message: format!("stiffness {} N/m must be positive", spec.stiffness),
+            });
+        }
+        let s = &spec.section;
+        for (what, v) in [
+            ("Young's modulus", s.youngs_modulus),
+            ("shear modulus", s.shear_modulus),
+            ("area", s.area),
+            ("moment of area 1", s.moment_1),
+            ("moment of area 2", s.moment_2),
+            ("torsion constant", s.torsion_constant),
+            ("polar moment", s.polar_moment),
+            ("linear density", s.linear_density),
+        ] {
+            check_finite(&item, what, v, "")?;
+            if v < 0.0 {
+                return Err(BuildError::Invalid {
+                    item,
+                    message: format!("{what} is negative ({v})"),
+                });
+            }
+        }
+        self.system.wires.push(Wire {
+            name: spec.name,
+            ends: spec.ends,
+            stiffness: spec.stiffness,
+            unstretched_length: spec.unstretched_length,
+            section: spec.section,
+            tags: spec.tags,
+        });
+        Ok(self.system.wires.len() - 1)
+    }
+
+    /// Adds a six-axis spring with stiffness `k` and preload `f` in the spring's axes.
+    pub fn spring(
+        &mut self,
+        name: &str,
+        ends: [SpringEnd; 2],
+        k: Matrix6<f64>,
+        f: Vector6<f64>,
+        tag: &str,
+    ) -> Result<usize, BuildError> {
+        let item = format!("spring '{name}'");
+        if self.system.springs.iter().any(|s| s.name == name) {
+            return Err(BuildError::Duplicate {
+                what: "spring",
+                name: name.to_string(),
+            });
+        }
+        for end in &ends {
+            self.check_end_body(&item, end.body)?;
+        }
+        if k.iter().chain(f.iter()).any(|v| !v.is_finite()) {
+            return Err(BuildError::Invalid {
+                item,
+                message: "stiffness or preload is not finite".into(),
+            });
+        }
+        if (k - k.transpose()).abs().max() > 1e-12 * k.abs().max() {
+            return Err(BuildError::Invalid {
+                item,
+                message: "stiffness matrix is not symmetric".into(),
+            });
+        }
+        self.system.springs.push(Spring {
+            name: name.to_string(),
+            ends,
+            stiffness: k,
+            preload: f,
+            tag: tag.to_string(),
+        });
+        Ok(self.system.springs.len() - 1)
+    }
+
+    /// A user-written potential term (J) as an expression of coordinate names; after the
+    /// equilibrium, `<coordinate>.eq` names the equilibrium value.
+    pub fn extra_term(
+        &mut self,
+        name: &str,
+        energy: &str,
+        tag: &str,
+        phase: ExtraPhase,
+    ) -> Result<(), BuildError> {
+        let context = format!("extra term '{name}'");
+        let expr = pendkit_expr::parse(energy).map_err(|e| BuildError::Expression {
+            context: context.clone(),
+            message: e.to_string(),
+        })?;
+        for s in expr.symbols() {
+            let base = s
+                .strip_suffix(".eq")
+                .filter(|_| phase == ExtraPhase::AfterEquilibrium);
+            if self.system.coord(base.unwrap_or(&s)).is_none() {
+                return Err(BuildError::Unknown {
+                    context,
+                    what: "coordinate",
+                    name: s,
+                });
+            }
+        }
+        self.system.extra_terms.push(ExtraTerm {
+            name: name.to_string(),
+            energy: expr,
+            tag: tag.to_string(),
+            phase,
+        });
+        Ok(())
+    }
+
+    /// An instance of a plug-in element kind (checked against the registry at assembly).
+    pub fn plugin_element(&mut self, element: PluginElement) -> Result<(), BuildError> {
+        let item = format!("element '{}'", element.name);
+        for &b in &element.bodies {
+            self.check_end_body(&item, b)?;
+        }
+        if element.points.len() != element.bodies.len() {
+            return Err(BuildError::Invalid {
+                item,
+                message: "needs one point per body".into(),
+            });
+        }
+        self.system.plugin_elements.push(element);
+        Ok(())
+    }
+
+    /// The finished model.
+    pub fn build(self) -> Result<System, BuildError> {
+        check_finite("model", "gravity", self.system.gravity, "m/s^2")?;
+        Ok(self.system)
+    }
+}
+
+/// Inertia must be symmetric and either zero (a point mass) or positive definite.
+fn check_inertia(item: &str, inertia: &Matrix3<f64>) -> Result<(), BuildError> {
+    if inertia.iter().any(|v| !v.is_finite()) {
+        return Err(BuildError::Invalid {
+            item: item.to_string(),
+            message: "inertia is not finite".into(),
+        });
+    }
+    let scale = inertia.abs().max();
+    if scale == 0.0 {
+        return Ok(());
+    }
+    if (inertia - inertia.transpose()).abs().max() > 1e-12 * scale {
+        return Err(BuildError::Invalid {
+            item: item.to_string(),
+            message: "inertia tensor is not symmetric".into(),
+        });
+    }
+    let moments = inertia.symmetric_eigenvalues();
+    if moments.iter().any(|&m| m <= 0.0) {
+        return Err(BuildError::Invalid {
+            item: item.to_string(),
+            message: format!(
+                "inertia tensor is not positive definite (principal moments {:.6e}, {:.6e}, {:.6e} kg m^2)",
+                moments[0], moments[1], moments[2]
+            ),
+        });
+    }
+    Ok(())
+}
+
+/// A model: default parameters and a function that builds a [`System`] from resolved
+/// parameter values. Bundled models implement it; so can a downstream tool.
+pub trait Model: Sync {
+    /// Name used on the command line, e.g. `pendulum`.
+    fn name(&self) -> &'static str;
+    /// One line describing the model.
+    fn summary(&self) -> &'static str;
+    /// Default parameter definitions.
+    fn parameters(&self) -> Result<ParamSet, ParamError>;
+    /// Builds the numeric model from resolved parameters.
+    fn build(&self, params: &Resolved) -> Result<System, BuildError>;
+}
+
+/// Resolves `model`'s defaults with `overrides` (name, expression text) applied, and builds.
+pub fn build_with(
+    model: &dyn Model,
+    overrides: &[(String, String)],
+) -> Result<(System, Resolved), BuildError> {
+    let mut params = model.parameters()?;
+    for (name, text) in overrides {
+        params.apply_text(name, text)?;
+    }
+    let resolved = params.resolve()?;
+    let system = model.build(&resolved)?;
+    Ok((system, resolved))
+}
+
+/// Named numbers for a plug-in element instance.
+pub fn values<const N: usize>(pairs: [(&str, f64); N]) -> BTreeMap<String, f64> {
+    pairs.into_iter().map(|(k, v)| (k.to_string(), v)).collect()
+}

@@ -1,0 +1,220 @@
+//! Order-independent resolution of a parameter set (depth-first, with cycle detection).
+
+use std::collections::{BTreeSet, HashMap};
+
+use pendkit_expr::{Expr, parse};
+
+use crate::{Definition, ParamError, unknown};
+
+/// A resolved value: a number, or an expression in the free symbols only.
+#[derive(Debug, Clone, PartialEq)]
+enum Value {
+    Number(f64),
+    Symbolic(Expr),
+}
+
+/// The outcome of [`crate::ParamSet::resolve_with_free`]: numeric values of all parameters
+/// that do not depend on free symbols, and expressions for those that do.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Resolved {
+    entries: Vec<(String, Value)>,
+    index: HashMap<String, usize>,
+}
+
+#[derive(Clone, Copy, PartialEq)]
+enum State {
+    New,
+    Active,
+    Done,
+}
+
+struct Resolver<'a> {
+    defs: &'a [(String, Definition)],
+    index: &'a HashMap<String, usize>,
+    free: &'a [&'a str],
+    state: Vec<State>,
+    values: Vec<Option<Value>>,
+    /// The parameters being resolved, outermost first.
+    stack: Vec<usize>,
+}
+
+pub(crate) fn resolve(
+    defs: &[(String, Definition)],
+    index: &HashMap<String, usize>,
+    free: &[&str],
+) -> Result<Resolved, ParamError> {
+    let mut r = Resolver {
+        defs,
+        index,
+        free,
+        state: vec![State::New; defs.len()],
+        values: vec![None; defs.len()],
+        stack: Vec::new(),
+    };
+    let mut entries = Vec::new();
+    for (i, (name, _)) in defs.iter().enumerate() {
+        if free.contains(&name.as_str()) {
+            continue;
+        }
+        r.visit(i)?;
+        if let Some(value) = r.values[i].clone() {
+            entries.push((name.clone(), value));
+        }
+    }
+    let index = entries
+        .iter()
+        .enumerate()
+        .map(|(i, (name, _))| (name.clone(), i))
+        .collect();
+    Ok(Resolved { entries, index })
+}
+
+impl Resolver<'_> {
+    fn name(&self, i: usize) -> String {
+        self.defs[i].0.clone()
+    }
+
+    fn visit(&mut self, i: usize) -> Result<(), ParamError> {
+        match self.state[i] {
+            State::Done => return Ok(()),
+            State::Active => {
+                let start = self.stack.iter().position(|&j| j == i).unwrap_or(0);
+                let mut chain: Vec<String> =
+                    self.stack[start..].iter().map(|&j| self.name(j)).collect();
+                chain.push(self.name(i));
+                return Err(ParamError::Cycle { chain });
+            }
+            State::New => {}
+        }
+        self.state[i] = State::Active;
+        self.stack.push(i);
+
+        let defs = self.defs;
+        let (name, def) = &defs[i];
+        let symbols = def.expr.symbols();
+        let mut symbolic = false;
+        for sym in &symbols {
+            if self.free.contains(&sym.as_str()) {
+                symbolic = true;
+                continue;
+            }
+            let Some(&j) = self.index.get(sym) else {
+                return Err(ParamError::Undefined {
+                    symbol: sym.clone(),
+                    used_in: name.clone(),
+                    chain: self.stack.iter().map(|&j| self.name(j)).collect(),
+                });
+            };
+            self.visit(j)?;
+            symbolic |= matches!(self.values[j], Some(Value::Symbolic(_)));
+        }
+
+        let value_of = |s: &str| self.index.get(s).and_then(|&j| self.values[j].as_ref());
+        let value = if symbolic {
+            Value::Symbolic(def.expr.substitute(&|s| match value_of(s)? {
+                Value::Number(x) => Some(Expr::Num(*x)),
+                Value::Symbolic(e) => Some(e.clone()),
+            }))
+        } else {
+            let lookup = |s: &str| match value_of(s)? {
+                Value::Number(x) => Some(*x),
+                Value::Symbolic(_) => None,
+            };
+            let x = def
+                .expr
+                .eval(&lookup)
+                .map_err(|source| ParamError::Syntax {
+                    name: name.clone(),
+                    source,
+                })?;
+            if !x.is_finite() {
+                return Err(ParamError::NotFinite {
+                    name: name.clone(),
+                    definition: def.source.clone(),
+                    value: x,
+                });
+            }
+            Value::Number(x)
+        };
+        self.values[i] = Some(value);
+        self.state[i] = State::Done;
+        self.stack.pop();
+        Ok(())
+    }
+}
+
+impl Resolved {
+    fn lookup(&self, name: &str) -> Result<&Value, ParamError> {
+        match self.index.get(name) {
+            Some(&i) => Ok(&self.entries[i].1),
+            None => Err(unknown(name, self.entries.iter().map(|(n, _)| n.as_str()))),
+        }
+    }
+
+    /// The numeric value of `name`. Fails if it is unknown or depends on free symbols.
+    pub fn get(&self, name: &str) -> Result<f64, ParamError> {
+        match self.lookup(name)? {
+            Value::Number(x) => Ok(*x),
+            Value::Symbolic(e) => Err(ParamError::Symbolic {
+                name: name.to_string(),
+                free: e.symbols().into_iter().collect(),
+            }),
+        }
+    }
+
+    /// The value of `name` as an expression: a number, or for a parameter that depends on
+    /// free symbols, its definition with every numeric parameter substituted, so that only
+    /// free symbols are left (compile it with [`Expr::compile`] for fast evaluation).
+    pub fn expression(&self, name: &str) -> Result<Expr, ParamError> {
+        Ok(match self.lookup(name)? {
+            Value::Number(x) => Expr::Num(*x),
+            Value::Symbolic(e) => e.clone(),
+        })
+    }
+
+    /// Whether `name` depends on free symbols (and so has no numeric value).
+    pub fn is_symbolic(&self, name: &str) -> bool {
+        matches!(self.lookup(name), Ok(Value::Symbolic(_)))
+    }
+
+    /// The numeric parameters and their values, in definition order.
+    pub fn iter(&self) -> impl Iterator<Item = (&str, f64)> {
+        self.entries.iter().filter_map(|(name, v)| match v {
+            Value::Number(x) => Some((name.as_str(), *x)),
+            Value::Symbolic(_) => None,
+        })
+    }
+
+    /// The parameters that depend on free symbols, with their expressions, in definition order.
+    pub fn symbolic(&self) -> impl Iterator<Item = (&str, &Expr)> {
+        self.entries.iter().filter_map(|(name, v)| match v {
+            Value::Symbolic(e) => Some((name.as_str(), e)),
+            Value::Number(_) => None,
+        })
+    }
+
+    /// The number of numeric parameters (those yielded by [`Resolved::iter`]).
+    pub fn len(&self) -> usize {
+        self.iter().count()
+    }
+
+    /// Whether there are no numeric parameters.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Evaluates an expression of the numeric parameters.
+    pub fn eval(&self, expr: &Expr) -> Result<f64, ParamError> {
+        let symbols: BTreeSet<String> = expr.symbols();
+        for s in &symbols {
+            self.get(s)?;
+        }
+        let lookup = |s: &str| self.get(s).ok();
+        Ok(expr.eval(&lookup)?)
+    }
+
+    /// Parses and evaluates an expression of the numeric parameters.
+    pub fn eval_str(&self, text: &str) -> Result<f64, ParamError> {
+        self.eval(&parse(text)?)
+    }
+}

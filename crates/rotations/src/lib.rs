@@ -1,0 +1,169 @@
+//! Rotation matrices and angular-velocity maps for (yaw, pitch, roll) angles, generic over
+//! the dual-number scalar so that the same code gives values, gradients and Hessians.
+//!
+//! Convention (DESIGN.md §2): R = Rz(yaw) · Ry(pitch) · Rx(roll); a point p given in body
+//! coordinates sits at X + R p in space. Angles are in radians.
+
+use nalgebra::{Matrix3, Vector3};
+use num_dual::DualNum;
+
+/// The scalar every generic energy body is written over: `f64` for values, a dual number
+/// for derivatives (num-dual 0.15 writes the bound `DualNum<Primitive = f64> + Copy`).
+pub trait Real: DualNum<Primitive = f64> + Copy {}
+impl<T: DualNum<Primitive = f64> + Copy> Real for T {}
+
+/// Lifts an `f64` constant into the scalar type.
+#[inline]
+pub fn c<D: Real>(x: f64) -> D {
+    D::from(x)
+}
+
+/// Rotation matrix R = Rz(yaw) · Ry(pitch) · Rx(roll) (angles in rad).
+pub fn rotation<D: Real>(yaw: D, pitch: D, roll: D) -> Matrix3<D> {
+    let (sy, cy) = yaw.sin_cos();
+    let (sp, cp) = pitch.sin_cos();
+    let (sr, cr) = roll.sin_cos();
+    Matrix3::new(
+        cy * cp,
+        cy * sp * sr - sy * cr,
+        cy * sp * cr + sy * sr,
+        sy * cp,
+        sy * sp * sr + cy * cr,
+        sy * sp * cr - cy * sr,
+        -sp,
+        cp * sr,
+        cp * cr,
+    )
+}
+
+/// Body-frame angular velocity map Ω_B: ω_B = Ω_B · (d yaw, d pitch, d roll)/dt, in rad/s per
+/// rad/s. Derived from ω̂_B = Rᵀ Ṙ (tests check it against a numerical derivative of R).
+pub fn body_rate_matrix<D: Real>(_yaw: D, pitch: D, roll: D) -> Matrix3<D> {
+    let (sp, cp) = pitch.sin_cos();
+    let (sr, cr) = roll.sin_cos();
+    let zero = c::<D>(0.0);
+    let one = c::<D>(1.0);
+    Matrix3::new(-sp, zero, one, cp * sr, cr, zero, cp * cr, -sr, zero)
+}
+
+/// Space-frame angular velocity map Ω_S = R · Ω_B: ω_S = Ω_S · (d yaw, d pitch, d roll)/dt
+/// (the source's `omegaIS`).
+pub fn space_rate_matrix<D: Real>(yaw: D, pitch: D, _roll: D) -> Matrix3<D> {
+    let (sy, cy) = yaw.sin_cos();
+    let (sp, cp) = pitch.sin_cos();
+    let zero = c::<D>(0.0);
+    let one = c::<D>(1.0);
+    Matrix3::new(zero, -sy, cy * cp, zero, cy, sy * cp, one, zero, -sp)
+}
+
+/// (yaw, pitch, roll) of a rotation matrix, the inverse of [`rotation`] for
+/// |pitch| < π/2 (rad).
+pub fn angles<D: Real>(r: &Matrix3<D>) -> [D; 3] {
+    let yaw = r[(1, 0)].atan2(r[(0, 0)]);
+    let pitch = (-r[(2, 0)]).atan2((r[(0, 0)] * r[(0, 0)] + r[(1, 0)] * r[(1, 0)]).sqrt());
+    let roll = r[(2, 1)].atan2(r[(2, 2)]);
+    [yaw, pitch, roll]
+}
+
+/// The vector of a skew-symmetric matrix: vee([ω]×) = ω.
+pub fn vee<D: Real>(m: &Matrix3<D>) -> Vector3<D> {
+    let half = 0.5;
+    Vector3::new(
+        (m[(2, 1)] - m[(1, 2)]) * half,
+        (m[(0, 2)] - m[(2, 0)]) * half,
+        (m[(1, 0)] - m[(0, 1)]) * half,
+    )
+}
+
+/// Small-rotation vector (rad) of a rotation that is close to the identity: the axis times
+/// the sine of the angle, exact to first order (used for twists and lab-frame rotations).
+pub fn small_rotation<D: Real>(r: &Matrix3<D>) -> Vector3<D> {
+    vee(r)
+}
+
+/// Reorders a space-frame rotation vector (about x, y, z) into the lab "yaw, pitch, roll"
+/// order (about z, y, x), the source's `omegaSNI` permutation.
+pub fn lab_yaw_pitch_roll<D: Real>(omega_space: &Vector3<D>) -> [D; 3] {
+    [omega_space[2], omega_space[1], omega_space[0]]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn max_abs(m: &Matrix3<f64>) -> f64 {
+        m.iter().fold(0.0, |a, &b| a.max(b.abs()))
+    }
+
+    #[test]
+    fn single_axis_rotations_follow_the_right_hand_rule() {
+        // yaw turns x towards y; pitch turns z towards x; roll turns y towards z.
+        let q = std::f64::consts::FRAC_PI_2;
+        let x = Vector3::x();
+        let z = Vector3::z();
+        let y = Vector3::y();
+        assert!((rotation(q, 0.0, 0.0) * x - y).norm() < 1e-15);
+        assert!((rotation(0.0, q, 0.0) * z - x).norm() < 1e-15);
+        assert!((rotation(0.0, 0.0, q) * y - z).norm() < 1e-15);
+    }
+
+    proptest! {
+        #[test]
+        fn rotation_is_orthogonal(y in -3.1..3.1f64, p in -1.5..1.5f64, r in -3.1..3.1f64) {
+            let m = rotation(y, p, r);
+            prop_assert!(max_abs(&(m.transpose() * m - Matrix3::identity())) < 1e-14);
+            prop_assert!((m.determinant() - 1.0).abs() < 1e-14);
+        }
+
+        #[test]
+        fn angles_round_trip(y in -3.1..3.1f64, p in -1.5..1.5f64, r in -3.1..3.1f64) {
+            let [y2, p2, r2] = angles(&rotation(y, p, r));
+            prop_assert!((y - y2).abs() < 1e-12);
+            prop_assert!((p - p2).abs() < 1e-12);
+            prop_assert!((r - r2).abs() < 1e-12);
+        }
+
+        #[test]
+        fn body_rate_matches_numerical_derivative(
+            y in -3.0..3.0f64, p in -1.4..1.4f64, r in -3.0..3.0f64,
+            dy in -1.0..1.0f64, dp in -1.0..1.0f64, dr in -1.0..1.0f64,
+        ) {
+            // ω̂_B = Rᵀ Ṙ with Ṙ from a central difference along (dy, dp, dr).
+            let h = 1e-6;
+            let rp = rotation(y + h * dy, p + h * dp, r + h * dr);
+            let rm = rotation(y - h * dy, p - h * dp, r - h * dr);
+            let rdot = (rp - rm) / (2.0 * h);
+            let rot = rotation(y, p, r);
+            let omega_hat = rot.transpose() * rdot;
+            let rate = Vector3::new(dy, dp, dr);
+            let omega_b = body_rate_matrix(y, p, r) * rate;
+            prop_assert!((vee(&omega_hat) - omega_b).norm() < 1e-8);
+            // skew-symmetry of Rᵀ Ṙ (consistency of the numerical derivative itself)
+            prop_assert!(max_abs(&(omega_hat + omega_hat.transpose())) < 1e-8);
+            let omega_s = space_rate_matrix(y, p, r) * rate;
+            prop_assert!((vee(&(rdot * rot.transpose())) - omega_s).norm() < 1e-8);
+        }
+
+        #[test]
+        fn small_rotation_is_first_order_exact(a in -1.0..1.0f64, b in -1.0..1.0f64, cc in -1.0..1.0f64) {
+            let eps = 1e-7;
+            let m = rotation(eps * a, eps * b, eps * cc);
+            let v = small_rotation(&m);
+            let [yaw, pitch, roll] = lab_yaw_pitch_roll(&v);
+            prop_assert!((yaw - eps * a).abs() < 1e-13);
+            prop_assert!((pitch - eps * b).abs() < 1e-13);
+            prop_assert!((roll - eps * cc).abs() < 1e-13);
+        }
+    }
+
+    #[test]
+    fn generic_over_dual_numbers() {
+        use num_dual::Dual64;
+        // d/dyaw of R(yaw, 0, 0) at 0 is the generator of rotations about z.
+        let m = rotation(Dual64::new(0.0, 1.0), Dual64::from(0.0), Dual64::from(0.0));
+        let d = m.map(|e| e.eps);
+        let expected = Matrix3::new(0.0, -1.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+        assert!(max_abs(&(d - expected)) < 1e-15);
+    }
+}
