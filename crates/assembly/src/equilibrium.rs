@@ -27,7 +27,7 @@ impl Default for EquilibriumOptions {
         EquilibriumOptions {
             max_iterations: 200,
             force_tolerance: 1e-11,
-            step_tolerance: 1e-9,
+            step_tolerance: 1e-12,
             max_excursion: 100.0,
         }
     }
@@ -144,13 +144,13 @@ pub fn find_equilibrium(
                     .collect(),
             });
         }
-        let (worst, max_residual) = ev
-            .gradient
-            .iter()
-            .enumerate()
-            .fold((0, 0.0f64), |acc, (k, g)| {
-                if g.abs() > acc.1 { (k, g.abs()) } else { acc }
-            });
+        let (worst, max_residual) =
+            ev.gradient
+                .iter()
+                .enumerate()
+                .fold((0, 0.0f64), |acc, (k, g)| {
+                    if g.abs() > acc.1 { (k, g.abs()) } else { acc }
+                });
         let not_converged = || AssemblyError::NotConverged {
             iterations: iteration,
             residual: max_residual,

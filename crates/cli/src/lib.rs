@@ -113,7 +113,11 @@ impl Case {
             message,
         };
         let text = std::fs::read_to_string(path).map_err(|e| err(e.to_string()))?;
-        let file: CaseFile = toml::from_str(&text).map_err(|e| err(e.message().to_string()))?;
+        let file: CaseFile = toml::from_str(&text).map_err(|e| {
+            let line = e.span().map(|s| text[..s.start].lines().count().max(1));
+            let at = line.map(|l| format!("line {l}: ")).unwrap_or_default();
+            err(format!("{at}{}", e.message().trim()))
+        })?;
         let _ = file.description;
         let mut overrides = Vec::new();
         for (name, value) in &file.parameters {

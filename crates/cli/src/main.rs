@@ -1,5 +1,7 @@
 //! The `pendkit` command line (DESIGN.md §8).
 
+use std::fmt::Write as _;
+use std::io::Write as _;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
@@ -57,24 +59,29 @@ fn main() -> ExitCode {
     }
 }
 
+/// Writes the output; a closed pipe (`pendkit ... | head`) is not an error.
+fn emit(text: &str) {
+    let _ = std::io::stdout().lock().write_all(text.as_bytes());
+}
+
 fn run(cli: Cli) -> Result<(), Error> {
+    let mut out = String::new();
     match cli.command {
         Command::Elements => {
             for kind in registry() {
-                println!(
+                let _ = writeln!(
+                    out,
                     "{:<16} stage {:<3} {}",
                     kind.kind(),
                     kind.stage(),
                     kind.summary()
                 );
             }
-            Ok(())
         }
         Command::Models => {
             for m in pendkit::models() {
-                println!("{:<18} {}", m.name(), m.summary());
+                let _ = writeln!(out, "{:<18} {}", m.name(), m.summary());
             }
-            Ok(())
         }
         Command::Modes {
             model,
@@ -91,17 +98,18 @@ fn run(cli: Cli) -> Result<(), Error> {
             if let (Err(e), false) = (&stable, allow_unstable) {
                 return Err(Error::Dynamics(e.clone()));
             }
-            if json {
-                print_json(&case, stage, &result);
+            out = if json {
+                modes_json(&case, stage, &result)
             } else {
-                print_table(&case, stage, &result, lab);
-            }
-            Ok(())
+                modes_table(&case, stage, &result, lab)
+            };
         }
     }
+    emit(&out);
+    Ok(())
 }
 
-fn print_json(case: &Case, stage: Stage, r: &pendkit::StageResult) {
+fn modes_json(case: &Case, stage: Stage, r: &pendkit::StageResult) -> String {
     let x = &r.assembled.equilibrium.coords;
     let modes: Vec<_> = r
         .modes
@@ -138,12 +146,14 @@ fn print_json(case: &Case, stage: Stage, r: &pendkit::StageResult) {
         "equilibrium": equilibrium,
         "modes": modes,
     });
-    println!("{}", serde_json::to_string_pretty(&out).unwrap_or_default());
+    serde_json::to_string_pretty(&out).unwrap_or_default() + "\n"
 }
 
-fn print_table(case: &Case, stage: Stage, r: &pendkit::StageResult, lab: bool) {
+fn modes_table(case: &Case, stage: Stage, r: &pendkit::StageResult, lab: bool) -> String {
+    let mut out = String::new();
     let eq = &r.assembled.equilibrium;
-    println!(
+    let _ = writeln!(
+        out,
         "{} ({}), stage {}: {} modes; equilibrium in {} Newton steps, residual {:.2e}",
         case.name,
         case.model.name(),
@@ -152,9 +162,10 @@ fn print_table(case: &Case, stage: Stage, r: &pendkit::StageResult, lab: bool) {
         eq.iterations,
         eq.max_residual
     );
-    println!(
-        "{:>4}  {:>14}  {:<10} {}",
-        "mode", "frequency Hz", "label", "kinetic energy"
+    let _ = writeln!(
+        out,
+        "{:>4}  {:>14}  {:<10} kinetic energy",
+        "mode", "frequency Hz", "label"
     );
     for (i, m) in r.modes.modes.iter().enumerate() {
         let mut shares: Vec<(usize, f64)> =
@@ -171,7 +182,8 @@ fn print_table(case: &Case, stage: Stage, r: &pendkit::StageResult, lab: bool) {
         } else {
             "  UNSTABLE (growth rate)"
         };
-        println!(
+        let _ = writeln!(
+            out,
             "{:>4}  {:>14.7}  {:<10} {}{}",
             i + 1,
             m.hz,
@@ -181,7 +193,8 @@ fn print_table(case: &Case, stage: Stage, r: &pendkit::StageResult, lab: bool) {
         );
         if lab {
             for b in lab_motion(&r.system, &r.assembled.layout, &eq.coords, m) {
-                println!(
+                let _ = writeln!(
+                    out,
                     "        {:<10} x {:>10.3e} y {:>10.3e} z {:>10.3e}  yaw {:>10.3e} pitch {:>10.3e} roll {:>10.3e}",
                     b.body,
                     b.translation[0],
@@ -194,4 +207,5 @@ fn print_table(case: &Case, stage: Stage, r: &pendkit::StageResult, lab: bool) {
             }
         }
     }
+    out
 }

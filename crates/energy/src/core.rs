@@ -122,7 +122,7 @@ impl Element for WireStretch {
             .iter()
             .map(|wire| {
                 let length = reference.wire_length(wire);
-                if !(length > 0.0) {
+                if length.is_nan() || length <= 0.0 {
                     return Err(EnergyError::ZeroLengthWire {
                         wire: wire.name.clone(),
                     });

@@ -206,11 +206,8 @@ mod tests {
             6.0 * x.sin() * y,
         ];
         assert!((d.value - (a * x * x * y + x.sin() * y.powi(3))).abs() < 1e-15);
-        for k in 0..2 {
-            assert!((d.gradient[k] - g[k]).abs() < 1e-14);
-        }
-        for k in 0..4 {
-            assert!((d.hessian[k] - h[k]).abs() < 1e-14);
+        for (got, want) in d.gradient.iter().zip(g).chain(d.hessian.iter().zip(h)) {
+            assert!((got - want).abs() < 1e-14);
         }
     }
 }

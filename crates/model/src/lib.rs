@@ -153,11 +153,18 @@ impl WireSpec {
         tags: WireTags,
     ) -> Self {
         let stiffness = section.youngs_modulus * section.area / length;
+        // A non-positive length is kept as the unstretched length so that the builder
+        // reports it as a zero-length wire rather than as an infinite stiffness.
+        let unstretched_length = if length > 0.0 {
+            length - tension / stiffness
+        } else {
+            length
+        };
         WireSpec {
             name: name.into(),
             ends,
             stiffness,
-            unstretched_length: length - tension / stiffness,
+            unstretched_length,
             section,
             tags,
         }
@@ -360,18 +367,17 @@ impl SystemBuilder {
         }
         for end in &spec.ends {
             self.check_end_body(&item, end.body)?;
-            if let EndDirection::Explicit(v) = &end.direction {
-                if !(v.norm() > 0.0) {
-                    return Err(BuildError::Invalid {
-                        item,
-                        message: "explicit end direction is a zero vector".into(),
-                    });
-                }
+            if let EndDirection::Explicit(v) = &end.direction
+                && (v.norm().is_nan() || v.norm() <= 0.0)
+            {
+                return Err(BuildError::Invalid {
+                    item,
+                    message: "explicit end direction is a zero vector".into(),
+                });
             }
         }
-        check_finite(&item, "stiffness", spec.stiffness, "N/m")?;
         check_finite(&item, "unstretched length", spec.unstretched_length, "m")?;
-        if !(spec.unstretched_length > 0.0) {
+        if spec.unstretched_length <= 0.0 {
             return Err(BuildError::Invalid {
                 item,
                 message: format!(
@@ -380,7 +386,8 @@ impl SystemBuilder {
                 ),
             });
         }
-        if !(spec.stiffness > 0.0) {
+        check_finite(&item, "stiffness", spec.stiffness, "N/m")?;
+        if spec.stiffness <= 0.0 {
             return Err(BuildError::Invalid {
                 item,
                 message: format!("stiffness {} N/m must be positive", spec.stiffness),

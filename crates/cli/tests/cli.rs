@@ -1,0 +1,131 @@
+//! The command line as DESIGN.md §8 specifies it.
+
+use std::process::Command;
+
+fn pendkit(args: &[&str]) -> (bool, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_pendkit"))
+        .args(args)
+        .output()
+        .expect("pendkit runs");
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+fn modes_json(args: &[&str]) -> serde_json::Value {
+    let (ok, stdout, stderr) = pendkit(args);
+    assert!(ok, "{stderr}");
+    serde_json::from_str(&stdout).expect("valid JSON")
+}
+
+fn frequencies(v: &serde_json::Value) -> Vec<f64> {
+    v["modes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|m| m["hz"].as_f64().unwrap())
+        .collect()
+}
+
+#[test]
+fn toy_json_has_the_contract_fields_and_the_oracle_frequency() {
+    let v = modes_json(&["modes", "toy", "--json"]);
+    assert_eq!(v["model"], "toy");
+    assert_eq!(v["stage"], "0A");
+    assert_eq!(v["coordinates"], serde_json::json!(["x"]));
+    let m = &v["modes"][0];
+    assert_eq!(m["label"], "x");
+    assert_eq!(m["vector"].as_array().unwrap().len(), 1);
+    // physics_oracles.md §8: f0 = 4.358638 Hz (7 significant digits)
+    assert!((m["hz"].as_f64().unwrap() - 4.358638).abs() < 5e-7);
+}
+
+#[test]
+fn pendulum_json_prints_the_pendulum_and_bounce_modes() {
+    let v = modes_json(&["modes", "pendulum", "--json"]);
+    let hz = frequencies(&v);
+    // sqrt(g/l)/2π = 0.6435451 Hz twice, bounce 6.180387 Hz (oracles §1, §3)
+    assert_eq!(hz.len(), 3);
+    assert!((hz[0] - 0.6435451).abs() < 5e-8 && (hz[1] - 0.6435451).abs() < 5e-8);
+    assert!((hz[2] - 6.180387).abs() < 5e-7);
+    assert!(hz.windows(2).all(|w| w[0] <= w[1]));
+}
+
+#[test]
+fn set_overrides_and_case_files_agree() {
+    let case = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../models/basic/cases/rigid-body/d2mm.toml"
+    );
+    let from_file = frequencies(&modes_json(&["modes", case, "--json"]));
+    let from_set = frequencies(&modes_json(&[
+        "modes",
+        "rigid-body",
+        "--set",
+        "d_fibre=0.002",
+        "--json",
+    ]));
+    assert_eq!(from_file, from_set);
+    // oracles §2, d = 2 mm, s = ±5 mm: x-pitch pair 0.3717501 and 0.6437291 Hz
+    assert!(from_file.iter().any(|f| (f - 0.3717501).abs() < 5e-8));
+    let scaled = frequencies(&modes_json(&[
+        "modes",
+        "rigid-body",
+        "--set",
+        "d_fibre=scale(0.2)",
+        "--json",
+    ]));
+    assert_eq!(scaled, from_set);
+}
+
+#[test]
+fn elements_lists_kinds_with_stages() {
+    let (ok, stdout, _) = pendkit(&["elements"]);
+    assert!(ok);
+    for kind in ["gravity", "spring", "wire-stretch"] {
+        let line = stdout
+            .lines()
+            .find(|l| l.starts_with(kind))
+            .unwrap_or_else(|| panic!("{kind} missing"));
+        assert!(line.contains("stage 0A"), "{line}");
+    }
+}
+
+#[test]
+fn bad_input_is_one_line_and_non_zero() {
+    let dir = std::env::temp_dir().join(format!("pendkit-cli-test-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let broken = dir.join("broken.toml");
+    std::fs::write(&broken, "model = \"pendulum\"\n[parameters\nm1 = 3\n").unwrap();
+    let broken = broken.to_string_lossy().into_owned();
+    let cases: [(&[&str], &str); 6] = [
+        (&["modes", "nosuch"], "unknown model 'nosuch'"),
+        (&["modes", "pendulum", "--set", "m1=-40"], "negative mass"),
+        (
+            &[
+                "modes",
+                "pendulum",
+                "--set",
+                "m1=2*l_fibre",
+                "--set",
+                "l_fibre=m1",
+            ],
+            "cycle",
+        ),
+        (&["modes", "pendulum", "--set", "m1"], "expected NAME=EXPR"),
+        (&["modes", "pendulum", "--stage", "3"], "unknown stage"),
+        (&["modes", broken.as_str()], "broken.toml"),
+    ];
+    for (args, expected) in cases {
+        let (ok, stdout, stderr) = pendkit(args);
+        assert!(!ok, "{args:?} succeeded");
+        assert!(stdout.is_empty(), "{args:?} printed {stdout}");
+        assert!(stderr.contains(expected), "{args:?}: {stderr}");
+        if expected != "unknown stage" {
+            // clap formats its own usage errors; ours are exactly one line
+            assert_eq!(stderr.trim_end().lines().count(), 1, "{args:?}: {stderr}");
+        }
+    }
+}

@@ -1,0 +1,224 @@
+//! Bad input gives a clear error naming what and where, never a panic or a wrong number.
+
+use nalgebra::Vector3;
+use pendkit::{Case, run_stage};
+use pendkit_assembly::{AssemblyError, EquilibriumOptions, solve_equilibrium};
+use pendkit_energy::{EndDirection, Stage, WireEnd, WireSection, WireTags};
+use pendkit_model::{BodySpec, SystemBuilder, WireSpec};
+
+/// The one-line message of building `model` with `sets`.
+fn build_error(model: &str, sets: &[&str]) -> String {
+    let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
+    let result = Case::model(model)
+        .and_then(|c| c.with_sets(&sets))
+        .and_then(|c| c.build());
+    match result {
+        Ok(_) => panic!("{model} {sets:?} built without error"),
+        Err(e) => {
+            let text = e.to_string();
+            assert!(!text.contains('\n'), "multi-line error: {text}");
+            text
+        }
+    }
+}
+
+#[test]
+fn parameter_cycle_names_the_chain() {
+    let e = build_error("pendulum", &["m1=2*l_fibre", "l_fibre=m1/80"]);
+    assert!(
+        e.contains("m1 -> l_fibre -> m1") || e.contains("l_fibre -> m1 -> l_fibre"),
+        "{e}"
+    );
+}
+
+#[test]
+fn undefined_symbol_is_named() {
+    let e = build_error("pendulum", &["m1=mass_total/2"]);
+    assert!(e.contains("'mass_total'") && e.contains("m1"), "{e}");
+}
+
+#[test]
+fn unknown_parameter_is_named_with_a_suggestion() {
+    let e = build_error("pendulum", &["m11=3"]);
+    assert!(e.contains("'m11'") && e.contains("'m1'"), "{e}");
+}
+
+#[test]
+fn unknown_model_lists_the_bundled_ones() {
+    let e = Case::open("pendullum")
+        .err()
+        .expect("unknown model")
+        .to_string();
+    assert!(e.contains("'pendullum'") && e.contains("pendulum"), "{e}");
+}
+
+#[test]
+fn negative_mass_is_rejected() {
+    let e = build_error("pendulum", &["m1=-40"]);
+    assert!(e.contains("mass1") && e.contains("negative mass"), "{e}");
+}
+
+#[test]
+fn non_positive_definite_inertia_is_rejected() {
+    let e = build_error("rigid-body", &["I1y=-0.1"]);
+    assert!(
+        e.contains("mass1") && e.contains("not positive definite"),
+        "{e}"
+    );
+    // products of inertia larger than the moments break positive definiteness too
+    let mut b = SystemBuilder::new(9.81);
+    b.variable("yaw", 0.0).unwrap();
+    let inertia = nalgebra::Matrix3::new(1.0, 2.0, 0.0, 2.0, 1.0, 0.0, 0.0, 0.0, 1.0);
+    let e = b
+        .body(
+            BodySpec::new("plate")
+                .pose(["0", "0", "0", "yaw", "0", "0"])
+                .mass(1.0)
+                .inertia(inertia),
+        )
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("plate") && e.contains("not positive definite"),
+        "{e}"
+    );
+}
+
+#[test]
+fn zero_length_wire_is_rejected() {
+    let e = build_error("pendulum", &["l_fibre=0"]);
+    assert!(e.contains("fibre1") && e.contains("zero-length"), "{e}");
+}
+
+fn silica() -> WireSection {
+    WireSection::round(0.2e-3, 72e9, 30e9, 2200.0)
+}
+
+fn tags() -> WireTags {
+    WireTags {
+        stretch: "s".into(),
+        bending: "b".into(),
+        torsion: "t".into(),
+    }
+}
+
+#[test]
+fn coincident_attachment_points_are_a_zero_length_wire() {
+    // a wire whose ends sit at the same point once the bodies are placed
+    let mut b = SystemBuilder::new(9.81);
+    b.support_parameters().unwrap();
+    let top = b.body(BodySpec::new("support").pose_suffix("00")).unwrap();
+    b.variable("z1", 0.0).unwrap();
+    let mass = b
+        .body(
+            BodySpec::new("bob")
+                .pose(["0", "0", "z1", "0", "0", "0"])
+                .mass(1.0),
+        )
+        .unwrap();
+    let end = |body| WireEnd {
+        body,
+        point: Vector3::zeros(),
+        direction: EndDirection::Hinged,
+    };
+    b.wire(WireSpec {
+        name: "w".into(),
+        ends: [end(top), end(mass)],
+        stiffness: 1e4,
+        unstretched_length: 0.5,
+        section: silica(),
+        tags: tags(),
+    })
+    .unwrap();
+    let e = run_stage(b.build().unwrap(), Stage::S0A)
+        .err()
+        .expect("zero length")
+        .to_string();
+    assert!(e.contains("'w'") && e.contains("zero length"), "{e}");
+}
+
+#[test]
+fn unsupported_body_runs_away() {
+    // a mass with nothing holding it: the potential m g z has no minimum
+    let mut b = SystemBuilder::new(9.81);
+    b.variable("z1", 0.0).unwrap();
+    b.body(
+        BodySpec::new("bob")
+            .pose(["0", "0", "z1", "0", "0", "0"])
+            .mass(1.0),
+    )
+    .unwrap();
+    let s = b.build().unwrap();
+    let e = solve_equilibrium(&s, &EquilibriumOptions::default()).unwrap_err();
+    assert!(
+        matches!(e, AssemblyError::Runaway { ref coordinate, .. } if coordinate == "z1"),
+        "{e}"
+    );
+}
+
+#[test]
+fn iteration_limit_is_a_clear_non_convergence() {
+    let mut s = Case::model("rigid-body").unwrap().build().unwrap().0;
+    let i = s.coord("pitch1").unwrap();
+    s.coords[i].start = 0.3;
+    let options = EquilibriumOptions {
+        max_iterations: 1,
+        ..Default::default()
+    };
+    let e = solve_equilibrium(&s, &options).unwrap_err();
+    assert!(
+        matches!(e, AssemblyError::NotConverged { iterations: 1, .. }),
+        "{e}"
+    );
+    assert!(e.to_string().contains("did not converge"));
+}
+
+#[test]
+fn inverted_pendulum_is_reported_unstable() {
+    // a 1 kg bob balanced on a compressed strut 0.5 m above the support
+    let mut b = SystemBuilder::new(9.81);
+    b.support_parameters().unwrap();
+    let top = b.body(BodySpec::new("support").pose_suffix("00")).unwrap();
+    for (n, v) in [("x1", 0.0), ("y1", 0.0), ("z1", 0.5)] {
+        b.variable(n, v).unwrap();
+    }
+    let bob = b
+        .body(
+            BodySpec::new("bob")
+                .pose(["x1", "y1", "z1", "0", "0", "0"])
+                .mass(1.0),
+        )
+        .unwrap();
+    let end = |body| WireEnd {
+        body,
+        point: Vector3::zeros(),
+        direction: EndDirection::Hinged,
+    };
+    b.wire(WireSpec::from_tension(
+        "strut",
+        [end(top), end(bob)],
+        silica(),
+        0.5,
+        -9.81,
+        tags(),
+    ))
+    .unwrap();
+    let result = run_stage(b.build().unwrap(), Stage::S0A).unwrap();
+    let e = result.modes.check_stable().unwrap_err().to_string();
+    assert!(
+        e.contains("unstable equilibrium") && (e.contains("x1") || e.contains("y1")),
+        "{e}"
+    );
+    // the unstable modes are reported with a growth rate, not NaN: sqrt(g/l)/2π
+    let growth = (9.81f64 / 0.5).sqrt() / (2.0 * std::f64::consts::PI);
+    let unstable: Vec<_> = result
+        .modes
+        .modes
+        .iter()
+        .filter(|m| !m.is_stable())
+        .collect();
+    assert_eq!(unstable.len(), 2);
+    for m in unstable {
+        assert!((m.hz + growth).abs() < 1e-9 * growth, "{}", m.hz);
+    }
+}
