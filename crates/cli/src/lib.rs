@@ -8,10 +8,13 @@
 
 use std::path::{Path, PathBuf};
 
+use nalgebra::{DVector, Vector3};
 use pendkit_assembly::{Assembled, AssemblyError, EquilibriumOptions, assemble};
-use pendkit_dynamics::{DynamicsError, Modes, eliminate_floats, normal_modes};
+use pendkit_dynamics::{
+    DynamicsError, Input, Modes, Output, StageModel, eliminate_floats, normal_modes,
+};
 use pendkit_energy::{Stage, System};
-use pendkit_model::{BuildError, Model};
+use pendkit_model::{BuildError, DampingSpec, Model, Overrides};
 use pendkit_params::Resolved;
 
 pub use pendkit_assembly as assembly;
@@ -40,7 +43,7 @@ pub enum Error {
         message: String,
     },
     /// A `--set NAME=EXPR` argument without '='.
-    #[error("--set '{0}': expected NAME=EXPR")]
+    #[error("--set '{0}': expected NAME=EXPR or damping.<tag>.<field>=EXPR")]
     SetSyntax(String),
     /// Building the model failed.
     #[error(transparent)]
@@ -48,6 +51,34 @@ pub enum Error {
     /// Equilibrium or assembly failed.
     #[error(transparent)]
     Assembly(#[from] AssemblyError),
+    /// An input or output name that means nothing in this model.
+    #[error("'{name}': {message}")]
+    Name {
+        /// The name given.
+        name: String,
+        /// What is wrong, with the valid names.
+        message: String,
+    },
+    /// A frequency grid that cannot be made.
+    #[error(
+        "frequency grid from {from} Hz to {to} Hz with {n} points: need 0 < from <= to and at least one point"
+    )]
+    Grid {
+        /// Start (Hz).
+        from: f64,
+        /// End (Hz).
+        to: f64,
+        /// Points.
+        n: usize,
+    },
+    /// Losses asked for at stage 0A.
+    #[error(
+        "transfer functions, noise and state space need stage 0b or later (0A has no dissipation dilution)"
+    )]
+    StageTooEarly,
+    /// Writing an export file failed.
+    #[error(transparent)]
+    Export(pendkit_export::ExportError),
     /// Modes or eliminations failed.
     #[error(transparent)]
     Dynamics(#[from] DynamicsError),
@@ -73,19 +104,23 @@ pub fn find_model(name: &str) -> Result<&'static dyn Model, Error> {
         })
 }
 
-/// A case: a model and parameter overrides (name, expression text), in application order.
+/// A case: a model with parameter and damping overrides.
 #[derive(Clone)]
 pub struct Case {
     /// Case name (the model name, or the case file's stem).
     pub name: String,
+    /// What the case is for (from the case file).
+    pub description: Option<String>,
     /// The model it refines.
     pub model: &'static dyn Model,
-    /// Overrides, applied in order.
-    pub overrides: Vec<(String, String)>,
+    /// Parameter and damping overrides.
+    pub overrides: Overrides,
 }
 
-/// Parsed form of a case file (TOML): `model = "name"` and a `[parameters]` table whose
-/// values are numbers or expression strings (including `scale(x)` and `increment(x)`).
+/// Parsed form of a case file (TOML): `model = "name"`, a `[parameters]` table whose
+/// values are numbers or expression strings (including `scale(x)` and `increment(x)`), and
+/// `[damping.<tag>]` tables with `real`, `structural`, `viscous`, `imag` (expressions, `f` in
+/// Hz allowed in `real` and `imag`) and `thermoelastic = [delta, tau]`.
 #[derive(serde::Deserialize)]
 #[serde(deny_unknown_fields)]
 struct CaseFile {
@@ -94,6 +129,32 @@ struct CaseFile {
     description: Option<String>,
     #[serde(default)]
     parameters: toml::Table,
+    #[serde(default)]
+    damping: std::collections::BTreeMap<String, DampingFile>,
+}
+
+/// A `[damping.<tag>]` table of a case file.
+#[derive(serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct DampingFile {
+    real: Option<toml::Value>,
+    structural: Option<toml::Value>,
+    viscous: Option<toml::Value>,
+    imag: Option<toml::Value>,
+    thermoelastic: Option<[toml::Value; 2]>,
+}
+
+/// A TOML number or string as expression text.
+fn expression_text(what: &str, value: &toml::Value) -> Result<String, String> {
+    match value {
+        toml::Value::String(s) => Ok(s.clone()),
+        toml::Value::Integer(i) => Ok(i.to_string()),
+        toml::Value::Float(f) => Ok(format!("{f:e}")),
+        other => Err(format!(
+            "{what}: expected a number or an expression string, got {}",
+            other.type_str()
+        )),
+    }
 }
 
 impl Case {
@@ -101,8 +162,9 @@ impl Case {
     pub fn model(name: &str) -> Result<Case, Error> {
         Ok(Case {
             name: name.to_string(),
+            description: None,
             model: find_model(name)?,
-            overrides: Vec::new(),
+            overrides: Overrides::default(),
         })
     }
 
@@ -118,27 +180,39 @@ impl Case {
             let at = line.map(|l| format!("line {l}: ")).unwrap_or_default();
             err(format!("{at}{}", e.message().trim()))
         })?;
-        let _ = file.description;
-        let mut overrides = Vec::new();
+        let mut overrides = Overrides::default();
         for (name, value) in &file.parameters {
-            let text = match value {
-                toml::Value::String(s) => s.clone(),
-                toml::Value::Integer(i) => i.to_string(),
-                toml::Value::Float(f) => format!("{f:e}"),
-                other => {
-                    return Err(err(format!(
-                        "parameter '{name}': expected a number or an expression string, got {}",
-                        other.type_str()
-                    )));
-                }
+            let text = expression_text(&format!("parameter '{name}'"), value).map_err(err)?;
+            overrides.parameters.push((name.clone(), text));
+        }
+        for (tag, d) in &file.damping {
+            let field = |name: &str, v: &Option<toml::Value>| {
+                v.as_ref()
+                    .map(|v| expression_text(&format!("damping.{tag}.{name}"), v))
+                    .transpose()
             };
-            overrides.push((name.clone(), text));
+            let thermoelastic = match &d.thermoelastic {
+                None => None,
+                Some([delta, tau]) => Some((
+                    expression_text(&format!("damping.{tag}.thermoelastic"), delta).map_err(err)?,
+                    expression_text(&format!("damping.{tag}.thermoelastic"), tau).map_err(err)?,
+                )),
+            };
+            let spec = DampingSpec {
+                real: field("real", &d.real).map_err(err)?,
+                structural: field("structural", &d.structural).map_err(err)?,
+                viscous: field("viscous", &d.viscous).map_err(err)?,
+                imag: field("imag", &d.imag).map_err(err)?,
+                thermoelastic,
+            };
+            overrides.damping.insert(tag.clone(), spec);
         }
         Ok(Case {
             name: path
                 .file_stem()
                 .map(|s| s.to_string_lossy().into_owned())
                 .unwrap_or_default(),
+            description: file.description,
             model: find_model(&file.model).map_err(|e| err(e.to_string()))?,
             overrides,
         })
@@ -155,14 +229,28 @@ impl Case {
         }
     }
 
-    /// Adds `NAME=EXPR` overrides (applied after the case's own).
+    /// Adds `NAME=EXPR` overrides (applied after the case's own); `damping.<tag>.<field>=EXPR`
+    /// sets a damping field.
     pub fn with_sets(mut self, sets: &[String]) -> Result<Case, Error> {
         for s in sets {
             let (name, expr) = s
                 .split_once('=')
                 .ok_or_else(|| Error::SetSyntax(s.clone()))?;
-            self.overrides
-                .push((name.trim().to_string(), expr.trim().to_string()));
+            let (name, expr) = (name.trim(), expr.trim());
+            match name
+                .strip_prefix("damping.")
+                .and_then(|rest| rest.split_once('.'))
+            {
+                Some((tag, field)) => {
+                    let spec = self.overrides.damping.entry(tag.to_string()).or_default();
+                    spec.set_field(field, expr)
+                        .map_err(|m| Error::SetSyntax(format!("{s}: {m}")))?;
+                }
+                None => self
+                    .overrides
+                    .parameters
+                    .push((name.to_string(), expr.to_string())),
+            }
         }
         Ok(self)
     }
@@ -179,24 +267,149 @@ pub struct StageResult {
     pub system: System,
     /// Equilibrium and per-term matrices.
     pub assembled: Assembled,
+    /// The stage's frequency-independent matrices for responses and noise.
+    pub model: StageModel,
     /// Normal modes (possibly with unstable ones: check [`Modes::check_stable`]).
     pub modes: Modes,
 }
 
-/// Equilibrium, stiffness, mass and modes of `system` at `stage`.
+/// Equilibrium, stiffness, mass and modes of `system` at `stage`. The modes use the real
+/// stiffness at f = 0 (each tag's ε'(0); 1 unless a model says otherwise).
 pub fn run_stage(system: System, stage: Stage) -> Result<StageResult, Error> {
     let assembled = assemble(&system, stage, &EquilibriumOptions::default())?;
-    let reduced = eliminate_floats(&assembled.stiffness(), &assembled.layout, &system)?;
-    let names: Vec<String> = assembled
-        .layout
-        .variables
-        .iter()
-        .map(|&i| system.coords[i].name.clone())
-        .collect();
-    let modes = normal_modes(&reduced.k_eff, &assembled.mass, &names)?;
+    let model = StageModel::new(&system, &assembled);
+    let reduced = eliminate_floats(
+        &model.real_stiffness(&system.damping),
+        &assembled.layout,
+        &system,
+    )?;
+    let modes = normal_modes(&reduced.k_eff, &assembled.mass, &model.variables)?;
     Ok(StageResult {
         system,
         assembled,
+        model,
         modes,
     })
+}
+
+impl StageResult {
+    /// A point on a body and a direction, written `<body>@x,y,z/dx,dy,dz` (m, body
+    /// coordinates; direction in lab axes, normalised): the generalised-force vector over
+    /// the variables of a unit force there, equal to the displacement-output vector of that
+    /// point along that direction (the linearised geometry at equilibrium).
+    fn point_vector(&self, spec: &str) -> Option<Result<DVector<f64>, Error>> {
+        let (body, rest) = spec.split_once('@')?;
+        Some((|| {
+            let bad = || Error::Name {
+                name: spec.to_string(),
+                message: "expected <body>@x,y,z/dx,dy,dz".into(),
+            };
+            let (point, dir) = rest.split_once('/').ok_or_else(bad)?;
+            let nums = |t: &str| -> Result<Vector3<f64>, Error> {
+                let v: Vec<f64> = t
+                    .split(',')
+                    .map(|x| x.trim().parse::<f64>())
+                    .collect::<Result<_, _>>()
+                    .map_err(|_| bad())?;
+                if v.len() == 3 && v.iter().all(|x| x.is_finite()) {
+                    Ok(Vector3::new(v[0], v[1], v[2]))
+                } else {
+                    Err(bad())
+                }
+            };
+            let (p, d) = (nums(point)?, nums(dir)?);
+            if d.norm() == 0.0 {
+                return Err(bad());
+            }
+            let b = self.system.body(body).ok_or_else(|| Error::Name {
+                name: spec.to_string(),
+                message: format!("unknown body '{body}'"),
+            })?;
+            let jac = self.system.bodies[b]
+                .frame
+                .jacobian(&self.assembled.equilibrium.coords, &p);
+            let d = d.normalize();
+            Ok(DVector::from_iterator(
+                self.assembled.layout.variables.len(),
+                self.assembled
+                    .layout
+                    .variables
+                    .iter()
+                    .map(|&g| jac.position.column(g).dot(&d)),
+            ))
+        })())
+    }
+
+    fn unit(n: usize, k: usize) -> DVector<f64> {
+        let mut v = DVector::zeros(n);
+        v[k] = 1.0;
+        v
+    }
+
+    fn names_error(&self, name: &str, what: &str, valid: &[String]) -> Error {
+        Error::Name {
+            name: name.to_string(),
+            message: format!("not {what} (valid: {})", valid.join(" ")),
+        }
+    }
+
+    /// Parses an input: a parameter (support displacement, e.g. `x00`), `force:<variable>`
+    /// or `force:<body>@x,y,z/dx,dy,dz`.
+    pub fn input(&self, name: &str) -> Result<Input, Error> {
+        let m = &self.model;
+        if let Some(target) = name.strip_prefix("force:") {
+            if let Some(v) = self.point_vector(target) {
+                return Ok(Input::Force(v?));
+            }
+            return match m.variables.iter().position(|v| v == target) {
+                Some(k) => Ok(Input::Force(Self::unit(m.variables.len(), k))),
+                None => Err(self.names_error(target, "a variable to push on", &m.variables)),
+            };
+        }
+        match m.parameters.iter().position(|v| v == name) {
+            Some(k) => Ok(Input::Displacement(Self::unit(m.parameters.len(), k))),
+            None => Err(self.names_error(
+                name,
+                "a parameter to drive (or force:<variable>)",
+                &m.parameters,
+            )),
+        }
+    }
+
+    /// Parses an output: a variable, `<body>@x,y,z/dx,dy,dz`, or `force:<parameter>` (the
+    /// force on the support).
+    pub fn output(&self, name: &str) -> Result<Output, Error> {
+        let m = &self.model;
+        if let Some(target) = name.strip_prefix("force:") {
+            return match m.parameters.iter().position(|v| v == target) {
+                Some(k) => Ok(Output::SupportForce(Self::unit(m.parameters.len(), k))),
+                None => Err(self.names_error(target, "a parameter", &m.parameters)),
+            };
+        }
+        if let Some(v) = self.point_vector(name) {
+            return Ok(Output::Displacement(v?));
+        }
+        match m.variables.iter().position(|v| v == name) {
+            Some(k) => Ok(Output::Displacement(Self::unit(m.variables.len(), k))),
+            None => Err(self.names_error(
+                name,
+                "a variable (or <body>@x,y,z/dx,dy,dz, force:<parameter>)",
+                &m.variables,
+            )),
+        }
+    }
+}
+
+/// `n` log-spaced frequencies from `from` to `to` (Hz).
+pub fn log_grid(from: f64, to: f64, n: usize) -> Result<Vec<f64>, Error> {
+    if from.is_nan() || to.is_nan() || from <= 0.0 || to < from || n == 0 {
+        return Err(Error::Grid { from, to, n });
+    }
+    if n == 1 {
+        return Ok(vec![from]);
+    }
+    let (a, b) = (from.ln(), to.ln());
+    Ok((0..n)
+        .map(|i| (a + (b - a) * i as f64 / (n - 1) as f64).exp())
+        .collect())
 }

@@ -5,9 +5,11 @@ use std::io::Write as _;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
-use pendkit::{Case, Error, run_stage};
+use pendkit::{Case, Error, StageResult, log_grid, run_stage};
+use pendkit_dynamics::Output;
 use pendkit_dynamics::lab_motion;
 use pendkit_energy::{Stage, registry};
+use pendkit_export::{Matrix, Names};
 use serde_json::json;
 
 #[derive(Parser)]
@@ -21,18 +23,58 @@ struct Cli {
     command: Command,
 }
 
+/// The model or case, stage and parameter overrides every calculation takes.
+#[derive(clap::Args)]
+struct ModelArgs {
+    /// Bundled model name or path to a case file (.toml).
+    model: String,
+    /// Calculation stage: 0a, 0b, 1a, 1b or 2 (modes default to 0a, responses to 2).
+    #[arg(long)]
+    stage: Option<Stage>,
+    /// Override a parameter: NAME=EXPR, scale(x) or increment(x); or a damping field,
+    /// damping.<tag>.<field>=EXPR (repeatable).
+    #[arg(long = "set", value_name = "NAME=EXPR")]
+    sets: Vec<String>,
+}
+
+impl ModelArgs {
+    /// Builds the case and runs its stage (default `default`).
+    fn run(&self, default: Stage) -> Result<(Case, Stage, StageResult), Error> {
+        let case = Case::open(&self.model)?.with_sets(&self.sets)?;
+        let stage = self.stage.unwrap_or(default);
+        let (system, _) = case.build()?;
+        Ok((case, stage, run_stage(system, stage)?))
+    }
+
+    /// As [`ModelArgs::run`], for results that need losses (stage 0B or later).
+    fn run_lossy(&self) -> Result<(Case, Stage, StageResult), Error> {
+        if self.stage == Some(Stage::S0A) {
+            return Err(Error::StageTooEarly);
+        }
+        self.run(Stage::S2)
+    }
+}
+
+/// A log-spaced frequency grid.
+#[derive(clap::Args)]
+struct GridArgs {
+    /// First frequency (Hz).
+    #[arg(long, default_value_t = 0.1)]
+    from: f64,
+    /// Last frequency (Hz).
+    #[arg(long, default_value_t = 100.0)]
+    to: f64,
+    /// Number of log-spaced points.
+    #[arg(long, default_value_t = 200)]
+    points: usize,
+}
+
 #[derive(Subcommand)]
 enum Command {
     /// Equilibrium and normal modes of a model or case file.
     Modes {
-        /// Bundled model name or path to a case file (.toml).
-        model: String,
-        /// Calculation stage: 0a, 0b, 1a, 1b or 2.
-        #[arg(long, default_value = "0a")]
-        stage: Stage,
-        /// Override a parameter: NAME=EXPR, scale(x) or increment(x) (repeatable).
-        #[arg(long = "set", value_name = "NAME=EXPR")]
-        sets: Vec<String>,
+        #[command(flatten)]
+        args: ModelArgs,
         /// Print JSON instead of a table.
         #[arg(long)]
         json: bool,
@@ -42,6 +84,51 @@ enum Command {
         /// Print the modes even if the equilibrium is unstable (exit status stays 0).
         #[arg(long)]
         allow_unstable: bool,
+    },
+    /// Transfer function from a support displacement or a force to a displacement or a
+    /// force on the support.
+    Tf {
+        #[command(flatten)]
+        args: ModelArgs,
+        /// A parameter (support displacement, e.g. x00), force:<variable>, or
+        /// force:<body>@x,y,z/dx,dy,dz.
+        #[arg(long)]
+        input: String,
+        /// A variable, <body>@x,y,z/dx,dy,dz, or force:<parameter> (force on the support).
+        #[arg(long)]
+        output: String,
+        #[command(flatten)]
+        grid: GridArgs,
+        /// Print f_hz,re,im rows.
+        #[arg(long)]
+        csv: bool,
+    },
+    /// Thermal noise (fluctuation-dissipation) at an output, with its breakdown by tag.
+    Noise {
+        #[command(flatten)]
+        args: ModelArgs,
+        /// A variable or <body>@x,y,z/dx,dy,dz.
+        #[arg(long)]
+        output: String,
+        #[command(flatten)]
+        grid: GridArgs,
+        /// Print f_hz,asd rows.
+        #[arg(long)]
+        csv: bool,
+        /// Add one ASD column per damping tag (CSV) or per term (table).
+        #[arg(long)]
+        breakdown: bool,
+    },
+    /// State-space matrices A, B, C, D with names, to .mat, .npz or .json.
+    Ss {
+        #[command(flatten)]
+        args: ModelArgs,
+        /// Output file; the extension (.mat, .npz, .json) picks the format.
+        #[arg(long)]
+        out: std::path::PathBuf,
+        /// Frequency (Hz) at which damping is represented as viscous.
+        #[arg(long, default_value_t = 1.0)]
+        damping_frequency: f64,
     },
     /// List the registered element kinds and the stage each joins at.
     Elements,
@@ -84,16 +171,12 @@ fn run(cli: Cli) -> Result<(), Error> {
             }
         }
         Command::Modes {
-            model,
-            stage,
-            sets,
+            args,
             json,
             lab,
             allow_unstable,
         } => {
-            let case = Case::open(&model)?.with_sets(&sets)?;
-            let (system, _) = case.build()?;
-            let result = run_stage(system, stage)?;
+            let (case, stage, result) = args.run(Stage::S0A)?;
             let stable = result.modes.check_stable();
             if let (Err(e), false) = (&stable, allow_unstable) {
                 return Err(Error::Dynamics(e.clone()));
@@ -103,6 +186,171 @@ fn run(cli: Cli) -> Result<(), Error> {
             } else {
                 modes_table(&case, stage, &result, lab)
             };
+        }
+        Command::Tf {
+            args,
+            input,
+            output,
+            grid,
+            csv,
+        } => {
+            let (case, stage, r) = args.run_lossy()?;
+            let (input_v, output_v) = (r.input(&input)?, r.output(&output)?);
+            let freqs = log_grid(grid.from, grid.to, grid.points)?;
+            let h = r
+                .model
+                .transfer(&r.system.damping, &input_v, &output_v, &freqs);
+            if csv {
+                out.push_str("f_hz,re,im\n");
+            } else {
+                let _ = writeln!(
+                    out,
+                    "{} ({}), stage {stage}: {output} / {input}",
+                    case.name,
+                    case.model.name()
+                );
+                let _ = writeln!(
+                    out,
+                    "{:>12}  {:>14}  {:>9}  {:>14}  {:>14}",
+                    "f_hz", "magnitude", "phase_deg", "re", "im"
+                );
+            }
+            for (f, z) in freqs.iter().zip(&h) {
+                if csv {
+                    let _ = writeln!(out, "{f:e},{:e},{:e}", z.re, z.im);
+                } else {
+                    let _ = writeln!(
+                        out,
+                        "{f:>12.6e}  {:>14.6e}  {:>9.3}  {:>14.6e}  {:>14.6e}",
+                        z.norm(),
+                        z.arg().to_degrees(),
+                        z.re,
+                        z.im
+                    );
+                }
+            }
+        }
+        Command::Noise {
+            args,
+            output,
+            grid,
+            csv,
+            breakdown,
+        } => {
+            let (case, stage, r) = args.run_lossy()?;
+            let v = match r.output(&output)? {
+                Output::Displacement(v) => v,
+                Output::SupportForce(_) => {
+                    return Err(Error::Name {
+                        name: output,
+                        message: "thermal noise needs a displacement output".into(),
+                    });
+                }
+            };
+            let freqs = log_grid(grid.from, grid.to, grid.points)?;
+            let noise = r
+                .model
+                .thermal_noise(&r.system.damping, &v, r.system.temperature, &freqs);
+            let tags = noise.by_tag();
+            if csv {
+                out.push_str("f_hz,asd");
+                if breakdown {
+                    for (tag, _) in &tags {
+                        let _ = write!(out, ",{tag}");
+                    }
+                }
+                out.push('\n');
+            } else {
+                let _ = writeln!(
+                    out,
+                    "{} ({}), stage {stage}: thermal noise of {output} at {} K (ASD per sqrt(Hz))",
+                    case.name,
+                    case.model.name(),
+                    r.system.temperature
+                );
+                let _ = writeln!(out, "{:>12}  {:>12}  dominant", "f_hz", "asd");
+            }
+            for (i, f) in freqs.iter().enumerate() {
+                let asd = noise.total[i].sqrt();
+                if csv {
+                    let _ = write!(out, "{f:e},{asd:e}");
+                    if breakdown {
+                        for (_, series) in &tags {
+                            let _ = write!(out, ",{:e}", series[i].max(0.0).sqrt());
+                        }
+                    }
+                    out.push('\n');
+                } else {
+                    let shares = if breakdown {
+                        &noise.by_term
+                    } else {
+                        &tags
+                            .iter()
+                            .map(|(t, s)| (t.clone(), t.clone(), s.clone()))
+                            .collect()
+                    };
+                    let top = shares
+                        .iter()
+                        .max_by(|a, b| a.2[i].total_cmp(&b.2[i]))
+                        .map(|(name, _, s)| {
+                            format!(
+                                "{name} {:.0}%",
+                                100.0 * s[i] / noise.total[i].max(f64::MIN_POSITIVE)
+                            )
+                        })
+                        .unwrap_or_default();
+                    let _ = writeln!(out, "{f:>12.6e}  {asd:>12.6e}  {top}");
+                }
+            }
+        }
+        Command::Ss {
+            args,
+            out: path,
+            damping_frequency,
+        } => {
+            let (case, stage, r) = args.run_lossy()?;
+            let ss = r.model.state_space(&r.system.damping, damping_frequency)?;
+            let rows = |m: &nalgebra::DMatrix<f64>| -> Vec<f64> {
+                (0..m.nrows())
+                    .flat_map(|i| (0..m.ncols()).map(move |j| m[(i, j)]))
+                    .collect()
+            };
+            let data = [rows(&ss.a), rows(&ss.b), rows(&ss.c), rows(&ss.d)];
+            let matrices: Vec<Matrix> = [("A", &ss.a), ("B", &ss.b), ("C", &ss.c), ("D", &ss.d)]
+                .iter()
+                .zip(&data)
+                .map(|((name, m), d)| Matrix {
+                    name,
+                    rows: m.nrows(),
+                    cols: m.ncols(),
+                    data: d,
+                })
+                .collect();
+            let names = [
+                Names {
+                    name: "states",
+                    items: &ss.states,
+                },
+                Names {
+                    name: "inputs",
+                    items: &ss.inputs,
+                },
+                Names {
+                    name: "outputs",
+                    items: &ss.outputs,
+                },
+            ];
+            pendkit_export::write(&path, &matrices, &names).map_err(Error::Export)?;
+            let _ = writeln!(
+                out,
+                "{} ({}), stage {stage}: wrote {} ({} states, {} inputs, {} outputs); damping represented as viscous at {damping_frequency} Hz (exact for viscous damping only)",
+                case.name,
+                case.model.name(),
+                path.display(),
+                ss.states.len(),
+                ss.inputs.len(),
+                ss.outputs.len()
+            );
         }
     }
     emit(&out);

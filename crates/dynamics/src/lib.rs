@@ -1,6 +1,13 @@
 //! Dynamics from the assembled matrices: elimination of floats by Schur complement, and
 //! normal modes (generalised symmetric eigenproblem K_eff v = ω² M v) with labels and a
-//! lab-frame table of body motions.
+//! lab-frame table of body motions; and, with dissipation dilution, transfer functions,
+//! thermal noise and state-space matrices.
+
+mod response;
+
+pub use response::{
+    BOLTZMANN, Input, Output, ReducedComplex, StageModel, StateSpace, TermLoss, ThermalNoise,
+};
 
 use faer::{Mat, Side};
 use nalgebra::{DMatrix, Vector3};
@@ -25,6 +32,9 @@ pub enum DynamicsError {
         /// The variable with the smallest diagonal mass.
         variable: String,
     },
+    /// Damping represented at a frequency that is not positive.
+    #[error("damping frequency must be positive (got {0} Hz)")]
+    DampingFrequency(f64),
     /// The eigen solver failed.
     #[error("eigen solver failed: {0}")]
     Eigen(String),

@@ -3,6 +3,7 @@
 //! description of a model (`System`) that elements read.
 
 mod core;
+mod damping;
 mod element;
 mod extra;
 mod stage;
@@ -10,6 +11,7 @@ mod system;
 mod term;
 
 pub use crate::core::{GRAVITY_TAG, GravityEnergy, SpringEnergy, WireStretchEnergy};
+pub use damping::{Damping, TagDamping};
 pub use element::{Element, LocalFrames, Reference, Registration, find_kind, registry};
 pub use extra::{CONSTRAINT_TAG, constraint_terms, extra_terms};
 pub use pendkit_rotations::Real;

@@ -7,7 +7,7 @@ use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
 use pendkit_expr::Expr;
 use pendkit_geometry::FrameMap;
 
-use crate::Stage;
+use crate::{Damping, Stage};
 
 /// Index of a coordinate in [`System::coords`].
 pub type CoordId = usize;
@@ -249,6 +249,10 @@ pub struct System {
     pub early_wire_terms: EarlyWireTerms,
     /// Highest stage whose plug-in terms may join the equilibrium early.
     pub early_stage_limit: Option<Stage>,
+    /// Complex multipliers of the damping tags.
+    pub damping: Damping,
+    /// Temperature for thermal noise (K).
+    pub temperature: f64,
 }
 
 impl System {
@@ -265,6 +269,22 @@ impl System {
     /// Start (or nominal) values of all coordinates.
     pub fn start(&self) -> Vec<f64> {
         self.coords.iter().map(|c| c.start).collect()
+    }
+
+    /// Every damping tag the model's terms can carry.
+    pub fn tags(&self) -> std::collections::BTreeSet<String> {
+        let mut tags: std::collections::BTreeSet<String> = self
+            .wires
+            .iter()
+            .flat_map(|w| [&w.tags.stretch, &w.tags.bending, &w.tags.torsion])
+            .chain(self.springs.iter().map(|s| &s.tag))
+            .chain(self.extra_terms.iter().map(|t| &t.tag))
+            .chain(self.plugin_elements.iter().map(|e| &e.tag))
+            .cloned()
+            .collect();
+        tags.insert(crate::GRAVITY_TAG.to_string());
+        tags.insert(crate::CONSTRAINT_TAG.to_string());
+        tags
     }
 
     /// Indices of the coordinates of one kind, in definition order.

@@ -5,6 +5,8 @@
 //! Every quantity is in SI units: lengths in m, angles in rad, masses in kg, inertias in
 //! kg m^2, stiffnesses in N/m (or N m/rad), forces in N, moduli in Pa.
 
+mod damping;
+
 use std::collections::BTreeMap;
 
 use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
@@ -15,6 +17,8 @@ use pendkit_energy::{
 use pendkit_expr::Slot;
 use pendkit_geometry::{FrameMap, PoseMap};
 use pendkit_params::{ParamError, ParamSet, Resolved};
+
+pub use damping::DampingSpec;
 
 /// Errors in a model definition; each names the item and what is wrong with it.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -562,21 +566,61 @@ pub trait Model: Sync {
     fn summary(&self) -> &'static str;
     /// Default parameter definitions.
     fn parameters(&self) -> Result<ParamSet, ParamError>;
+    /// Default damping per tag (expressions over the parameters).
+    fn damping(&self) -> BTreeMap<String, DampingSpec> {
+        BTreeMap::new()
+    }
     /// Builds the numeric model from resolved parameters.
     fn build(&self, params: &Resolved) -> Result<System, BuildError>;
 }
 
-/// Resolves `model`'s defaults with `overrides` (name, expression text) applied, and builds.
+/// Default temperature for thermal noise (K) when a model does not define `temperature`.
+pub const DEFAULT_TEMPERATURE: f64 = 290.0;
+
+/// What a case changes in a model: parameter overrides (name, expression text, applied in
+/// order) and damping fields per tag.
+#[derive(Clone, Debug, Default)]
+pub struct Overrides {
+    /// Parameter overrides: a value, an expression, `scale(x)` or `increment(x)`.
+    pub parameters: Vec<(String, String)>,
+    /// Damping overrides per tag; the fields given replace the model's.
+    pub damping: BTreeMap<String, DampingSpec>,
+}
+
+/// Resolves `model`'s defaults with `overrides` applied, builds the system and attaches
+/// its damping multipliers and temperature (parameter `temperature`, K).
 pub fn build_with(
     model: &dyn Model,
-    overrides: &[(String, String)],
+    overrides: &Overrides,
 ) -> Result<(System, Resolved), BuildError> {
     let mut params = model.parameters()?;
-    for (name, text) in overrides {
+    if !params.contains("temperature") {
+        params.define_value("temperature", DEFAULT_TEMPERATURE)?;
+    }
+    for (name, text) in &overrides.parameters {
         params.apply_text(name, text)?;
     }
     let resolved = params.resolve()?;
-    let system = model.build(&resolved)?;
+    let mut system = model.build(&resolved)?;
+    let used = system.tags();
+    let mut specs = model.damping();
+    for (tag, spec) in &overrides.damping {
+        if !used.contains(tag) {
+            return Err(BuildError::Unknown {
+                context: format!(
+                    "damping (tags of this model: {})",
+                    used.iter().cloned().collect::<Vec<_>>().join(", ")
+                ),
+                what: "tag",
+                name: tag.clone(),
+            });
+        }
+        specs.entry(tag.clone()).or_default().merge(spec);
+    }
+    for (tag, spec) in &specs {
+        system.damping.set(tag, spec.resolve(tag, &resolved)?);
+    }
+    system.temperature = resolved.get("temperature")?;
     Ok((system, resolved))
 }
 

@@ -6,7 +6,9 @@
 
 use nalgebra::{Matrix6, Vector3, Vector6};
 use pendkit_energy::{EndDirection, SpringEnd, WireEnd, WireSection, WireTags};
-use pendkit_model::{BodySpec, BuildError, Model, SystemBuilder, WireSpec};
+use std::collections::BTreeMap;
+
+use pendkit_model::{BodySpec, BuildError, DampingSpec, Model, SystemBuilder, WireSpec};
 use pendkit_params::{ParamError, ParamSet, Resolved};
 
 /// Builds a parameter set from (name, expression) pairs.
@@ -19,7 +21,8 @@ fn params(defs: &[(&str, &str)]) -> Result<ParamSet, ParamError> {
 }
 
 /// The material parameters of the REF fused-silica fibre (physics_oracles.md §0).
-const SILICA_FIBRE: [(&str, &str); 6] = [
+const SILICA_FIBRE: [(&str, &str); 7] = [
+    ("phi_fibre", "1e-7"),
     ("r_fibre", "0.2e-3"),
     ("E_fibre", "72e9"),
     ("nu_fibre", "0.17"),
@@ -27,6 +30,15 @@ const SILICA_FIBRE: [(&str, &str); 6] = [
     ("l_fibre", "0.6"),
     ("g", "9.81"),
 ];
+
+/// Structural loss `phi` (a parameter name) on the stretch, bending and torsion tags of
+/// wires called `kind` (the bundled small models' fibres default to φ = 1e-7 everywhere).
+fn wire_damping(kind: &str, phi: &str) -> BTreeMap<String, DampingSpec> {
+    ["stretch", "bending", "torsion"]
+        .into_iter()
+        .map(|t| (format!("{kind}_{t}"), DampingSpec::structural(phi)))
+        .collect()
+}
 
 fn fibre_tags() -> WireTags {
     WireTags {
@@ -160,6 +172,9 @@ impl Model for Pendulum {
         defs.extend(SILICA_FIBRE);
         params(&defs)
     }
+    fn damping(&self) -> BTreeMap<String, DampingSpec> {
+        wire_damping("fibre", "phi_fibre")
+    }
     fn build(&self, p: &Resolved) -> Result<pendkit_energy::System, BuildError> {
         let (g, m, l) = (p.get("g")?, p.get("m1")?, p.get("l_fibre")?);
         let mut b = SystemBuilder::new(g);
@@ -207,7 +222,11 @@ impl Model for DoublePendulum {
             ("E_wire", "212e9"),
             ("nu_wire", "0.29"),
             ("rho_wire", "7800"),
+            ("phi_wire", "1e-7"),
         ])
+    }
+    fn damping(&self) -> BTreeMap<String, DampingSpec> {
+        wire_damping("wire", "phi_wire")
     }
     fn build(&self, p: &Resolved) -> Result<pendkit_energy::System, BuildError> {
         let g = p.get("g")?;
@@ -289,6 +308,9 @@ impl Model for RigidBody {
         ];
         defs.extend(SILICA_FIBRE);
         params(&defs)
+    }
+    fn damping(&self) -> BTreeMap<String, DampingSpec> {
+        wire_damping("fibre", "phi_fibre")
     }
     fn build(&self, p: &Resolved) -> Result<pendkit_energy::System, BuildError> {
         let (g, m, l, d) = (
