@@ -409,7 +409,11 @@ pub fn log_grid(from: f64, to: f64, n: usize) -> Result<Vec<f64>, Error> {
         return Ok(vec![from]);
     }
     let (a, b) = (from.ln(), to.ln());
-    Ok((0..n)
+    let mut grid: Vec<f64> = (0..n)
         .map(|i| (a + (b - a) * i as f64 / (n - 1) as f64).exp())
-        .collect())
+        .collect();
+    // the end points exactly as given, not as exp(ln(x)) rounds them
+    grid[0] = from;
+    grid[n - 1] = to;
+    Ok(grid)
 }

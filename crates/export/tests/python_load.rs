@@ -13,7 +13,9 @@ fn scipy_and_numpy_load_what_we_write() {
     // Keep in step with the expected values in load_check.py.
     let a = [0.1, -2.5, 1e-300, 1.0 / 3.0, 6.02214076e23, -0.0];
     let b = [1.0, 2.0, 3.0];
-    let states: Vec<String> = ["x1", "theta_dot", "φ_pitch"].map(String::from).to_vec();
+    let states: Vec<String> = ["x1", "theta_dot", "φ_pitch", ""]
+        .map(String::from)
+        .to_vec();
     let inputs: Vec<String> = Vec::new();
     let matrices = [
         Matrix {
