@@ -15,6 +15,9 @@ fn registered_kinds_are_exactly_the_bundled_set() {
             ("gravity", Stage::S0A),
             ("spring", Stage::S0A),
             ("wire-stretch", Stage::S0A),
+            ("wire-torsion", Stage::S1A),
+            ("wire-bending", Stage::S1B),
+            ("wire-extra-stretch", Stage::S2),
         ]
     );
 }

@@ -17,6 +17,11 @@ use pendkit_energy::{Stage, System};
 use pendkit_model::{BuildError, DampingSpec, Model, Overrides};
 use pendkit_params::Resolved;
 
+// Name every bundled element crate so the linker keeps its registration.
+use pendkit_element_bending as _;
+use pendkit_element_extra_stretch as _;
+use pendkit_element_torsion as _;
+
 pub use pendkit_assembly as assembly;
 pub use pendkit_dynamics as dynamics;
 pub use pendkit_energy as energy;

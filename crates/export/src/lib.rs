@@ -4,10 +4,10 @@
 //! Every [`Matrix`] and every [`Names`] list becomes one variable of the file, under its own
 //! name:
 //!
-//! | input     | `.mat` (MATLAB / `scipy.io.loadmat`)  | `.npz` (`numpy.load`)          | JSON                 |
-//! |-----------|----------------------------------------|--------------------------------|----------------------|
-//! | [`Matrix`] | `rows x cols` double                  | `<f8` array of shape (rows, cols) | array of row arrays |
-//! | [`Names`]  | `n x 1` cell array of char row vectors | `<U{maxlen}` array of shape (n,) | array of strings     |
+//! | input      | `.mat` (MATLAB, `scipy.io.loadmat`)    | `.npz` (`numpy.load`)             | JSON                |
+//! |------------|----------------------------------------|-----------------------------------|---------------------|
+//! | [`Matrix`] | `rows x cols` double                   | `<f8` array of shape (rows, cols) | array of row arrays |
+//! | [`Names`]  | `n x 1` cell array of char row vectors | `<U{maxlen}` array of shape (n,)  | array of strings    |
 //!
 //! Variable names must be valid MATLAB names (a letter first, then letters, digits or
 //! underscores, at most 63 characters, not a keyword) and distinct; matrix data is row-major
@@ -253,8 +253,8 @@ pub fn write_npz<W: Write + Seek>(
 /// The variables as one JSON object: each matrix an array of row arrays, each name list an
 /// array of strings, e.g. `{"A": [[0.0, 1.0], [-4.0, 0.0]], "states": ["x", "v"]}`.
 ///
-/// Keys come out sorted by name. Non-finite values become `null` (as in JavaScript) and
-/// values beyond `data.len()` are left out; [`write`] rejects both instead.
+/// Keys come out sorted by name. Non-finite values become `null` (as in JavaScript), and rows
+/// past the end of a too-short `data` come out empty; [`write()`] rejects both instead.
 pub fn to_json(matrices: &[Matrix], names: &[Names]) -> Value {
     let mut object = serde_json::Map::new();
     for m in matrices {

@@ -124,3 +124,63 @@ impl DampingSpec {
         })
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use pendkit_params::ParamSet;
+
+    fn params() -> Resolved {
+        let mut p = ParamSet::new();
+        p.define("delta", "1.945745e-5").unwrap();
+        p.define("tau", "1.450933e-2").unwrap();
+        p.define("phi", "1e-7").unwrap();
+        p.resolve().unwrap()
+    }
+
+    #[test]
+    fn thermoelastic_peak_matches_the_oracle_table() {
+        // physics_oracles.md §7, silica fibre with the stress term: Δ = 1.945745e-5,
+        // τ = 1.450933e-2 s; φ_TE(1, 10, 100, 500 Hz) printed to 7 digits.
+        let spec = DampingSpec {
+            thermoelastic: Some(("delta".into(), "tau".into())),
+            ..Default::default()
+        };
+        let d = spec.resolve("t", &params()).unwrap();
+        for (f, printed) in [
+            (1.0, 1.759213e-6),
+            (10.0, 9.687251e-6),
+            (100.0, 2.108941e-6),
+            (500.0, 4.266579e-7),
+        ] {
+            let (re, im) = d.at(f);
+            assert_eq!(re, 1.0);
+            assert!((im - printed).abs() <= 0.5e-6 * printed, "{f} Hz: {im}");
+        }
+    }
+
+    #[test]
+    fn parts_add_and_fields_merge() {
+        // §6: φ_w(ω) = φ + Δ ωτ/(1 + ω²τ²) = 9.787251e-6 at 10 Hz with φ = 1e-7.
+        let mut spec = DampingSpec::structural("phi");
+        spec.merge(&DampingSpec {
+            thermoelastic: Some(("delta".into(), "tau".into())),
+            ..Default::default()
+        });
+        let (_, im) = spec.resolve("t", &params()).unwrap().at(10.0);
+        assert!((im - 9.787251e-6).abs() <= 0.5e-12);
+        spec.set_field("viscous", "2e-3").unwrap();
+        spec.set_field("real", "1 + 0*f").unwrap();
+        let (re, im2) = spec.resolve("t", &params()).unwrap().at(10.0);
+        assert_eq!(re, 1.0);
+        assert!((im2 - im - 2e-2).abs() < 1e-15);
+        assert!(spec.set_field("loss", "1").is_err());
+        let bad = DampingSpec::structural("nosuch");
+        assert!(
+            bad.resolve("t", &params())
+                .unwrap_err()
+                .to_string()
+                .contains("nosuch")
+        );
+    }
+}

@@ -66,17 +66,20 @@ fn support(b: &mut SystemBuilder) -> Result<usize, BuildError> {
 }
 
 /// Four vertical fibres from the support (at z = 0) to `body`, attached at (±a, ±b, d) on the
-/// body whose centre sits at z = -(l + d); each carries a quarter of `weight` (N).
-#[allow(clippy::too_many_arguments)]
+/// body whose centre sits at z = -(l + d); each carries a quarter of `weight` (N). Their
+/// lower ends are hinged when the parameter `hinged_bottom` is non-zero, else clamped.
 fn four_fibres(
     b: &mut SystemBuilder,
-    support: usize,
-    body: usize,
+    (support, body): (usize, usize),
     p: &Resolved,
     (a, bb, d): (f64, f64, f64),
     weight: f64,
-    bottom: EndDirection,
 ) -> Result<(), BuildError> {
+    let bottom = if p.get("hinged_bottom")? != 0.0 {
+        EndDirection::Hinged
+    } else {
+        EndDirection::Auto
+    };
     let section = round_section(p, "fibre")?;
     let length = p.get("l_fibre")?;
     for (k, (sx, sy)) in [(1.0, 1.0), (1.0, -1.0), (-1.0, 1.0), (-1.0, -1.0)]
@@ -168,7 +171,14 @@ impl Model for Pendulum {
         "40 kg point mass on 4 silica fibres, 0.6 m, clamped at the top, hinged at the mass"
     }
     fn parameters(&self) -> Result<ParamSet, ParamError> {
-        let mut defs = vec![("m1", "40"), ("a_fibre", "0.005"), ("b_fibre", "0.17")];
+        let mut defs = vec![
+            ("m1", "40"),
+            ("a_fibre", "0.005"),
+            ("b_fibre", "0.17"),
+            // 1: fibres hinged at the mass (one bending point); 0: clamped to the
+            // non-rotating point mass (two bending points)
+            ("hinged_bottom", "1"),
+        ];
         defs.extend(SILICA_FIBRE);
         params(&defs)
     }
@@ -188,15 +198,7 @@ impl Model for Pendulum {
                 .mass(m),
         )?;
         let spread = (p.get("a_fibre")?, p.get("b_fibre")?, 0.0);
-        four_fibres(
-            &mut b,
-            support,
-            mass,
-            p,
-            spread,
-            m * g,
-            EndDirection::Hinged,
-        )?;
+        four_fibres(&mut b, (support, mass), p, spread, m * g)?;
         b.build()
     }
 }
@@ -337,13 +339,8 @@ impl Model for RigidBody {
                 .mass(m)
                 .inertia_diag(p.get("I1x")?, p.get("I1y")?, p.get("I1z")?),
         )?;
-        let bottom = if p.get("hinged_bottom")? != 0.0 {
-            EndDirection::Hinged
-        } else {
-            EndDirection::Auto
-        };
         let spread = (p.get("a_fibre")?, p.get("b_fibre")?, d);
-        four_fibres(&mut b, support, body, p, spread, m * g, bottom)?;
+        four_fibres(&mut b, (support, body), p, spread, m * g)?;
         b.build()
     }
 }
