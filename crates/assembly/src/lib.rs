@@ -260,31 +260,16 @@ fn equilibrium_terms(system: &System, x: &[f64]) -> Result<Vec<Term>, EnergyErro
     Ok(terms)
 }
 
-/// Finds the equilibrium of `system`. Plug-in terms that join early are rebuilt around each
-/// new equilibrium (their auto clamp angles and tensions depend on it) until it settles.
+/// Finds the equilibrium of `system`. Plug-in terms that join early are built around the
+/// start position (their auto clamp angles and tensions), as in the source (§9.2.6): the
+/// start is meant to be the drawing's nominal geometry, which is where clamps are aligned.
 pub fn solve_equilibrium(
     system: &System,
     options: &EquilibriumOptions,
 ) -> Result<Equilibrium, AssemblyError> {
     check_plugin_kinds(system)?;
     let start = system.start();
-    let mut eq = find_equilibrium(system, &equilibrium_terms(system, &start)?, &start, options)?;
-    if system.early_wire_terms != EarlyWireTerms::No {
-        for _ in 0..10 {
-            let terms = equilibrium_terms(system, &eq.coords)?;
-            let next = find_equilibrium(system, &terms, &eq.coords, options)?;
-            let moved = next
-                .coords
-                .iter()
-                .zip(&eq.coords)
-                .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
-            eq = next;
-            if moved <= options.step_tolerance {
-                break;
-            }
-        }
-    }
-    Ok(eq)
+    find_equilibrium(system, &equilibrium_terms(system, &start)?, &start, options)
 }
 
 /// Finds the equilibrium and differentiates every term of `stage` there.
@@ -304,8 +289,15 @@ pub fn assemble_at(
     equilibrium: Equilibrium,
 ) -> Result<Assembled, AssemblyError> {
     let x = &equilibrium.coords;
-    let all_plugins = system.early_wire_terms == EarlyWireTerms::Yes;
-    let mut terms = kind_terms(system, x, |s| s <= stage || all_plugins)?;
+    let mut terms = kind_terms(system, x, |s| s == Stage::S0A)?;
+    // plug-in terms: those of the stage, built around the equilibrium; or, when they joined
+    // the equilibrium for good, all of them, built around the start as they were there
+    let plugins = if system.early_wire_terms == EarlyWireTerms::Yes {
+        kind_terms(system, &system.start(), |s| s != Stage::S0A)?
+    } else {
+        kind_terms(system, x, |s| s != Stage::S0A && s <= stage)?
+    };
+    terms.extend(plugins);
     terms.extend(extra_terms(system, ExtraPhase::BeforeEquilibrium, None)?);
     terms.extend(extra_terms(system, ExtraPhase::AfterEquilibrium, Some(x))?);
     terms.extend(constraint_terms(system, x));

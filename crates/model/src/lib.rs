@@ -588,7 +588,9 @@ pub struct Overrides {
 }
 
 /// Resolves `model`'s defaults with `overrides` applied, builds the system and attaches
-/// its damping multipliers and temperature (parameter `temperature`, K).
+/// its damping multipliers, temperature (parameter `temperature`, K, default 290) and the
+/// "wire terms early" switch (parameter `wire_terms_early`: 0 no, 1 yes, 2 equilibrium
+/// only; default 0).
 pub fn build_with(
     model: &dyn Model,
     overrides: &Overrides,
@@ -596,6 +598,9 @@ pub fn build_with(
     let mut params = model.parameters()?;
     if !params.contains("temperature") {
         params.define_value("temperature", DEFAULT_TEMPERATURE)?;
+    }
+    if !params.contains("wire_terms_early") {
+        params.define_value("wire_terms_early", 0.0)?;
     }
     for (name, text) in &overrides.parameters {
         params.apply_text(name, text)?;
@@ -621,6 +626,17 @@ pub fn build_with(
         system.damping.set(tag, spec.resolve(tag, &resolved)?);
     }
     system.temperature = resolved.get("temperature")?;
+    system.early_wire_terms = match resolved.get("wire_terms_early")? {
+        0.0 => EarlyWireTerms::No,
+        1.0 => EarlyWireTerms::Yes,
+        2.0 => EarlyWireTerms::EquilibriumOnly,
+        other => {
+            return Err(BuildError::Invalid {
+                item: "parameter 'wire_terms_early'".into(),
+                message: format!("must be 0 (no), 1 (yes) or 2 (equilibrium only), got {other}"),
+            });
+        }
+    };
     Ok((system, resolved))
 }
 
