@@ -343,7 +343,7 @@ fn run(cli: Cli) -> Result<(), Error> {
             pendkit_export::write(&path, &matrices, &names).map_err(Error::Export)?;
             let _ = writeln!(
                 out,
-                "{} ({}), stage {stage}: wrote {} ({} states, {} inputs, {} outputs); damping represented as viscous at {damping_frequency} Hz (exact for viscous damping only)",
+                "{} ({}), stage {stage}: wrote {} ({} states, {} inputs, {} outputs); damping represented as viscous at {damping_frequency} Hz: exact for viscous damping only, and without the damping force of the support's velocity (B and D use Re C_XS,eff and Re S_eff)",
                 case.name,
                 case.model.name(),
                 path.display(),

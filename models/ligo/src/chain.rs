@@ -1,0 +1,291 @@
+//! Building blocks shared by the quad and the triple: blade tips in each variant, wires
+//! between bodies, violin-mode beads on fibres, and material damping.
+
+use std::collections::BTreeMap;
+
+use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
+use pendkit_energy::{BodyId, EndDirection, SpringEnd, WireEnd, WireSection, WireTags};
+use pendkit_model::{BodySpec, BuildError, DampingSpec, SystemBuilder, WireSpec};
+use pendkit_params::Resolved;
+
+/// How blade tips are modelled (source §6.3–§6.4).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Blades {
+    /// Massless tip moving along the mounting body's z axis: a float ("xtra-lite").
+    XtraLite,
+    /// Tip with mass moving along the mounting body's z axis: one variable ("lite").
+    Lite,
+    /// Tip as a 6-DOF body with mass on a 6x6 spring ("full").
+    Full,
+    /// Massless tip with vertical and lateral (x) compliance: two floats ("lateral").
+    Lateral,
+}
+
+impl Blades {
+    /// The blade-tip parameters each form needs, with defaults (documented assumptions:
+    /// no public blade data is at hand).
+    pub fn parameters(self) -> Vec<(&'static str, &'static str)> {
+        match self {
+            Blades::XtraLite => vec![],
+            // effective tip mass of a ~0.2 kg maraging blade, of order a quarter of it
+            Blades::Lite => vec![("blade_tip_mass", "0.05")],
+            Blades::Full => vec![
+                ("blade_tip_mass", "0.05"),
+                // tip inertia m r² with r = 2 cm
+                ("blade_tip_inertia", "blade_tip_mass*0.02^2"),
+                // stiffness of the non-working directions (N/m, N m/rad)
+                ("blade_stiff_translation", "1e6"),
+                ("blade_stiff_rotation", "1e3"),
+            ],
+            // lateral stiffness per blade as a multiple of its vertical stiffness
+            Blades::Lateral => vec![("blade_lateral_ratio", "300")],
+        }
+    }
+}
+
+/// One blade: mounted on `parent` with its tip at `tip` (m, parent coordinates), vertical
+/// stiffness `kc` (N/m), carrying `load` (N) down through its wires at the nominal geometry.
+pub struct Blade<'a> {
+    /// Suffix of the tip's coordinate names, e.g. `0l`.
+    pub name: &'a str,
+    /// The body the blade is clamped to.
+    pub parent: BodyId,
+    /// Lab position of the parent's origin at the nominal geometry (m); the parent is level.
+    pub parent_origin: Vector3<f64>,
+    /// Tip position in parent coordinates (m).
+    pub tip: Vector3<f64>,
+    /// Vertical stiffness (N/m).
+    pub kc: f64,
+    /// Vertical load from the wires at the nominal geometry (N).
+    pub load: f64,
+    /// Damping tag.
+    pub tag: &'a str,
+}
+
+fn num(x: f64) -> String {
+    // Rust prints f64 without exponent and exactly round-trippable
+    format!("({x})")
+}
+
+/// Adds a blade in the form `blades` and returns the tip body; wires attach to it at
+/// (±s, 0, 0) in its coordinates. The blade's preload is set so that the tip is in
+/// equilibrium at the nominal geometry.
+pub fn blade(b: &mut SystemBuilder, blade: &Blade, blades: Blades, p: &Resolved, g: f64) -> Result<BodyId, BuildError> {
+    let (z, x) = (format!("zb{}", blade.name), format!("xb{}", blade.name));
+    let t = &blade.tip;
+    let tip_name = format!("blade{}", blade.name);
+    let mut stiffness = Vector6::new(0.0, 0.0, blade.kc, 0.0, 0.0, 0.0);
+    let mut load = blade.load;
+    let tip = match blades {
+        Blades::XtraLite | Blades::Lateral | Blades::Lite => {
+            let x_expr = if blades == Blades::Lateral {
+                b.float(&x, 0.0)?;
+                stiffness[0] = p.get("blade_lateral_ratio")? * blade.kc;
+                format!("{} + {x}", num(t.x))
+            } else {
+                num(t.x)
+            };
+            let mut spec = BodySpec::new(&tip_name)
+                .on(blade.parent)
+                .pose([&x_expr, &num(t.y), &format!("{} + {z}", num(t.z)), "0", "0", "0"]);
+            if blades == Blades::Lite {
+                b.variable(&z, 0.0)?;
+                let m = p.get("blade_tip_mass")?;
+                spec = spec.mass(m);
+                load += m * g;
+            } else {
+                b.float(&z, 0.0)?;
+            }
+            b.body(spec)?
+        }
+        Blades::Full => {
+            let at = blade.parent_origin + t;
+            let names = ["x", "y", "z", "yaw", "pitch", "roll"].map(|n| format!("{n}b{}", blade.name));
+            for (k, n) in names.iter().enumerate() {
+                b.variable(n, if k < 3 { at[k] } else { 0.0 })?;
+            }
+            let m = p.get("blade_tip_mass")?;
+            let i = p.get("blade_tip_inertia")?;
+            load += m * g;
+            let (kt, kr) = (p.get("blade_stiff_translation")?, p.get("blade_stiff_rotation")?);
+            stiffness = Vector6::new(kt, kt, blade.kc, kr, kr, kr);
+            b.body(
+                BodySpec::new(&tip_name)
+                    .pose(names.each_ref().map(String::as_str))
+                    .mass(m)
+                    .inertia(Matrix3::identity() * i),
+            )?
+        }
+    };
+    // the tip frame's origin is the tip itself in every form
+    let ends = [
+        SpringEnd {
+            body: blade.parent,
+            point: *t,
+            angles: [0.0; 3],
+        },
+        SpringEnd {
+            body: tip,
+            point: Vector3::zeros(),
+            angles: [0.0; 3],
+        },
+    ];
+    b.spring(
+        &tip_name,
+        ends,
+        Matrix6::from_diagonal(&stiffness),
+        Vector6::new(0.0, 0.0, -load, 0.0, 0.0, 0.0),
+        blade.tag,
+    )?;
+    Ok(tip)
+}
+
+/// A round wire's section from parameters `r<suffix>`, `Y<suffix>` and Poisson's ratio
+/// `nu` (a parameter name), with density `rho` (a parameter name).
+pub fn round_section(p: &Resolved, r: &str, y: &str, nu: &str, rho: &str) -> Result<WireSection, BuildError> {
+    let e = p.get(y)?;
+    Ok(WireSection::round(p.get(r)?, e, e / (2.0 * (1.0 + p.get(nu)?)), p.get(rho)?))
+}
+
+/// Tags `<set>_stretch`, `<set>_bending`, `<set>_torsion`.
+pub fn tags(set: &str) -> WireTags {
+    WireTags {
+        stretch: format!("{set}_stretch"),
+        bending: format!("{set}_bending"),
+        torsion: format!("{set}_torsion"),
+    }
+}
+
+/// One straight wire, clamped at both ends (auto directions), of nominal length `length`
+/// (m) carrying `tension` (N).
+pub fn wire(
+    b: &mut SystemBuilder,
+    name: &str,
+    (upper, upper_point): (BodyId, Vector3<f64>),
+    (lower, lower_point): (BodyId, Vector3<f64>),
+    (section, length, tension): (&WireSection, f64, f64),
+    tags: &WireTags,
+) -> Result<(), BuildError> {
+    let end = |body, point| WireEnd {
+        body,
+        point,
+        direction: EndDirection::Auto,
+    };
+    b.wire(WireSpec::from_tension(
+        name,
+        [end(upper, upper_point), end(lower, lower_point)],
+        section.clone(),
+        length,
+        tension,
+        tags.clone(),
+    ))?;
+    Ok(())
+}
+
+/// A vertical fibre between two bodies, optionally carrying violin-mode beads.
+pub struct Fibre<'a> {
+    /// Name; segments are `<name>s1 ...`, beads `<name>b1 ...` (coordinates
+    /// `x<name>b1 y<name>b1 z<name>b1 ...`).
+    pub name: &'a str,
+    /// Upper body and attachment point (m, body coordinates).
+    pub upper: (BodyId, Vector3<f64>),
+    /// Lower body and attachment point.
+    pub lower: (BodyId, Vector3<f64>),
+    /// Lab position of the upper attachment at the nominal geometry (m).
+    pub top: Vector3<f64>,
+    /// Cross-section.
+    pub section: &'a WireSection,
+    /// Length between the attachment points (m).
+    pub length: f64,
+    /// Tension of the lowest segment (N).
+    pub tension: f64,
+    /// Number of beads (0: one plain fibre).
+    pub beads: usize,
+}
+
+/// Adds a fibre split into `beads + 1` segments with point-mass beads between them, each
+/// bead carrying one segment's mass μ L / (N + 1) (the lumped-mass rule). The fibre is
+/// clamped at both ends and hinged at the beads (a string between them); each segment
+/// carries the tension of the lowest plus the weight of the beads below it.
+pub fn beaded_fibre(b: &mut SystemBuilder, f: &Fibre, g: f64, tags: &WireTags) -> Result<(), BuildError> {
+    let segment = f.length / (f.beads + 1) as f64;
+    let bead_mass = f.section.linear_density * segment;
+    let mut above = (f.upper.0, f.upper.1, EndDirection::Auto);
+    for k in 0..=f.beads {
+        let below = if k < f.beads {
+            let names = ["x", "y", "z"].map(|c| format!("{c}{}b{}", f.name, k + 1));
+            b.variable(&names[0], f.top.x)?;
+            b.variable(&names[1], f.top.y)?;
+            b.variable(&names[2], f.top.z - segment * (k + 1) as f64)?;
+            let bead = b.body(
+                BodySpec::new(format!("{}b{}", f.name, k + 1))
+                    .pose([&names[0], &names[1], &names[2], "0", "0", "0"])
+                    .mass(bead_mass),
+            )?;
+            (bead, Vector3::zeros(), EndDirection::Hinged)
+        } else {
+            (f.lower.0, f.lower.1, EndDirection::Auto)
+        };
+        let end = |(body, point, direction): &(BodyId, Vector3<f64>, EndDirection)| WireEnd {
+            body: *body,
+            point: *point,
+            direction: direction.clone(),
+        };
+        let name = if f.beads == 0 {
+            f.name.to_string()
+        } else {
+            format!("{}s{}", f.name, k + 1)
+        };
+        let carried = f.tension + (f.beads - k) as f64 * bead_mass * g;
+        b.wire(WireSpec::from_tension(
+            name,
+            [end(&above), end(&below)],
+            f.section.clone(),
+            segment,
+            carried,
+            tags.clone(),
+        ))?;
+        above = below;
+    }
+    Ok(())
+}
+
+/// Mass (kg) of the beads of one fibre.
+pub fn beads_mass(section: &WireSection, length: f64, beads: usize) -> f64 {
+    if beads == 0 {
+        0.0
+    } else {
+        section.linear_density * length * beads as f64 / (beads + 1) as f64
+    }
+}
+
+/// Damping of a wire set from its material: structural φ on stretch, bending and torsion,
+/// plus the thermoelastic peak on bending (physics_oracles.md §7, with the stress term):
+/// Δ = (Y T/ρC)(α − σβ/Y)², τ = ρ C d² / (2.16 · 2π · κ), σ = tension / area.
+/// `material` prefixes the material parameters (`<m>_phi`, `<m>_rho`, ...); `tension` and
+/// `radius`, `youngs` name the wire set's parameters.
+pub fn wire_damping(set: &str, material: &str, tension: &str, radius: &str, youngs: &str) -> Vec<(String, DampingSpec)> {
+    let phi = format!("{material}_phi");
+    let stress = format!("({tension})/(pi*{radius}^2)");
+    let delta = format!(
+        "{youngs}*temperature/({material}_rho*{material}_C)*({material}_alpha - {stress}*{material}_dlnE_dT/{youngs})^2"
+    );
+    let tau = format!("{material}_rho*{material}_C*(2*{radius})^2/(2.16*2*pi*{material}_K)");
+    vec![
+        (format!("{set}_stretch"), DampingSpec::structural(&phi)),
+        (
+            format!("{set}_bending"),
+            DampingSpec {
+                structural: Some(phi.clone()),
+                thermoelastic: Some((delta, tau)),
+                ..Default::default()
+            },
+        ),
+        (format!("{set}_torsion"), DampingSpec::structural(&phi)),
+    ]
+}
+
+/// Collects damping entries into the map a model returns.
+pub fn damping_map(entries: impl IntoIterator<Item = (String, DampingSpec)>) -> BTreeMap<String, DampingSpec> {
+    entries.into_iter().collect()
+}
