@@ -91,7 +91,9 @@ pub enum Error {
 
 /// Every bundled model.
 pub fn models() -> Vec<&'static dyn Model> {
-    pendkit_models_basic::models()
+    let mut all = pendkit_models_basic::models();
+    all.extend(pendkit_models_ligo::models());
+    all
 }
 
 /// The bundled model called `name`.

@@ -70,7 +70,13 @@ fn num(x: f64) -> String {
 /// Adds a blade in the form `blades` and returns the tip body; wires attach to it at
 /// (±s, 0, 0) in its coordinates. The blade's preload is set so that the tip is in
 /// equilibrium at the nominal geometry.
-pub fn blade(b: &mut SystemBuilder, blade: &Blade, blades: Blades, p: &Resolved, g: f64) -> Result<BodyId, BuildError> {
+pub fn blade(
+    b: &mut SystemBuilder,
+    blade: &Blade,
+    blades: Blades,
+    p: &Resolved,
+    g: f64,
+) -> Result<BodyId, BuildError> {
     let (z, x) = (format!("zb{}", blade.name), format!("xb{}", blade.name));
     let t = &blade.tip;
     let tip_name = format!("blade{}", blade.name);
@@ -85,9 +91,14 @@ pub fn blade(b: &mut SystemBuilder, blade: &Blade, blades: Blades, p: &Resolved,
             } else {
                 num(t.x)
             };
-            let mut spec = BodySpec::new(&tip_name)
-                .on(blade.parent)
-                .pose([&x_expr, &num(t.y), &format!("{} + {z}", num(t.z)), "0", "0", "0"]);
+            let mut spec = BodySpec::new(&tip_name).on(blade.parent).pose([
+                &x_expr,
+                &num(t.y),
+                &format!("{} + {z}", num(t.z)),
+                "0",
+                "0",
+                "0",
+            ]);
             if blades == Blades::Lite {
                 b.variable(&z, 0.0)?;
                 let m = p.get("blade_tip_mass")?;
@@ -100,14 +111,18 @@ pub fn blade(b: &mut SystemBuilder, blade: &Blade, blades: Blades, p: &Resolved,
         }
         Blades::Full => {
             let at = blade.parent_origin + t;
-            let names = ["x", "y", "z", "yaw", "pitch", "roll"].map(|n| format!("{n}b{}", blade.name));
+            let names =
+                ["x", "y", "z", "yaw", "pitch", "roll"].map(|n| format!("{n}b{}", blade.name));
             for (k, n) in names.iter().enumerate() {
                 b.variable(n, if k < 3 { at[k] } else { 0.0 })?;
             }
             let m = p.get("blade_tip_mass")?;
             let i = p.get("blade_tip_inertia")?;
             load += m * g;
-            let (kt, kr) = (p.get("blade_stiff_translation")?, p.get("blade_stiff_rotation")?);
+            let (kt, kr) = (
+                p.get("blade_stiff_translation")?,
+                p.get("blade_stiff_rotation")?,
+            );
             stiffness = Vector6::new(kt, kt, blade.kc, kr, kr, kr);
             b.body(
                 BodySpec::new(&tip_name)
@@ -142,9 +157,20 @@ pub fn blade(b: &mut SystemBuilder, blade: &Blade, blades: Blades, p: &Resolved,
 
 /// A round wire's section from parameters `r<suffix>`, `Y<suffix>` and Poisson's ratio
 /// `nu` (a parameter name), with density `rho` (a parameter name).
-pub fn round_section(p: &Resolved, r: &str, y: &str, nu: &str, rho: &str) -> Result<WireSection, BuildError> {
+pub fn round_section(
+    p: &Resolved,
+    r: &str,
+    y: &str,
+    nu: &str,
+    rho: &str,
+) -> Result<WireSection, BuildError> {
     let e = p.get(y)?;
-    Ok(WireSection::round(p.get(r)?, e, e / (2.0 * (1.0 + p.get(nu)?)), p.get(rho)?))
+    Ok(WireSection::round(
+        p.get(r)?,
+        e,
+        e / (2.0 * (1.0 + p.get(nu)?)),
+        p.get(rho)?,
+    ))
 }
 
 /// Tags `<set>_stretch`, `<set>_bending`, `<set>_torsion`.
@@ -191,8 +217,8 @@ pub struct Fibre<'a> {
     pub upper: (BodyId, Vector3<f64>),
     /// Lower body and attachment point.
     pub lower: (BodyId, Vector3<f64>),
-    /// Lab position of the upper attachment at the nominal geometry (m).
-    pub top: Vector3<f64>,
+    /// Lab positions of the upper and lower attachments at the nominal geometry (m).
+    pub nominal: [Vector3<f64>; 2],
     /// Cross-section.
     pub section: &'a WireSection,
     /// Length between the attachment points (m).
@@ -207,16 +233,23 @@ pub struct Fibre<'a> {
 /// bead carrying one segment's mass μ L / (N + 1) (the lumped-mass rule). The fibre is
 /// clamped at both ends and hinged at the beads (a string between them); each segment
 /// carries the tension of the lowest plus the weight of the beads below it.
-pub fn beaded_fibre(b: &mut SystemBuilder, f: &Fibre, g: f64, tags: &WireTags) -> Result<(), BuildError> {
+pub fn beaded_fibre(
+    b: &mut SystemBuilder,
+    f: &Fibre,
+    g: f64,
+    tags: &WireTags,
+) -> Result<(), BuildError> {
     let segment = f.length / (f.beads + 1) as f64;
     let bead_mass = f.section.linear_density * segment;
     let mut above = (f.upper.0, f.upper.1, EndDirection::Auto);
     for k in 0..=f.beads {
         let below = if k < f.beads {
             let names = ["x", "y", "z"].map(|c| format!("{c}{}b{}", f.name, k + 1));
-            b.variable(&names[0], f.top.x)?;
-            b.variable(&names[1], f.top.y)?;
-            b.variable(&names[2], f.top.z - segment * (k + 1) as f64)?;
+            let at = f.nominal[0]
+                + (f.nominal[1] - f.nominal[0]) * ((k + 1) as f64 / (f.beads + 1) as f64);
+            for (name, value) in names.iter().zip(at.iter()) {
+                b.variable(name, *value)?;
+            }
             let bead = b.body(
                 BodySpec::new(format!("{}b{}", f.name, k + 1))
                     .pose([&names[0], &names[1], &names[2], "0", "0", "0"])
@@ -264,7 +297,13 @@ pub fn beads_mass(section: &WireSection, length: f64, beads: usize) -> f64 {
 /// Δ = (Y T/ρC)(α − σβ/Y)², τ = ρ C d² / (2.16 · 2π · κ), σ = tension / area.
 /// `material` prefixes the material parameters (`<m>_phi`, `<m>_rho`, ...); `tension` and
 /// `radius`, `youngs` name the wire set's parameters.
-pub fn wire_damping(set: &str, material: &str, tension: &str, radius: &str, youngs: &str) -> Vec<(String, DampingSpec)> {
+pub fn wire_damping(
+    set: &str,
+    material: &str,
+    tension: &str,
+    radius: &str,
+    youngs: &str,
+) -> Vec<(String, DampingSpec)> {
     let phi = format!("{material}_phi");
     let stress = format!("({tension})/(pi*{radius}^2)");
     let delta = format!(
@@ -286,6 +325,8 @@ pub fn wire_damping(set: &str, material: &str, tension: &str, radius: &str, youn
 }
 
 /// Collects damping entries into the map a model returns.
-pub fn damping_map(entries: impl IntoIterator<Item = (String, DampingSpec)>) -> BTreeMap<String, DampingSpec> {
+pub fn damping_map(
+    entries: impl IntoIterator<Item = (String, DampingSpec)>,
+) -> BTreeMap<String, DampingSpec> {
     entries.into_iter().collect()
 }

@@ -1,0 +1,335 @@
+//! The aLIGO quadruple test-mass suspension (source §6.2), parameters and topology from
+//! `params/quad2005.csv` and its README: support, 2 structure blades, 2 top wires, top mass
+//! (stage 0), 2 blades, 4 wires, UIM (1), 2 blades, 4 wires, PUM (2), 4 silica fibres, test
+//! mass (3). Wire lengths are equilibrium lengths between attachment points; each wire's
+//! stiffness is Y π r² / l and its unstretched length l − T/k with T the static tension,
+//! and each blade's preload holds its tip at the nominal height, so the equilibrium sits on
+//! the nominal geometry.
+
+use std::collections::BTreeMap;
+
+use nalgebra::Vector3;
+use pendkit_energy::System;
+use pendkit_model::{BodySpec, BuildError, DampingSpec, Model, SystemBuilder};
+use pendkit_params::{ParamError, ParamSet, Resolved};
+
+use crate::chain::{self, Blade, Blades, Fibre};
+use crate::tables;
+
+/// One variant of the quad.
+pub struct Quad {
+    name: &'static str,
+    summary: &'static str,
+    blades: Blades,
+    /// Default number of violin beads per fibre (parameter `n_beads`).
+    beads: usize,
+}
+
+/// The bundled quad variants.
+pub const QUADS: [Quad; 5] = [
+    Quad {
+        name: "quad",
+        summary: "aLIGO quad, xtra-lite (massless blade tips as floats), quad2005 parameters",
+        blades: Blades::XtraLite,
+        beads: 0,
+    },
+    Quad {
+        name: "quad-lite",
+        summary: "aLIGO quad, lite (blade tips with mass, 1 DOF each)",
+        blades: Blades::Lite,
+        beads: 0,
+    },
+    Quad {
+        name: "quad-full",
+        summary: "aLIGO quad, full (blade tips as 6-DOF bodies on 6x6 springs)",
+        blades: Blades::Full,
+        beads: 0,
+    },
+    Quad {
+        name: "quad-lateral",
+        summary: "aLIGO quad, xtra-lite with lateral blade compliance (the source's preferred model)",
+        blades: Blades::Lateral,
+        beads: 0,
+    },
+    Quad {
+        name: "quad-v5",
+        summary: "aLIGO quad, xtra-lite with 5 violin beads per fibre (n_beads sets any N)",
+        blades: Blades::XtraLite,
+        beads: 5,
+    },
+];
+
+/// Nominal vertical extent (m) of a wire of length `l` whose ends differ by `dy` in y.
+fn vertical(l: f64, dy: f64) -> f64 {
+    (l * l - dy * dy).sqrt()
+}
+
+impl Model for Quad {
+    fn name(&self) -> &'static str {
+        self.name
+    }
+
+    fn summary(&self) -> &'static str {
+        self.summary
+    }
+
+    fn parameters(&self) -> Result<ParamSet, ParamError> {
+        let mut set = ParamSet::new();
+        tables::define_quad(&mut set)?;
+        tables::define_materials(&mut set)?;
+        for (name, value) in [
+            // Poisson's ratios (not in the tables): silica as physics_oracles.md §0, steel typical
+            ("nu_steel", "0.29".to_string()),
+            ("nu_silica", "0.17".to_string()),
+            ("n_beads", self.beads.to_string()),
+            // static tensions (N) of each wire set at the nominal geometry, for the
+            // thermoelastic stress term
+            (
+                "Tn",
+                "(mn+m1+m2+m3)*g/2*ln/sqrt(ln^2-(nn0-nn1)^2)".to_string(),
+            ),
+            ("T1", "(m1+m2+m3)*g/4*l1/sqrt(l1^2-(n0-n1)^2)".to_string()),
+            ("T2", "(m2+m3)*g/4*l2/sqrt(l2^2-(n2-n3)^2)".to_string()),
+            ("T3", "m3*g/4*l3/sqrt(l3^2-(n4-n5)^2)".to_string()),
+        ] {
+            set.define(name, &value)?;
+        }
+        for (name, value) in self.blades.parameters() {
+            set.define(name, value)?;
+        }
+        Ok(set)
+    }
+
+    fn damping(&self) -> BTreeMap<String, DampingSpec> {
+        let mut d = chain::damping_map(
+            [
+                ("wn", "steel", "Tn", "rn", "Yn"),
+                ("w1", "steel", "T1", "r1", "Y1"),
+                ("w2", "steel", "T2", "r2", "Y2"),
+                ("fibre", "silica", "T3", "r3", "Y3"),
+            ]
+            .into_iter()
+            .flat_map(|(set, m, t, r, y)| chain::wire_damping(set, m, t, r, y)),
+        );
+        for blade in ["blade_n", "blade_1", "blade_2"] {
+            d.insert(blade.into(), DampingSpec::structural("maraging_phi"));
+        }
+        d
+    }
+
+    fn build(&self, p: &Resolved) -> Result<System, BuildError> {
+        let v = |n: &str| p.get(n);
+        let g = v("g")?;
+        for (name, expected) in [("nwn", 2.0), ("nw1", 4.0), ("nw2", 4.0), ("nw3", 4.0)] {
+            if v(name)? != expected {
+                return Err(BuildError::Invalid {
+                    item: format!("parameter '{name}'"),
+                    message: format!("the quad's topology has {expected} wires here"),
+                });
+            }
+        }
+        let beads = v("n_beads")?;
+        if beads < 0.0 || beads.fract() != 0.0 || beads > 1000.0 {
+            return Err(BuildError::Invalid {
+                item: "parameter 'n_beads'".into(),
+                message: format!("must be a whole number from 0 to 1000, got {beads}"),
+            });
+        }
+        let beads = beads as usize;
+        let (mn, m1, m2, m3) = (v("mn")?, v("m1")?, v("m2")?, v("m3")?);
+        let steel = |r: &str, y: &str| chain::round_section(p, r, y, "nu_steel", "steel_rho");
+        let (sec_n, sec_1, sec_2) = (steel("rn", "Yn")?, steel("r1", "Y1")?, steel("r2", "Y2")?);
+        let sec_3 = chain::round_section(p, "r3", "Y3", "nu_silica", "silica_rho")?;
+        let l3 = v("l3")?;
+        let m_beads = 4.0 * chain::beads_mass(&sec_3, l3, beads);
+
+        // nominal geometry: centre-of-mass heights from the wire lengths (the derived tl*)
+        let vert_n = vertical(v("ln")?, v("nn0")? - v("nn1")?);
+        let vert_1 = vertical(v("l1")?, v("n0")? - v("n1")?);
+        let vert_2 = vertical(v("l2")?, v("n2")? - v("n3")?);
+        let vert_3 = vertical(l3, v("n4")? - v("n5")?);
+        let z0 = -vert_n - v("dm")?;
+        let z1 = z0 - v("dn")? - vert_1 - v("d0")?;
+        let z2 = z1 - v("d1")? - vert_2 - v("d2")?;
+        let z3 = z2 - v("d3")? - vert_3 - v("d4")?;
+
+        let mut b = SystemBuilder::new(g);
+        b.support_parameters()?;
+        let support = b.body(BodySpec::new("support").pose_suffix("00"))?;
+        let mut bodies = Vec::new();
+        for (k, (name, z, m, inertia)) in [
+            ("top", z0, mn, ["Inx", "Iny", "Inz"]),
+            ("uim", z1, m1, ["I1x", "I1y", "I1z"]),
+            ("pum", z2, m2, ["I2x", "I2y", "I2z"]),
+            ("testmass", z3, m3, ["I3x", "I3y", "I3z"]),
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            for (c, start) in ["x", "y", "z", "yaw", "pitch", "roll"]
+                .into_iter()
+                .zip([0.0, 0.0, z, 0.0, 0.0, 0.0])
+            {
+                b.variable(&format!("{c}{k}"), start)?;
+            }
+            bodies.push(
+                b.body(
+                    BodySpec::new(name)
+                        .pose_suffix(&k.to_string())
+                        .mass(m)
+                        .inertia_diag(v(inertia[0])?, v(inertia[1])?, v(inertia[2])?),
+                )?,
+            );
+        }
+        let [top, uim, pum, tm] = [bodies[0], bodies[1], bodies[2], bodies[3]];
+
+        // vertical loads (N) on each blade tip: everything hung below it, shared by 2 blades
+        let below = |masses: f64| (masses + m_beads) * g / 2.0;
+        let kc = |f: &str, m: f64| -> Result<f64, BuildError> {
+            Ok(0.5 * (2.0 * std::f64::consts::PI * v(f)?).powi(2) * m)
+        };
+        let blade_stages = [
+            // (parent, parent origin z, tip y, tip z, kc, load, tag, name prefix)
+            (
+                support,
+                0.0,
+                v("nn0")?,
+                0.0,
+                kc("ufcn", mn)?,
+                below(mn + m1 + m2 + m3),
+                "blade_n",
+                "0",
+            ),
+            (
+                top,
+                z0,
+                v("n0")?,
+                -v("dn")?,
+                kc("ufc1", m1)?,
+                below(m1 + m2 + m3),
+                "blade_1",
+                "1",
+            ),
+            (
+                uim,
+                z1,
+                v("n2")?,
+                -v("d1")?,
+                kc("ufc2", m2)?,
+                below(m2 + m3),
+                "blade_2",
+                "2",
+            ),
+        ];
+        let mut tips = Vec::new();
+        for (parent, origin_z, y, z, kc, load, tag, prefix) in blade_stages {
+            let mut pair = Vec::new();
+            for (side, sign) in [("l", 1.0), ("r", -1.0)] {
+                let blade = Blade {
+                    name: &format!("{prefix}{side}"),
+                    parent,
+                    parent_origin: Vector3::new(0.0, 0.0, origin_z),
+                    tip: Vector3::new(0.0, sign * y, z),
+                    kc,
+                    load,
+                    tag,
+                };
+                pair.push(chain::blade(&mut b, &blade, self.blades, p, g)?);
+            }
+            tips.push(pair);
+        }
+
+        // top wires: one per structure blade tip, to the top mass at (0, ±nn1, dm)
+        let (sn, su, si, sl) = (v("sn")?, v("su")?, v("si")?, v("sl")?);
+        let tags_n = chain::tags("wn");
+        for (k, sign) in [1.0, -1.0].into_iter().enumerate() {
+            chain::wire(
+                &mut b,
+                &format!("wn{}", k + 1),
+                (tips[0][k], Vector3::new(sn, 0.0, 0.0)),
+                (top, Vector3::new(sn, sign * v("nn1")?, v("dm")?)),
+                (
+                    &sec_n,
+                    v("ln")?,
+                    below(mn + m1 + m2 + m3) * v("ln")? / vert_n,
+                ),
+                &tags_n,
+            )?;
+        }
+        // UIM and PUM wires: two per blade tip at x = ±s
+        for (stage, lower, s, n_low, d_low, sec, l, vert, mass, set) in [
+            (
+                1,
+                uim,
+                su,
+                v("n1")?,
+                v("d0")?,
+                &sec_1,
+                v("l1")?,
+                vert_1,
+                m1 + m2 + m3,
+                "w1",
+            ),
+            (
+                2,
+                pum,
+                si,
+                v("n3")?,
+                v("d2")?,
+                &sec_2,
+                v("l2")?,
+                vert_2,
+                m2 + m3,
+                "w2",
+            ),
+        ] {
+            let tags = chain::tags(set);
+            let tension = below(mass) / 2.0 * l / vert;
+            for (k, (side, sx)) in [(0, 1.0), (0, -1.0), (1, 1.0), (1, -1.0)]
+                .into_iter()
+                .enumerate()
+            {
+                let sy = if side == 0 { 1.0 } else { -1.0 };
+                chain::wire(
+                    &mut b,
+                    &format!("{set}_{}", k + 1),
+                    (tips[stage][side], Vector3::new(sx * s, 0.0, 0.0)),
+                    (lower, Vector3::new(sx * s, sy * n_low, d_low)),
+                    (sec, l, tension),
+                    &tags,
+                )?;
+            }
+        }
+        // fibres from the PUM (±sl, ±n4, −d3) to the test mass (±sl, ±n5, d4)
+        let tags_3 = chain::tags("fibre");
+        let (n4, n5, d3, d4) = (v("n4")?, v("n5")?, v("d3")?, v("d4")?);
+        for (k, (sx, sy)) in [(1.0, 1.0), (-1.0, 1.0), (1.0, -1.0), (-1.0, -1.0)]
+            .into_iter()
+            .enumerate()
+        {
+            let (upper_point, lower_point) = (
+                Vector3::new(sx * sl, sy * n4, -d3),
+                Vector3::new(sx * sl, sy * n5, d4),
+            );
+            chain::beaded_fibre(
+                &mut b,
+                &Fibre {
+                    name: &format!("f{}", k + 1),
+                    upper: (pum, upper_point),
+                    lower: (tm, lower_point),
+                    nominal: [
+                        Vector3::new(0.0, 0.0, z2) + upper_point,
+                        Vector3::new(0.0, 0.0, z3) + lower_point,
+                    ],
+                    section: &sec_3,
+                    length: l3,
+                    tension: m3 * g / 4.0 * l3 / vert_3,
+                    beads,
+                },
+                g,
+                &tags_3,
+            )?;
+        }
+        b.build()
+    }
+}
