@@ -174,27 +174,15 @@ fn to_faer(m: &DMatrix<f64>) -> Mat<f64> {
     Mat::from_fn(m.nrows(), m.ncols(), |i, j| m[(i, j)])
 }
 
-/// Solves K_eff v = ω² M v by Cholesky reduction to a standard symmetric problem.
-/// `names` are the variable names. Eigenvalues within rounding of zero (relative 1e-12 of
-/// the largest) are reported as exactly zero: neutral, not unstable.
-pub fn normal_modes(
-    k_eff: &DMatrix<f64>,
-    mass: &DMatrix<f64>,
-    names: &[String],
-) -> Result<Modes, DynamicsError> {
-    let n = mass.nrows();
-    let m = to_faer(mass);
-    let llt = m.llt(Side::Lower).map_err(|_| {
-        let weakest = (0..n)
-            .min_by(|&i, &j| mass[(i, i)].total_cmp(&mass[(j, j)]))
-            .unwrap_or(0);
-        DynamicsError::SingularMass {
-            variable: names.get(weakest).cloned().unwrap_or_default(),
-        }
-    })?;
-    let l = llt.L();
-    // C = L⁻¹ K L⁻ᵀ, symmetric, same eigenvalues as the pencil (K, M)
-    let mut x = to_faer(k_eff);
+/// Eigenpairs (ω², vectors) of the pencil (A, B) by Cholesky reduction of B:
+/// C = L⁻¹ A L⁻ᵀ, eigenvalues ascending, vectors L⁻ᵀ u (B-orthonormal).
+fn reduced_eigen(
+    a: &DMatrix<f64>,
+    b_llt: &faer::linalg::solvers::Llt<f64>,
+) -> Result<(Vec<f64>, Mat<f64>), DynamicsError> {
+    let n = a.nrows();
+    let l = b_llt.L();
+    let mut x = to_faer(a);
     l.solve_lower_triangular_in_place(x.as_mut());
     let mut c = x.transpose().to_owned();
     l.solve_lower_triangular_in_place(c.as_mut());
@@ -204,11 +192,62 @@ pub fn normal_modes(
         .map_err(|e| DynamicsError::Eigen(format!("{e:?}")))?;
     let mut v = evd.U().to_owned();
     l.transpose().solve_upper_triangular_in_place(v.as_mut());
-    let lambdas: Vec<f64> = (0..n).map(|i| evd.S().column_vector()[i]).collect();
-    let largest = lambdas.iter().fold(0.0f64, |a, l| a.max(l.abs()));
+    Ok(((0..n).map(|i| evd.S().column_vector()[i]).collect(), v))
+}
+
+/// Solves K_eff v = ω² M v. When K_eff is positive definite the pencil is reduced with
+/// K_eff's Cholesky factor and solved for 1/ω²: the low modes, the ones suspensions are
+/// about, then keep full relative accuracy even when very stiff, very light parts (blade
+/// tips, beads) put other modes many decades higher; otherwise (neutral or unstable modes)
+/// it is reduced with M's factor, and eigenvalues within rounding of zero (100 ε of the
+/// largest) are reported as exactly zero: neutral. Modes stiffer than the lowest by more
+/// than 1/(100 ε) ≈ 4.5e13 in ω² cannot be resolved in double precision and are reported
+/// at that bound. `names` are the variable names.
+pub fn normal_modes(
+    k_eff: &DMatrix<f64>,
+    mass: &DMatrix<f64>,
+    names: &[String],
+) -> Result<Modes, DynamicsError> {
+    let n = mass.nrows();
+    let m_llt = to_faer(mass).llt(Side::Lower).map_err(|_| {
+        let weakest = (0..n)
+            .min_by(|&i, &j| mass[(i, i)].total_cmp(&mass[(j, j)]))
+            .unwrap_or(0);
+        DynamicsError::SingularMass {
+            variable: names.get(weakest).cloned().unwrap_or_default(),
+        }
+    })?;
+    let (lambdas, v, zero) = match to_faer(k_eff).llt(Side::Lower) {
+        Ok(k_llt) => {
+            // M u = μ K u with μ = 1/ω², μ descending ⇔ ω² ascending
+            let (mus, u) = reduced_eigen(mass, &k_llt)?;
+            // every μ is positive in exact arithmetic; the smallest (the stiffest modes) are
+            // resolved only down to rounding of the largest, and are reported at that bound
+            let floor = 100.0 * f64::EPSILON * mus.last().copied().unwrap_or(0.0);
+            let order: Vec<usize> = (0..n).rev().collect();
+            let mut v = Mat::zeros(n, n);
+            let mut lambdas = Vec::with_capacity(n);
+            for (k, &j) in order.iter().enumerate() {
+                let col: Vec<f64> = (0..n).map(|i| u[(i, j)]).collect();
+                let vn = nalgebra::DVector::from_column_slice(&col);
+                let norm = vn.dot(&(mass * &vn)).sqrt();
+                for i in 0..n {
+                    v[(i, k)] = col[i] / norm;
+                }
+                lambdas.push(1.0 / mus[j].max(floor));
+            }
+            (lambdas, v, 0.0)
+        }
+        Err(_) => {
+            let (lambdas, v) = reduced_eigen(k_eff, &m_llt)?;
+            // neutral modes come out as ± rounding of the largest eigenvalue
+            let largest = lambdas.iter().fold(0.0f64, |a, l| a.max(l.abs()));
+            (lambdas, v, 100.0 * f64::EPSILON * largest)
+        }
+    };
     let modes = (0..n)
         .map(|k| {
-            let lambda = if lambdas[k].abs() <= 1e-12 * largest {
+            let lambda = if lambdas[k].abs() <= zero {
                 0.0
             } else {
                 lambdas[k]

@@ -22,6 +22,14 @@ pub enum Blades {
 }
 
 impl Blades {
+    /// Mass (kg) of one blade tip in this form (parameter `blade_tip_mass`, or 0).
+    pub fn tip_mass(self, p: &Resolved) -> Result<f64, BuildError> {
+        match self {
+            Blades::Lite | Blades::Full => Ok(p.get("blade_tip_mass")?),
+            Blades::XtraLite | Blades::Lateral => Ok(0.0),
+        }
+    }
+
     /// The blade-tip parameters each form needs, with defaults (documented assumptions:
     /// no public blade data is at hand).
     pub fn parameters(self) -> Vec<(&'static str, &'static str)> {
@@ -44,7 +52,7 @@ impl Blades {
 }
 
 /// One blade: mounted on `parent` with its tip at `tip` (m, parent coordinates), vertical
-/// stiffness `kc` (N/m), carrying `load` (N) down through its wires at the nominal geometry.
+/// stiffness `kc` (N/m), pulled by its wires with force `pull` at the nominal geometry.
 pub struct Blade<'a> {
     /// Suffix of the tip's coordinate names, e.g. `0l`.
     pub name: &'a str,
@@ -56,8 +64,9 @@ pub struct Blade<'a> {
     pub tip: Vector3<f64>,
     /// Vertical stiffness (N/m).
     pub kc: f64,
-    /// Vertical load from the wires at the nominal geometry (N).
-    pub load: f64,
+    /// Force of the wires on the tip at the nominal geometry (N, parent axes; the parent is
+    /// level there).
+    pub pull: Vector3<f64>,
     /// Damping tag.
     pub tag: &'a str,
 }
@@ -68,8 +77,9 @@ fn num(x: f64) -> String {
 }
 
 /// Adds a blade in the form `blades` and returns the tip body; wires attach to it at
-/// (±s, 0, 0) in its coordinates. The blade's preload is set so that the tip is in
-/// equilibrium at the nominal geometry.
+/// (±s, 0, 0) in its coordinates. The blade's preload balances the wires' pull and the
+/// tip's weight, so that the tip is in equilibrium at the nominal geometry (entries for
+/// directions a form does not let the tip move in are inert).
 pub fn blade(
     b: &mut SystemBuilder,
     blade: &Blade,
@@ -81,7 +91,7 @@ pub fn blade(
     let t = &blade.tip;
     let tip_name = format!("blade{}", blade.name);
     let mut stiffness = Vector6::new(0.0, 0.0, blade.kc, 0.0, 0.0, 0.0);
-    let mut load = blade.load;
+    let mut tip_weight = 0.0;
     let tip = match blades {
         Blades::XtraLite | Blades::Lateral | Blades::Lite => {
             let x_expr = if blades == Blades::Lateral {
@@ -103,7 +113,7 @@ pub fn blade(
                 b.variable(&z, 0.0)?;
                 let m = p.get("blade_tip_mass")?;
                 spec = spec.mass(m);
-                load += m * g;
+                tip_weight = m * g;
             } else {
                 b.float(&z, 0.0)?;
             }
@@ -118,7 +128,7 @@ pub fn blade(
             }
             let m = p.get("blade_tip_mass")?;
             let i = p.get("blade_tip_inertia")?;
-            load += m * g;
+            tip_weight = m * g;
             let (kt, kr) = (
                 p.get("blade_stiff_translation")?,
                 p.get("blade_stiff_rotation")?,
@@ -149,7 +159,14 @@ pub fn blade(
         &tip_name,
         ends,
         Matrix6::from_diagonal(&stiffness),
-        Vector6::new(0.0, 0.0, -load, 0.0, 0.0, 0.0),
+        Vector6::new(
+            blade.pull.x,
+            blade.pull.y,
+            blade.pull.z - tip_weight,
+            0.0,
+            0.0,
+            0.0,
+        ),
         blade.tag,
     )?;
     Ok(tip)

@@ -183,20 +183,25 @@ impl Model for Quad {
         }
         let [top, uim, pum, tm] = [bodies[0], bodies[1], bodies[2], bodies[3]];
 
-        // vertical loads (N) on each blade tip: everything hung below it, shared by 2 blades
+        // vertical loads (N) on each blade tip: everything hung below it, shared by 2 blades;
+        // the tips of the lite and full forms weigh on the body their blade is mounted on
+        let tip = 2.0 * self.blades.tip_mass(p)?;
         let below = |masses: f64| (masses + m_beads) * g / 2.0;
         let kc = |f: &str, m: f64| -> Result<f64, BuildError> {
             Ok(0.5 * (2.0 * std::f64::consts::PI * v(f)?).powi(2) * m)
         };
+        // (parent, parent origin z, tip y, tip z, kc, load W, y of the wires' lower ends,
+        //  their vertical extent, tag, name prefix)
         let blade_stages = [
-            // (parent, parent origin z, tip y, tip z, kc, load, tag, name prefix)
             (
                 support,
                 0.0,
                 v("nn0")?,
                 0.0,
                 kc("ufcn", mn)?,
-                below(mn + m1 + m2 + m3),
+                below(mn + m1 + m2 + m3 + 2.0 * tip),
+                v("nn1")?,
+                vert_n,
                 "blade_n",
                 "0",
             ),
@@ -206,7 +211,9 @@ impl Model for Quad {
                 v("n0")?,
                 -v("dn")?,
                 kc("ufc1", m1)?,
-                below(m1 + m2 + m3),
+                below(m1 + m2 + m3 + tip),
+                v("n1")?,
+                vert_1,
                 "blade_1",
                 "1",
             ),
@@ -217,12 +224,14 @@ impl Model for Quad {
                 -v("d1")?,
                 kc("ufc2", m2)?,
                 below(m2 + m3),
+                v("n3")?,
+                vert_2,
                 "blade_2",
                 "2",
             ),
         ];
         let mut tips = Vec::new();
-        for (parent, origin_z, y, z, kc, load, tag, prefix) in blade_stages {
+        for (parent, origin_z, y, z, kc, load, y_low, vert, tag, prefix) in blade_stages {
             let mut pair = Vec::new();
             for (side, sign) in [("l", 1.0), ("r", -1.0)] {
                 let blade = Blade {
@@ -231,7 +240,8 @@ impl Model for Quad {
                     parent_origin: Vector3::new(0.0, 0.0, origin_z),
                     tip: Vector3::new(0.0, sign * y, z),
                     kc,
-                    load,
+                    // the wires hang down and sideways towards their lower ends
+                    pull: Vector3::new(0.0, sign * load * (y_low - y) / vert, -load),
                     tag,
                 };
                 pair.push(chain::blade(&mut b, &blade, self.blades, p, g)?);
@@ -251,7 +261,7 @@ impl Model for Quad {
                 (
                     &sec_n,
                     v("ln")?,
-                    below(mn + m1 + m2 + m3) * v("ln")? / vert_n,
+                    below(mn + m1 + m2 + m3 + 2.0 * tip) * v("ln")? / vert_n,
                 ),
                 &tags_n,
             )?;
@@ -267,7 +277,7 @@ impl Model for Quad {
                 &sec_1,
                 v("l1")?,
                 vert_1,
-                m1 + m2 + m3,
+                m1 + m2 + m3 + tip,
                 "w1",
             ),
             (
