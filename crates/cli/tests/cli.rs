@@ -129,3 +129,57 @@ fn bad_input_is_one_line_and_non_zero() {
         }
     }
 }
+
+#[test]
+fn quad_modes_and_transfer_functions() {
+    let v = modes_json(&["modes", "quad", "--stage", "0a", "--json"]);
+    assert_eq!(frequencies(&v).len(), 24);
+    assert_eq!(v["coordinates"].as_array().unwrap().len(), 24);
+    for input in ["x00", "force:x3"] {
+        let (ok, stdout, stderr) = pendkit(&[
+            "tf", "quad", "--input", input, "--output", "x3", "--points", "5", "--csv",
+        ]);
+        assert!(ok, "{stderr}");
+        let rows: Vec<&str> = stdout.lines().collect();
+        assert_eq!(rows[0], "f_hz,re,im");
+        assert_eq!(rows.len(), 6);
+        let first: Vec<f64> = rows[1].split(',').map(|x| x.parse().unwrap()).collect();
+        assert_eq!(first[0], 0.1);
+        assert!(first[1].is_finite() && first[2].is_finite());
+    }
+    let (ok, stdout, _) = pendkit(&[
+        "noise",
+        "quad",
+        "--output",
+        "x3",
+        "--points",
+        "3",
+        "--csv",
+        "--breakdown",
+    ]);
+    assert!(ok);
+    assert!(stdout.lines().next().unwrap().starts_with("f_hz,asd,"));
+}
+
+#[test]
+fn every_bundled_case_file_runs() {
+    // the case files under models/ are examples users copy: each must parse, build and run
+    let root = concat!(env!("CARGO_MANIFEST_DIR"), "/../../models");
+    let mut stack = vec![std::path::PathBuf::from(root)];
+    let mut count = 0;
+    while let Some(dir) = stack.pop() {
+        for entry in std::fs::read_dir(&dir).unwrap() {
+            let path = entry.unwrap().path();
+            if path.is_dir() {
+                stack.push(path);
+            } else if path.extension().is_some_and(|e| e == "toml")
+                && path.to_string_lossy().contains("/cases/")
+            {
+                let (ok, _, stderr) = pendkit(&["modes", path.to_str().unwrap()]);
+                assert!(ok, "{}: {stderr}", path.display());
+                count += 1;
+            }
+        }
+    }
+    assert!(count >= 5, "found {count} case files");
+}
