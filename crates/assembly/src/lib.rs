@@ -254,8 +254,7 @@ fn kind_terms(
 /// when asked for, the plug-in terms built around `x`.
 fn equilibrium_terms(system: &System, x: &[f64]) -> Result<Vec<Term>, EnergyError> {
     let early = system.early_wire_terms != EarlyWireTerms::No;
-    let limit = system.early_stage_limit.unwrap_or(Stage::S2);
-    let mut terms = kind_terms(system, x, |s| s == Stage::S0A || early && s <= limit)?;
+    let mut terms = kind_terms(system, x, |s| s == Stage::S0A || early)?;
     terms.extend(extra_terms(system, ExtraPhase::BeforeEquilibrium, None)?);
     Ok(terms)
 }

@@ -116,6 +116,7 @@ impl LocalFrames {
             .collect::<std::collections::BTreeSet<_>>()
             .into_iter()
             .collect();
+        // every variable of every frame is in `coords` by construction
         let local = |g: usize| coords.binary_search(&g).unwrap_or(0);
         let frames = bodies
             .iter()

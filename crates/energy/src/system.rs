@@ -7,7 +7,7 @@ use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
 use pendkit_expr::Expr;
 use pendkit_geometry::FrameMap;
 
-use crate::{Damping, Stage};
+use crate::Damping;
 
 /// Index of a coordinate in [`System::coords`].
 pub type CoordId = usize;
@@ -247,8 +247,6 @@ pub struct System {
     pub constraint_stiffness: BTreeMap<CoordId, f64>,
     /// Whether plug-in wire terms join the equilibrium.
     pub early_wire_terms: EarlyWireTerms,
-    /// Highest stage whose plug-in terms may join the equilibrium early.
-    pub early_stage_limit: Option<Stage>,
     /// Complex multipliers of the damping tags.
     pub damping: Damping,
     /// Temperature for thermal noise (K).

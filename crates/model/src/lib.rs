@@ -639,8 +639,3 @@ pub fn build_with(
     };
     Ok((system, resolved))
 }
-
-/// Named numbers for a plug-in element instance.
-pub fn values<const N: usize>(pairs: [(&str, f64); N]) -> BTreeMap<String, f64> {
-    pairs.into_iter().map(|(k, v)| (k.to_string(), v)).collect()
-}
