@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 use nalgebra::{DVector, Vector3};
 use pendkit_assembly::{Assembled, AssemblyError, EquilibriumOptions, assemble};
 use pendkit_dynamics::{
-    DynamicsError, Input, Modes, Output, StageModel, eliminate_floats, normal_modes,
+    DynamicsError, Input, Modes, Output, StageModel, ThermalNoise, eliminate_floats, normal_modes,
 };
 use pendkit_energy::{Stage, System};
 use pendkit_model::{BuildError, DampingSpec, Model, Overrides};
@@ -403,6 +403,38 @@ impl StageResult {
                 "a variable (or <body>@x,y,z/dx,dy,dz, force:<parameter>)",
                 &m.variables,
             )),
+        }
+    }
+}
+
+impl StageResult {
+    /// Transfer function from the named input to the named output (see
+    /// [`StageResult::input`], [`StageResult::output`]) at `freqs` (Hz), with the model's
+    /// damping.
+    pub fn transfer(
+        &self,
+        input: &str,
+        output: &str,
+        freqs: &[f64],
+    ) -> Result<Vec<faer::c64>, Error> {
+        let (i, o) = (self.input(input)?, self.output(output)?);
+        Ok(self.model.transfer(&self.system.damping, &i, &o, freqs))
+    }
+
+    /// Thermal noise (PSD, m²/Hz or rad²/Hz) of the named displacement output at `freqs`
+    /// (Hz), at the model's temperature, with its breakdown by term.
+    pub fn noise(&self, output: &str, freqs: &[f64]) -> Result<ThermalNoise, Error> {
+        match self.output(output)? {
+            Output::Displacement(v) => Ok(self.model.thermal_noise(
+                &self.system.damping,
+                &v,
+                self.system.temperature,
+                freqs,
+            )),
+            Output::SupportForce(_) => Err(Error::Name {
+                name: output.to_string(),
+                message: "thermal noise needs a displacement output".into(),
+            }),
         }
     }
 }

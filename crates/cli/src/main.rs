@@ -6,7 +6,6 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 use pendkit::{Case, Error, StageResult, log_grid, run_stage};
-use pendkit_dynamics::Output;
 use pendkit_dynamics::lab_motion;
 use pendkit_energy::{Stage, registry};
 use pendkit_export::{Matrix, Names};
@@ -195,11 +194,8 @@ fn run(cli: Cli) -> Result<(), Error> {
             csv,
         } => {
             let (case, stage, r) = args.run_lossy()?;
-            let (input_v, output_v) = (r.input(&input)?, r.output(&output)?);
             let freqs = log_grid(grid.from, grid.to, grid.points)?;
-            let h = r
-                .model
-                .transfer(&r.system.damping, &input_v, &output_v, &freqs);
+            let h = r.transfer(&input, &output, &freqs)?;
             if csv {
                 out.push_str("f_hz,re,im\n");
             } else {
@@ -238,19 +234,8 @@ fn run(cli: Cli) -> Result<(), Error> {
             breakdown,
         } => {
             let (case, stage, r) = args.run_lossy()?;
-            let v = match r.output(&output)? {
-                Output::Displacement(v) => v,
-                Output::SupportForce(_) => {
-                    return Err(Error::Name {
-                        name: output,
-                        message: "thermal noise needs a displacement output".into(),
-                    });
-                }
-            };
             let freqs = log_grid(grid.from, grid.to, grid.points)?;
-            let noise = r
-                .model
-                .thermal_noise(&r.system.damping, &v, r.system.temperature, &freqs);
+            let noise = r.noise(&output, &freqs)?;
             let tags = noise.by_tag();
             if csv {
                 out.push_str("f_hz,asd");
