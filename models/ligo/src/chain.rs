@@ -300,6 +300,18 @@ pub fn beaded_fibre(
     Ok(())
 }
 
+/// The number of violin beads per fibre from parameter `n_beads` (a whole number, 0–1000).
+pub fn bead_count(p: &Resolved) -> Result<usize, BuildError> {
+    let beads = p.get("n_beads")?;
+    if beads < 0.0 || beads.fract() != 0.0 || beads > 1000.0 {
+        return Err(BuildError::Invalid {
+            item: "parameter 'n_beads'".into(),
+            message: format!("must be a whole number from 0 to 1000, got {beads}"),
+        });
+    }
+    Ok(beads as usize)
+}
+
 /// Mass (kg) of the beads of one fibre.
 pub fn beads_mass(section: &WireSection, length: f64, beads: usize) -> f64 {
     if beads == 0 {

@@ -7,6 +7,7 @@
 mod chain;
 pub mod quad;
 pub mod tables;
+pub mod triple;
 
 use pendkit_model::Model;
 
@@ -14,5 +15,9 @@ pub use chain::Blades;
 
 /// Every model of this crate.
 pub fn models() -> Vec<&'static dyn Model> {
-    quad::QUADS.iter().map(|q| q as &dyn Model).collect()
+    quad::QUADS
+        .iter()
+        .map(|q| q as &dyn Model)
+        .chain(triple::TRIPLES.iter().map(|t| t as &dyn Model))
+        .collect()
 }
