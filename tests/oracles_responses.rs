@@ -7,15 +7,13 @@
 //! relative or better) unless stated. The printed oracle digits are checked to half a unit
 //! of their last digit.
 
-mod common;
-
-use common::{TWO_PI, assert_printed, assert_rel, run};
 use nalgebra::{DVector, Matrix6, Vector3, Vector6};
 use pendkit::StageResult;
-use pendkit_dynamics::{BOLTZMANN, Input, Output, StageModel};
+use pendkit_dynamics::{BOLTZMANN, StageModel};
 use pendkit_energy::{Damping, SpringEnd, Stage};
 use pendkit_model::{BodySpec, DampingSpec, SystemBuilder};
 use pendkit_params::ParamSet;
+use pendkit_tests::{TWO_PI, assert_printed, assert_rel, run};
 
 type C = (f64, f64);
 

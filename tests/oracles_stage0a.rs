@@ -8,11 +8,9 @@
 //! (forces below 1e-11 of the weight); 1e-10 relative leaves margin above both and is far
 //! tighter than the 1e-7.
 
-mod common;
-
-use common::{TWO_PI, assert_printed, assert_rel, hz, run};
 use pendkit_dynamics::eliminate_floats;
 use pendkit_energy::Stage;
+use pendkit_tests::{TWO_PI, assert_printed, assert_rel, hz, run};
 
 const G: f64 = 9.81;
 const REL: f64 = 1e-10;

@@ -11,12 +11,10 @@
 //! difference with step 1e-4, error ~1e-8). Printed oracle digits to half a unit of the
 //! last digit.
 
-mod common;
-
-use common::{TWO_PI, assert_printed, assert_rel, hz, run};
 use pendkit::StageResult;
 use pendkit_assembly::{EquilibriumOptions, solve_equilibrium};
 use pendkit_energy::Stage;
+use pendkit_tests::{TWO_PI, assert_printed, assert_rel, hz, run};
 
 const G: f64 = 9.81;
 const E: f64 = 72e9;

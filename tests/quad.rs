@@ -1,11 +1,9 @@
 //! The aLIGO quad against physics (issue 5): nominal equilibrium, block structure,
 //! transfer-function limits, agreement between variants, and violin modes.
 
-mod common;
-
-use common::{TWO_PI, assert_rel, run};
 use pendkit::StageResult;
 use pendkit_energy::Stage;
+use pendkit_tests::{TWO_PI, assert_rel, run};
 
 const G: f64 = 9.81;
 

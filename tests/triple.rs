@@ -5,12 +5,10 @@
 //! The reference values are computed here from the model's design inputs (the numbers of
 //! its parameter table, repeated below), not from the model's own derived quantities.
 
-#[allow(dead_code)] // each test crate uses a different part of the shared helpers
-mod common;
-
-use common::{assert_rel, run};
 use pendkit::StageResult;
 use pendkit_energy::Stage;
+#[allow(dead_code)] // each test crate uses a different part of the shared helpers
+use pendkit_tests::{assert_rel, run};
 
 const G: f64 = 9.81;
 /// Optic: fused silica (2200 kg/m³), 150 mm diameter × 75 mm thick.

@@ -128,14 +128,7 @@ impl Model for Quad {
                 });
             }
         }
-        let beads = v("n_beads")?;
-        if beads < 0.0 || beads.fract() != 0.0 || beads > 1000.0 {
-            return Err(BuildError::Invalid {
-                item: "parameter 'n_beads'".into(),
-                message: format!("must be a whole number from 0 to 1000, got {beads}"),
-            });
-        }
-        let beads = beads as usize;
+        let beads = chain::bead_count(p)?;
         let (mn, m1, m2, m3) = (v("mn")?, v("m1")?, v("m2")?, v("m3")?);
         let steel = |r: &str, y: &str| chain::round_section(p, r, y, "nu_steel", "steel_rho");
         let (sec_n, sec_1, sec_2) = (steel("rn", "Yn")?, steel("r1", "Y1")?, steel("r2", "Y2")?);

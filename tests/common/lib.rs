@@ -1,4 +1,5 @@
-//! Helpers shared by the workspace tests.
+//! Helpers shared by the workspace tests: running a bundled model, finding a mode,
+//! and tolerance assertions that say what they compared.
 
 use pendkit::{Case, StageResult, run_stage};
 use pendkit_energy::Stage;
