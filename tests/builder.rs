@@ -6,8 +6,10 @@
 use nalgebra::{Matrix3, Vector3};
 use pendkit::run_stage;
 use pendkit_dynamics::lab_motion;
-use pendkit_energy::{EndDirection, ExtraPhase, Stage, System, WireEnd, WireSection, WireTags};
-use pendkit_model::{BodySpec, SystemBuilder, WireSpec};
+use pendkit_energy::{
+    EndDirection, ExtraPhase, Stage, System, Wire, WireEnd, WireSection, WireTags,
+};
+use pendkit_model::{BodySpec, SystemBuilder};
 
 const G: f64 = 9.81;
 const TWO_PI: f64 = 2.0 * std::f64::consts::PI;
@@ -38,7 +40,7 @@ fn pendulum(extra: impl FnOnce(&mut SystemBuilder)) -> System {
         torsion: "t".into(),
     };
     let section = WireSection::round(0.5e-3, 200e9, 80e9, 7800.0);
-    b.wire(WireSpec::from_tension(
+    b.wire(Wire::from_tension(
         "wire",
         [hinge(support), hinge(bob)],
         section,

@@ -3,8 +3,8 @@
 use nalgebra::Vector3;
 use pendkit::{Case, run_stage};
 use pendkit_assembly::{AssemblyError, EquilibriumOptions, solve_equilibrium};
-use pendkit_energy::{EndDirection, Stage, WireEnd, WireSection, WireTags};
-use pendkit_model::{BodySpec, SystemBuilder, WireSpec};
+use pendkit_energy::{EndDirection, Stage, Wire, WireEnd, WireSection, WireTags};
+use pendkit_model::{BodySpec, SystemBuilder};
 
 /// The one-line message of building `model` with `sets`.
 fn build_error(model: &str, sets: &[&str]) -> String {
@@ -121,7 +121,7 @@ fn coincident_attachment_points_are_a_zero_length_wire() {
         point: Vector3::zeros(),
         direction: EndDirection::Hinged,
     };
-    b.wire(WireSpec {
+    b.wire(Wire {
         name: "w".into(),
         ends: [end(top), end(mass)],
         stiffness: 1e4,
@@ -194,7 +194,7 @@ fn inverted_pendulum_is_reported_unstable() {
         point: Vector3::zeros(),
         direction: EndDirection::Hinged,
     };
-    b.wire(WireSpec::from_tension(
+    b.wire(Wire::from_tension(
         "strut",
         [end(top), end(bob)],
         silica(),

@@ -146,6 +146,36 @@ pub struct Wire {
     pub tags: WireTags,
 }
 
+impl Wire {
+    /// A wire of equilibrium length `length` (m) carrying static tension `tension` (N):
+    /// k = E A / length (the parameter sets' convention) and l0 = length − T / k.
+    pub fn from_tension(
+        name: impl Into<String>,
+        ends: [WireEnd; 2],
+        section: WireSection,
+        length: f64,
+        tension: f64,
+        tags: WireTags,
+    ) -> Self {
+        let stiffness = section.youngs_modulus * section.area / length;
+        // A non-positive length is kept as the unstretched length so that the builder
+        // reports it as a zero-length wire rather than as an infinite stiffness.
+        let unstretched_length = if length > 0.0 {
+            length - tension / stiffness
+        } else {
+            length
+        };
+        Wire {
+            name: name.into(),
+            ends,
+            stiffness,
+            unstretched_length,
+            section,
+            tags,
+        }
+    }
+}
+
 /// One end of a spring: a point on a body and the fixed angles that turn the body's axes
 /// into the spring's.
 #[derive(Clone, Debug)]

@@ -12,7 +12,7 @@ use std::collections::BTreeMap;
 use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
 use pendkit_energy::{
     Body, BodyId, CoordId, CoordKind, Coordinate, EarlyWireTerms, EndDirection, ExtraPhase,
-    ExtraTerm, PluginElement, Spring, SpringEnd, System, Wire, WireEnd, WireSection, WireTags,
+    ExtraTerm, PluginElement, Spring, SpringEnd, System, Wire,
 };
 use pendkit_expr::Slot;
 use pendkit_geometry::{FrameMap, PoseMap};
@@ -125,53 +125,6 @@ impl BodySpec {
     pub fn centre_of_mass(mut self, com: Vector3<f64>) -> Self {
         self.centre_of_mass = com;
         self
-    }
-}
-
-/// A wire to add.
-#[derive(Clone, Debug)]
-pub struct WireSpec {
-    /// Name.
-    pub name: String,
-    /// Upper (or first) and lower (or second) ends.
-    pub ends: [WireEnd; 2],
-    /// Longitudinal stiffness k (N/m).
-    pub stiffness: f64,
-    /// Unstretched length l0 (m).
-    pub unstretched_length: f64,
-    /// Cross-section.
-    pub section: WireSection,
-    /// Damping tags.
-    pub tags: WireTags,
-}
-
-impl WireSpec {
-    /// A wire of equilibrium length `length` (m) carrying static tension `tension` (N):
-    /// k = E A / length (the parameter sets' convention) and l0 = length - T / k.
-    pub fn from_tension(
-        name: impl Into<String>,
-        ends: [WireEnd; 2],
-        section: WireSection,
-        length: f64,
-        tension: f64,
-        tags: WireTags,
-    ) -> Self {
-        let stiffness = section.youngs_modulus * section.area / length;
-        // A non-positive length is kept as the unstretched length so that the builder
-        // reports it as a zero-length wire rather than as an infinite stiffness.
-        let unstretched_length = if length > 0.0 {
-            length - tension / stiffness
-        } else {
-            length
-        };
-        WireSpec {
-            name: name.into(),
-            ends,
-            stiffness,
-            unstretched_length,
-            section,
-            tags,
-        }
     }
 }
 
@@ -361,7 +314,7 @@ impl SystemBuilder {
     }
 
     /// Adds a wire, checking its length, stiffness and section.
-    pub fn wire(&mut self, spec: WireSpec) -> Result<usize, BuildError> {
+    pub fn wire(&mut self, spec: Wire) -> Result<usize, BuildError> {
         let item = format!("wire '{}'", spec.name);
         if self.system.wires.iter().any(|w| w.name == spec.name) {
             return Err(BuildError::Duplicate {
@@ -416,14 +369,7 @@ impl SystemBuilder {
                 });
             }
         }
-        self.system.wires.push(Wire {
-            name: spec.name,
-            ends: spec.ends,
-            stiffness: spec.stiffness,
-            unstretched_length: spec.unstretched_length,
-            section: spec.section,
-            tags: spec.tags,
-        });
+        self.system.wires.push(spec);
         Ok(self.system.wires.len() - 1)
     }
 

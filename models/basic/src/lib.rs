@@ -5,10 +5,10 @@
 //! lengths are derived from the static tensions.
 
 use nalgebra::{Matrix6, Vector3, Vector6};
-use pendkit_energy::{EndDirection, SpringEnd, WireEnd, WireSection, WireTags};
+use pendkit_energy::{EndDirection, SpringEnd, Wire, WireEnd, WireSection, WireTags};
 use std::collections::BTreeMap;
 
-use pendkit_model::{BodySpec, BuildError, DampingSpec, Model, SystemBuilder, WireSpec};
+use pendkit_model::{BodySpec, BuildError, DampingSpec, Model, SystemBuilder};
 use pendkit_params::{ParamError, ParamSet, Resolved};
 
 /// Builds a parameter set from (name, expression) pairs.
@@ -99,7 +99,7 @@ fn four_fibres(
                 direction: bottom.clone(),
             },
         ];
-        b.wire(WireSpec::from_tension(
+        b.wire(Wire::from_tension(
             format!("fibre{}", k + 1),
             ends,
             section.clone(),
@@ -266,7 +266,7 @@ impl Model for DoublePendulum {
             point: Vector3::zeros(),
             direction: EndDirection::Hinged,
         };
-        b.wire(WireSpec::from_tension(
+        b.wire(Wire::from_tension(
             "wire1",
             [hinge(support), hinge(upper)],
             section.clone(),
@@ -274,7 +274,7 @@ impl Model for DoublePendulum {
             (m1 + m2) * g,
             tags.clone(),
         ))?;
-        b.wire(WireSpec::from_tension(
+        b.wire(Wire::from_tension(
             "wire2",
             [hinge(upper), hinge(lower)],
             section,

@@ -4,8 +4,8 @@
 use std::collections::BTreeMap;
 
 use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
-use pendkit_energy::{BodyId, EndDirection, SpringEnd, WireEnd, WireSection, WireTags};
-use pendkit_model::{BodySpec, BuildError, DampingSpec, SystemBuilder, WireSpec};
+use pendkit_energy::{BodyId, EndDirection, SpringEnd, Wire, WireEnd, WireSection, WireTags};
+use pendkit_model::{BodySpec, BuildError, DampingSpec, SystemBuilder};
 use pendkit_params::Resolved;
 
 /// How blade tips are modelled (source §6.3–§6.4).
@@ -214,7 +214,7 @@ pub fn wire(
         point,
         direction: EndDirection::Auto,
     };
-    b.wire(WireSpec::from_tension(
+    b.wire(Wire::from_tension(
         name,
         [end(upper, upper_point), end(lower, lower_point)],
         section.clone(),
@@ -287,7 +287,7 @@ pub fn beaded_fibre(
             format!("{}s{}", f.name, k + 1)
         };
         let carried = f.tension + (f.beads - k) as f64 * bead_mass * g;
-        b.wire(WireSpec::from_tension(
+        b.wire(Wire::from_tension(
             name,
             [end(&above), end(&below)],
             f.section.clone(),
