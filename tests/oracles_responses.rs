@@ -8,12 +8,11 @@
 //! of their last digit.
 
 use nalgebra::{DVector, Matrix6, Vector3, Vector6};
-use pendkit::StageResult;
 use pendkit_dynamics::{BOLTZMANN, StageModel};
 use pendkit_energy::{Damping, SpringEnd, Stage};
 use pendkit_model::{BodySpec, DampingSpec, SystemBuilder};
 use pendkit_params::ParamSet;
-use pendkit_tests::{TWO_PI, assert_printed, assert_rel, run};
+use pendkit_tests::{TWO_PI, assert_printed, assert_rel, run, tf};
 
 type C = (f64, f64);
 
@@ -24,16 +23,6 @@ fn cmul(a: C, b: C) -> C {
 fn cdiv(a: C, b: C) -> C {
     let d = b.0 * b.0 + b.1 * b.1;
     ((a.0 * b.0 + a.1 * b.1) / d, (a.1 * b.0 - a.0 * b.1) / d)
-}
-
-fn tf(r: &StageResult, input: &str, output: &str, f: f64) -> (f64, f64) {
-    let h = r.model.transfer(
-        &r.system.damping,
-        &r.input(input).unwrap(),
-        &r.output(output).unwrap(),
-        &[f],
-    );
-    (h[0].re, h[0].im)
 }
 
 #[test]

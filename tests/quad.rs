@@ -1,21 +1,12 @@
 //! The aLIGO quad against physics (issue 5): nominal equilibrium, block structure,
 //! transfer-function limits, agreement between variants, and violin modes.
 
-use pendkit::StageResult;
 use pendkit_energy::Stage;
-use pendkit_tests::{TWO_PI, assert_rel, run};
+use pendkit_tests::{
+    TWO_PI, assert_blocks, assert_rel, lowest, max_relative_difference, run, stiff_string_f1, tf,
+};
 
 const G: f64 = 9.81;
-
-fn tf(r: &StageResult, input: &str, output: &str, f: f64) -> (f64, f64) {
-    let h = r.model.transfer(
-        &r.system.damping,
-        &r.input(input).unwrap(),
-        &r.output(output).unwrap(),
-        &[f],
-    );
-    (h[0].re, h[0].im)
-}
 
 #[test]
 fn equilibrium_is_the_nominal_geometry_to_a_micrometre() {
@@ -75,63 +66,11 @@ fn derived_rows_of_the_parameter_table_agree() {
     assert!((kw(70e9, 0.0002, 0.6, 4.0) - 29320.0).abs() < 5.0);
 }
 
-/// Block of a coordinate: longitudinal/pitch, transverse/roll, vertical, yaw.
-fn block(name: &str) -> usize {
-    if name.starts_with('x') || name.starts_with("pitch") {
-        0
-    } else if name.starts_with('y') && !name.starts_with("yaw") || name.starts_with("roll") {
-        1
-    } else if name.starts_with('z') {
-        2
-    } else {
-        3
-    }
-}
-
 #[test]
 fn symmetric_quad_separates_into_four_blocks() {
     // x/pitch, y/roll, z, yaw: 8 + 8 + 4 + 4 modes, no coupling above rounding.
     let r = run("quad", &[], Stage::S0A);
-    let k = pendkit_dynamics::eliminate_floats(
-        &r.model.real_stiffness(&r.system.damping),
-        &r.assembled.layout,
-        &r.system,
-    )
-    .unwrap()
-    .k_eff;
-    let names = &r.model.variables;
-    for i in 0..names.len() {
-        for j in 0..names.len() {
-            if block(&names[i]) != block(&names[j]) {
-                let scale = (k[(i, i)] * k[(j, j)]).sqrt();
-                assert!(
-                    k[(i, j)].abs() <= 1e-12 * scale,
-                    "K[{}, {}] = {}",
-                    names[i],
-                    names[j],
-                    k[(i, j)]
-                );
-                assert_eq!(r.assembled.mass[(i, j)], 0.0);
-            }
-        }
-    }
-    let mut counts = [0; 4];
-    for m in &r.modes.modes {
-        let b = block(&m.label);
-        let share: f64 = names
-            .iter()
-            .zip(&m.energy_fractions)
-            .filter(|(n, _)| block(n) == b)
-            .map(|(_, f)| f)
-            .sum();
-        assert!(
-            (share - 1.0).abs() < 1e-9,
-            "mode at {} Hz leaks out of its block",
-            m.hz
-        );
-        counts[b] += 1;
-    }
-    assert_eq!(counts, [8, 8, 4, 4]);
+    assert_blocks(&r, [8, 8, 4, 4]);
 }
 
 #[test]
@@ -178,24 +117,6 @@ fn low_frequency_force_compliance_is_the_sum_of_the_stage_pendulums() {
     let (re0, _) = tf(&r0, "force:x3", "x3", 1e-4);
     assert_rel(re0, compliance, 1e-6);
     assert!((re / compliance - 1.0).abs() < 0.01 && re < re0);
-}
-
-/// The lowest `n` mode frequencies of a model with overrides at stage 0A.
-fn lowest(model: &str, sets: &[&str], n: usize) -> Vec<f64> {
-    run(model, sets, Stage::S0A)
-        .modes
-        .modes
-        .iter()
-        .take(n)
-        .map(|m| m.hz)
-        .collect()
-}
-
-fn max_relative_difference(a: &[f64], b: &[f64]) -> f64 {
-    a.iter()
-        .zip(b)
-        .map(|(x, y)| ((x - y) / y).abs())
-        .fold(0.0, f64::max)
 }
 
 #[test]
@@ -262,31 +183,6 @@ fn violin_modes_of_v5_follow_the_loaded_string() {
         let x = modes.iter().filter(|m| m.label.starts_with('x')).count();
         assert_eq!(x, 4, "violin modes come in x and y");
     }
-}
-
-/// First violin frequency (Hz) of the quad's fibre as a continuum stiff string clamped at
-/// both ends: root of 2 k kₑ (1 − cos kL cosh kₑL) + (kₑ² − k²) sin kL sinh kₑL = 0
-/// (divided by cosh kₑL), k² = (−T + s)/2EI, kₑ² = (T + s)/2EI, s = sqrt(T² + 4 EI μ ω²)
-/// (physics_oracles.md §5).
-fn stiff_string_f1(t: f64, ei: f64, mu: f64, l: f64) -> f64 {
-    let residual = |f: f64| {
-        let w = TWO_PI * f;
-        let s = (t * t + 4.0 * ei * mu * w * w).sqrt();
-        let (k, ke) = (((s - t) / (2.0 * ei)).sqrt(), ((s + t) / (2.0 * ei)).sqrt());
-        let sech = 1.0 / (ke * l).cosh();
-        2.0 * k * ke * (sech - (k * l).cos()) + (ke * ke - k * k) * (k * l).sin() * (ke * l).tanh()
-    };
-    let ideal = (t / mu).sqrt() / (2.0 * l);
-    let (mut a, mut b) = (ideal * 0.999, ideal * 1.01);
-    for _ in 0..200 {
-        let m = 0.5 * (a + b);
-        if residual(a) * residual(m) <= 0.0 {
-            b = m;
-        } else {
-            a = m;
-        }
-    }
-    0.5 * (a + b)
 }
 
 #[test]

@@ -47,4 +47,119 @@ pub fn assert_printed(a: f64, printed: f64, digits: i32) {
     );
 }
 
+/// 2π.
 pub const TWO_PI: f64 = 2.0 * std::f64::consts::PI;
+
+/// One transfer function value (re, im) from a named input to a named output at `f` (Hz).
+pub fn tf(r: &StageResult, input: &str, output: &str, f: f64) -> (f64, f64) {
+    let h = r
+        .transfer(input, output, &[f])
+        .expect("valid input and output");
+    (h[0].re, h[0].im)
+}
+
+/// The lowest `n` mode frequencies (Hz) of a bundled model with overrides at stage 0A.
+pub fn lowest(model: &str, sets: &[&str], n: usize) -> Vec<f64> {
+    run(model, sets, Stage::S0A)
+        .modes
+        .modes
+        .iter()
+        .take(n)
+        .map(|m| m.hz)
+        .collect()
+}
+
+/// Largest |a_i / b_i − 1|.
+pub fn max_relative_difference(a: &[f64], b: &[f64]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| ((x - y) / y).abs())
+        .fold(0.0, f64::max)
+}
+
+/// Block of a coordinate of a symmetric suspension: 0 longitudinal/pitch, 1
+/// transverse/roll, 2 vertical, 3 yaw.
+pub fn block(name: &str) -> usize {
+    if name.starts_with('x') || name.starts_with("pitch") {
+        0
+    } else if name.starts_with('y') && !name.starts_with("yaw") || name.starts_with("roll") {
+        1
+    } else if name.starts_with('z') {
+        2
+    } else {
+        3
+    }
+}
+
+/// Asserts that the stage-0A stiffness and mass of `r` do not couple the four blocks
+/// above rounding (1e-12 of the geometric mean of the diagonal entries), that every mode's
+/// kinetic energy stays in one block (to 1e-9), and that the blocks hold `counts` modes.
+#[track_caller]
+pub fn assert_blocks(r: &StageResult, counts: [usize; 4]) {
+    let k = pendkit::dynamics::eliminate_floats(
+        &r.model.real_stiffness(&r.system.damping),
+        &r.assembled.layout,
+        &r.system,
+    )
+    .expect("floats eliminate")
+    .k_eff;
+    let names = &r.model.variables;
+    for i in 0..names.len() {
+        for j in 0..names.len() {
+            if block(&names[i]) != block(&names[j]) {
+                let scale = (k[(i, i)] * k[(j, j)]).sqrt();
+                assert!(
+                    k[(i, j)].abs() <= 1e-12 * scale,
+                    "K[{}, {}] = {}",
+                    names[i],
+                    names[j],
+                    k[(i, j)]
+                );
+                assert_eq!(r.assembled.mass[(i, j)], 0.0);
+            }
+        }
+    }
+    let mut found = [0; 4];
+    for m in &r.modes.modes {
+        let b = block(&m.label);
+        let share: f64 = names
+            .iter()
+            .zip(&m.energy_fractions)
+            .filter(|(n, _)| block(n) == b)
+            .map(|(_, f)| f)
+            .sum();
+        assert!(
+            (share - 1.0).abs() < 1e-9,
+            "mode at {} Hz leaks out of its block",
+            m.hz
+        );
+        found[b] += 1;
+    }
+    assert_eq!(found, counts);
+}
+
+/// First violin frequency (Hz) of a continuum stiff string clamped at both ends, tension
+/// `t` (N), bending stiffness `ei` (N m²), linear density `mu` (kg/m), length `l` (m): the
+/// root of 2 k kₑ (1 − cos kL cosh kₑL) + (kₑ² − k²) sin kL sinh kₑL = 0 (divided by
+/// cosh kₑL), k² = (−T + s)/2EI, kₑ² = (T + s)/2EI, s = sqrt(T² + 4 EI μ ω²)
+/// (physics_oracles.md §5), by bisection next to the ideal string's f₁.
+pub fn stiff_string_f1(t: f64, ei: f64, mu: f64, l: f64) -> f64 {
+    let residual = |f: f64| {
+        let w = TWO_PI * f;
+        let s = (t * t + 4.0 * ei * mu * w * w).sqrt();
+        let (k, ke) = (((s - t) / (2.0 * ei)).sqrt(), ((s + t) / (2.0 * ei)).sqrt());
+        let sech = 1.0 / (ke * l).cosh();
+        2.0 * k * ke * (sech - (k * l).cos()) + (ke * ke - k * k) * (k * l).sin() * (ke * l).tanh()
+    };
+    let ideal = (t / mu).sqrt() / (2.0 * l);
+    let (mut a, mut b) = (ideal * 0.999, ideal * 1.01);
+    for _ in 0..200 {
+        let m = 0.5 * (a + b);
+        if residual(a) * residual(m) <= 0.0 {
+            b = m;
+        } else {
+            a = m;
+        }
+    }
+    0.5 * (a + b)
+}

@@ -312,6 +312,58 @@ pub fn bead_count(p: &Resolved) -> Result<usize, BuildError> {
     Ok(beads as usize)
 }
 
+/// The four lowest wires (or fibres), from `upper` at (±sl, ±n4, −d3) to `lower` at
+/// (±sl, ±n5, d4) (parameters of those names, m), each of length `l3` and carrying a quarter
+/// of `weight` (N) along its slope, with `beads` violin beads each. `heights` are the two
+/// bodies' nominal centre heights (m); the bodies are level and centred on the z axis there.
+pub fn lowest_wires(
+    b: &mut SystemBuilder,
+    p: &Resolved,
+    (upper, lower): (BodyId, BodyId),
+    heights: [f64; 2],
+    (section, weight): (&WireSection, f64),
+    beads: usize,
+    tags: &WireTags,
+) -> Result<(), BuildError> {
+    let (sl, n4, n5, d3, d4, l3) = (
+        p.get("sl")?,
+        p.get("n4")?,
+        p.get("n5")?,
+        p.get("d3")?,
+        p.get("d4")?,
+        p.get("l3")?,
+    );
+    let vertical = (l3 * l3 - (n4 - n5).powi(2)).sqrt();
+    for (k, (sx, sy)) in [(1.0, 1.0), (-1.0, 1.0), (1.0, -1.0), (-1.0, -1.0)]
+        .into_iter()
+        .enumerate()
+    {
+        let (upper_point, lower_point) = (
+            Vector3::new(sx * sl, sy * n4, -d3),
+            Vector3::new(sx * sl, sy * n5, d4),
+        );
+        beaded_fibre(
+            b,
+            &Fibre {
+                name: &format!("f{}", k + 1),
+                upper: (upper, upper_point),
+                lower: (lower, lower_point),
+                nominal: [
+                    Vector3::z() * heights[0] + upper_point,
+                    Vector3::z() * heights[1] + lower_point,
+                ],
+                section,
+                length: l3,
+                tension: weight / 4.0 * l3 / vertical,
+                beads,
+            },
+            p.get("g")?,
+            tags,
+        )?;
+    }
+    Ok(())
+}
+
 /// Mass (kg) of the beads of one fibre.
 pub fn beads_mass(section: &WireSection, length: f64, beads: usize) -> f64 {
     if beads == 0 {

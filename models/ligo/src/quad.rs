@@ -13,7 +13,7 @@ use pendkit_energy::System;
 use pendkit_model::{BodySpec, BuildError, DampingSpec, Model, SystemBuilder};
 use pendkit_params::{ParamError, ParamSet, Resolved};
 
-use crate::chain::{self, Blade, Blades, Fibre};
+use crate::chain::{self, Blade, Blades};
 use crate::tables;
 
 /// One variant of the quad.
@@ -243,7 +243,7 @@ impl Model for Quad {
         }
 
         // top wires: one per structure blade tip, to the top mass at (0, ±nn1, dm)
-        let (sn, su, si, sl) = (v("sn")?, v("su")?, v("si")?, v("sl")?);
+        let (sn, su, si) = (v("sn")?, v("su")?, v("si")?);
         let tags_n = chain::tags("wn");
         for (k, sign) in [1.0, -1.0].into_iter().enumerate() {
             chain::wire(
@@ -304,35 +304,15 @@ impl Model for Quad {
             }
         }
         // fibres from the PUM (±sl, ±n4, −d3) to the test mass (±sl, ±n5, d4)
-        let tags_3 = chain::tags("fibre");
-        let (n4, n5, d3, d4) = (v("n4")?, v("n5")?, v("d3")?, v("d4")?);
-        for (k, (sx, sy)) in [(1.0, 1.0), (-1.0, 1.0), (1.0, -1.0), (-1.0, -1.0)]
-            .into_iter()
-            .enumerate()
-        {
-            let (upper_point, lower_point) = (
-                Vector3::new(sx * sl, sy * n4, -d3),
-                Vector3::new(sx * sl, sy * n5, d4),
-            );
-            chain::beaded_fibre(
-                &mut b,
-                &Fibre {
-                    name: &format!("f{}", k + 1),
-                    upper: (pum, upper_point),
-                    lower: (tm, lower_point),
-                    nominal: [
-                        Vector3::new(0.0, 0.0, z2) + upper_point,
-                        Vector3::new(0.0, 0.0, z3) + lower_point,
-                    ],
-                    section: &sec_3,
-                    length: l3,
-                    tension: m3 * g / 4.0 * l3 / vert_3,
-                    beads,
-                },
-                g,
-                &tags_3,
-            )?;
-        }
+        chain::lowest_wires(
+            &mut b,
+            p,
+            (pum, tm),
+            [z2, z3],
+            (&sec_3, m3 * g),
+            beads,
+            &chain::tags("fibre"),
+        )?;
         b.build()
     }
 }

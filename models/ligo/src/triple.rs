@@ -18,7 +18,7 @@ use pendkit_energy::System;
 use pendkit_model::{BodySpec, BuildError, DampingSpec, Model, SystemBuilder};
 use pendkit_params::{ParamError, ParamSet, Resolved};
 
-use crate::chain::{self, Blade, Blades, Fibre};
+use crate::chain::{self, Blade, Blades};
 use crate::tables;
 
 /// One variant of the triple.
@@ -237,7 +237,7 @@ impl Model for Triple {
         let (l1, l2, l3) = (v("l1")?, v("l2")?, v("l3")?);
         let (n0, n1, n2, n3, n4, n5) = (v("n0")?, v("n1")?, v("n2")?, v("n3")?, v("n4")?, v("n5")?);
         let (d0, d1, d2, d3, d4) = (v("d0")?, v("d1")?, v("d2")?, v("d3")?, v("d4")?);
-        let (si, sl) = (v("si")?, v("sl")?);
+        let si = v("si")?;
         let m_beads = 4.0 * chain::beads_mass(&sec_3, l3, beads);
 
         // nominal geometry: centre-of-mass heights from the wires' vertical extents
@@ -340,34 +340,15 @@ impl Model for Triple {
         }
 
         // lower wires from the intermediate mass (±sl, ±n4, −d3) to the optic (±sl, ±n5, d4)
-        let tags_3 = chain::tags("w3");
-        for (k, (sx, sy)) in [(1.0, 1.0), (-1.0, 1.0), (1.0, -1.0), (-1.0, -1.0)]
-            .into_iter()
-            .enumerate()
-        {
-            let (upper_point, lower_point) = (
-                Vector3::new(sx * sl, sy * n4, -d3),
-                Vector3::new(sx * sl, sy * n5, d4),
-            );
-            chain::beaded_fibre(
-                &mut b,
-                &Fibre {
-                    name: &format!("f{}", k + 1),
-                    upper: (intermediate, upper_point),
-                    lower: (optic, lower_point),
-                    nominal: [
-                        Vector3::new(0.0, 0.0, z2) + upper_point,
-                        Vector3::new(0.0, 0.0, z3) + lower_point,
-                    ],
-                    section: &sec_3,
-                    length: l3,
-                    tension: m3 * g / 4.0 * l3 / vert_3,
-                    beads,
-                },
-                g,
-                &tags_3,
-            )?;
-        }
+        chain::lowest_wires(
+            &mut b,
+            p,
+            (intermediate, optic),
+            [z2, z3],
+            (&sec_3, m3 * g),
+            beads,
+            &chain::tags("w3"),
+        )?;
         b.build()
     }
 }

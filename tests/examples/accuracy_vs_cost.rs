@@ -1,6 +1,6 @@
 //! Accuracy against cost: how much model a result needs.
 //!
-//! Run with `cargo run --release -p pendkit --example accuracy_vs_cost`. Prints three
+//! Run with `cargo run --release -p pendkit-tests --example accuracy_vs_cost`. Prints three
 //! tables (times are the median of several runs on this machine):
 //! 1. stages of the `pendulum`: the x-mode frequency against the exact flexure result
 //!    (physics_oracles.md §1), and the time of build + equilibrium + modes;
@@ -13,6 +13,7 @@ use std::time::Instant;
 
 use pendkit::energy::Stage;
 use pendkit::{Case, StageResult, run_stage};
+use pendkit_tests::stiff_string_f1;
 
 /// Median wall time (s) of `runs` calls, and the last result.
 fn timed(runs: usize, f: impl Fn() -> StageResult) -> (f64, StageResult) {
@@ -32,28 +33,6 @@ fn run(model: &str, sets: &[String], stage: Stage) -> StageResult {
         .and_then(|c| c.with_sets(sets))
         .expect("bundled model");
     run_stage(case.build().expect("builds").0, stage).expect("runs")
-}
-
-/// First violin frequency of a clamped stiff string (physics_oracles.md §5), by bisection.
-fn stiff_string_f1(t: f64, ei: f64, mu: f64, l: f64) -> f64 {
-    let residual = |f: f64| {
-        let w = 2.0 * std::f64::consts::PI * f;
-        let s = (t * t + 4.0 * ei * mu * w * w).sqrt();
-        let (k, ke) = (((s - t) / (2.0 * ei)).sqrt(), ((s + t) / (2.0 * ei)).sqrt());
-        2.0 * k * ke * (1.0 / (ke * l).cosh() - (k * l).cos())
-            + (ke * ke - k * k) * (k * l).sin() * (ke * l).tanh()
-    };
-    let ideal = (t / mu).sqrt() / (2.0 * l);
-    let (mut a, mut b) = (ideal * 0.999, ideal * 1.01);
-    for _ in 0..200 {
-        let m = 0.5 * (a + b);
-        if residual(a) * residual(m) <= 0.0 {
-            b = m;
-        } else {
-            a = m;
-        }
-    }
-    0.5 * (a + b)
 }
 
 fn main() {
