@@ -6,7 +6,6 @@
 //! its parameter table, repeated below), not from the model's own derived quantities.
 
 use pendkit_energy::Stage;
-#[allow(dead_code)] // each test crate uses a different part of the shared helpers
 use pendkit_tests::{assert_blocks, assert_rel, lowest, max_relative_difference, run, tf};
 
 const G: f64 = 9.81;
