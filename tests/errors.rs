@@ -222,3 +222,32 @@ fn inverted_pendulum_is_reported_unstable() {
         assert!((m.hz + growth).abs() < 1e-9 * growth, "{}", m.hz);
     }
 }
+
+#[test]
+fn other_impossible_parameters_are_named() {
+    for (sets, expected) in [
+        (&["r_fibre=0"][..], "stiffness 0 N/m must be positive"),
+        (&["temperature=-1"][..], "'temperature': must be positive"),
+        (&["m1=1e308*10"][..], "not a finite number"),
+        (&["wire_terms_early=3"][..], "wire_terms_early"),
+        (&["damping.nosuch.structural=1"][..], "unknown tag 'nosuch'"),
+    ] {
+        let e = build_error("pendulum", sets);
+        assert!(e.contains(expected), "{sets:?}: {e}");
+    }
+    let e = build_error("quad", &["n_beads=2.5"]);
+    assert!(e.contains("n_beads"), "{e}");
+    // a float held by nothing is caught when its block is eliminated
+    let sets = vec!["k1=0".to_string(), "k2=0".to_string()];
+    let (system, _) = Case::model("toy")
+        .unwrap()
+        .with_sets(&sets)
+        .unwrap()
+        .build()
+        .unwrap();
+    let e = run_stage(system, Stage::S0A)
+        .err()
+        .expect("singular float")
+        .to_string();
+    assert!(e.contains("float 'q'"), "{e}");
+}

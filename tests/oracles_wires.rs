@@ -279,3 +279,22 @@ fn wire_terms_early_rescue_a_model_unstable_without_them() {
         r.modes.check_stable().unwrap();
     }
 }
+
+#[test]
+fn without_tension_the_fibres_are_cantilevers() {
+    // g = 0: no tension, u = 0, and the beam energy reduces to textbook beam bending: a
+    // fibre clamped at the top and pinned at the mass resists with 3 EI/l³ (cantilever tip
+    // force), clamped to the non-rotating point mass with 12 EI/l³ (guided beam). This
+    // takes the stage-2 pipeline through the u → 0 series of the beam functions.
+    for (sets, k_per_fibre) in [
+        (&["g=0"][..], 3.0 * ei() / L.powi(3)),
+        (&["g=0", "hinged_bottom=0"][..], 12.0 * ei() / L.powi(3)),
+    ] {
+        let r = run("pendulum", sets, Stage::S2);
+        assert_rel(
+            hz(&r, "x1", 0),
+            (4.0 * k_per_fibre / 40.0).sqrt() / TWO_PI,
+            1e-9,
+        );
+    }
+}

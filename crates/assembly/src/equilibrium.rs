@@ -17,6 +17,9 @@ pub struct EquilibriumOptions {
     pub force_tolerance: f64,
     /// ... and the last Newton step moved no coordinate by more than this (m or rad).
     pub step_tolerance: f64,
+    /// Residual forces (N) or torques (N m) below this count as zero whatever the scale
+    /// (a model without loads, g = 0, is in equilibrium where it starts).
+    pub force_floor: f64,
     /// A coordinate moving further than this from its start (m or rad) means the
     /// potential has no minimum nearby (a model without support, a wrong sign).
     pub max_excursion: f64,
@@ -28,6 +31,7 @@ impl Default for EquilibriumOptions {
             max_iterations: 200,
             force_tolerance: 1e-11,
             step_tolerance: 1e-12,
+            force_floor: 1e-9,
             max_excursion: 100.0,
         }
     }
@@ -157,7 +161,7 @@ pub fn find_equilibrium(
             coordinate: name(worst),
         };
         let forces_ok = max_residual <= options.force_tolerance * ev.force_scale;
-        if n == 0 || max_residual == 0.0 {
+        if n == 0 || max_residual <= options.force_floor {
             return Ok(Equilibrium {
                 coords: x,
                 iterations: iteration,

@@ -158,9 +158,9 @@ impl Wire {
         tags: WireTags,
     ) -> Self {
         let stiffness = section.youngs_modulus * section.area / length;
-        // A non-positive length is kept as the unstretched length so that the builder
-        // reports it as a zero-length wire rather than as an infinite stiffness.
-        let unstretched_length = if length > 0.0 {
+        // A non-positive length or stiffness is passed through as it is, so that the builder
+        // reports a zero-length or zero-stiffness wire rather than an infinite length.
+        let unstretched_length = if length > 0.0 && stiffness > 0.0 {
             length - tension / stiffness
         } else {
             length

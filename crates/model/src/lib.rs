@@ -572,6 +572,12 @@ pub fn build_with(
         system.damping.set(tag, spec.resolve(tag, &resolved)?);
     }
     system.temperature = resolved.get("temperature")?;
+    if system.temperature <= 0.0 {
+        return Err(BuildError::Invalid {
+            item: "parameter 'temperature'".into(),
+            message: format!("must be positive (got {} K)", system.temperature),
+        });
+    }
     system.early_wire_terms = match resolved.get("wire_terms_early")? {
         0.0 => EarlyWireTerms::No,
         1.0 => EarlyWireTerms::Yes,

@@ -75,7 +75,12 @@ impl WireBeam {
         if directions.iter().all(Option::is_none) || ei.iter().all(|&e| e == 0.0) {
             return Ok(None);
         }
-        let tension = reference.wire_tension(wire);
+        // a tension within rounding of the stretch (k l ε) is zero, not compression
+        let rounding = 1e-12 * wire.stiffness * reference.wire_length(wire);
+        let tension = match reference.wire_tension(wire) {
+            t if t.abs() <= rounding => 0.0,
+            t => t,
+        };
         if tension.is_nan() || tension < 0.0 {
             return Err(fail(format!(
                 "not under tension (T = {tension:.4e} N): the beam model needs a taut wire"
