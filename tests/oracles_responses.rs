@@ -8,9 +8,10 @@
 //! of their last digit.
 
 use nalgebra::{DVector, Matrix6, Vector3, Vector6};
-use pendkit_dynamics::{BOLTZMANN, StageModel};
+use pendkit_dynamics::StageModel;
 use pendkit_energy::{Damping, SpringEnd, Stage};
 use pendkit_model::{BodySpec, DampingSpec, SystemBuilder};
+use pendkit_noise::BOLTZMANN;
 use pendkit_params::ParamSet;
 use pendkit_tests::{TWO_PI, assert_printed, assert_rel, run, tf};
 
@@ -224,7 +225,8 @@ fn structural_mass_spring_noise() {
     let phi = 1e-3;
     let (model, damping, t) = oscillator(k, DampingSpec::structural("1e-3"));
     let freqs = [0.1, 1.0, 10.0];
-    let noise = model.thermal_noise(&damping, &DVector::from_element(1, 1.0), t, &freqs);
+    let noise =
+        pendkit_noise::thermal_noise(&model, &damping, &DVector::from_element(1, 1.0), t, &freqs);
     for ((f, s), printed) in
         freqs
             .iter()
@@ -256,8 +258,8 @@ fn changing_damping_reuses_the_matrices() {
             .unwrap(),
     );
     let v = DVector::from_element(1, 1.0);
-    let s1 = model.thermal_noise(&damping, &v, t, &[0.1]).total;
-    let s2 = model.thermal_noise(&doubled, &v, t, &[0.1]).total;
+    let s1 = pendkit_noise::thermal_noise(&model, &damping, &v, t, &[0.1]).total;
+    let s2 = pendkit_noise::thermal_noise(&model, &doubled, &v, t, &[0.1]).total;
     assert_eq!(model.lossless, before.lossless);
     assert_eq!(model.by_tag[0].1, before.by_tag[0].1);
     let w = TWO_PI * 0.1;
@@ -288,7 +290,7 @@ fn viscous_oscillator_satisfies_equipartition() {
     let (a, b, n) = ((1e-4f64).ln(), (1e3f64).ln(), 400_000usize);
     let h = (b - a) / n as f64;
     let freqs: Vec<f64> = (0..=n).map(|i| (a + h * i as f64).exp()).collect();
-    let s = model.thermal_noise(&damping, &v, t, &freqs).total;
+    let s = pendkit_noise::thermal_noise(&model, &damping, &v, t, &freqs).total;
     let mut integral = 0.0;
     for i in 0..=n {
         let w = if i == 0 || i == n {

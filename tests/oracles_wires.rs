@@ -99,9 +99,13 @@ fn pendulum_thermal_noise_at_10_hz() {
     let i = r.model.variables.iter().position(|v| v == "x1").unwrap();
     let mut v = nalgebra::DVector::zeros(r.model.variables.len());
     v[i] = 1.0;
-    let noise = r
-        .model
-        .thermal_noise(&r.system.damping, &v, r.system.temperature, &[10.0]);
+    let noise = pendkit_noise::thermal_noise(
+        &r.model,
+        &r.system.damping,
+        &v,
+        r.system.temperature,
+        &[10.0],
+    );
     assert_rel(noise.total[0], s, 1e-6);
     assert_printed(noise.total[0].sqrt(), 2.326369e-20, 7);
     // all of it is bending loss; the breakdown names the four fibres' bending terms

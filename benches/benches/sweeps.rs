@@ -1,6 +1,6 @@
 //! Frequency sweeps on precomputed stage-2 results: the support-to-mass transfer function
 //! (`StageModel::transfer`, input `x00`) and the thermal noise with its per-term breakdown
-//! (`StageModel::thermal_noise`) over log grids from 0.1 to 100 Hz, plus the state-space
+//! (`pendkit_noise::thermal_noise`) over log grids from 0.1 to 100 Hz, plus the state-space
 //! matrices of the quad. Building the model and `run_stage` happen outside the timed loop.
 
 use std::hint::black_box;
@@ -60,7 +60,8 @@ fn bench_noise(c: &mut Criterion, name: &str, r: &StageResult, output: &str, n: 
     let freqs = grid(n);
     c.bench_function(&format!("noise/{name}/{n}"), |b| {
         b.iter(|| {
-            r.model.thermal_noise(
+            pendkit_noise::thermal_noise(
+                &r.model,
                 &r.system.damping,
                 black_box(&v),
                 r.system.temperature,

@@ -1,6 +1,6 @@
 //! pendkit's facade: the catalogue of bundled models, case files, and the whole pipeline
-//! from a model or case to equilibrium and normal modes, for the command line and for
-//! downstream tools that want one call.
+//! from a model or case to equilibrium, normal modes, transfer functions and thermal noise,
+//! for the command line and for downstream tools that want one call.
 //!
 //! This crate names every bundled element and model crate so that the linker keeps their
 //! `inventory` registrations (inventory issue #50); link against it, not the parts, to get
@@ -11,10 +11,11 @@ use std::path::{Path, PathBuf};
 use nalgebra::{DVector, Vector3};
 use pendkit_assembly::{Assembled, AssemblyError, EquilibriumOptions, assemble};
 use pendkit_dynamics::{
-    DynamicsError, Input, Modes, Output, StageModel, ThermalNoise, eliminate_floats, normal_modes,
+    DynamicsError, Input, Modes, Output, StageModel, eliminate_floats, normal_modes,
 };
 use pendkit_energy::{Stage, System};
 use pendkit_model::{BuildError, DampingSpec, Model, Overrides};
+use pendkit_noise::{ThermalNoise, thermal_noise};
 use pendkit_params::Resolved;
 
 // Name every bundled element crate so the linker keeps its registration.
@@ -26,6 +27,7 @@ pub use pendkit_assembly as assembly;
 pub use pendkit_dynamics as dynamics;
 pub use pendkit_energy as energy;
 pub use pendkit_model as model;
+pub use pendkit_noise as noise;
 pub use pendkit_params as params;
 
 /// Errors of the whole pipeline, one line each.
@@ -425,7 +427,8 @@ impl StageResult {
     /// (Hz), at the model's temperature, with its breakdown by term.
     pub fn noise(&self, output: &str, freqs: &[f64]) -> Result<ThermalNoise, Error> {
         match self.output(output)? {
-            Output::Displacement(v) => Ok(self.model.thermal_noise(
+            Output::Displacement(v) => Ok(thermal_noise(
+                &self.model,
                 &self.system.damping,
                 &v,
                 self.system.temperature,

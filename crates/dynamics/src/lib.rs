@@ -1,13 +1,11 @@
 //! Dynamics from the assembled matrices: elimination of floats by Schur complement, and
 //! normal modes (generalised symmetric eigenproblem K_eff v = ω² M v) with labels and a
-//! lab-frame table of body motions; and, with dissipation dilution, transfer functions,
-//! thermal noise and state-space matrices.
+//! lab-frame table of body motions; and, with dissipation dilution, transfer functions
+//! and state-space matrices.
 
 mod response;
 
-pub use response::{
-    BOLTZMANN, Input, Output, ReducedComplex, StageModel, StateSpace, TermLoss, ThermalNoise,
-};
+pub use response::{Input, Output, ReducedComplex, StageModel, StateSpace, TermLoss};
 
 use faer::{Mat, Side};
 use nalgebra::{DMatrix, Vector3};

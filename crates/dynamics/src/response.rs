@@ -1,6 +1,6 @@
 //! Frequency responses with dissipation dilution (DESIGN.md §4–§5): the complex master
 //! matrix P(f), force and support-displacement transfer functions, forces on the support,
-//! and the state-space form.
+//! and the state-space form (thermal noise builds on it in `pendkit-noise`).
 //!
 //! The per-term matrices are assembled once; damping enters only through the multipliers
 //! passed to each call, so trying other damping never re-assembles anything.
@@ -211,56 +211,15 @@ impl StageModel {
             .collect()
     }
 
-    /// Thermal-noise PSD (m²/Hz, or rad²/Hz) of the output combination `v` of the variables
-    /// at temperature `temperature` (K), by the fluctuation–dissipation theorem:
-    /// S = (4 k_B T / ω) |Im(vᵀ E⁻¹ v)|, with the share of every lossy term.
-    pub fn thermal_noise(
-        &self,
-        damping: &Damping,
-        v: &DVector<f64>,
-        temperature: f64,
-        freqs: &[f64],
-    ) -> ThermalNoise {
+    /// Response z (over the variables, then the floats) to the generalised force `force`
+    /// on the variables at `f_hz`, with the support held: A(f) z = [force; 0].
+    pub fn respond_to_force(&self, damping: &Damping, force: &DVector<f64>, f_hz: f64) -> Vec<c64> {
         let (nx, nq, _) = self.sizes;
-        let n = nx + nq;
-        let mut out = ThermalNoise {
-            total: Vec::with_capacity(freqs.len()),
-            by_term: self
-                .terms
-                .iter()
-                .map(|t| (t.label.clone(), t.tag.clone(), Vec::new()))
-                .collect(),
-        };
-        let rhs = Mat::<c64>::from_fn(n, 1, |i, _| c64::new(if i < nx { v[i] } else { 0.0 }, 0.0));
-        for &f in freqs {
-            let p = self.master_at(damping, f);
-            let z = self.solve(&p, f, &rhs);
-            let scale = 4.0 * BOLTZMANN * temperature / (TWO_PI * f);
-            let response: c64 = (0..nx).map(|i| z[(i, 0)] * v[i]).sum();
-            out.total.push(scale * response.im.abs());
-            for (t, (_, _, series)) in self.terms.iter().zip(out.by_term.iter_mut()) {
-                let (_, loss) = damping.at(&t.tag, f);
-                let m = t.positions.len();
-                let zl = |a: usize| {
-                    if t.positions[a] < n {
-                        z[(t.positions[a], 0)]
-                    } else {
-                        c64::new(0.0, 0.0)
-                    }
-                };
-                // dissipation of this term: ε''(f) · Re(z̄ᵀ P_off z) over its coordinates
-                let mut energy = 0.0;
-                if loss != 0.0 {
-                    for a in 0..m {
-                        for b in 0..m {
-                            energy += (zl(a).conj() * zl(b)).re * t.off[a * m + b];
-                        }
-                    }
-                }
-                series.push(scale * loss * energy);
-            }
-        }
-        out
+        let rhs = Mat::<c64>::from_fn(nx + nq, 1, |i, _| {
+            c64::new(if i < nx { force[i] } else { 0.0 }, 0.0)
+        });
+        let z = self.solve(&self.master_at(damping, f_hz), f_hz, &rhs);
+        (0..nx + nq).map(|i| z[(i, 0)]).collect()
     }
 
     /// Complex reduced matrices K_eff(f), C_XS,eff(f), S_eff(f) (Schur complement of the
@@ -357,9 +316,6 @@ impl StageModel {
     }
 }
 
-/// Boltzmann constant k_B (J/K).
-pub const BOLTZMANN: f64 = 1.380649e-23;
-
 /// Complex K_eff, C_XS,eff and S_eff at one frequency.
 #[derive(Clone, Debug)]
 pub struct ReducedComplex {
@@ -369,30 +325,4 @@ pub struct ReducedComplex {
     pub c_xs_eff: Mat<c64>,
     /// S_eff over the parameters.
     pub s_eff: Mat<c64>,
-}
-
-/// Thermal noise at one output over a frequency grid.
-#[derive(Clone, Debug)]
-pub struct ThermalNoise {
-    /// One-sided PSD (m²/Hz or rad²/Hz) per frequency.
-    pub total: Vec<f64>,
-    /// Share of each lossy term: (term name, tag, PSD per frequency); they add up to
-    /// `total`.
-    pub by_term: Vec<(String, String, Vec<f64>)>,
-}
-
-impl ThermalNoise {
-    /// The breakdown summed per damping tag, in tag order.
-    pub fn by_tag(&self) -> Vec<(String, Vec<f64>)> {
-        let mut tags: std::collections::BTreeMap<String, Vec<f64>> = Default::default();
-        for (_, tag, series) in &self.by_term {
-            let sum = tags
-                .entry(tag.clone())
-                .or_insert_with(|| vec![0.0; series.len()]);
-            for (s, v) in sum.iter_mut().zip(series) {
-                *s += v;
-            }
-        }
-        tags.into_iter().collect()
-    }
 }
