@@ -10,7 +10,7 @@
 
 use pendkit_dynamics::eliminate_floats;
 use pendkit_energy::Stage;
-use pendkit_tests::{TWO_PI, assert_printed, assert_rel, hz, run};
+use pendkit_tests::{TWO_PI, assert_printed, assert_rel, hz, labelled, run, two_dof_frequencies};
 
 const G: f64 = 9.81;
 const REL: f64 = 1e-10;
@@ -93,9 +93,7 @@ fn x_pitch_pair(d: f64, s: f64) -> [f64; 2] {
         -m * G * d / l,
         m * G * d + m * G * d * d / l + kw * 4.0 * s * s,
     );
-    let (a, b, c) = (m * ip, -(kxx * ip + ktt * m), kxx * ktt - kxt * kxt);
-    let disc = (b * b - 4.0 * a * c).sqrt();
-    [(-b - disc) / (2.0 * a), (-b + disc) / (2.0 * a)].map(|w2| w2.sqrt() / TWO_PI)
+    two_dof_frequencies([[kxx, kxt], [kxt, ktt]], (m, ip))
 }
 
 #[test]
@@ -113,13 +111,7 @@ fn rigid_body_x_pitch_pair() {
     for (sets, d, s, printed) in cases {
         let r = run("rigid-body", sets, Stage::S0A);
         let expected = x_pitch_pair(d, s);
-        let pair: Vec<f64> = r
-            .modes
-            .modes
-            .iter()
-            .filter(|m| m.label == "x1" || m.label == "pitch1")
-            .map(|m| m.hz)
-            .collect();
+        let pair = labelled(&r, &["x1", "pitch1"]);
         assert_eq!(pair.len(), 2, "{sets:?}");
         assert_rel(pair[0], expected[0], REL);
         assert_rel(pair[1], expected[1], REL);

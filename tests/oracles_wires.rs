@@ -14,7 +14,7 @@
 use pendkit::StageResult;
 use pendkit_assembly::{EquilibriumOptions, solve_equilibrium};
 use pendkit_energy::Stage;
-use pendkit_tests::{TWO_PI, assert_printed, assert_rel, hz, run};
+use pendkit_tests::{TWO_PI, assert_printed, assert_rel, hz, labelled, run, two_dof_frequencies};
 
 const G: f64 = 9.81;
 const E: f64 = 72e9;
@@ -137,13 +137,7 @@ fn x_pitch_with_bending(d: f64, s: f64) -> [f64; 2] {
                 * (sii * (a[i] * a[j] + b[i] * b[j]) + sij * (a[i] * b[j] + b[i] * a[j]));
         }
     }
-    let (p, q, c) = (
-        m * ip,
-        -(k[0][0] * ip + k[1][1] * m),
-        k[0][0] * k[1][1] - k[0][1] * k[1][0],
-    );
-    let disc = (q * q - 4.0 * p * c).sqrt();
-    [(-q - disc) / (2.0 * p), (-q + disc) / (2.0 * p)].map(|w2| w2.sqrt() / TWO_PI)
+    two_dof_frequencies(k, (m, ip))
 }
 
 #[test]
@@ -167,13 +161,7 @@ fn rigid_body_pitch_with_bending() {
     ];
     for (sets, d, s, printed) in rows {
         let r = run("rigid-body", sets, Stage::S2);
-        let pair: Vec<f64> = r
-            .modes
-            .modes
-            .iter()
-            .filter(|m| m.label == "x1" || m.label == "pitch1")
-            .map(|m| m.hz)
-            .collect();
+        let pair = labelled(&r, &["x1", "pitch1"]);
         let expected = x_pitch_with_bending(d, s);
         for k in 0..2 {
             assert_rel(pair[k], expected[k], 1e-9);

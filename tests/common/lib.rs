@@ -163,3 +163,47 @@ pub fn stiff_string_f1(t: f64, ei: f64, mu: f64, l: f64) -> f64 {
     }
     0.5 * (a + b)
 }
+
+/// The two frequencies (Hz) of a 2-DOF system with stiffness `k` and diagonal mass
+/// `(m1, m2)`: the roots of det(K − ω² M) = 0.
+pub fn two_dof_frequencies(k: [[f64; 2]; 2], (m1, m2): (f64, f64)) -> [f64; 2] {
+    let (a, b, c) = (
+        m1 * m2,
+        -(k[0][0] * m2 + k[1][1] * m1),
+        k[0][0] * k[1][1] - k[0][1] * k[1][0],
+    );
+    let disc = (b * b - 4.0 * a * c).sqrt();
+    [(-b - disc) / (2.0 * a), (-b + disc) / (2.0 * a)].map(|w2| w2.sqrt() / TWO_PI)
+}
+
+/// Frequencies (Hz) of the modes labelled with any of `labels`, ascending.
+pub fn labelled(r: &StageResult, labels: &[&str]) -> Vec<f64> {
+    r.modes
+        .modes
+        .iter()
+        .filter(|m| labels.contains(&m.label.as_str()))
+        .map(|m| m.hz)
+        .collect()
+}
+
+/// Asserts that the support-to-`output` transfer function along x (and y, z) tends to +1 at
+/// 1e-4 Hz (inertial corrections there are below 1e-7 for modes above 0.3 Hz), and that
+/// |x_out/x00| falls as f^`-power` between 40 and 80 Hz, well above the modes (corrections
+/// (f_mode/f)² keep the slope within 0.05).
+#[track_caller]
+pub fn assert_support_limits(r: &StageResult, stage: &str, power: f64) {
+    for axis in ["x", "y", "z"] {
+        let (re, im) = tf(r, &format!("{axis}00"), &format!("{axis}{stage}"), 1e-4);
+        assert!(
+            (re - 1.0).abs() < 1e-6 && im.abs() < 1e-6,
+            "{axis}{stage}/{axis}00 = {re} + {im}i"
+        );
+    }
+    let output = format!("x{stage}");
+    let mag = |f: f64| {
+        let (a, b) = tf(r, "x00", &output, f);
+        (a * a + b * b).sqrt()
+    };
+    let slope = (mag(80.0) / mag(40.0)).ln() / 2f64.ln();
+    assert!((slope + power).abs() < 0.05, "slope {slope}");
+}

@@ -172,6 +172,11 @@ pub fn blade(
     Ok(tip)
 }
 
+/// Nominal vertical extent (m) of a wire of length `l` whose ends differ by `dy` in y.
+pub fn vertical(l: f64, dy: f64) -> f64 {
+    (l * l - dy * dy).sqrt()
+}
+
 /// A round wire's section from parameters `r<suffix>`, `Y<suffix>` and Poisson's ratio
 /// `nu` (a parameter name), with density `rho` (a parameter name).
 pub fn round_section(
@@ -333,7 +338,7 @@ pub fn lowest_wires(
         p.get("d4")?,
         p.get("l3")?,
     );
-    let vertical = (l3 * l3 - (n4 - n5).powi(2)).sqrt();
+    let vert = vertical(l3, n4 - n5);
     for (k, (sx, sy)) in [(1.0, 1.0), (-1.0, 1.0), (1.0, -1.0), (-1.0, -1.0)]
         .into_iter()
         .enumerate()
@@ -354,7 +359,7 @@ pub fn lowest_wires(
                 ],
                 section,
                 length: l3,
-                tension: weight / 4.0 * l3 / vertical,
+                tension: weight / 4.0 * l3 / vert,
                 beads,
             },
             p.get("g")?,

@@ -13,7 +13,7 @@ use pendkit_energy::System;
 use pendkit_model::{BodySpec, BuildError, DampingSpec, Model, SystemBuilder};
 use pendkit_params::{ParamError, ParamSet, Resolved};
 
-use crate::chain::{self, Blade, Blades};
+use crate::chain::{self, Blade, Blades, vertical};
 use crate::tables;
 
 /// One variant of the quad.
@@ -58,11 +58,6 @@ pub const QUADS: [Quad; 5] = [
         beads: 5,
     },
 ];
-
-/// Nominal vertical extent (m) of a wire of length `l` whose ends differ by `dy` in y.
-fn vertical(l: f64, dy: f64) -> f64 {
-    (l * l - dy * dy).sqrt()
-}
 
 impl Model for Quad {
     fn name(&self) -> &'static str {

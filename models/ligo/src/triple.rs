@@ -18,7 +18,7 @@ use pendkit_energy::System;
 use pendkit_model::{BodySpec, BuildError, DampingSpec, Model, SystemBuilder};
 use pendkit_params::{ParamError, ParamSet, Resolved};
 
-use crate::chain::{self, Blade, Blades};
+use crate::chain::{self, Blade, Blades, vertical};
 use crate::tables;
 
 /// One variant of the triple.
@@ -162,11 +162,6 @@ const PARAMETERS: &[(&str, &str)] = &[
 
 /// The material constants blended into `lower_<c>` by `fibre_silica`.
 const LOWER_MATERIAL: [&str; 7] = ["rho", "C", "K", "alpha", "dlnE_dT", "phi", "Y"];
-
-/// Nominal vertical extent (m) of a wire of length `l` whose ends differ by `dy` in y.
-fn vertical(l: f64, dy: f64) -> f64 {
-    (l * l - dy * dy).sqrt()
-}
 
 impl Model for Triple {
     fn name(&self) -> &'static str {
