@@ -3,8 +3,8 @@
 
 use pendkit_energy::Stage;
 use pendkit_tests::{
-    TWO_PI, assert_blocks, assert_rel, assert_support_limits, lowest, max_relative_difference, run,
-    stiff_string_f1, tf,
+    TWO_PI, assert_blocks, assert_rel, assert_support_limits, deviation, full_blade_tips, lowest,
+    max_relative_difference, run, stiff_string_f1, tf,
 };
 
 const G: f64 = 9.81;
@@ -114,8 +114,8 @@ fn variants_converge_to_the_xtra_lite_quad() {
     // A blade tip with (almost) no mass rides where the float would: the lite quad's 24
     // suspension modes approach the xtra-lite ones linearly in the tip mass (the tips add
     // m r² to the bodies' inertia): measured 4.4e-8 at 1e-6 kg and 4.4e-11 at 1e-9 kg.
-    let lite_6 = max_relative_difference(&lowest("quad-lite", &["blade_tip_mass=1e-6"], 24), &quad);
-    let lite_9 = max_relative_difference(&lowest("quad-lite", &["blade_tip_mass=1e-9"], 24), &quad);
+    let lite_6 = deviation("quad-lite", &["blade_tip_mass=1e-6".into()], &quad);
+    let lite_9 = deviation("quad-lite", &["blade_tip_mass=1e-9".into()], &quad);
     assert!(
         lite_9 < 1e-10 && lite_6 > 100.0 * lite_9,
         "{lite_6:e} {lite_9:e}"
@@ -124,15 +124,7 @@ fn variants_converge_to_the_xtra_lite_quad() {
     // 3.5e-6 at (1e-6 kg, 1e10 N/m, 1e8 N m/rad) and 4.1e-7 at (1e-7, 1e11, 1e9); stiffer
     // still, rounding in the Hessian (1e13 N/m next to ~1e2 N/m pendulum stiffness) takes
     // over and the agreement gets worse (1.1e-5 at 1e13), so 1e-6 is the reachable level.
-    let full = |m: &str, kt: &str, kr: &str| {
-        let sets = [
-            format!("blade_tip_mass={m}"),
-            format!("blade_stiff_translation={kt}"),
-            format!("blade_stiff_rotation={kr}"),
-        ];
-        let sets: Vec<&str> = sets.iter().map(String::as_str).collect();
-        max_relative_difference(&lowest("quad-full", &sets, 24), &quad)
-    };
+    let full = |m, kt, kr| deviation("quad-full", &full_blade_tips(m, kt, kr), &quad);
     let (coarse, fine) = (full("1e-6", "1e10", "1e8"), full("1e-7", "1e11", "1e9"));
     assert!(fine < 1e-6 && fine < coarse / 5.0, "{coarse:e} {fine:e}");
     // lateral compliance → infinite stiffness: measured 1.4e-8 at ratio 1e9, 1.4e-11 at 1e12

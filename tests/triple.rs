@@ -7,7 +7,8 @@
 
 use pendkit_energy::Stage;
 use pendkit_tests::{
-    assert_blocks, assert_rel, assert_support_limits, lowest, max_relative_difference, run, tf,
+    assert_blocks, assert_rel, assert_support_limits, deviation, full_blade_tips, lowest,
+    max_relative_difference, run, tf,
 };
 
 const G: f64 = 9.81;
@@ -115,10 +116,7 @@ fn variants_converge_to_the_xtra_lite_triple() {
     // suspension modes approach the xtra-lite ones linearly in the tip mass (the tips add
     // m r² to the bodies' inertia and their weight to the loads): measured 7.8e-7 at 1e-6 kg
     // and 7.8e-10 at 1e-9 kg.
-    let lite = |m: &str| {
-        let sets = [format!("blade_tip_mass={m}")];
-        max_relative_difference(&lowest("triple-lite", &[sets[0].as_str()], 18), &triple)
-    };
+    let lite = |m: &str| deviation("triple-lite", &[format!("blade_tip_mass={m}")], &triple);
     let (lite_6, lite_9) = (lite("1e-6"), lite("1e-9"));
     assert!(
         lite_9 < 1e-9 && lite_6 > 100.0 * lite_9,
@@ -129,15 +127,7 @@ fn variants_converge_to_the_xtra_lite_triple() {
     // and 1.6e-6 at (1e9, 1e7); at (1e-7 kg, 1e10, 1e8) it is 3.5e-7, the reachable level:
     // stiffer still, rounding in the Hessian (1e12 N/m next to ~10 N/m pendulum stiffness)
     // takes over and the agreement gets worse (3.6e-6 at 1e12 N/m), so the bound is 1e-6.
-    let full = |m: &str, kt: &str, kr: &str| {
-        let sets = [
-            format!("blade_tip_mass={m}"),
-            format!("blade_stiff_translation={kt}"),
-            format!("blade_stiff_rotation={kr}"),
-        ];
-        let sets: Vec<&str> = sets.iter().map(String::as_str).collect();
-        max_relative_difference(&lowest("triple-full", &sets, 18), &triple)
-    };
+    let full = |m, kt, kr| deviation("triple-full", &full_blade_tips(m, kt, kr), &triple);
     let (soft, stiff) = (full("1e-9", "1e8", "1e6"), full("1e-9", "1e9", "1e7"));
     let stiffest = full("1e-7", "1e10", "1e8");
     assert!(

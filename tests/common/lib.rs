@@ -69,6 +69,23 @@ pub fn lowest(model: &str, sets: &[&str], n: usize) -> Vec<f64> {
         .collect()
 }
 
+/// Largest relative deviation of the lowest modes of `model` with overrides `sets` (stage
+/// 0A) from the frequencies `reference` (as many modes as `reference` holds).
+pub fn deviation(model: &str, sets: &[String], reference: &[f64]) -> f64 {
+    let sets: Vec<&str> = sets.iter().map(String::as_str).collect();
+    max_relative_difference(&lowest(model, &sets, reference.len()), reference)
+}
+
+/// Overrides of the `-full` blade-tip variants: tip mass (kg) and the stiffness of the
+/// non-working directions (N/m, N m/rad).
+pub fn full_blade_tips(mass: &str, translation: &str, rotation: &str) -> Vec<String> {
+    vec![
+        format!("blade_tip_mass={mass}"),
+        format!("blade_stiff_translation={translation}"),
+        format!("blade_stiff_rotation={rotation}"),
+    ]
+}
+
 /// Largest |a_i / b_i − 1|.
 pub fn max_relative_difference(a: &[f64], b: &[f64]) -> f64 {
     a.iter()
