@@ -308,10 +308,11 @@ pub fn beaded_fibre(
 /// The number of violin beads per fibre from parameter `n_beads` (a whole number, 0–1000).
 pub fn bead_count(p: &Resolved) -> Result<usize, BuildError> {
     let beads = p.get("n_beads")?;
-    if beads < 0.0 || beads.fract() != 0.0 || beads > 1000.0 {
+    // dense linear algebra: 200 beads per fibre is already ~2400 degrees of freedom
+    if beads < 0.0 || beads.fract() != 0.0 || beads > 200.0 {
         return Err(BuildError::Invalid {
             item: "parameter 'n_beads'".into(),
-            message: format!("must be a whole number from 0 to 1000, got {beads}"),
+            message: format!("must be a whole number from 0 to 200, got {beads}"),
         });
     }
     Ok(beads as usize)
