@@ -305,7 +305,7 @@ pub fn beaded_fibre(
     Ok(())
 }
 
-/// The number of violin beads per fibre from parameter `n_beads` (a whole number, 0–1000).
+/// The number of violin beads per fibre from parameter `n_beads` (a whole number, 0–200).
 pub fn bead_count(p: &Resolved) -> Result<usize, BuildError> {
     let beads = p.get("n_beads")?;
     // dense linear algebra: 200 beads per fibre is already ~2400 degrees of freedom
