@@ -1,6 +1,6 @@
 //! `run_stage` (equilibrium, assembly of the stage's terms, elimination of floats and normal
-//! modes) at every stage, for three models of increasing size. The numeric model is built
-//! once; each iteration runs on a fresh clone of it, made outside the timed section.
+//! modes) at every stage, for every bundled model. The numeric model is built once; each
+//! iteration runs on a fresh clone of it, made outside the timed section.
 
 use std::time::Duration;
 
@@ -10,7 +10,7 @@ use pendkit_energy::Stage;
 
 fn stages(c: &mut Criterion) {
     let mut group = c.benchmark_group("stage");
-    for name in ["pendulum", "rigid-body", "quad"] {
+    for name in pendkit::models().iter().map(|m| m.name()) {
         let (system, _) = Case::model(name)
             .and_then(|case| case.build())
             .unwrap_or_else(|e| panic!("{name}: {e}"));
@@ -33,9 +33,9 @@ fn stages(c: &mut Criterion) {
 criterion_group! {
     name = benches;
     config = Criterion::default()
-        .sample_size(20)
-        .warm_up_time(Duration::from_secs(1))
-        .measurement_time(Duration::from_secs(2));
+        .sample_size(10)
+        .warm_up_time(Duration::from_millis(500))
+        .measurement_time(Duration::from_secs(1));
     targets = stages
 }
 criterion_main!(benches);
