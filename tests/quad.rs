@@ -3,8 +3,8 @@
 
 use pendkit_energy::Stage;
 use pendkit_tests::{
-    TWO_PI, assert_blocks, assert_rel, assert_support_limits, deviation, full_blade_tips, lowest,
-    max_relative_difference, run, stiff_string_f1, tf,
+    TWO_PI, assert_blocks, assert_nominal_equilibrium, assert_rel, assert_support_limits,
+    deviation, full_blade_tips, lowest, max_relative_difference, run, stiff_string_f1, tf,
 };
 
 const G: f64 = 9.81;
@@ -12,20 +12,7 @@ const G: f64 = 9.81;
 #[test]
 fn equilibrium_is_the_nominal_geometry_to_a_micrometre() {
     for model in ["quad", "quad-lite", "quad-full", "quad-lateral", "quad-v5"] {
-        let r = run(model, &[], Stage::S0A);
-        let start = r.system.start();
-        for (c, (x, s)) in r
-            .system
-            .coords
-            .iter()
-            .zip(r.assembled.equilibrium.coords.iter().zip(&start))
-        {
-            assert!(
-                (x - s).abs() < 1e-6,
-                "{model}: {} at {x}, nominal {s}",
-                c.name
-            );
-        }
+        assert_nominal_equilibrium(model);
     }
 }
 

@@ -7,8 +7,8 @@
 
 use pendkit_energy::Stage;
 use pendkit_tests::{
-    assert_blocks, assert_rel, assert_support_limits, deviation, full_blade_tips, lowest,
-    max_relative_difference, run, tf,
+    assert_blocks, assert_nominal_equilibrium, assert_rel, assert_support_limits, deviation,
+    full_blade_tips, lowest, max_relative_difference, run, tf,
 };
 
 const G: f64 = 9.81;
@@ -42,20 +42,7 @@ fn equilibrium_is_the_nominal_geometry_to_a_micrometre() {
     // that the equilibrium sits on the start (nominal) geometry: every coordinate (m, rad)
     // within 1e-6 of it after the minimisation.
     for model in VARIANTS {
-        let r = run(model, &[], Stage::S0A);
-        let start = r.system.start();
-        for (c, (x, s)) in r
-            .system
-            .coords
-            .iter()
-            .zip(r.assembled.equilibrium.coords.iter().zip(&start))
-        {
-            assert!(
-                (x - s).abs() < 1e-6,
-                "{model}: {} at {x}, nominal {s}",
-                c.name
-            );
-        }
+        assert_nominal_equilibrium(model);
     }
     // and the nominal optic height is the sum of the wires' vertical extents and the five
     // 1 mm break-offs, about 0.9 m below the suspension point

@@ -224,3 +224,24 @@ pub fn assert_support_limits(r: &StageResult, stage: &str, power: f64) {
     let slope = (mag(80.0) / mag(40.0)).ln() / 2f64.ln();
     assert!((slope + power).abs() < 0.05, "slope {slope}");
 }
+
+/// Asserts that `model`'s equilibrium lies on its start (nominal) geometry: every
+/// coordinate within 1e-6 (m or rad). The models derive unstretched lengths and blade
+/// preloads from the static loads so that it should.
+#[track_caller]
+pub fn assert_nominal_equilibrium(model: &str) {
+    let r = run(model, &[], Stage::S0A);
+    let start = r.system.start();
+    for (c, (x, s)) in r
+        .system
+        .coords
+        .iter()
+        .zip(r.assembled.equilibrium.coords.iter().zip(&start))
+    {
+        assert!(
+            (x - s).abs() < 1e-6,
+            "{model}: {} at {x}, nominal {s}",
+            c.name
+        );
+    }
+}
