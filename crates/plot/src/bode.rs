@@ -224,17 +224,13 @@ impl Figure for BodePlot {
         magnitude_axes.min_y_room = room;
         phase_axes.min_y_room = room;
 
-        let magnitude_chart = chart::build(&top, &magnitude_axes)?;
-        chart::draw_curves(&magnitude_chart, &magnitude_axes, &magnitudes)?;
-        let phase_chart = chart::build(&bottom, &phase_axes)?;
+        let magnitude_panel = chart::build(&top, magnitude_axes)?;
+        magnitude_panel.draw_curves(&magnitudes)?;
+        let phase_panel = chart::build(&bottom, phase_axes)?;
         for curve in &curves {
-            chart::draw_curve(
-                &phase_chart,
-                &phase_axes,
-                &curve.phase.points,
-                &curve.phase.stroke,
-                |i| curve.wraps.binary_search(&i).is_ok(),
-            )?;
+            phase_panel.draw_curve(&curve.phase.points, &curve.phase.stroke, |i| {
+                curve.wraps.binary_search(&i).is_ok()
+            })?;
         }
         if let Some(legend) = legend {
             style::draw_legend(&legend, &entries, 12)?;

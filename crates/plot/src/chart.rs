@@ -6,6 +6,7 @@ use plotters::prelude::*;
 
 use crate::PlotError;
 use crate::axis::{AxisCoord, Scale, drawable};
+use crate::labels::Rect;
 use crate::style::{
     self, AXIS_TITLE_EM, GRID_MAJOR, GRID_MINOR, INK, MarkerStyle, Stroke, TICK_EM,
     draw_pixel_line, draw_pixel_marker,
@@ -76,21 +77,155 @@ pub(crate) fn y_room<DB: DrawingBackend>(
     Ok((widest_label as i32 + 2 * TICK_MARK + GAP + title_room).max(axes.min_y_room))
 }
 
+/// A laid-out panel: the chart, the whole area it was built on (plot, label areas and
+/// margins), and its axes. Everything in the plot is drawn on the whole area in pixels, so
+/// that a marker on the plot's edge is not cut (plotters clamps each shape's points to the
+/// area it is drawn on).
+pub(crate) struct Panel<'a, DB: DrawingBackend> {
+    pub(crate) chart: Chart<'a, DB>,
+    pub(crate) area: &'a DrawingArea<DB, Shift>,
+    pub(crate) axes: PanelAxes,
+}
+
+impl<DB: DrawingBackend> Panel<'_, DB> {
+    /// Pixel position of a data point, relative to the panel's area.
+    pub(crate) fn to_pixel(&self, x: f64, y: f64) -> (i32, i32) {
+        let (bx, by) = self.chart.backend_coord(&(x, y));
+        let (ox, oy) = self.area.get_base_pixel();
+        (bx - ox, by - oy)
+    }
+
+    /// The plot (inside the axes), in pixels of the panel's area.
+    pub(crate) fn plot_rect(&self) -> Rect {
+        let plot = self.chart.plotting_area();
+        let (px, py) = plot.get_base_pixel();
+        let (ox, oy) = self.area.get_base_pixel();
+        let (w, h) = plot.dim_in_pixel();
+        let (x0, y0) = (px - ox, py - oy);
+        Rect {
+            x0,
+            y0,
+            x1: x0 + w as i32,
+            y1: y0 + h as i32,
+        }
+    }
+
+    /// Size of the plot in pixels.
+    pub(crate) fn plot_size(&self) -> (u32, u32) {
+        self.chart.plotting_area().dim_in_pixel()
+    }
+
+    /// Draws the grid, axes, tick labels and titles (for panels made with [`layout`]).
+    pub(crate) fn draw_mesh(&mut self) -> Result<(), PlotError> {
+        let mut mesh = self.chart.configure_mesh();
+        mesh.x_labels(MAX_MAJOR_TICKS)
+            .y_labels(MAX_MAJOR_TICKS)
+            .max_light_lines(MAX_MAJOR_TICKS)
+            .light_line_style(GRID_MINOR)
+            .bold_line_style(GRID_MAJOR)
+            .axis_style(INK)
+            .set_all_tick_mark_size(TICK_MARK)
+            .label_style(style::text(TICK_EM))
+            .axis_desc_style(style::text(AXIS_TITLE_EM));
+        if !self.axes.x_title.is_empty() {
+            mesh.x_desc(self.axes.x_title.as_str());
+        }
+        if !self.axes.y_title.is_empty() {
+            mesh.y_desc(self.axes.y_title.as_str());
+        }
+        mesh.draw()?;
+        Ok(())
+    }
+
+    /// Draws the points as a line, broken wherever a point cannot be drawn (not finite, or
+    /// not positive on a log axis) and wherever `breaks_before(i)` says so; a stretch of one
+    /// point is drawn as a dot. Returns whether anything was drawn.
+    pub(crate) fn draw_curve(
+        &self,
+        points: &[(f64, f64)],
+        stroke: &Stroke,
+        breaks_before: impl Fn(usize) -> bool,
+    ) -> Result<bool, PlotError> {
+        let mut drew = false;
+        let mut run: Vec<(i32, i32)> = Vec::new();
+        let flush = |run: &mut Vec<(i32, i32)>| -> Result<(), PlotError> {
+            match run.as_slice() {
+                [] => {}
+                [single] => {
+                    let dot = MarkerStyle::new(
+                        style::Marker::Circle,
+                        stroke.color,
+                        stroke.width.max(2) as i32,
+                        true,
+                    );
+                    draw_pixel_marker(self.area, *single, &dot)?;
+                }
+                line => draw_pixel_line(self.area, line, stroke)?,
+            }
+            run.clear();
+            Ok(())
+        };
+        for (index, &(x, y)) in points.iter().enumerate() {
+            let ok = self.drawable(x, y);
+            if !ok || breaks_before(index) {
+                flush(&mut run)?;
+            }
+            if ok {
+                run.push(self.to_pixel(x, y));
+                drew = true;
+            }
+        }
+        flush(&mut run)?;
+        Ok(drew)
+    }
+
+    /// Draws a marker at every drawable point; returns how many were drawn.
+    pub(crate) fn draw_markers(
+        &self,
+        points: &[(f64, f64)],
+        marker: &MarkerStyle,
+    ) -> Result<usize, PlotError> {
+        let mut count = 0;
+        for &(x, y) in points {
+            if self.drawable(x, y) {
+                draw_pixel_marker(self.area, self.to_pixel(x, y), marker)?;
+                count += 1;
+            }
+        }
+        Ok(count)
+    }
+
+    /// Draws each curve's line (broken at undrawable points) and markers.
+    pub(crate) fn draw_curves(&self, curves: &[&Curve]) -> Result<(), PlotError> {
+        for curve in curves {
+            self.draw_curve(&curve.points, &curve.stroke, |_| false)?;
+            if let Some(marker) = &curve.marker {
+                self.draw_markers(&curve.points, marker)?;
+            }
+        }
+        Ok(())
+    }
+
+    fn drawable(&self, x: f64, y: f64) -> bool {
+        drawable(x, self.axes.x_scale) && drawable(y, self.axes.y_scale)
+    }
+}
+
 /// Builds the panel on `area` and draws its grid, axes, tick labels and titles.
 pub(crate) fn build<'a, DB: DrawingBackend>(
     area: &'a DrawingArea<DB, Shift>,
-    axes: &PanelAxes,
-) -> Result<Chart<'a, DB>, PlotError> {
-    let mut chart = layout(area, axes)?;
-    draw_mesh(&mut chart, axes)?;
-    Ok(chart)
+    axes: PanelAxes,
+) -> Result<Panel<'a, DB>, PlotError> {
+    let mut panel = layout(area, axes)?;
+    panel.draw_mesh()?;
+    Ok(panel)
 }
 
 /// Lays the panel out on `area` (room for tick labels and titles) without drawing anything.
 pub(crate) fn layout<'a, DB: DrawingBackend>(
     area: &'a DrawingArea<DB, Shift>,
-    axes: &PanelAxes,
-) -> Result<Chart<'a, DB>, PlotError> {
+    axes: PanelAxes,
+) -> Result<Panel<'a, DB>, PlotError> {
     let (_, tick_height) = area.estimate_text_size("0", &style::text(TICK_EM))?;
     let (_, title_height) = area.estimate_text_size("0", &style::text(AXIS_TITLE_EM))?;
     let x_title_room = if axes.x_title.is_empty() {
@@ -98,7 +233,7 @@ pub(crate) fn layout<'a, DB: DrawingBackend>(
     } else {
         title_height as i32 + GAP
     };
-    let y_area = y_room(area, axes)?;
+    let y_area = y_room(area, &axes)?;
     let x_area = tick_height as i32 + 2 * TICK_MARK + GAP + x_title_room;
     let chart = ChartBuilder::on(area)
         .margin_top(MARGIN_TOP)
@@ -107,115 +242,7 @@ pub(crate) fn layout<'a, DB: DrawingBackend>(
         .x_label_area_size(x_area)
         .y_label_area_size(y_area)
         .build_cartesian_2d(axes.x.clone(), axes.y.clone())?;
-    Ok(chart)
-}
-
-/// Draws the grid, axes, tick labels and titles of a laid-out panel.
-fn draw_mesh<DB: DrawingBackend>(
-    chart: &mut Chart<'_, DB>,
-    axes: &PanelAxes,
-) -> Result<(), PlotError> {
-    let mut mesh = chart.configure_mesh();
-    mesh.x_labels(MAX_MAJOR_TICKS)
-        .y_labels(MAX_MAJOR_TICKS)
-        .max_light_lines(MAX_MAJOR_TICKS)
-        .light_line_style(GRID_MINOR)
-        .bold_line_style(GRID_MAJOR)
-        .axis_style(INK)
-        .set_all_tick_mark_size(TICK_MARK)
-        .label_style(style::text(TICK_EM))
-        .axis_desc_style(style::text(AXIS_TITLE_EM));
-    if !axes.x_title.is_empty() {
-        mesh.x_desc(axes.x_title.as_str());
-    }
-    if !axes.y_title.is_empty() {
-        mesh.y_desc(axes.y_title.as_str());
-    }
-    mesh.draw()?;
-    Ok(())
-}
-
-/// Draws the mesh of a panel laid out with [`layout`] (for figures that adjust the axes to
-/// the panel's size first).
-pub(crate) fn finish_layout<DB: DrawingBackend>(
-    chart: &mut Chart<'_, DB>,
-    axes: &PanelAxes,
-) -> Result<(), PlotError> {
-    draw_mesh(chart, axes)
-}
-
-/// The panel's plotting area as a pixel area (origin at its top-left corner).
-pub(crate) fn pixel_area<DB: DrawingBackend>(chart: &Chart<'_, DB>) -> DrawingArea<DB, Shift> {
-    chart.plotting_area().strip_coord_spec()
-}
-
-/// Pixel position of a data point inside the plotting area.
-pub(crate) fn to_pixel<DB: DrawingBackend>(chart: &Chart<'_, DB>, x: f64, y: f64) -> (i32, i32) {
-    let (bx, by) = chart.backend_coord(&(x, y));
-    let (ox, oy) = chart.plotting_area().get_base_pixel();
-    (bx - ox, by - oy)
-}
-
-/// Draws the points as a line, broken wherever a point cannot be drawn (not finite, or not
-/// positive on a log axis) and wherever `breaks_before(i)` says so; a stretch of one point
-/// is drawn as a dot. Returns whether anything was drawn.
-pub(crate) fn draw_curve<DB: DrawingBackend>(
-    chart: &Chart<'_, DB>,
-    axes: &PanelAxes,
-    points: &[(f64, f64)],
-    stroke: &Stroke,
-    breaks_before: impl Fn(usize) -> bool,
-) -> Result<bool, PlotError> {
-    let area = pixel_area(chart);
-    let mut drew = false;
-    let mut run: Vec<(i32, i32)> = Vec::new();
-    let flush = |run: &mut Vec<(i32, i32)>| -> Result<(), PlotError> {
-        match run.len() {
-            0 => {}
-            1 => {
-                let dot = MarkerStyle::new(
-                    style::Marker::Circle,
-                    stroke.color,
-                    stroke.width.max(2) as i32,
-                    true,
-                );
-                draw_pixel_marker(&area, run[0], &dot)?;
-            }
-            _ => draw_pixel_line(&area, run, stroke)?,
-        }
-        run.clear();
-        Ok(())
-    };
-    for (index, &(x, y)) in points.iter().enumerate() {
-        let ok = drawable(x, axes.x_scale) && drawable(y, axes.y_scale);
-        if !ok || breaks_before(index) {
-            flush(&mut run)?;
-        }
-        if ok {
-            run.push(to_pixel(chart, x, y));
-            drew = true;
-        }
-    }
-    flush(&mut run)?;
-    Ok(drew)
-}
-
-/// Draws a marker at every drawable point; returns how many were drawn.
-pub(crate) fn draw_markers<DB: DrawingBackend>(
-    chart: &Chart<'_, DB>,
-    axes: &PanelAxes,
-    points: &[(f64, f64)],
-    marker: &MarkerStyle,
-) -> Result<usize, PlotError> {
-    let area = pixel_area(chart);
-    let mut count = 0;
-    for &(x, y) in points {
-        if drawable(x, axes.x_scale) && drawable(y, axes.y_scale) {
-            draw_pixel_marker(&area, to_pixel(chart, x, y), marker)?;
-            count += 1;
-        }
-    }
-    Ok(count)
+    Ok(Panel { chart, area, axes })
 }
 
 /// A named line (and optionally markers) through points, as the curve figures draw it.
@@ -268,21 +295,6 @@ pub(crate) fn fit_axes(
     Some((x, y))
 }
 
-/// Draws each curve's line (broken at undrawable points) and markers.
-pub(crate) fn draw_curves<DB: DrawingBackend>(
-    chart: &Chart<'_, DB>,
-    axes: &PanelAxes,
-    curves: &[&Curve],
-) -> Result<(), PlotError> {
-    for curve in curves {
-        draw_curve(chart, axes, &curve.points, &curve.stroke, |_| false)?;
-        if let Some(marker) = &curve.marker {
-            draw_markers(chart, axes, &curve.points, marker)?;
-        }
-    }
-    Ok(())
-}
-
 /// Titles and scales of a single-panel curve figure.
 pub(crate) struct CurveFigure<'a> {
     pub(crate) figure: &'static str,
@@ -318,8 +330,8 @@ pub(crate) fn draw_curve_figure<DB: DrawingBackend>(
         .collect();
     let body = style::draw_title(area, spec.title, None)?;
     let (chart_area, legend_area) = style::split_for_legend(&body, &entries, 0.35)?;
-    let chart = build(&chart_area, &axes)?;
-    draw_curves(&chart, &axes, curves)?;
+    let panel = build(&chart_area, axes)?;
+    panel.draw_curves(curves)?;
     if let Some(legend_area) = legend_area {
         style::draw_legend(&legend_area, &entries, MARGIN_TOP)?;
     }

@@ -106,16 +106,10 @@ pub(crate) struct LabelPlacer {
 }
 
 impl LabelPlacer {
-    /// A placer for labels inside `area` (pixels of that area).
-    pub(crate) fn new<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>) -> Self {
-        let (w, h) = area.dim_in_pixel();
+    /// A placer for labels inside `bounds` (pixels of the area they are drawn on).
+    pub(crate) fn new(bounds: Rect) -> Self {
         LabelPlacer {
-            bounds: Rect {
-                x0: 0,
-                y0: 0,
-                x1: w as i32,
-                y1: h as i32,
-            },
+            bounds,
             taken: Vec::new(),
         }
     }

@@ -191,10 +191,8 @@ impl Figure for ModeChart {
         });
         let body = style::draw_title(area, &self.title, note.as_deref())?;
         let (chart_area, legend) = style::split_for_legend(&body, &entries, 0.3)?;
-        let chart = chart::build(&chart_area, &axes)?;
-
-        let pixels = chart::pixel_area(&chart);
-        let mut placer = LabelPlacer::new(&pixels);
+        let panel = chart::build(&chart_area, axes)?;
+        let mut placer = LabelPlacer::new(panel.plot_rect());
         // Markers first (labels must avoid all of them), lowest frequency first.
         let mut order: Vec<usize> = (0..self.modes.len()).collect();
         order.sort_by(|&a, &b| {
@@ -212,13 +210,13 @@ impl Figure for ModeChart {
                 continue;
             }
             let row = row_of(&mode.family);
-            let at = chart::to_pixel(&chart, f, y_of(row));
+            let at = panel.to_pixel(f, y_of(row));
             let marker = if mode.unstable {
                 UNSTABLE
             } else {
                 stable_marker(row)
             };
-            style::draw_pixel_marker(&pixels, at, &marker)?;
+            style::draw_pixel_marker(panel.area, at, &marker)?;
             placer.block(Rect::around(at, marker.size + 1));
             drawn.push((index, at));
         }
@@ -235,7 +233,16 @@ impl Figure for ModeChart {
                 at,
                 gap: UNSTABLE.size + 2,
             };
-            placer.place(&pixels, &label, &[Side::Above, Side::Below], false)?;
+            // Centred above or below; shifted right or left near the plot's edges.
+            let sides = [
+                Side::Above,
+                Side::Below,
+                Side::AboveRight,
+                Side::BelowRight,
+                Side::AboveLeft,
+                Side::BelowLeft,
+            ];
+            placer.place(panel.area, &label, &sides, false)?;
         }
         if let Some(legend) = legend {
             style::draw_legend(&legend, &entries, 12)?;

@@ -5,7 +5,7 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use crate::axis::{AxisCoord, Scale, axis_label, format_number};
-use crate::chart::{self, Chart, PanelAxes};
+use crate::chart::{self, Panel, PanelAxes};
 use crate::labels::{Label, LabelPlacer, Side};
 use crate::style::{self, ANNOTATION_EM, Marker, MarkerStyle, Stroke};
 use crate::{Figure, PlotError};
@@ -684,57 +684,51 @@ fn draw_silhouette<DB: DrawingBackend>(
 
 /// Pixel silhouette of a body's points in a view.
 fn pixel_hull<DB: DrawingBackend>(
-    chart: &Chart<'_, DB>,
+    panel: &Panel<'_, DB>,
     view: View,
     points: &[Vec3],
 ) -> Vec<(i32, i32)> {
     let hull = convex_hull(points.iter().map(|p| view.project(*p)).collect());
-    let mut pixels: Vec<(i32, i32)> = hull
-        .iter()
-        .map(|&(x, y)| chart::to_pixel(chart, x, y))
-        .collect();
+    let mut pixels: Vec<(i32, i32)> = hull.iter().map(|&(x, y)| panel.to_pixel(x, y)).collect();
     pixels.dedup();
     pixels
 }
 
 fn draw_view<DB: DrawingBackend>(
-    chart: &Chart<'_, DB>,
+    panel: &Panel<'_, DB>,
     view: View,
     scene: &Scene,
     names: &[&str],
 ) -> Result<(), PlotError> {
-    let area = chart::pixel_area(chart);
+    let area = panel.area;
     let rest_wire = Stroke::solid(REST_LINE, 1);
     let rest_outline = Stroke::solid(REST_LINE, 1);
     let moved_wire = Stroke::solid(MOVED_WIRE, 2);
     let moved_outline = Stroke::solid(MOVED_LINE, 2);
     let wire_pixels = |(a, b): &(Vec3, Vec3)| {
         let (a, b) = (view.project(*a), view.project(*b));
-        [
-            chart::to_pixel(chart, a.0, a.1),
-            chart::to_pixel(chart, b.0, b.1),
-        ]
+        [panel.to_pixel(a.0, a.1), panel.to_pixel(b.0, b.1)]
     };
     for wire in &scene.rest_wires {
-        style::draw_pixel_line(&area, &wire_pixels(wire), &rest_wire)?;
+        style::draw_pixel_line(area, &wire_pixels(wire), &rest_wire)?;
     }
     let rest_hulls: Vec<Vec<(i32, i32)>> = scene
         .rest_bodies
         .iter()
-        .map(|points| pixel_hull(chart, view, points))
+        .map(|points| pixel_hull(panel, view, points))
         .collect();
     for hull in &rest_hulls {
-        draw_silhouette(&area, hull, REST_FILL.filled(), &rest_outline)?;
+        draw_silhouette(area, hull, REST_FILL.filled(), &rest_outline)?;
     }
     for wire in &scene.moved_wires {
-        style::draw_pixel_line(&area, &wire_pixels(wire), &moved_wire)?;
+        style::draw_pixel_line(area, &wire_pixels(wire), &moved_wire)?;
     }
     for points in &scene.moved_bodies {
-        let hull = pixel_hull(chart, view, points);
-        draw_silhouette(&area, &hull, MOVED_FILL.filled(), &moved_outline)?;
+        let hull = pixel_hull(panel, view, points);
+        draw_silhouette(area, &hull, MOVED_FILL.filled(), &moved_outline)?;
     }
     // Names to the right of the bodies at rest (left if there is no room).
-    let mut placer = LabelPlacer::new(&area);
+    let mut placer = LabelPlacer::new(panel.plot_rect());
     let label_style = style::text(ANNOTATION_EM);
     for (hull, name) in rest_hulls.iter().zip(names) {
         let Some(right) = hull.iter().map(|p| p.0).max() else {
@@ -753,7 +747,7 @@ fn draw_view<DB: DrawingBackend>(
             at: ((left + right) / 2, middle),
             gap: half_width + 8,
         };
-        placer.place(&area, &label, &[Side::Right, Side::Left], false)?;
+        placer.place(area, &label, &[Side::Right, Side::Left], false)?;
     }
     Ok(())
 }
@@ -783,34 +777,29 @@ impl Figure for ModeShapePlot {
             reason: "the drawing has no finite extent".to_string(),
         };
         let mut dims: Vec<(u32, u32)> = titled.iter().map(|a| a.dim_in_pixel()).collect();
-        let mut charts = Vec::with_capacity(2);
-        let mut all_axes = Vec::with_capacity(2);
+        let mut panels = Vec::with_capacity(2);
         for _ in 0..4 {
             let pixels_per_metre = common_scale(&bounds, &dims);
-            all_axes = views
+            panels = views
                 .iter()
                 .zip(bounds.iter().copied())
                 .zip(&dims)
-                .map(|((view, b), d)| view_axes(*view, b, *d, pixels_per_metre).ok_or_else(nothing))
+                .zip(&titled)
+                .map(|(((view, b), d), area)| {
+                    let axes = view_axes(*view, b, *d, pixels_per_metre).ok_or_else(nothing)?;
+                    chart::layout(area, axes)
+                })
                 .collect::<Result<Vec<_>, _>>()?;
-            charts = titled
-                .iter()
-                .zip(&all_axes)
-                .map(|(a, axes)| chart::layout(a, axes))
-                .collect::<Result<Vec<_>, _>>()?;
-            let new_dims: Vec<(u32, u32)> = charts
-                .iter()
-                .map(|c| c.plotting_area().dim_in_pixel())
-                .collect();
+            let new_dims: Vec<(u32, u32)> = panels.iter().map(Panel::plot_size).collect();
             if new_dims == dims {
                 break;
             }
             dims = new_dims;
         }
         let names: Vec<&str> = self.bodies.iter().map(|b| b.name.as_str()).collect();
-        for ((chart, axes), view) in charts.iter_mut().zip(&all_axes).zip(views) {
-            chart::finish_layout(chart, axes)?;
-            draw_view(chart, view, &scene, &names)?;
+        for (panel, view) in panels.iter_mut().zip(views) {
+            panel.draw_mesh()?;
+            draw_view(panel, view, &scene, &names)?;
         }
         Ok(())
     }

@@ -242,34 +242,31 @@ impl Figure for TradeoffChart {
 
         let body = style::draw_title(area, &self.title, None)?;
         let (chart_area, legend) = style::split_for_legend(&body, &entries, 0.3)?;
-        let chart = chart::build(&chart_area, &axes)?;
+        let (x0, x1) = axes.x.bounds();
+        let panel = chart::build(&chart_area, axes)?;
         if let Some(tolerance) = self.tolerance {
-            let (x0, x1) = axes.x.bounds();
-            chart::draw_curve(
-                &chart,
-                &axes,
+            panel.draw_curve(
                 &[(x0, tolerance), (x1, tolerance)],
                 &tolerance_stroke,
                 |_| false,
             )?;
         }
         let front_points: Vec<(f64, f64)> = front.iter().map(|&i| shown(&self.points[i])).collect();
-        chart::draw_curve(&chart, &axes, &front_points, &front_stroke, |_| false)?;
+        panel.draw_curve(&front_points, &front_stroke, |_| false)?;
 
-        let pixels = chart::pixel_area(&chart);
-        let mut placer = LabelPlacer::new(&pixels);
+        let mut placer = LabelPlacer::new(panel.plot_rect());
         let mut placed = Vec::with_capacity(self.points.len());
         for (index, point) in self.points.iter().enumerate() {
             let (x, y) = shown(point);
-            let at = chart::to_pixel(&chart, x, y);
+            let at = panel.to_pixel(x, y);
             let marker = if front.contains(&index) {
                 ON_FRONT
             } else {
                 VARIANT
             };
-            style::draw_pixel_marker(&pixels, at, &marker)?;
+            style::draw_pixel_marker(panel.area, at, &marker)?;
             if point.max_relative_error == 0.0 {
-                style::draw_pixel_marker(&pixels, at, &ZERO_ERROR)?;
+                style::draw_pixel_marker(panel.area, at, &ZERO_ERROR)?;
             }
             placer.block(Rect::around(at, ZERO_ERROR.size + 1));
             placed.push(at);
@@ -282,7 +279,7 @@ impl Figure for TradeoffChart {
                 at,
                 gap: ZERO_ERROR.size + 3,
             };
-            placer.place(&pixels, &label, &Side::ALL, true)?;
+            placer.place(panel.area, &label, &Side::ALL, true)?;
         }
         if let Some(legend) = legend {
             style::draw_legend(&legend, &entries, 12)?;
