@@ -1,8 +1,8 @@
-//! Damping specifications as a model or case writes them, resolved against the model's
-//! parameters into compiled multipliers of frequency.
+//! Damping specifications as a model or case writes them, parsed once and compiled against
+//! the model's resolved parameters into multipliers of frequency.
 
 use pendkit_energy::TagDamping;
-use pendkit_expr::{Slot, parse};
+use pendkit_expr::{Expr, Slot, parse};
 use pendkit_params::Resolved;
 
 use crate::BuildError;
@@ -79,8 +79,16 @@ impl DampingSpec {
         Ok(())
     }
 
-    /// Compiles the multipliers of tag `tag` against resolved parameters.
+    /// Compiles the multipliers of tag `tag` against resolved parameters
+    /// ([`DampingSpec::parse`], then [`ParsedDamping::compile`]).
     pub fn resolve(&self, tag: &str, params: &Resolved) -> Result<TagDamping, BuildError> {
+        self.parse(tag)?.compile(tag, params)
+    }
+
+    /// Parses the multipliers of tag `tag`: ε' (`real`, 1 when absent) and ε'' (the sum of
+    /// the parts given, 0 when none is). Which parameters they use is only checked when
+    /// they are compiled.
+    pub fn parse(&self, tag: &str) -> Result<ParsedDamping, BuildError> {
         let mut imag_parts = Vec::new();
         if let Some(phi) = &self.structural {
             imag_parts.push(format!("({phi})"));
@@ -99,13 +107,46 @@ impl DampingSpec {
         } else {
             imag_parts.join("+")
         };
-        let real = self.real.clone().unwrap_or_else(|| "1".to_string());
-        let compile = |text: &str, which: &str| {
-            let context = format!("damping of tag '{tag}' ({which})");
-            let expr = parse(text).map_err(|e| BuildError::Expression {
-                context: context.clone(),
+        let real = self.real.as_deref().unwrap_or("1");
+        let parse_part = |text: &str, which: &str| {
+            parse(text).map_err(|e| BuildError::Expression {
+                context: context(tag, which),
                 message: e.to_string(),
-            })?;
+            })
+        };
+        Ok(ParsedDamping {
+            spec: self.clone(),
+            real: parse_part(real, "real")?,
+            imag: parse_part(&imag, "imag")?,
+        })
+    }
+}
+
+/// Where a damping expression sits, for error messages.
+fn context(tag: &str, which: &str) -> String {
+    format!("damping of tag '{tag}' ({which})")
+}
+
+/// A [`DampingSpec`] with its multipliers parsed, so that a build only compiles them
+/// against the resolved parameters (models keep these in their cached
+/// [`Defaults`](crate::Defaults)).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ParsedDamping {
+    spec: DampingSpec,
+    real: Expr,
+    imag: Expr,
+}
+
+impl ParsedDamping {
+    /// The specification this was parsed from (to merge a case's fields into).
+    pub fn spec(&self) -> &DampingSpec {
+        &self.spec
+    }
+
+    /// Compiles the multipliers of tag `tag` against resolved parameters: every symbol but
+    /// `f` (Hz) must be a numeric parameter, and is folded in as a constant.
+    pub fn compile(&self, tag: &str, params: &Resolved) -> Result<TagDamping, BuildError> {
+        let compile = |expr: &Expr, which: &str| {
             let slot = |s: &str| {
                 if s == "f" {
                     Some(Slot::Var(0))
@@ -114,13 +155,13 @@ impl DampingSpec {
                 }
             };
             expr.compile(&slot).map_err(|e| BuildError::Expression {
-                context,
+                context: context(tag, which),
                 message: e.to_string(),
             })
         };
         Ok(TagDamping {
-            real: compile(&real, "real")?,
-            imag: compile(&imag, "imag")?,
+            real: compile(&self.real, "real")?,
+            imag: compile(&self.imag, "imag")?,
         })
     }
 }

@@ -7,7 +7,8 @@
 
 mod damping;
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet};
+use std::sync::{Arc, OnceLock};
 
 use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
 use pendkit_energy::{
@@ -18,7 +19,7 @@ use pendkit_expr::Slot;
 use pendkit_geometry::{FrameMap, PoseMap};
 use pendkit_params::{ParamError, ParamSet, Resolved};
 
-pub use damping::DampingSpec;
+pub use damping::{DampingSpec, ParsedDamping};
 
 /// Errors in a model definition; each names the item and what is wrong with it.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -472,6 +473,25 @@ impl SystemBuilder {
     }
 }
 
+/// The value of parameter `name` as a whole number in `range` (a count: stages, beads), or
+/// a one-line error naming the parameter, the range and the value.
+pub fn whole_number(
+    params: &Resolved,
+    name: &str,
+    range: std::ops::RangeInclusive<usize>,
+) -> Result<usize, BuildError> {
+    let value = params.get(name)?;
+    let (low, high) = (*range.start(), *range.end());
+    if value.fract() == 0.0 && value >= low as f64 && value <= high as f64 {
+        Ok(value as usize)
+    } else {
+        Err(BuildError::Invalid {
+            item: format!("parameter '{name}'"),
+            message: format!("must be a whole number from {low} to {high}, got {value}"),
+        })
+    }
+}
+
 /// Inertia must be symmetric and either zero (a point mass) or positive definite.
 fn check_inertia(item: &str, inertia: &Matrix3<f64>) -> Result<(), BuildError> {
     if inertia.iter().any(|v| !v.is_finite()) {
@@ -518,10 +538,101 @@ pub trait Model: Sync {
     }
     /// Builds the numeric model from resolved parameters.
     fn build(&self, params: &Resolved) -> Result<System, BuildError>;
+    /// Where this model keeps its parsed [`Defaults`] from one build to the next, if it
+    /// does (a `DefaultsCache` of its own, e.g. in a `static`). A model that returns one
+    /// promises that [`Model::parameters`] and [`Model::damping`] always give the same
+    /// result. The default, `None`, parses them again at every build.
+    fn defaults_cache(&self) -> Option<&DefaultsCache> {
+        None
+    }
+}
+
+/// Inside an `impl Model for T`, defines [`Model::defaults_cache`] to return a
+/// [`DefaultsCache`] of its own (a `static` in the function, so one per `impl`): for a type
+/// with a single instance, such as a unit struct. Types with several instances keep a
+/// `DefaultsCache` field instead.
+#[macro_export]
+macro_rules! defaults_cache_per_impl {
+    () => {
+        fn defaults_cache(&self) -> Option<&$crate::DefaultsCache> {
+            static CACHE: $crate::DefaultsCache = $crate::DefaultsCache::new();
+            Some(&CACHE)
+        }
+    };
 }
 
 /// Default temperature for thermal noise (K) when a model does not define `temperature`.
 pub const DEFAULT_TEMPERATURE: f64 = 290.0;
+
+/// What a model's builds share, whatever the overrides: its default parameters, parsed
+/// (with `temperature` and `wire_terms_early` added when the model does not define them),
+/// and its default damping per tag, parsed.
+#[derive(Debug)]
+pub struct Defaults {
+    /// The model's name.
+    pub model: &'static str,
+    /// Default parameters; cloning them is cheap (see [`ParamSet`]).
+    pub params: ParamSet,
+    /// Default damping per tag.
+    pub damping: BTreeMap<String, ParsedDamping>,
+}
+
+impl Defaults {
+    /// Parses `model`'s defaults (without looking at its cache).
+    pub fn parse(model: &dyn Model) -> Result<Defaults, BuildError> {
+        let mut params = model.parameters()?;
+        if !params.contains("temperature") {
+            params.define_value("temperature", DEFAULT_TEMPERATURE)?;
+        }
+        if !params.contains("wire_terms_early") {
+            params.define_value("wire_terms_early", 0.0)?;
+        }
+        let damping = model
+            .damping()
+            .into_iter()
+            .map(|(tag, spec)| Ok((tag.clone(), spec.parse(&tag)?)))
+            .collect::<Result<_, BuildError>>()?;
+        Ok(Defaults {
+            model: model.name(),
+            params,
+            damping,
+        })
+    }
+
+    /// `model`'s defaults: from its [`DefaultsCache`] if it has one, else parsed now.
+    pub fn of(model: &dyn Model) -> Result<Arc<Defaults>, BuildError> {
+        match model.defaults_cache() {
+            Some(cache) => cache.get_or_parse(model),
+            None => Defaults::parse(model).map(Arc::new),
+        }
+    }
+}
+
+/// A model's parsed [`Defaults`], kept after the first build (parsing the quad's parameter
+/// tables and damping expressions is about half the cost of building it). Give each model
+/// its own; a cache found holding another model's defaults is bypassed.
+#[derive(Debug, Default)]
+pub struct DefaultsCache(OnceLock<Result<Arc<Defaults>, BuildError>>);
+
+impl DefaultsCache {
+    /// An empty cache (usable in a `static`).
+    pub const fn new() -> Self {
+        DefaultsCache(OnceLock::new())
+    }
+
+    /// The cached defaults of `model`, parsed on first use. A model whose defaults do not
+    /// parse gives the same error every time.
+    pub fn get_or_parse(&self, model: &dyn Model) -> Result<Arc<Defaults>, BuildError> {
+        let cached = self
+            .0
+            .get_or_init(|| Defaults::parse(model).map(Arc::new))
+            .clone();
+        match cached {
+            Ok(defaults) if defaults.model != model.name() => Defaults::parse(model).map(Arc::new),
+            other => other,
+        }
+    }
+}
 
 /// What a case changes in a model: parameter overrides (name, expression text, applied in
 /// order) and damping fields per tag.
@@ -541,35 +652,43 @@ pub fn build_with(
     model: &dyn Model,
     overrides: &Overrides,
 ) -> Result<(System, Resolved), BuildError> {
-    let mut params = model.parameters()?;
-    if !params.contains("temperature") {
-        params.define_value("temperature", DEFAULT_TEMPERATURE)?;
-    }
-    if !params.contains("wire_terms_early") {
-        params.define_value("wire_terms_early", 0.0)?;
-    }
+    let defaults = Defaults::of(model)?;
+    let mut params = defaults.params.clone();
     for (name, text) in &overrides.parameters {
         params.apply_text(name, text)?;
     }
     let resolved = params.resolve()?;
     let mut system = model.build(&resolved)?;
     let used = system.tags();
-    let mut specs = model.damping();
-    for (tag, spec) in &overrides.damping {
-        if !used.contains(tag) {
-            return Err(BuildError::Unknown {
-                context: format!(
-                    "damping (tags of this model: {})",
-                    used.iter().cloned().collect::<Vec<_>>().join(", ")
-                ),
-                what: "tag",
-                name: tag.clone(),
-            });
-        }
-        specs.entry(tag.clone()).or_default().merge(spec);
+    if let Some(tag) = overrides.damping.keys().find(|t| !used.contains(*t)) {
+        return Err(BuildError::Unknown {
+            context: format!(
+                "damping (tags of this model: {})",
+                used.iter().cloned().collect::<Vec<_>>().join(", ")
+            ),
+            what: "tag",
+            name: tag.clone(),
+        });
     }
-    for (tag, spec) in &specs {
-        system.damping.set(tag, spec.resolve(tag, &resolved)?);
+    // every tag with default or overridden damping, in order; only the overridden ones are
+    // parsed again
+    let tags: BTreeSet<&String> = defaults
+        .damping
+        .keys()
+        .chain(overrides.damping.keys())
+        .collect();
+    for tag in tags {
+        let damping = match (defaults.damping.get(tag), overrides.damping.get(tag)) {
+            (Some(parsed), None) => parsed.compile(tag, &resolved)?,
+            (parsed, over) => {
+                let mut spec = parsed.map(|p| p.spec().clone()).unwrap_or_default();
+                if let Some(over) = over {
+                    spec.merge(over);
+                }
+                spec.resolve(tag, &resolved)?
+            }
+        };
+        system.damping.set(tag, damping);
     }
     system.temperature = resolved.get("temperature")?;
     if system.temperature <= 0.0 {

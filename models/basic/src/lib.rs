@@ -115,6 +115,8 @@ fn four_fibres(
 pub struct Toy;
 
 impl Model for Toy {
+    pendkit_model::defaults_cache_per_impl!();
+
     fn name(&self) -> &'static str {
         "toy"
     }
@@ -164,6 +166,8 @@ impl Model for Toy {
 pub struct Pendulum;
 
 impl Model for Pendulum {
+    pendkit_model::defaults_cache_per_impl!();
+
     fn name(&self) -> &'static str {
         "pendulum"
     }
@@ -207,6 +211,8 @@ impl Model for Pendulum {
 pub struct DoublePendulum;
 
 impl Model for DoublePendulum {
+    pendkit_model::defaults_cache_per_impl!();
+
     fn name(&self) -> &'static str {
         "double-pendulum"
     }
@@ -290,6 +296,8 @@ impl Model for DoublePendulum {
 pub struct RigidBody;
 
 impl Model for RigidBody {
+    pendkit_model::defaults_cache_per_impl!();
+
     fn name(&self) -> &'static str {
         "rigid-body"
     }
