@@ -7,7 +7,7 @@
 
 mod damping;
 
-use std::collections::{BTreeMap, BTreeSet};
+use std::collections::{BTreeMap, HashMap, HashSet};
 use std::sync::{Arc, OnceLock};
 
 use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
@@ -15,7 +15,7 @@ use pendkit_energy::{
     Body, BodyId, CoordId, CoordKind, Coordinate, EarlyWireTerms, EndDirection, ExtraPhase,
     ExtraTerm, PluginElement, Spring, SpringEnd, System, Wire,
 };
-use pendkit_expr::Slot;
+use pendkit_expr::{ExprError, Slot};
 use pendkit_geometry::{FrameMap, PoseMap};
 use pendkit_params::{ParamError, ParamSet, Resolved};
 
@@ -94,9 +94,9 @@ impl BodySpec {
     }
 
     /// The six pose coordinates `x<s> y<s> z<s> yaw<s> pitch<s> roll<s>`.
-    pub fn pose_suffix(self, suffix: &str) -> Self {
-        let names = ["x", "y", "z", "yaw", "pitch", "roll"].map(|n| format!("{n}{suffix}"));
-        self.pose(names.each_ref().map(String::as_str))
+    pub fn pose_suffix(mut self, suffix: &str) -> Self {
+        self.pose = ["x", "y", "z", "yaw", "pitch", "roll"].map(|n| format!("{n}{suffix}"));
+        self
     }
 
     /// Pose relative to another body's frame instead of the lab.
@@ -133,9 +133,21 @@ impl BodySpec {
 #[derive(Debug, Default)]
 pub struct SystemBuilder {
     system: System,
+    /// Names already used, so that lookups and duplicate checks do not scan the lists
+    /// (a 100-stage chain has 600 coordinates and 400 wires).
+    coord_ids: HashMap<String, CoordId>,
+    body_ids: HashMap<String, BodyId>,
+    wire_names: HashSet<String>,
+    spring_names: HashSet<String>,
 }
 
-fn check_finite(item: &str, what: &str, value: f64, unit: &str) -> Result<(), BuildError> {
+/// `item` is formatted only for the error.
+fn check_finite(
+    item: impl std::fmt::Display,
+    what: &str,
+    value: f64,
+    unit: &str,
+) -> Result<(), BuildError> {
     if value.is_finite() {
         Ok(())
     } else {
@@ -160,13 +172,20 @@ impl SystemBuilder {
         kind: CoordKind,
         start: f64,
     ) -> Result<CoordId, BuildError> {
-        if self.system.coord(name).is_some() {
+        if self.coord_ids.contains_key(name) {
             return Err(BuildError::Duplicate {
                 what: "coordinate",
                 name: name.to_string(),
             });
         }
-        check_finite(&format!("coordinate '{name}'"), "start value", start, "")?;
+        check_finite(
+            format_args!("coordinate '{name}'"),
+            "start value",
+            start,
+            "",
+        )?;
+        self.coord_ids
+            .insert(name.to_string(), self.system.coords.len());
         self.system.coords.push(Coordinate {
             name: name.to_string(),
             kind,
@@ -200,11 +219,14 @@ impl SystemBuilder {
     }
 
     fn coord_id(&self, context: &str, name: &str) -> Result<CoordId, BuildError> {
-        self.system.coord(name).ok_or_else(|| BuildError::Unknown {
-            context: context.to_string(),
-            what: "coordinate",
-            name: name.to_string(),
-        })
+        self.coord_ids
+            .get(name)
+            .copied()
+            .ok_or_else(|| BuildError::Unknown {
+                context: context.to_string(),
+                what: "coordinate",
+                name: name.to_string(),
+            })
     }
 
     /// Holds a variable or float at its start value during the equilibrium search.
@@ -229,13 +251,13 @@ impl SystemBuilder {
 
     /// Index of a body by name.
     pub fn body_id(&self, name: &str) -> Option<BodyId> {
-        self.system.body(name)
+        self.body_ids.get(name).copied()
     }
 
     /// Adds a body, checking its pose expressions and mass properties.
     pub fn body(&mut self, spec: BodySpec) -> Result<BodyId, BuildError> {
         let item = format!("body '{}'", spec.name);
-        if self.system.body(&spec.name).is_some() {
+        if self.body_ids.contains_key(&spec.name) {
             return Err(BuildError::Duplicate {
                 what: "body",
                 name: spec.name,
@@ -252,26 +274,23 @@ impl SystemBuilder {
         let labels = ["x", "y", "z", "yaw", "pitch", "roll"];
         let mut entries = Vec::with_capacity(6);
         for (text, label) in spec.pose.iter().zip(labels) {
-            let context = format!("{item} pose {label}");
+            // formatted only for an error: a build adds hundreds of pose entries
+            let context = || format!("{item} pose {label}");
             let expr = pendkit_expr::parse(text).map_err(|e| BuildError::Expression {
-                context: context.clone(),
+                context: context(),
                 message: e.to_string(),
             })?;
-            if let Some(unknown) = expr
-                .symbols()
-                .into_iter()
-                .find(|s| self.system.coord(s).is_none())
-            {
-                return Err(BuildError::Unknown {
-                    context,
+            let slot = |s: &str| self.coord_ids.get(s).copied().map(Slot::Var);
+            entries.push(expr.compile(&slot).map_err(|e| match e {
+                ExprError::UnknownSymbol { name } => BuildError::Unknown {
+                    context: context(),
                     what: "coordinate",
-                    name: unknown,
-                });
-            }
-            let slot = |s: &str| self.system.coord(s).map(Slot::Var);
-            entries.push(expr.compile(&slot).map_err(|e| BuildError::Expression {
-                context,
-                message: e.to_string(),
+                    name,
+                },
+                e => BuildError::Expression {
+                    context: context(),
+                    message: e.to_string(),
+                },
             })?);
         }
         let pose = PoseMap {
@@ -293,6 +312,8 @@ impl SystemBuilder {
                 .frame
                 .child(pose),
         };
+        self.body_ids
+            .insert(spec.name.clone(), self.system.bodies.len());
         self.system.bodies.push(Body {
             name: spec.name,
             frame,
@@ -317,7 +338,7 @@ impl SystemBuilder {
     /// Adds a wire, checking its length, stiffness and section.
     pub fn wire(&mut self, spec: Wire) -> Result<usize, BuildError> {
         let item = format!("wire '{}'", spec.name);
-        if self.system.wires.iter().any(|w| w.name == spec.name) {
+        if self.wire_names.contains(&spec.name) {
             return Err(BuildError::Duplicate {
                 what: "wire",
                 name: spec.name,
@@ -370,6 +391,7 @@ impl SystemBuilder {
                 });
             }
         }
+        self.wire_names.insert(spec.name.clone());
         self.system.wires.push(spec);
         Ok(self.system.wires.len() - 1)
     }
@@ -384,7 +406,7 @@ impl SystemBuilder {
         tag: &str,
     ) -> Result<usize, BuildError> {
         let item = format!("spring '{name}'");
-        if self.system.springs.iter().any(|s| s.name == name) {
+        if self.spring_names.contains(name) {
             return Err(BuildError::Duplicate {
                 what: "spring",
                 name: name.to_string(),
@@ -405,6 +427,7 @@ impl SystemBuilder {
                 message: "stiffness matrix is not symmetric".into(),
             });
         }
+        self.spring_names.insert(name.to_string());
         self.system.springs.push(Spring {
             name: name.to_string(),
             ends,
@@ -433,7 +456,7 @@ impl SystemBuilder {
             let base = s
                 .strip_suffix(".eq")
                 .filter(|_| phase == ExtraPhase::AfterEquilibrium);
-            if self.system.coord(base.unwrap_or(&s)).is_none() {
+            if !self.coord_ids.contains_key(base.unwrap_or(&s)) {
                 return Err(BuildError::Unknown {
                     context,
                     what: "coordinate",
@@ -659,25 +682,26 @@ pub fn build_with(
     }
     let resolved = params.resolve()?;
     let mut system = model.build(&resolved)?;
-    let used = system.tags();
-    if let Some(tag) = overrides.damping.keys().find(|t| !used.contains(*t)) {
-        return Err(BuildError::Unknown {
-            context: format!(
-                "damping (tags of this model: {})",
-                used.iter().cloned().collect::<Vec<_>>().join(", ")
-            ),
-            what: "tag",
-            name: tag.clone(),
-        });
+    if !overrides.damping.is_empty() {
+        let used = system.tags();
+        if let Some(tag) = overrides.damping.keys().find(|t| !used.contains(*t)) {
+            return Err(BuildError::Unknown {
+                context: format!(
+                    "damping (tags of this model: {})",
+                    used.iter().cloned().collect::<Vec<_>>().join(", ")
+                ),
+                what: "tag",
+                name: tag.clone(),
+            });
+        }
     }
-    // every tag with default or overridden damping, in order; only the overridden ones are
-    // parsed again
-    let tags: BTreeSet<&String> = defaults
+    // the model's tags, then those only a case gives damping; a tag the case overrides is
+    // parsed again with its fields merged in
+    let case_only = overrides
         .damping
         .keys()
-        .chain(overrides.damping.keys())
-        .collect();
-    for tag in tags {
+        .filter(|t| !defaults.damping.contains_key(*t));
+    for tag in defaults.damping.keys().chain(case_only) {
         let damping = match (defaults.damping.get(tag), overrides.damping.get(tag)) {
             (Some(parsed), None) => parsed.compile(tag, &resolved)?,
             (parsed, over) => {
