@@ -266,7 +266,7 @@ fn stage_count_is_validated() {
         let case = pendkit::Case::model("chain")
             .and_then(|c| c.with_sets(&[format!("n_stages={value}")]))
             .expect("case");
-        let e = case.build().err().expect("must fail").to_string();
+        let e = case.build().expect_err("must fail").to_string();
         assert_eq!(
             e,
             format!("parameter 'n_stages': must be a whole number from 1 to 200, got {shown}")

@@ -239,7 +239,12 @@ impl SystemBuilder {
     /// A stiffness (N/m or N m/rad) tying a coordinate to its equilibrium, for debugging.
     pub fn constraint_stiffness(&mut self, name: &str, k: f64) -> Result<(), BuildError> {
         let i = self.coord_id("constraint stiffness", name)?;
-        check_finite(&format!("constraint on '{name}'"), "stiffness", k, "N/m")?;
+        check_finite(
+            format_args!("constraint on '{name}'"),
+            "stiffness",
+            k,
+            "N/m",
+        )?;
         self.system.constraint_stiffness.insert(i, k);
         Ok(())
     }
