@@ -1,5 +1,8 @@
 //! Per bundled model: building the numeric model, finding its equilibrium, and the whole
-//! stage-0A pipeline (build, equilibrium, assembly, normal modes).
+//! stage-0A pipeline (build, equilibrium, assembly, normal modes); and the build of the
+//! `chain` model at 10, 30 and 100 stages, to show how it scales.
+
+mod scaling;
 
 use std::hint::black_box;
 use std::time::Duration;
@@ -26,6 +29,13 @@ fn models(c: &mut Criterion) {
                 let (system, _) = black_box(&case).build().unwrap();
                 run_stage(system, Stage::S0A).unwrap()
             })
+        });
+    }
+    // the rest of the pipeline at these sizes is `stage/chain-<n>/0A` in stages.rs
+    for n in scaling::CHAIN_STAGES {
+        let (name, case) = scaling::chain(n);
+        c.bench_function(&format!("build/{name}"), |b| {
+            b.iter(|| black_box(&case).build().unwrap())
         });
     }
 }

@@ -48,22 +48,24 @@ impl Expr {
 }
 
 fn compile_node(expr: &Expr, slot: &dyn Fn(&str) -> Option<Slot>) -> Result<Node, ExprError> {
-    let node = match expr {
-        Expr::Num(x) => return Ok(Node::Const(*x)),
-        Expr::Sym(name) if name == "pi" => return Ok(Node::Const(std::f64::consts::PI)),
-        Expr::Sym(name) => {
-            return match slot(name) {
-                Some(Slot::Const(x)) => Ok(Node::Const(x)),
-                Some(Slot::Var(i)) => Ok(Node::Var(i)),
-                None => Err(ExprError::UnknownSymbol { name: name.clone() }),
-            };
-        }
-        Expr::Neg(e) => Node::Neg(Box::new(compile_node(e, slot)?)),
-        Expr::Binary(op, l, r) => Node::Binary(
-            *op,
-            Box::new(compile_node(l, slot)?),
-            Box::new(compile_node(r, slot)?),
-        ),
+    // Children are compiled first and are already folded, so a node is constant when all
+    // its children are; constants fold here without building the node.
+    Ok(match expr {
+        Expr::Num(x) => Node::Const(*x),
+        Expr::Sym(name) if name == "pi" => Node::Const(std::f64::consts::PI),
+        Expr::Sym(name) => match slot(name) {
+            Some(Slot::Const(x)) => Node::Const(x),
+            Some(Slot::Var(i)) => Node::Var(i),
+            None => return Err(ExprError::UnknownSymbol { name: name.clone() }),
+        },
+        Expr::Neg(e) => match compile_node(e, slot)? {
+            Node::Const(x) => Node::Const(-x),
+            e => Node::Neg(Box::new(e)),
+        },
+        Expr::Binary(op, l, r) => match (compile_node(l, slot)?, compile_node(r, slot)?) {
+            (Node::Const(a), r @ Node::Const(_)) => Node::Const(binary(*op, a, &r, &[])),
+            (l, r) => Node::Binary(*op, Box::new(l), Box::new(r)),
+        },
         Expr::Call(func, args) => {
             if !func.accepts(args.len()) {
                 return Err(ExprError::WrongArity {
@@ -72,21 +74,23 @@ fn compile_node(expr: &Expr, slot: &dyn Fn(&str) -> Option<Slot>) -> Result<Node
                 });
             }
             let args = args.iter().map(|a| compile_node(a, slot));
-            Node::Call(*func, args.collect::<Result<_, _>>()?)
+            let node = Node::Call(*func, args.collect::<Result<_, _>>()?);
+            match &node {
+                Node::Call(_, args) if args.iter().all(Node::is_const) => {
+                    Node::Const(node.eval::<f64>(&[]))
+                }
+                _ => node,
+            }
         }
-    };
-    // Children are already folded, so a node is constant when all its children are.
-    let constant = match &node {
-        Node::Neg(e) => e.is_const(),
-        Node::Binary(_, l, r) => l.is_const() && r.is_const(),
-        Node::Call(_, args) => args.iter().all(Node::is_const),
-        Node::Const(_) | Node::Var(_) => false,
-    };
-    Ok(if constant {
-        Node::Const(node.eval::<f64>(&[]))
-    } else {
-        node
     })
+}
+
+/// `l op r`, with `r` still a node: a constant exponent allows negative bases, e.g. (-2)^3.
+fn binary<D: DualNum<Primitive = f64> + Copy>(op: BinOp, l: D, r: &Node, vars: &[D]) -> D {
+    match (op, r) {
+        (BinOp::Pow, Node::Const(exponent)) => l.powf(*exponent),
+        _ => op.apply(l, r.eval(vars)),
+    }
 }
 
 impl Node {
@@ -99,11 +103,7 @@ impl Node {
             Node::Const(x) => D::from(*x),
             Node::Var(i) => vars.get(*i).copied().unwrap_or(D::from(f64::NAN)),
             Node::Neg(e) => -e.eval(vars),
-            Node::Binary(op, l, r) => match (op, &**r) {
-                // A constant exponent allows negative bases, e.g. (-2)^3.
-                (BinOp::Pow, Node::Const(exponent)) => l.eval(vars).powf(*exponent),
-                _ => op.apply(l.eval(vars), r.eval(vars)),
-            },
+            Node::Binary(op, l, r) => binary(*op, l.eval(vars), r, vars),
             Node::Call(func, args) => func
                 .apply(args, |a| Ok::<D, Infallible>(a.eval(vars)))
                 .ok()

@@ -1,8 +1,10 @@
-//! Damping specifications as a model or case writes them, resolved against the model's
-//! parameters into compiled multipliers of frequency.
+//! Damping specifications as a model or case writes them, parsed once and compiled against
+//! the model's resolved parameters into multipliers of frequency.
+
+use std::sync::OnceLock;
 
 use pendkit_energy::TagDamping;
-use pendkit_expr::{Slot, parse};
+use pendkit_expr::{Expr, Slot, parse};
 use pendkit_params::Resolved;
 
 use crate::BuildError;
@@ -79,8 +81,16 @@ impl DampingSpec {
         Ok(())
     }
 
-    /// Compiles the multipliers of tag `tag` against resolved parameters.
+    /// Compiles the multipliers of tag `tag` against resolved parameters
+    /// ([`DampingSpec::parse`], then [`ParsedDamping::compile`]).
     pub fn resolve(&self, tag: &str, params: &Resolved) -> Result<TagDamping, BuildError> {
+        self.parse(tag)?.compile(tag, params)
+    }
+
+    /// Parses the multipliers of tag `tag`: ε' (`real`, 1 when absent) and ε'' (the sum of
+    /// the parts given, 0 when none is). Which parameters they use is only checked when
+    /// they are compiled.
+    pub fn parse(&self, tag: &str) -> Result<ParsedDamping, BuildError> {
         let mut imag_parts = Vec::new();
         if let Some(phi) = &self.structural {
             imag_parts.push(format!("({phi})"));
@@ -99,13 +109,71 @@ impl DampingSpec {
         } else {
             imag_parts.join("+")
         };
-        let real = self.real.clone().unwrap_or_else(|| "1".to_string());
-        let compile = |text: &str, which: &str| {
-            let context = format!("damping of tag '{tag}' ({which})");
-            let expr = parse(text).map_err(|e| BuildError::Expression {
-                context: context.clone(),
+        let real = self.real.as_deref().unwrap_or("1");
+        let parse_part = |text: &str, which: &str| {
+            parse(text).map_err(|e| BuildError::Expression {
+                context: context(tag, which),
                 message: e.to_string(),
-            })?;
+            })
+        };
+        let (real, imag) = (parse_part(real, "real")?, parse_part(&imag, "imag")?);
+        let mut inputs = real.symbols();
+        inputs.extend(imag.symbols());
+        inputs.remove("f");
+        Ok(ParsedDamping {
+            spec: self.clone(),
+            real,
+            imag,
+            inputs: inputs.into_iter().collect(),
+            first: OnceLock::new(),
+        })
+    }
+}
+
+/// Where a damping expression sits, for error messages.
+fn context(tag: &str, which: &str) -> String {
+    format!("damping of tag '{tag}' ({which})")
+}
+
+/// A [`DampingSpec`] with its multipliers parsed, so that a build only compiles them
+/// against the resolved parameters (models keep these in their cached
+/// [`Defaults`](crate::Defaults)).
+///
+/// It also keeps its first compilation, with the values of the parameters it read then,
+/// and hands out a copy whenever a later build reads the same values (bit for bit): a
+/// model's default damping is then compiled once, and stays so for every case that leaves
+/// the parameters it depends on alone. Other values are compiled afresh.
+#[derive(Clone, Debug)]
+pub struct ParsedDamping {
+    spec: DampingSpec,
+    real: Expr,
+    imag: Expr,
+    /// The parameters the multipliers read (every symbol but `f`), sorted.
+    inputs: Vec<String>,
+    /// The first compilation: the inputs' values then, and its result.
+    first: OnceLock<(Vec<f64>, TagDamping)>,
+}
+
+impl ParsedDamping {
+    /// The specification this was parsed from (to merge a case's fields into).
+    pub fn spec(&self) -> &DampingSpec {
+        &self.spec
+    }
+
+    /// Compiles the multipliers of tag `tag` against resolved parameters: every symbol but
+    /// `f` (Hz) must be a numeric parameter, and is folded in as a constant.
+    pub fn compile(&self, tag: &str, params: &Resolved) -> Result<TagDamping, BuildError> {
+        // None when an input is missing or symbolic: compiling reports it
+        let values: Option<Vec<f64>> = self.inputs.iter().map(|s| params.get(s).ok()).collect();
+        if let (Some(values), Some((first_values, compiled))) = (&values, self.first.get())
+            && values
+                .iter()
+                .map(|v| v.to_bits())
+                .eq(first_values.iter().map(|v| v.to_bits()))
+        {
+            return Ok(compiled.clone());
+        }
+        let compile = |expr: &Expr, which: &str| {
             let slot = |s: &str| {
                 if s == "f" {
                     Some(Slot::Var(0))
@@ -114,14 +182,19 @@ impl DampingSpec {
                 }
             };
             expr.compile(&slot).map_err(|e| BuildError::Expression {
-                context,
+                context: context(tag, which),
                 message: e.to_string(),
             })
         };
-        Ok(TagDamping {
-            real: compile(&real, "real")?,
-            imag: compile(&imag, "imag")?,
-        })
+        let compiled = TagDamping {
+            real: compile(&self.real, "real")?,
+            imag: compile(&self.imag, "imag")?,
+        };
+        if let Some(values) = values {
+            // a concurrent build may have set it first, with its own values: either is right
+            let _ = self.first.set((values, compiled.clone()));
+        }
+        Ok(compiled)
     }
 }
 
@@ -182,5 +255,30 @@ mod tests {
                 .to_string()
                 .contains("nosuch")
         );
+    }
+
+    #[test]
+    fn a_kept_compilation_is_reused_only_for_the_same_values() {
+        // φ(f) = phi + viscous 2e-3 f: the first compilation (phi = 1e-7) is kept; other
+        // values of phi must compile afresh, and the first values reuse the kept one.
+        let spec = DampingSpec {
+            structural: Some("phi".into()),
+            viscous: Some("2e-3".into()),
+            ..Default::default()
+        };
+        let parsed = spec.parse("t").unwrap();
+        let with_phi = |phi: f64| {
+            let mut p = ParamSet::new();
+            p.define_value("phi", phi).unwrap();
+            p.define_value("unrelated", phi).unwrap();
+            p.resolve().unwrap()
+        };
+        for phi in [1e-7, 3e-5, 1e-7, -0.0, 0.0, 1e-7] {
+            let (re, im) = parsed.compile("t", &with_phi(phi)).unwrap().at(10.0);
+            assert_eq!((re, im), (1.0, phi + 2e-2), "phi = {phi}");
+        }
+        // a missing parameter is still reported after a kept compilation exists
+        let e = parsed.compile("t", &ParamSet::new().resolve().unwrap());
+        assert!(e.unwrap_err().to_string().contains("phi"));
     }
 }

@@ -7,18 +7,19 @@
 
 mod damping;
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, HashMap, HashSet};
+use std::sync::{Arc, OnceLock};
 
 use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
 use pendkit_energy::{
     Body, BodyId, CoordId, CoordKind, Coordinate, EarlyWireTerms, EndDirection, ExtraPhase,
     ExtraTerm, PluginElement, Spring, SpringEnd, System, Wire,
 };
-use pendkit_expr::Slot;
+use pendkit_expr::{ExprError, Slot};
 use pendkit_geometry::{FrameMap, PoseMap};
 use pendkit_params::{ParamError, ParamSet, Resolved};
 
-pub use damping::DampingSpec;
+pub use damping::{DampingSpec, ParsedDamping};
 
 /// Errors in a model definition; each names the item and what is wrong with it.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -93,9 +94,9 @@ impl BodySpec {
     }
 
     /// The six pose coordinates `x<s> y<s> z<s> yaw<s> pitch<s> roll<s>`.
-    pub fn pose_suffix(self, suffix: &str) -> Self {
-        let names = ["x", "y", "z", "yaw", "pitch", "roll"].map(|n| format!("{n}{suffix}"));
-        self.pose(names.each_ref().map(String::as_str))
+    pub fn pose_suffix(mut self, suffix: &str) -> Self {
+        self.pose = ["x", "y", "z", "yaw", "pitch", "roll"].map(|n| format!("{n}{suffix}"));
+        self
     }
 
     /// Pose relative to another body's frame instead of the lab.
@@ -132,9 +133,21 @@ impl BodySpec {
 #[derive(Debug, Default)]
 pub struct SystemBuilder {
     system: System,
+    /// Names already used, so that lookups and duplicate checks do not scan the lists
+    /// (a 100-stage chain has 600 coordinates and 400 wires).
+    coord_ids: HashMap<String, CoordId>,
+    body_ids: HashMap<String, BodyId>,
+    wire_names: HashSet<String>,
+    spring_names: HashSet<String>,
 }
 
-fn check_finite(item: &str, what: &str, value: f64, unit: &str) -> Result<(), BuildError> {
+/// `item` is formatted only for the error.
+fn check_finite(
+    item: impl std::fmt::Display,
+    what: &str,
+    value: f64,
+    unit: &str,
+) -> Result<(), BuildError> {
     if value.is_finite() {
         Ok(())
     } else {
@@ -159,13 +172,20 @@ impl SystemBuilder {
         kind: CoordKind,
         start: f64,
     ) -> Result<CoordId, BuildError> {
-        if self.system.coord(name).is_some() {
+        if self.coord_ids.contains_key(name) {
             return Err(BuildError::Duplicate {
                 what: "coordinate",
                 name: name.to_string(),
             });
         }
-        check_finite(&format!("coordinate '{name}'"), "start value", start, "")?;
+        check_finite(
+            format_args!("coordinate '{name}'"),
+            "start value",
+            start,
+            "",
+        )?;
+        self.coord_ids
+            .insert(name.to_string(), self.system.coords.len());
         self.system.coords.push(Coordinate {
             name: name.to_string(),
             kind,
@@ -199,11 +219,14 @@ impl SystemBuilder {
     }
 
     fn coord_id(&self, context: &str, name: &str) -> Result<CoordId, BuildError> {
-        self.system.coord(name).ok_or_else(|| BuildError::Unknown {
-            context: context.to_string(),
-            what: "coordinate",
-            name: name.to_string(),
-        })
+        self.coord_ids
+            .get(name)
+            .copied()
+            .ok_or_else(|| BuildError::Unknown {
+                context: context.to_string(),
+                what: "coordinate",
+                name: name.to_string(),
+            })
     }
 
     /// Holds a variable or float at its start value during the equilibrium search.
@@ -216,7 +239,12 @@ impl SystemBuilder {
     /// A stiffness (N/m or N m/rad) tying a coordinate to its equilibrium, for debugging.
     pub fn constraint_stiffness(&mut self, name: &str, k: f64) -> Result<(), BuildError> {
         let i = self.coord_id("constraint stiffness", name)?;
-        check_finite(&format!("constraint on '{name}'"), "stiffness", k, "N/m")?;
+        check_finite(
+            format_args!("constraint on '{name}'"),
+            "stiffness",
+            k,
+            "N/m",
+        )?;
         self.system.constraint_stiffness.insert(i, k);
         Ok(())
     }
@@ -228,13 +256,13 @@ impl SystemBuilder {
 
     /// Index of a body by name.
     pub fn body_id(&self, name: &str) -> Option<BodyId> {
-        self.system.body(name)
+        self.body_ids.get(name).copied()
     }
 
     /// Adds a body, checking its pose expressions and mass properties.
     pub fn body(&mut self, spec: BodySpec) -> Result<BodyId, BuildError> {
         let item = format!("body '{}'", spec.name);
-        if self.system.body(&spec.name).is_some() {
+        if self.body_ids.contains_key(&spec.name) {
             return Err(BuildError::Duplicate {
                 what: "body",
                 name: spec.name,
@@ -251,26 +279,23 @@ impl SystemBuilder {
         let labels = ["x", "y", "z", "yaw", "pitch", "roll"];
         let mut entries = Vec::with_capacity(6);
         for (text, label) in spec.pose.iter().zip(labels) {
-            let context = format!("{item} pose {label}");
+            // formatted only for an error: a build adds hundreds of pose entries
+            let context = || format!("{item} pose {label}");
             let expr = pendkit_expr::parse(text).map_err(|e| BuildError::Expression {
-                context: context.clone(),
+                context: context(),
                 message: e.to_string(),
             })?;
-            if let Some(unknown) = expr
-                .symbols()
-                .into_iter()
-                .find(|s| self.system.coord(s).is_none())
-            {
-                return Err(BuildError::Unknown {
-                    context,
+            let slot = |s: &str| self.coord_ids.get(s).copied().map(Slot::Var);
+            entries.push(expr.compile(&slot).map_err(|e| match e {
+                ExprError::UnknownSymbol { name } => BuildError::Unknown {
+                    context: context(),
                     what: "coordinate",
-                    name: unknown,
-                });
-            }
-            let slot = |s: &str| self.system.coord(s).map(Slot::Var);
-            entries.push(expr.compile(&slot).map_err(|e| BuildError::Expression {
-                context,
-                message: e.to_string(),
+                    name,
+                },
+                e => BuildError::Expression {
+                    context: context(),
+                    message: e.to_string(),
+                },
             })?);
         }
         let pose = PoseMap {
@@ -292,6 +317,8 @@ impl SystemBuilder {
                 .frame
                 .child(pose),
         };
+        self.body_ids
+            .insert(spec.name.clone(), self.system.bodies.len());
         self.system.bodies.push(Body {
             name: spec.name,
             frame,
@@ -316,7 +343,7 @@ impl SystemBuilder {
     /// Adds a wire, checking its length, stiffness and section.
     pub fn wire(&mut self, spec: Wire) -> Result<usize, BuildError> {
         let item = format!("wire '{}'", spec.name);
-        if self.system.wires.iter().any(|w| w.name == spec.name) {
+        if self.wire_names.contains(&spec.name) {
             return Err(BuildError::Duplicate {
                 what: "wire",
                 name: spec.name,
@@ -369,6 +396,7 @@ impl SystemBuilder {
                 });
             }
         }
+        self.wire_names.insert(spec.name.clone());
         self.system.wires.push(spec);
         Ok(self.system.wires.len() - 1)
     }
@@ -383,7 +411,7 @@ impl SystemBuilder {
         tag: &str,
     ) -> Result<usize, BuildError> {
         let item = format!("spring '{name}'");
-        if self.system.springs.iter().any(|s| s.name == name) {
+        if self.spring_names.contains(name) {
             return Err(BuildError::Duplicate {
                 what: "spring",
                 name: name.to_string(),
@@ -404,6 +432,7 @@ impl SystemBuilder {
                 message: "stiffness matrix is not symmetric".into(),
             });
         }
+        self.spring_names.insert(name.to_string());
         self.system.springs.push(Spring {
             name: name.to_string(),
             ends,
@@ -432,7 +461,7 @@ impl SystemBuilder {
             let base = s
                 .strip_suffix(".eq")
                 .filter(|_| phase == ExtraPhase::AfterEquilibrium);
-            if self.system.coord(base.unwrap_or(&s)).is_none() {
+            if !self.coord_ids.contains_key(base.unwrap_or(&s)) {
                 return Err(BuildError::Unknown {
                     context,
                     what: "coordinate",
@@ -469,6 +498,25 @@ impl SystemBuilder {
     pub fn build(self) -> Result<System, BuildError> {
         check_finite("model", "gravity", self.system.gravity, "m/s^2")?;
         Ok(self.system)
+    }
+}
+
+/// The value of parameter `name` as a whole number in `range` (a count: stages, beads), or
+/// a one-line error naming the parameter, the range and the value.
+pub fn whole_number(
+    params: &Resolved,
+    name: &str,
+    range: std::ops::RangeInclusive<usize>,
+) -> Result<usize, BuildError> {
+    let value = params.get(name)?;
+    let (low, high) = (*range.start(), *range.end());
+    if value.fract() == 0.0 && value >= low as f64 && value <= high as f64 {
+        Ok(value as usize)
+    } else {
+        Err(BuildError::Invalid {
+            item: format!("parameter '{name}'"),
+            message: format!("must be a whole number from {low} to {high}, got {value}"),
+        })
     }
 }
 
@@ -518,10 +566,101 @@ pub trait Model: Sync {
     }
     /// Builds the numeric model from resolved parameters.
     fn build(&self, params: &Resolved) -> Result<System, BuildError>;
+    /// Where this model keeps its parsed [`Defaults`] from one build to the next, if it
+    /// does (a `DefaultsCache` of its own, e.g. in a `static`). A model that returns one
+    /// promises that [`Model::parameters`] and [`Model::damping`] always give the same
+    /// result. The default, `None`, parses them again at every build.
+    fn defaults_cache(&self) -> Option<&DefaultsCache> {
+        None
+    }
+}
+
+/// Inside an `impl Model for T`, defines [`Model::defaults_cache`] to return a
+/// [`DefaultsCache`] of its own (a `static` in the function, so one per `impl`): for a type
+/// with a single instance, such as a unit struct. Types with several instances keep a
+/// `DefaultsCache` field instead.
+#[macro_export]
+macro_rules! defaults_cache_per_impl {
+    () => {
+        fn defaults_cache(&self) -> Option<&$crate::DefaultsCache> {
+            static CACHE: $crate::DefaultsCache = $crate::DefaultsCache::new();
+            Some(&CACHE)
+        }
+    };
 }
 
 /// Default temperature for thermal noise (K) when a model does not define `temperature`.
 pub const DEFAULT_TEMPERATURE: f64 = 290.0;
+
+/// What a model's builds share, whatever the overrides: its default parameters, parsed
+/// (with `temperature` and `wire_terms_early` added when the model does not define them),
+/// and its default damping per tag, parsed.
+#[derive(Debug)]
+pub struct Defaults {
+    /// The model's name.
+    pub model: &'static str,
+    /// Default parameters; cloning them is cheap (see [`ParamSet`]).
+    pub params: ParamSet,
+    /// Default damping per tag.
+    pub damping: BTreeMap<String, ParsedDamping>,
+}
+
+impl Defaults {
+    /// Parses `model`'s defaults (without looking at its cache).
+    pub fn parse(model: &dyn Model) -> Result<Defaults, BuildError> {
+        let mut params = model.parameters()?;
+        if !params.contains("temperature") {
+            params.define_value("temperature", DEFAULT_TEMPERATURE)?;
+        }
+        if !params.contains("wire_terms_early") {
+            params.define_value("wire_terms_early", 0.0)?;
+        }
+        let damping = model
+            .damping()
+            .into_iter()
+            .map(|(tag, spec)| Ok((tag.clone(), spec.parse(&tag)?)))
+            .collect::<Result<_, BuildError>>()?;
+        Ok(Defaults {
+            model: model.name(),
+            params,
+            damping,
+        })
+    }
+
+    /// `model`'s defaults: from its [`DefaultsCache`] if it has one, else parsed now.
+    pub fn of(model: &dyn Model) -> Result<Arc<Defaults>, BuildError> {
+        match model.defaults_cache() {
+            Some(cache) => cache.get_or_parse(model),
+            None => Defaults::parse(model).map(Arc::new),
+        }
+    }
+}
+
+/// A model's parsed [`Defaults`], kept after the first build (parsing the quad's parameter
+/// tables and damping expressions is about half the cost of building it). Give each model
+/// its own; a cache found holding another model's defaults is bypassed.
+#[derive(Debug, Default)]
+pub struct DefaultsCache(OnceLock<Result<Arc<Defaults>, BuildError>>);
+
+impl DefaultsCache {
+    /// An empty cache (usable in a `static`).
+    pub const fn new() -> Self {
+        DefaultsCache(OnceLock::new())
+    }
+
+    /// The cached defaults of `model`, parsed on first use. A model whose defaults do not
+    /// parse gives the same error every time.
+    pub fn get_or_parse(&self, model: &dyn Model) -> Result<Arc<Defaults>, BuildError> {
+        let cached = self
+            .0
+            .get_or_init(|| Defaults::parse(model).map(Arc::new))
+            .clone();
+        match cached {
+            Ok(defaults) if defaults.model != model.name() => Defaults::parse(model).map(Arc::new),
+            other => other,
+        }
+    }
+}
 
 /// What a case changes in a model: parameter overrides (name, expression text, applied in
 /// order) and damping fields per tag.
@@ -541,22 +680,16 @@ pub fn build_with(
     model: &dyn Model,
     overrides: &Overrides,
 ) -> Result<(System, Resolved), BuildError> {
-    let mut params = model.parameters()?;
-    if !params.contains("temperature") {
-        params.define_value("temperature", DEFAULT_TEMPERATURE)?;
-    }
-    if !params.contains("wire_terms_early") {
-        params.define_value("wire_terms_early", 0.0)?;
-    }
+    let defaults = Defaults::of(model)?;
+    let mut params = defaults.params.clone();
     for (name, text) in &overrides.parameters {
         params.apply_text(name, text)?;
     }
     let resolved = params.resolve()?;
     let mut system = model.build(&resolved)?;
-    let used = system.tags();
-    let mut specs = model.damping();
-    for (tag, spec) in &overrides.damping {
-        if !used.contains(tag) {
+    if !overrides.damping.is_empty() {
+        let used = system.tags();
+        if let Some(tag) = overrides.damping.keys().find(|t| !used.contains(*t)) {
             return Err(BuildError::Unknown {
                 context: format!(
                     "damping (tags of this model: {})",
@@ -566,10 +699,25 @@ pub fn build_with(
                 name: tag.clone(),
             });
         }
-        specs.entry(tag.clone()).or_default().merge(spec);
     }
-    for (tag, spec) in &specs {
-        system.damping.set(tag, spec.resolve(tag, &resolved)?);
+    // the model's tags, then those only a case gives damping; a tag the case overrides is
+    // parsed again with its fields merged in
+    let case_only = overrides
+        .damping
+        .keys()
+        .filter(|t| !defaults.damping.contains_key(*t));
+    for tag in defaults.damping.keys().chain(case_only) {
+        let damping = match (defaults.damping.get(tag), overrides.damping.get(tag)) {
+            (Some(parsed), None) => parsed.compile(tag, &resolved)?,
+            (parsed, over) => {
+                let mut spec = parsed.map(|p| p.spec().clone()).unwrap_or_default();
+                if let Some(over) = over {
+                    spec.merge(over);
+                }
+                spec.resolve(tag, &resolved)?
+            }
+        };
+        system.damping.set(tag, damping);
     }
     system.temperature = resolved.get("temperature")?;
     if system.temperature <= 0.0 {

@@ -16,6 +16,7 @@
 mod resolve;
 
 use std::collections::HashMap;
+use std::sync::Arc;
 
 use pendkit_expr::{BinOp, Expr, ExprError, parse};
 
@@ -152,11 +153,36 @@ pub enum ParamError {
     },
 }
 
+/// One parameter of a [`ParamSet`]: its name, definition and the symbols the definition
+/// uses (found once, when it is defined or overridden, rather than at every resolution).
+#[derive(Debug, Clone)]
+pub(crate) struct Entry {
+    pub(crate) name: Arc<str>,
+    pub(crate) definition: Definition,
+    /// The symbols of `definition.expr`, sorted.
+    pub(crate) symbols: Vec<String>,
+}
+
+impl Entry {
+    fn new(name: Arc<str>, definition: Definition) -> Self {
+        let symbols = definition.expr.symbols().into_iter().collect();
+        Entry {
+            name,
+            definition,
+            symbols,
+        }
+    }
+}
+
 /// An ordered set of parameter definitions.
+///
+/// Cloning is cheap: clones share their entries and name index until one of them changes an
+/// entry (copy on write), so a model can parse its defaults once and hand each build a copy
+/// to override.
 #[derive(Debug, Clone, Default)]
 pub struct ParamSet {
-    defs: Vec<(String, Definition)>,
-    index: HashMap<String, usize>,
+    entries: Vec<Arc<Entry>>,
+    index: Arc<HashMap<Arc<str>, usize>>,
 }
 
 impl ParamSet {
@@ -196,9 +222,10 @@ impl ParamSet {
     }
 
     fn insert(&mut self, name: &str, expr: Expr, source: String) {
-        self.index.insert(name.to_string(), self.defs.len());
-        self.defs
-            .push((name.to_string(), Definition { expr, source }));
+        let name: Arc<str> = name.into();
+        Arc::make_mut(&mut self.index).insert(name.clone(), self.entries.len());
+        self.entries
+            .push(Arc::new(Entry::new(name, Definition { expr, source })));
     }
 
     /// Whether `name` is defined.
@@ -208,22 +235,22 @@ impl ParamSet {
 
     /// The parameter names in definition order.
     pub fn names(&self) -> impl Iterator<Item = &str> {
-        self.defs.iter().map(|(name, _)| name.as_str())
+        self.entries.iter().map(|e| &*e.name)
     }
 
     /// The definition of `name`.
     pub fn get(&self, name: &str) -> Option<&Definition> {
-        self.index.get(name).map(|&i| &self.defs[i].1)
+        self.index.get(name).map(|&i| &self.entries[i].definition)
     }
 
     /// The number of parameters.
     pub fn len(&self) -> usize {
-        self.defs.len()
+        self.entries.len()
     }
 
     /// Whether there are no parameters.
     pub fn is_empty(&self) -> bool {
-        self.defs.is_empty()
+        self.entries.is_empty()
     }
 
     /// Applies a case override to an existing parameter. `Scale` and `Increment` wrap the
@@ -249,18 +276,20 @@ impl ParamSet {
         text: Option<&str>,
     ) -> Result<(), ParamError> {
         let i = self.position(name)?;
-        let def = &mut self.defs[i].1;
+        let def = &self.entries[i].definition;
         let old = Box::new(def.expr.clone());
         let (expr, written) = match ov {
             Override::Expr(e) => (e, true),
             Override::Scale(x) => (Expr::Binary(BinOp::Mul, old, Box::new(x)), false),
             Override::Increment(x) => (Expr::Binary(BinOp::Add, old, Box::new(x)), false),
         };
-        def.source = match text {
+        let source = match text {
             Some(text) if written => text.to_string(),
             _ => expr.to_string(),
         };
-        def.expr = expr;
+        // only this entry is copied; the others stay shared with the set this was cloned from
+        let name = self.entries[i].name.clone();
+        self.entries[i] = Arc::new(Entry::new(name, Definition { expr, source }));
         Ok(())
     }
 
@@ -285,7 +314,7 @@ impl ParamSet {
     /// symbols in sorted order. A free symbol takes precedence over a parameter of the same
     /// name, which is then left out.
     pub fn resolve_with_free(&self, free: &[&str]) -> Result<Resolved, ParamError> {
-        resolve::resolve(&self.defs, &self.index, free)
+        resolve::resolve(&self.entries, &self.index, free)
     }
 }
 

@@ -1,10 +1,11 @@
 //! Order-independent resolution of a parameter set (depth-first, with cycle detection).
 
 use std::collections::{BTreeSet, HashMap};
+use std::sync::Arc;
 
 use pendkit_expr::{Expr, parse};
 
-use crate::{Definition, ParamError, unknown};
+use crate::{Entry, ParamError, unknown};
 
 /// A resolved value: a number, or an expression in the free symbols only.
 #[derive(Debug, Clone, PartialEq)]
@@ -17,8 +18,10 @@ enum Value {
 /// that do not depend on free symbols, and expressions for those that do.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Resolved {
-    entries: Vec<(String, Value)>,
-    index: HashMap<String, usize>,
+    entries: Vec<(Arc<str>, Value)>,
+    /// Position of each name in `entries`; shared with the parameter set when no parameter
+    /// is left out as free (the usual case), so resolving does not rebuild it.
+    index: Arc<HashMap<Arc<str>, usize>>,
 }
 
 #[derive(Clone, Copy, PartialEq)]
@@ -29,8 +32,8 @@ enum State {
 }
 
 struct Resolver<'a> {
-    defs: &'a [(String, Definition)],
-    index: &'a HashMap<String, usize>,
+    defs: &'a [Arc<Entry>],
+    index: &'a HashMap<Arc<str>, usize>,
     free: &'a [&'a str],
     state: Vec<State>,
     values: Vec<Option<Value>>,
@@ -39,8 +42,8 @@ struct Resolver<'a> {
 }
 
 pub(crate) fn resolve(
-    defs: &[(String, Definition)],
-    index: &HashMap<String, usize>,
+    defs: &[Arc<Entry>],
+    index: &Arc<HashMap<Arc<str>, usize>>,
     free: &[&str],
 ) -> Result<Resolved, ParamError> {
     let mut r = Resolver {
@@ -51,27 +54,33 @@ pub(crate) fn resolve(
         values: vec![None; defs.len()],
         stack: Vec::new(),
     };
-    let mut entries = Vec::new();
-    for (i, (name, _)) in defs.iter().enumerate() {
-        if free.contains(&name.as_str()) {
+    let mut entries = Vec::with_capacity(defs.len());
+    for (i, entry) in defs.iter().enumerate() {
+        if free.contains(&&*entry.name) {
             continue;
         }
         r.visit(i)?;
         if let Some(value) = r.values[i].clone() {
-            entries.push((name.clone(), value));
+            entries.push((entry.name.clone(), value));
         }
     }
-    let index = entries
-        .iter()
-        .enumerate()
-        .map(|(i, (name, _))| (name.clone(), i))
-        .collect();
+    let index = if entries.len() == defs.len() {
+        index.clone()
+    } else {
+        Arc::new(
+            entries
+                .iter()
+                .enumerate()
+                .map(|(i, (name, _))| (name.clone(), i))
+                .collect(),
+        )
+    };
     Ok(Resolved { entries, index })
 }
 
 impl Resolver<'_> {
     fn name(&self, i: usize) -> String {
-        self.defs[i].0.clone()
+        self.defs[i].name.to_string()
     }
 
     fn visit(&mut self, i: usize) -> Result<(), ParamError> {
@@ -90,18 +99,21 @@ impl Resolver<'_> {
         self.stack.push(i);
 
         let defs = self.defs;
-        let (name, def) = &defs[i];
-        let symbols = def.expr.symbols();
+        let Entry {
+            name,
+            definition: def,
+            symbols,
+        } = &*defs[i];
         let mut symbolic = false;
-        for sym in &symbols {
+        for sym in symbols {
             if self.free.contains(&sym.as_str()) {
                 symbolic = true;
                 continue;
             }
-            let Some(&j) = self.index.get(sym) else {
+            let Some(&j) = self.index.get(sym.as_str()) else {
                 return Err(ParamError::Undefined {
                     symbol: sym.clone(),
-                    used_in: name.clone(),
+                    used_in: name.to_string(),
                     chain: self.stack.iter().map(|&j| self.name(j)).collect(),
                 });
             };
@@ -124,12 +136,12 @@ impl Resolver<'_> {
                 .expr
                 .eval(&lookup)
                 .map_err(|source| ParamError::Syntax {
-                    name: name.clone(),
+                    name: name.to_string(),
                     source,
                 })?;
             if !x.is_finite() {
                 return Err(ParamError::NotFinite {
-                    name: name.clone(),
+                    name: name.to_string(),
                     definition: def.source.clone(),
                     value: x,
                 });
@@ -147,7 +159,7 @@ impl Resolved {
     fn lookup(&self, name: &str) -> Result<&Value, ParamError> {
         match self.index.get(name) {
             Some(&i) => Ok(&self.entries[i].1),
-            None => Err(unknown(name, self.entries.iter().map(|(n, _)| n.as_str()))),
+            None => Err(unknown(name, self.entries.iter().map(|(n, _)| &**n))),
         }
     }
 
@@ -180,7 +192,7 @@ impl Resolved {
     /// The numeric parameters and their values, in definition order.
     pub fn iter(&self) -> impl Iterator<Item = (&str, f64)> {
         self.entries.iter().filter_map(|(name, v)| match v {
-            Value::Number(x) => Some((name.as_str(), *x)),
+            Value::Number(x) => Some((&**name, *x)),
             Value::Symbolic(_) => None,
         })
     }
@@ -188,7 +200,7 @@ impl Resolved {
     /// The parameters that depend on free symbols, with their expressions, in definition order.
     pub fn symbolic(&self) -> impl Iterator<Item = (&str, &Expr)> {
         self.entries.iter().filter_map(|(name, v)| match v {
-            Value::Symbolic(e) => Some((name.as_str(), e)),
+            Value::Symbolic(e) => Some((&**name, e)),
             Value::Number(_) => None,
         })
     }

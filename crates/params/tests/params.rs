@@ -262,3 +262,23 @@ fn resolved_eval() {
     assert!(r.eval_str("a*").is_err());
     assert!(!r.is_empty());
 }
+
+#[test]
+fn clones_are_independent() {
+    // Clones share their entries until one changes (copy on write): an override or a new
+    // definition on a clone leaves the original, and its resolution, as they were.
+    let base = set(&SUSPENSION);
+    let mut copy = base.clone();
+    copy.apply_text("m1", "scale(2)").unwrap();
+    copy.define("extra", "m1 + 1").unwrap();
+    let (original, changed) = (base.resolve().unwrap(), copy.resolve().unwrap());
+    assert_eq!(original.get("m1"), Ok(22.0));
+    assert_eq!(changed.get("m1"), Ok(44.0));
+    // dependents follow the override in the copy only
+    assert_eq!(original.get("m2"), Ok(11.0));
+    assert_eq!(changed.get("m2"), Ok(22.0));
+    assert_eq!(changed.get("extra"), Ok(45.0));
+    assert!(!base.contains("extra") && original.get("extra").is_err());
+    assert_eq!(base.get("m1").unwrap().source, "22");
+    assert_eq!(copy.get("m1").unwrap().source, "22*2");
+}

@@ -1,12 +1,17 @@
 //! The small bundled models whose answers are known in closed form (physics_oracles.md):
 //! `toy` (two springs in series with a float), `pendulum` (point mass on four fibres),
 //! `double-pendulum` (two point masses on steel wires) and `rigid-body` (one body on four
-//! vertical fibres). Wires are straight and vertical at equilibrium: their unstretched
+//! vertical fibres); and `chain`, any number of such bodies one below the other, for
+//! scaling benchmarks. Wires are straight and vertical at equilibrium: their unstretched
 //! lengths are derived from the static tensions.
 
+mod chain;
+
 use nalgebra::{Matrix6, Vector3, Vector6};
-use pendkit_energy::{EndDirection, SpringEnd, Wire, WireEnd, WireSection, WireTags};
+use pendkit_energy::{BodyId, EndDirection, SpringEnd, Wire, WireEnd, WireSection, WireTags};
 use std::collections::BTreeMap;
+
+pub use chain::{Chain, MAX_STAGES};
 
 use pendkit_model::{BodySpec, BuildError, DampingSpec, Model, SystemBuilder};
 use pendkit_params::{ParamError, ParamSet, Resolved};
@@ -31,6 +36,16 @@ const SILICA_FIBRE: [(&str, &str); 7] = [
     ("g", "9.81"),
 ];
 
+/// The steel wire of the double pendulum and the chain: r = 0.5 mm music wire, E = 212 GPa,
+/// ν = 0.29, ρ = 7800 kg/m^3, φ = 1e-7 (as the fibres, so that the models compare).
+const STEEL_WIRE: [(&str, &str); 5] = [
+    ("r_wire", "0.5e-3"),
+    ("E_wire", "212e9"),
+    ("nu_wire", "0.29"),
+    ("rho_wire", "7800"),
+    ("phi_wire", "1e-7"),
+];
+
 /// Structural loss `phi` (a parameter name) on the stretch, bending and torsion tags of
 /// wires called `kind` (the bundled small models' fibres default to φ = 1e-7 everywhere).
 fn wire_damping(kind: &str, phi: &str) -> BTreeMap<String, DampingSpec> {
@@ -40,11 +55,12 @@ fn wire_damping(kind: &str, phi: &str) -> BTreeMap<String, DampingSpec> {
         .collect()
 }
 
-fn fibre_tags() -> WireTags {
+/// Tags `<kind>_stretch`, `<kind>_bending`, `<kind>_torsion`.
+fn wire_tags(kind: &str) -> WireTags {
     WireTags {
-        stretch: "fibre_stretch".into(),
-        bending: "fibre_bending".into(),
-        torsion: "fibre_torsion".into(),
+        stretch: format!("{kind}_stretch"),
+        bending: format!("{kind}_bending"),
+        torsion: format!("{kind}_torsion"),
     }
 }
 
@@ -65,23 +81,31 @@ fn support(b: &mut SystemBuilder) -> Result<usize, BuildError> {
     b.body(BodySpec::new("support").pose_suffix("00"))
 }
 
-/// Four vertical fibres from the support (at z = 0) to `body`, attached at (±a, ±b, d) on the
-/// body whose centre sits at z = -(l + d); each carries a quarter of `weight` (N). Their
-/// lower ends are hinged when the parameter `hinged_bottom` is non-zero, else clamped.
-fn four_fibres(
-    b: &mut SystemBuilder,
-    (support, body): (usize, usize),
-    p: &Resolved,
-    (a, bb, d): (f64, f64, f64),
-    weight: f64,
-) -> Result<(), BuildError> {
-    let bottom = if p.get("hinged_bottom")? != 0.0 {
-        EndDirection::Hinged
-    } else {
-        EndDirection::Auto
-    };
-    let section = round_section(p, "fibre")?;
-    let length = p.get("l_fibre")?;
+/// Four vertical wires of one kind from `upper` to `lower`, at (±a, ±b) in x and y on both,
+/// at height `heights.0` (m, in `upper`'s coordinates) on the upper body and `heights.1` on
+/// the lower one.
+struct FourWires<'a> {
+    /// Wires are called `<name>1` ... `<name>4`.
+    name: &'a str,
+    /// Upper and lower body.
+    bodies: (BodyId, BodyId),
+    /// Half-separations a in x and b in y (m).
+    spread: (f64, f64),
+    /// Attachment heights on the upper and on the lower body (m, body coordinates).
+    heights: (f64, f64),
+    /// Length between the attachment points at equilibrium (m).
+    length: f64,
+    /// Cross-section.
+    section: &'a WireSection,
+    /// Damping tags.
+    tags: &'a WireTags,
+    /// How the lower ends are held (the upper ends are clamped: auto direction).
+    bottom: EndDirection,
+}
+
+/// Adds the four wires, each carrying a quarter of `weight` (N) at equilibrium.
+fn four_wires(b: &mut SystemBuilder, w: &FourWires, weight: f64) -> Result<(), BuildError> {
+    let (a, bb) = w.spread;
     for (k, (sx, sy)) in [(1.0, 1.0), (1.0, -1.0), (-1.0, 1.0), (-1.0, -1.0)]
         .into_iter()
         .enumerate()
@@ -89,32 +113,63 @@ fn four_fibres(
         let (x, y) = (sx * a, sy * bb);
         let ends = [
             WireEnd {
-                body: support,
-                point: Vector3::new(x, y, 0.0),
+                body: w.bodies.0,
+                point: Vector3::new(x, y, w.heights.0),
                 direction: EndDirection::Auto,
             },
             WireEnd {
-                body,
-                point: Vector3::new(x, y, d),
-                direction: bottom.clone(),
+                body: w.bodies.1,
+                point: Vector3::new(x, y, w.heights.1),
+                direction: w.bottom.clone(),
             },
         ];
         b.wire(Wire::from_tension(
-            format!("fibre{}", k + 1),
+            format!("{}{}", w.name, k + 1),
             ends,
-            section.clone(),
-            length,
+            w.section.clone(),
+            w.length,
             weight / 4.0,
-            fibre_tags(),
+            w.tags.clone(),
         ))?;
     }
     Ok(())
+}
+
+/// The four silica fibres `fibre1` ... `fibre4` of the pendulum and the rigid body, from
+/// the support (at z = 0) to `body`, attached at (±a_fibre, ±b_fibre, d) on the body whose
+/// centre sits at z = -(l_fibre + d); each carries a quarter of `weight` (N). Their lower
+/// ends are hinged when the parameter `hinged_bottom` is non-zero, else clamped.
+fn four_fibres(
+    b: &mut SystemBuilder,
+    (support, body): (BodyId, BodyId),
+    p: &Resolved,
+    d: f64,
+    weight: f64,
+) -> Result<(), BuildError> {
+    let bottom = if p.get("hinged_bottom")? != 0.0 {
+        EndDirection::Hinged
+    } else {
+        EndDirection::Auto
+    };
+    let fibres = FourWires {
+        name: "fibre",
+        bodies: (support, body),
+        spread: (p.get("a_fibre")?, p.get("b_fibre")?),
+        heights: (0.0, d),
+        length: p.get("l_fibre")?,
+        section: &round_section(p, "fibre")?,
+        tags: &wire_tags("fibre"),
+        bottom,
+    };
+    four_wires(b, &fibres, weight)
 }
 
 /// Source §4 toy: mass m on springs k1 (support s to float q) and k2 (float q to mass x).
 pub struct Toy;
 
 impl Model for Toy {
+    pendkit_model::defaults_cache_per_impl!();
+
     fn name(&self) -> &'static str {
         "toy"
     }
@@ -164,6 +219,8 @@ impl Model for Toy {
 pub struct Pendulum;
 
 impl Model for Pendulum {
+    pendkit_model::defaults_cache_per_impl!();
+
     fn name(&self) -> &'static str {
         "pendulum"
     }
@@ -197,8 +254,7 @@ impl Model for Pendulum {
                 .pose(["x1", "y1", "z1", "0", "0", "0"])
                 .mass(m),
         )?;
-        let spread = (p.get("a_fibre")?, p.get("b_fibre")?, 0.0);
-        four_fibres(&mut b, (support, mass), p, spread, m * g)?;
+        four_fibres(&mut b, (support, mass), p, 0.0, m * g)?;
         b.build()
     }
 }
@@ -207,6 +263,8 @@ impl Model for Pendulum {
 pub struct DoublePendulum;
 
 impl Model for DoublePendulum {
+    pendkit_model::defaults_cache_per_impl!();
+
     fn name(&self) -> &'static str {
         "double-pendulum"
     }
@@ -214,18 +272,15 @@ impl Model for DoublePendulum {
         "40 kg over 40 kg point masses on 0.6 m steel wires, hinged"
     }
     fn parameters(&self) -> Result<ParamSet, ParamError> {
-        params(&[
+        let mut defs = vec![
             ("g", "9.81"),
             ("m1", "40"),
             ("m2", "40"),
             ("l1", "0.6"),
             ("l2", "0.6"),
-            ("r_wire", "0.5e-3"),
-            ("E_wire", "212e9"),
-            ("nu_wire", "0.29"),
-            ("rho_wire", "7800"),
-            ("phi_wire", "1e-7"),
-        ])
+        ];
+        defs.extend(STEEL_WIRE);
+        params(&defs)
     }
     fn damping(&self) -> BTreeMap<String, DampingSpec> {
         wire_damping("wire", "phi_wire")
@@ -256,11 +311,7 @@ impl Model for DoublePendulum {
                 .mass(m2),
         )?;
         let section = round_section(p, "wire")?;
-        let tags = WireTags {
-            stretch: "wire_stretch".into(),
-            bending: "wire_bending".into(),
-            torsion: "wire_torsion".into(),
-        };
+        let tags = wire_tags("wire");
         let hinge = |body| WireEnd {
             body,
             point: Vector3::zeros(),
@@ -290,6 +341,8 @@ impl Model for DoublePendulum {
 pub struct RigidBody;
 
 impl Model for RigidBody {
+    pendkit_model::defaults_cache_per_impl!();
+
     fn name(&self) -> &'static str {
         "rigid-body"
     }
@@ -339,13 +392,12 @@ impl Model for RigidBody {
                 .mass(m)
                 .inertia_diag(p.get("I1x")?, p.get("I1y")?, p.get("I1z")?),
         )?;
-        let spread = (p.get("a_fibre")?, p.get("b_fibre")?, d);
-        four_fibres(&mut b, (support, body), p, spread, m * g)?;
+        four_fibres(&mut b, (support, body), p, d, m * g)?;
         b.build()
     }
 }
 
 /// The models of this crate.
 pub fn models() -> Vec<&'static dyn Model> {
-    vec![&Toy, &Pendulum, &DoublePendulum, &RigidBody]
+    vec![&Toy, &Pendulum, &DoublePendulum, &RigidBody, &Chain]
 }

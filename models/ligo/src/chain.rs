@@ -305,17 +305,10 @@ pub fn beaded_fibre(
     Ok(())
 }
 
-/// The number of violin beads per fibre from parameter `n_beads` (a whole number, 0–200).
+/// The number of violin beads per fibre from parameter `n_beads` (a whole number, 0–200:
+/// dense linear algebra, and 200 beads per fibre is already ~2400 degrees of freedom).
 pub fn bead_count(p: &Resolved) -> Result<usize, BuildError> {
-    let beads = p.get("n_beads")?;
-    // dense linear algebra: 200 beads per fibre is already ~2400 degrees of freedom
-    if beads < 0.0 || beads.fract() != 0.0 || beads > 200.0 {
-        return Err(BuildError::Invalid {
-            item: "parameter 'n_beads'".into(),
-            message: format!("must be a whole number from 0 to 200, got {beads}"),
-        });
-    }
-    Ok(beads as usize)
+    pendkit_model::whole_number(p, "n_beads", 0..=200)
 }
 
 /// The four lowest wires (or fibres), from `upper` at (±sl, ±n4, −d3) to `lower` at

@@ -10,7 +10,7 @@ use std::collections::BTreeMap;
 
 use nalgebra::Vector3;
 use pendkit_energy::System;
-use pendkit_model::{BodySpec, BuildError, DampingSpec, Model, SystemBuilder};
+use pendkit_model::{BodySpec, BuildError, DampingSpec, DefaultsCache, Model, SystemBuilder};
 use pendkit_params::{ParamError, ParamSet, Resolved};
 
 use crate::chain::{self, Blade, Blades, vertical};
@@ -23,45 +23,56 @@ pub struct Quad {
     blades: Blades,
     /// Default number of violin beads per fibre (parameter `n_beads`).
     beads: usize,
+    /// This variant's parsed defaults, after its first build.
+    cache: DefaultsCache,
 }
 
 /// The bundled quad variants.
-pub const QUADS: [Quad; 5] = [
+pub static QUADS: [Quad; 5] = [
     Quad {
         name: "quad",
         summary: "aLIGO quad, xtra-lite (massless blade tips as floats), quad2005 parameters",
         blades: Blades::XtraLite,
         beads: 0,
+        cache: DefaultsCache::new(),
     },
     Quad {
         name: "quad-lite",
         summary: "aLIGO quad, lite (blade tips with mass, 1 DOF each)",
         blades: Blades::Lite,
         beads: 0,
+        cache: DefaultsCache::new(),
     },
     Quad {
         name: "quad-full",
         summary: "aLIGO quad, full (blade tips as 6-DOF bodies on 6x6 springs)",
         blades: Blades::Full,
         beads: 0,
+        cache: DefaultsCache::new(),
     },
     Quad {
         name: "quad-lateral",
         summary: "aLIGO quad, xtra-lite with lateral blade compliance (the source's preferred model)",
         blades: Blades::Lateral,
         beads: 0,
+        cache: DefaultsCache::new(),
     },
     Quad {
         name: "quad-v5",
         summary: "aLIGO quad, xtra-lite with 5 violin beads per fibre (n_beads sets any N)",
         blades: Blades::XtraLite,
         beads: 5,
+        cache: DefaultsCache::new(),
     },
 ];
 
 impl Model for Quad {
     fn name(&self) -> &'static str {
         self.name
+    }
+
+    fn defaults_cache(&self) -> Option<&DefaultsCache> {
+        Some(&self.cache)
     }
 
     fn summary(&self) -> &'static str {

@@ -15,7 +15,7 @@ use std::collections::BTreeMap;
 
 use nalgebra::Vector3;
 use pendkit_energy::System;
-use pendkit_model::{BodySpec, BuildError, DampingSpec, Model, SystemBuilder};
+use pendkit_model::{BodySpec, BuildError, DampingSpec, DefaultsCache, Model, SystemBuilder};
 use pendkit_params::{ParamError, ParamSet, Resolved};
 
 use crate::chain::{self, Blade, Blades, vertical};
@@ -28,39 +28,46 @@ pub struct Triple {
     blades: Blades,
     /// Default number of violin beads per lower wire (parameter `n_beads`).
     beads: usize,
+    /// This variant's parsed defaults, after its first build.
+    cache: DefaultsCache,
 }
 
 /// The bundled triple variants.
-pub const TRIPLES: [Triple; 5] = [
+pub static TRIPLES: [Triple; 5] = [
     Triple {
         name: "triple",
         summary: "GEO-style triple, xtra-lite (massless blade tips as floats), HSTS-like parameters",
         blades: Blades::XtraLite,
         beads: 0,
+        cache: DefaultsCache::new(),
     },
     Triple {
         name: "triple-lite",
         summary: "GEO-style triple, lite (blade tips with mass, 1 DOF each)",
         blades: Blades::Lite,
         beads: 0,
+        cache: DefaultsCache::new(),
     },
     Triple {
         name: "triple-full",
         summary: "GEO-style triple, full (blade tips as 6-DOF bodies on 6x6 springs)",
         blades: Blades::Full,
         beads: 0,
+        cache: DefaultsCache::new(),
     },
     Triple {
         name: "triple-lateral",
         summary: "GEO-style triple, xtra-lite with lateral blade compliance",
         blades: Blades::Lateral,
         beads: 0,
+        cache: DefaultsCache::new(),
     },
     Triple {
         name: "triple-v5",
         summary: "GEO-style triple, xtra-lite with 5 violin beads per lower wire (n_beads sets any N)",
         blades: Blades::XtraLite,
         beads: 5,
+        cache: DefaultsCache::new(),
     },
 ];
 
@@ -166,6 +173,10 @@ const LOWER_MATERIAL: [&str; 7] = ["rho", "C", "K", "alpha", "dlnE_dT", "phi", "
 impl Model for Triple {
     fn name(&self) -> &'static str {
         self.name
+    }
+
+    fn defaults_cache(&self) -> Option<&DefaultsCache> {
+        Some(&self.cache)
     }
 
     fn summary(&self) -> &'static str {
