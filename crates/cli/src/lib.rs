@@ -9,7 +9,9 @@
 use std::path::{Path, PathBuf};
 
 use nalgebra::{DVector, Vector3};
-use pendkit_assembly::{Assembled, AssemblyError, EquilibriumOptions, assemble};
+use pendkit_assembly::{
+    Assembled, AssemblyError, AssemblyOptions, PhaseTimes, assemble_with, timed,
+};
 use pendkit_dynamics::{
     DynamicsError, Input, Modes, Output, StageModel, eliminate_floats, normal_modes,
 };
@@ -285,14 +287,33 @@ pub struct StageResult {
 /// Equilibrium, stiffness, mass and modes of `system` at `stage`. The modes use the real
 /// stiffness at f = 0 (each tag's ε'(0); 1 unless a model says otherwise).
 pub fn run_stage(system: System, stage: Stage) -> Result<StageResult, Error> {
-    let assembled = assemble(&system, stage, &EquilibriumOptions::default())?;
-    let model = StageModel::new(&system, &assembled);
-    let reduced = eliminate_floats(
-        &model.real_stiffness(&system.damping),
-        &assembled.layout,
-        &system,
-    )?;
-    let modes = normal_modes(&reduced.k_eff, &assembled.mass, &model.variables)?;
+    run_stage_with(system, stage, &AssemblyOptions::default(), None)
+}
+
+/// [`run_stage`] with assembly options (equilibrium controls, derivative path), recording
+/// the time of each phase into `times` when given: the assembly's (`equilibrium`,
+/// `hessian:<kind>`, `mass`), then `stage-model` (the stage's matrices by tag), `floats`
+/// (their elimination) and `modes`.
+pub fn run_stage_with(
+    system: System,
+    stage: Stage,
+    options: &AssemblyOptions,
+    mut times: Option<&mut PhaseTimes>,
+) -> Result<StageResult, Error> {
+    let assembled = assemble_with(&system, stage, options, times.as_deref_mut())?;
+    let model = timed(&mut times, "stage-model", 1, || {
+        StageModel::new(&system, &assembled)
+    });
+    let reduced = timed(&mut times, "floats", 1, || {
+        eliminate_floats(
+            &model.real_stiffness(&system.damping),
+            &assembled.layout,
+            &system,
+        )
+    })?;
+    let modes = timed(&mut times, "modes", 1, || {
+        normal_modes(&reduced.k_eff, &assembled.mass, &model.variables)
+    })?;
     Ok(StageResult {
         system,
         assembled,

@@ -6,18 +6,27 @@ mod core;
 mod damping;
 mod element;
 mod extra;
+mod fast;
 mod stage;
 mod system;
 mod term;
 
 pub use crate::core::{GRAVITY_TAG, GravityEnergy, SpringEnergy, WireStretchEnergy};
 pub use damping::{Damping, TagDamping};
-pub use element::{Element, LocalFrames, Reference, Registration, find_kind, registry};
+pub use element::{
+    Element, LocalFrames, Reference, Registration, SharedBodies, find_kind, registry,
+};
 pub use extra::{CONSTRAINT_TAG, constraint_terms, extra_terms};
+pub use fast::{
+    Attached, Derivatives, FrameAt, JetPoint, MAX_PARTS, OffForm, Scratch, add_curvature,
+    add_jacobian, hyper_dual_over_frames,
+};
 pub use pendkit_rotations::Real;
 pub use stage::{Stage, UnknownStage};
 pub use system::*;
-pub use term::{LocalDerivatives, Potential, TensionOff, Term};
+pub use term::{
+    LocalDerivatives, OffHessian, PartOff, Potential, SharedPotential, TensionOff, Term,
+};
 
 /// Re-exported so plug-in crates can register without depending on `inventory` directly.
 pub use inventory;

@@ -36,6 +36,116 @@ pub fn rotation<D: Real>(yaw: D, pitch: D, roll: D) -> Matrix3<D> {
     )
 }
 
+/// Value and angle derivatives of R(yaw, pitch, roll) (f64): the first derivatives
+/// ∂R/∂θ_m and the second derivatives ∂²R/∂θ_m∂θ_n for θ = (yaw, pitch, roll), the
+/// pieces a frame's coordinate derivatives are assembled from by the chain rule.
+#[derive(Clone, Copy, Debug)]
+pub struct RotationDerivatives {
+    /// R itself.
+    pub value: Matrix3<f64>,
+    /// ∂R/∂θ_m, m = yaw, pitch, roll (per rad).
+    pub first: [Matrix3<f64>; 3],
+    /// ∂²R/∂θ_m∂θ_n (per rad²), indexed `[m][n]` (symmetric).
+    pub second: [[Matrix3<f64>; 3]; 3],
+}
+
+/// R = Rz(yaw) Ry(pitch) Rx(roll) and its first and second angle derivatives, each a
+/// product of the three axis rotations or their derivatives (angles in rad).
+pub fn rotation_derivatives(yaw: f64, pitch: f64, roll: f64) -> RotationDerivatives {
+    let (sy, cy) = yaw.sin_cos();
+    let (sp, cp) = pitch.sin_cos();
+    let (sr, cr) = roll.sin_cos();
+    // each axis rotation and its first and second derivative with respect to its angle
+    let z = [
+        Matrix3::new(cy, -sy, 0.0, sy, cy, 0.0, 0.0, 0.0, 1.0),
+        Matrix3::new(-sy, -cy, 0.0, cy, -sy, 0.0, 0.0, 0.0, 0.0),
+        Matrix3::new(-cy, sy, 0.0, -sy, -cy, 0.0, 0.0, 0.0, 0.0),
+    ];
+    let y = [
+        Matrix3::new(cp, 0.0, sp, 0.0, 1.0, 0.0, -sp, 0.0, cp),
+        Matrix3::new(-sp, 0.0, cp, 0.0, 0.0, 0.0, -cp, 0.0, -sp),
+        Matrix3::new(-cp, 0.0, -sp, 0.0, 0.0, 0.0, sp, 0.0, -cp),
+    ];
+    let x = [
+        Matrix3::new(1.0, 0.0, 0.0, 0.0, cr, -sr, 0.0, sr, cr),
+        Matrix3::new(0.0, 0.0, 0.0, 0.0, -sr, -cr, 0.0, cr, -sr),
+        Matrix3::new(0.0, 0.0, 0.0, 0.0, -cr, sr, 0.0, -sr, -cr),
+    ];
+    // derivative orders (yaw, pitch, roll) of one product Z^(a) Y^(b) X^(c)
+    let product = |a: usize, b: usize, c: usize| mul(&mul(&z[a], &y[b]), &x[c]);
+    let order = |m: usize, n: usize| -> [usize; 3] {
+        let mut o = [0; 3];
+        o[m] += 1;
+        o[n] += 1;
+        o
+    };
+    let first = std::array::from_fn(|m| {
+        let mut o = [0; 3];
+        o[m] = 1;
+        product(o[0], o[1], o[2])
+    });
+    let second = std::array::from_fn(|m| {
+        std::array::from_fn(|n| {
+            let o = order(m, n);
+            product(o[0], o[1], o[2])
+        })
+    });
+    RotationDerivatives {
+        value: product(0, 0, 0),
+        first,
+        second,
+    }
+}
+
+/// A · B for 3×3 matrices, written out: nalgebra's generic product is not inlined for dual
+/// numbers, which made it the largest cost of Hessian evaluation.
+#[inline]
+pub fn mul<D: Real>(a: &Matrix3<D>, b: &Matrix3<D>) -> Matrix3<D> {
+    Matrix3::from_fn(|i, j| a[(i, 0)] * b[(0, j)] + a[(i, 1)] * b[(1, j)] + a[(i, 2)] * b[(2, j)])
+}
+
+/// Aᵀ · B for 3×3 matrices, written out.
+#[inline]
+pub fn tr_mul<D: Real>(a: &Matrix3<D>, b: &Matrix3<D>) -> Matrix3<D> {
+    Matrix3::from_fn(|i, j| a[(0, i)] * b[(0, j)] + a[(1, i)] * b[(1, j)] + a[(2, i)] * b[(2, j)])
+}
+
+/// A · Bᵀ for 3×3 matrices, with B constant (f64): no derivative is carried through B.
+#[inline]
+pub fn mul_tr_const<D: Real>(a: &Matrix3<D>, b: &Matrix3<f64>) -> Matrix3<D> {
+    Matrix3::from_fn(|i, j| a[(i, 0)] * b[(j, 0)] + a[(i, 1)] * b[(j, 1)] + a[(i, 2)] * b[(j, 2)])
+}
+
+/// A · B for 3×3 matrices, with B constant (f64).
+#[inline]
+pub fn mul_const<D: Real>(a: &Matrix3<D>, b: &Matrix3<f64>) -> Matrix3<D> {
+    Matrix3::from_fn(|i, j| a[(i, 0)] * b[(0, j)] + a[(i, 1)] * b[(1, j)] + a[(i, 2)] * b[(2, j)])
+}
+
+/// A · v, written out.
+#[inline]
+pub fn mul_vec<D: Real>(a: &Matrix3<D>, v: &Vector3<D>) -> Vector3<D> {
+    Vector3::from_fn(|i, _| a[(i, 0)] * v[0] + a[(i, 1)] * v[1] + a[(i, 2)] * v[2])
+}
+
+/// Aᵀ · v, written out.
+#[inline]
+pub fn tr_mul_vec<D: Real>(a: &Matrix3<D>, v: &Vector3<D>) -> Vector3<D> {
+    Vector3::from_fn(|i, _| a[(0, i)] * v[0] + a[(1, i)] * v[1] + a[(2, i)] * v[2])
+}
+
+/// A · v with a constant (f64) vector v: the vector is not lifted to the scalar type.
+#[inline]
+pub fn mul_const_vec<D: Real>(a: &Matrix3<D>, v: &Vector3<f64>) -> Vector3<D> {
+    Vector3::from_fn(|i, _| a[(i, 0)] * v[0] + a[(i, 1)] * v[1] + a[(i, 2)] * v[2])
+}
+
+/// u · v, written out.
+#[inline]
+pub fn dot<D: Real>(u: &Vector3<D>, v: &Vector3<D>) -> D {
+    u[0] * v[0] + u[1] * v[1] + u[2] * v[2]
+}
+
 /// Body-frame angular velocity map Ω_B: ω_B = Ω_B · (d yaw, d pitch, d roll)/dt, in rad/s per
 /// rad/s. Derived from ω̂_B = Rᵀ Ṙ (tests check it against a numerical derivative of R).
 pub fn body_rate_matrix<D: Real>(_yaw: D, pitch: D, roll: D) -> Matrix3<D> {
@@ -155,6 +265,42 @@ mod tests {
             prop_assert!((pitch - eps * b).abs() < 1e-13);
             prop_assert!((roll - eps * cc).abs() < 1e-13);
         }
+    }
+
+    #[test]
+    fn rotation_derivatives_match_hyper_duals() {
+        // every first and second angle derivative against a hyper-dual evaluation of R
+        use num_dual::HyperDual64;
+        let angles = [0.3, -0.4, 0.7];
+        let d = rotation_derivatives(angles[0], angles[1], angles[2]);
+        assert!(max_abs(&(d.value - rotation(angles[0], angles[1], angles[2]))) < 1e-15);
+        for m in 0..3 {
+            for n in 0..3 {
+                let a: [HyperDual64; 3] = std::array::from_fn(|k| {
+                    let e1 = if k == m { 1.0 } else { 0.0 };
+                    let e2 = if k == n { 1.0 } else { 0.0 };
+                    HyperDual64::new(angles[k], e1, e2, 0.0)
+                });
+                let r = rotation(a[0], a[1], a[2]);
+                assert!(max_abs(&(r.map(|e| e.eps1) - d.first[m])) < 1e-15);
+                assert!(max_abs(&(r.map(|e| e.eps1eps2) - d.second[m][n])) < 1e-15);
+            }
+        }
+    }
+
+    #[test]
+    fn written_out_products_match_nalgebra() {
+        let a = rotation(0.1, 0.2, 0.3) * 1.5;
+        let b = rotation(-0.7, 0.4, 1.1) + Matrix3::identity();
+        let v = Vector3::new(0.3, -1.0, 2.0);
+        assert!(max_abs(&(mul(&a, &b) - a * b)) < 1e-15);
+        assert!(max_abs(&(tr_mul(&a, &b) - a.transpose() * b)) < 1e-15);
+        assert!(max_abs(&(mul_tr_const(&a, &b) - a * b.transpose())) < 1e-15);
+        assert!(max_abs(&(mul_const(&a, &b) - a * b)) < 1e-15);
+        assert!((mul_vec(&a, &v) - a * v).norm() < 1e-15);
+        assert!((mul_const_vec(&a, &v) - a * v).norm() < 1e-15);
+        assert!((tr_mul_vec(&a, &v) - a.transpose() * v).norm() < 1e-15);
+        assert!((dot(&v, &v) - v.norm_squared()).abs() < 1e-15);
     }
 
     #[test]
