@@ -52,8 +52,8 @@ struct Group {
     level: Level,
     /// Tension-off form of a single-part body, from its last Hessian evaluation.
     off_form: OffForm,
-    /// Phase name for timing, `hessian:<kind>` (kinds joined by `+` for a shared body).
-    phase: String,
+    /// The element kinds of its terms (two for a body shared by two kinds), for timing.
+    kinds: [Option<&'static str>; 2],
     /// Time spent evaluating Hessians, and how many times, since the last
     /// [`Evaluator::take_times`].
     time: Duration,
@@ -127,9 +127,8 @@ impl<'s> Evaluator<'s> {
             let g = match joined {
                 Some(g) => {
                     let group = &mut self.groups[g];
-                    if !group.phase.split([':', '+']).any(|k| k == term.kind) {
-                        group.phase.push('+');
-                        group.phase.push_str(term.kind);
+                    if group.kinds[0] != Some(term.kind) {
+                        group.kinds[1] = Some(term.kind);
                     }
                     group.members.push((t, part));
                     group.level = Level::Nothing;
@@ -146,7 +145,7 @@ impl<'s> Evaluator<'s> {
                         fast: None,
                         level: Level::Nothing,
                         off_form: OffForm::Same,
-                        phase: format!("hessian:{}", term.kind),
+                        kinds: [Some(term.kind), None],
                         time: Duration::ZERO,
                         timed: 0,
                     });
@@ -414,12 +413,18 @@ impl<'s> Evaluator<'s> {
             if calls == 0 {
                 continue;
             }
-            match out.iter_mut().find(|(name, ..)| *name == g.phase) {
+            // `hessian:<kind>`, kinds joined by `+` for a body shared by two
+            let phase = match g.kinds {
+                [Some(a), Some(b)] => format!("hessian:{a}+{b}"),
+                [Some(a), None] | [None, Some(a)] => format!("hessian:{a}"),
+                [None, None] => "hessian".to_string(),
+            };
+            match out.iter_mut().find(|(name, ..)| *name == phase) {
                 Some(entry) => {
                     entry.1 += time;
                     entry.2 += calls;
                 }
-                None => out.push((g.phase.clone(), time, calls)),
+                None => out.push((phase, time, calls)),
             }
         }
         out

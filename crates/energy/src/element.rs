@@ -170,12 +170,12 @@ pub struct LocalFrames {
 impl LocalFrames {
     /// Collects the frames of `bodies` of `system`.
     pub fn new(system: &System, bodies: &[BodyId]) -> Self {
-        let coords: Vec<usize> = bodies
+        let mut coords: Vec<usize> = bodies
             .iter()
-            .flat_map(|&b| system.bodies[b].frame.vars())
-            .collect::<std::collections::BTreeSet<_>>()
-            .into_iter()
+            .flat_map(|&b| system.bodies[b].frame.var_list().iter().copied())
             .collect();
+        coords.sort_unstable();
+        coords.dedup();
         // every variable of every frame is in `coords` by construction
         let local = |g: usize| coords.binary_search(&g).unwrap_or(0);
         let frames = bodies

@@ -13,7 +13,7 @@
 use nalgebra::{Matrix3, Vector3};
 use num_dual::HyperDual64;
 use pendkit_expr::Compiled;
-use pendkit_rotations::rotation_derivatives;
+use pendkit_rotations::{Real, rotation_derivatives};
 
 use crate::{Frame, PoseMap};
 
@@ -31,36 +31,66 @@ pub enum JetOrder {
 enum Entry {
     /// A number.
     Const(f64),
-    /// Exactly one coordinate: its position in the frame's coordinate list and its index in
-    /// the coordinate vector.
-    Var { at: usize, index: usize },
+    /// Exactly one coordinate: its position in the frame's coordinate list.
+    Var { at: usize },
     /// Any other expression, renumbered to its own coordinates 0..m, with their positions
-    /// in the frame's coordinate list and their indices in the coordinate vector.
-    General {
-        expr: Compiled,
-        at: Vec<usize>,
-        index: Vec<usize>,
-    },
+    /// in the frame's coordinate list.
+    General { expr: Compiled, at: Vec<usize> },
 }
+
+/// Most coordinates a general pose entry is evaluated with on the stack.
+const INLINE: usize = 8;
 
 /// One pose of a chain: how each entry depends on the coordinates, and which of the
 /// frame's coordinates move it at all.
 #[derive(Clone, Debug)]
-struct PoseShape {
+pub(crate) struct PoseShape {
     entries: [Entry; 6],
     moves: Vec<bool>,
 }
 
-/// What the derivative code needs to know about a frame map, worked out when it is built.
+/// A frame map's poses as the evaluation and derivative code reads them, worked out once
+/// when the map is built.
 #[derive(Clone, Debug)]
 pub(crate) struct Shape {
-    /// The coordinates the frame depends on, ascending.
+    /// The poses as given (coordinates by global index).
+    pub(crate) chain: Vec<PoseMap>,
+    /// The coordinates the frame depends on (global indices), ascending.
     pub(crate) vars: Vec<usize>,
-    poses: Vec<PoseShape>,
+    pub(crate) poses: Vec<PoseShape>,
+}
+
+impl PoseShape {
+    /// The six pose entries at `x`, reading the frame's coordinate `i` at `x[index[i]]`
+    /// (NaN where `x` is too short).
+    pub(crate) fn eval<D: Real>(&self, x: &[D], index: &[usize]) -> [D; 6] {
+        let read = |at: usize| {
+            index
+                .get(at)
+                .and_then(|&i| x.get(i))
+                .copied()
+                .unwrap_or(D::from(f64::NAN))
+        };
+        std::array::from_fn(|m| match &self.entries[m] {
+            Entry::Const(v) => D::from(*v),
+            Entry::Var { at } => read(*at),
+            Entry::General { expr, at } if at.len() <= INLINE => {
+                let mut own = [D::from(0.0); INLINE];
+                for (o, &a) in own.iter_mut().zip(at) {
+                    *o = read(a);
+                }
+                expr.eval(&own[..at.len()])
+            }
+            Entry::General { expr, at } => {
+                let own: Vec<D> = at.iter().map(|&a| read(a)).collect();
+                expr.eval(&own)
+            }
+        })
+    }
 }
 
 impl Shape {
-    pub(crate) fn new(chain: &[PoseMap]) -> Self {
+    pub(crate) fn new(chain: Vec<PoseMap>) -> Self {
         let vars: Vec<usize> = chain
             .iter()
             .flat_map(|p| p.entries.iter().flat_map(|e| e.vars()))
@@ -77,17 +107,13 @@ impl Shape {
                     if let Some(v) = e.as_const() {
                         Entry::Const(v)
                     } else if let Some(g) = e.as_var() {
-                        Entry::Var {
-                            at: at(g),
-                            index: g,
-                        }
+                        Entry::Var { at: at(g) }
                     } else {
                         let index: Vec<usize> = e.vars().into_iter().collect();
                         let own = |g: usize| index.binary_search(&g).unwrap_or(0);
                         Entry::General {
                             expr: e.remap(&own),
                             at: index.iter().map(|&g| at(g)).collect(),
-                            index,
                         }
                     }
                 });
@@ -100,7 +126,7 @@ impl Shape {
                 PoseShape { entries, moves }
             })
             .collect();
-        Shape { vars, poses }
+        Shape { chain, vars, poses }
     }
 }
 
@@ -260,11 +286,12 @@ impl crate::FrameMap {
     /// The frame and its derivatives with respect to [`crate::FrameMap::var_list`] at
     /// coordinates `x`, written into `out` (whose buffers are reused).
     pub fn jet(&self, x: &[f64], order: JetOrder, out: &mut FrameJet) {
-        let shape = &self.shape;
+        let shape = &*self.shape;
+        let index = &*self.index;
         let k = shape.vars.len();
         let second = order == JetOrder::Second;
         out.vars.clear();
-        out.vars.extend_from_slice(&shape.vars);
+        out.vars.extend_from_slice(index);
         out.second = second;
         let FrameJet {
             main,
@@ -278,7 +305,7 @@ impl crate::FrameMap {
         moved.resize(k, false);
         for (p, ps) in shape.poses.iter().enumerate() {
             let target = if p == 0 { &mut *main } else { &mut *pose };
-            pose_derivs(ps, x, k, second, entries, target);
+            pose_derivs(ps, x, index, second, entries, target);
             if p > 0 {
                 compose(main, pose, moved, &ps.moves, k, second, composed);
                 std::mem::swap(main, composed);
@@ -299,11 +326,19 @@ impl crate::FrameMap {
 fn pose_derivs(
     shape: &PoseShape,
     x: &[f64],
-    k: usize,
+    index: &[usize],
     second: bool,
     scratch: &mut EntryScratch,
     out: &mut Derivs,
 ) {
+    let k = index.len();
+    let read = |at: usize| {
+        index
+            .get(at)
+            .and_then(|&i| x.get(i))
+            .copied()
+            .unwrap_or(f64::NAN)
+    };
     let EntryScratch {
         values,
         grads,
@@ -322,17 +357,13 @@ fn pose_derivs(
         let g = &mut grads[m * k..(m + 1) * k];
         match entry {
             Entry::Const(v) => values[m] = *v,
-            Entry::Var { at, index } => {
-                values[m] = x.get(*index).copied().unwrap_or(f64::NAN);
+            Entry::Var { at } => {
+                values[m] = read(*at);
                 g[*at] = 1.0;
             }
-            Entry::General { expr, at, index } => {
+            Entry::General { expr, at } => {
                 hyper.clear();
-                hyper.extend(
-                    index
-                        .iter()
-                        .map(|&i| HyperDual64::from_re(x.get(i).copied().unwrap_or(f64::NAN))),
-                );
+                hyper.extend(at.iter().map(|&a| HyperDual64::from_re(read(a))));
                 values[m] = expr.eval(hyper.as_slice()).re;
                 for a in 0..at.len() {
                     hyper[a].eps1 = 1.0;
@@ -484,9 +515,32 @@ mod tests {
         }
     }
 
+    /// The frame of a chain of poses evaluated directly from their compiled expressions,
+    /// independently of the map's own evaluation code.
+    fn direct<D: pendkit_rotations::Real>(chain: &[PoseMap], x: &[D]) -> Frame<D> {
+        chain
+            .iter()
+            .map(|p| Frame::from_pose(std::array::from_fn(|i| p.entries[i].eval(x))))
+            .reduce(|parent, local| parent.compose(&local))
+            .unwrap_or_else(Frame::identity)
+    }
+
     /// Every derivative of the jet against hyper-dual evaluation of the pose expressions
-    /// (the reference), at `x`.
+    /// (the reference), at `x`; and the map's own evaluation, also after renumbering.
     fn check_against_hyper_duals(map: &FrameMap, x: &[f64]) {
+        let chain = &map.shape.chain;
+        let f = map.eval(x);
+        let d = direct(chain, x);
+        assert!((f.origin - d.origin).norm() < 1e-15 && (f.rotation - d.rotation).norm() < 1e-15);
+        // renumbered into a longer vector with the coordinates in reverse order at the end
+        let n = x.len();
+        let shifted = map.remap(&|i| 2 * n - 1 - i);
+        let mut y = vec![f64::NAN; 2 * n];
+        for i in 0..n {
+            y[2 * n - 1 - i] = x[i];
+        }
+        let g = shifted.eval(&y);
+        assert!((g.origin - d.origin).norm() < 1e-15 && (g.rotation - d.rotation).norm() < 1e-15);
         let mut jet = FrameJet::new();
         map.jet(x, JetOrder::Second, &mut jet);
         let vars = jet.vars().to_vec();
@@ -497,7 +551,7 @@ mod tests {
                 let mut xd: Vec<HyperDual64> = x.iter().map(|&v| HyperDual64::from_re(v)).collect();
                 xd[gi].eps1 = 1.0;
                 xd[gj].eps2 = 1.0;
-                let f = map.eval(&xd);
+                let f = direct(chain, &xd);
                 let p = f.point(&a);
                 let r = f.rotation;
                 assert!((p.map(|e| e.re) - jet.point(&a)).norm() < 1e-15 * scale);

@@ -9,6 +9,7 @@
 mod jet;
 
 use std::collections::BTreeSet;
+use std::sync::Arc;
 
 use nalgebra::{Matrix3, Matrix3xX, Vector3};
 use num_dual::Dual64;
@@ -90,19 +91,18 @@ pub struct PoseMap {
     pub entries: [Compiled; 6],
 }
 
-impl PoseMap {
-    fn eval<D: Real>(&self, x: &[D]) -> Frame<D> {
-        Frame::from_pose(std::array::from_fn(|i| self.entries[i].eval(x)))
-    }
-}
-
 /// How to compute a body's frame from the coordinates: a chain of poses from the lab down
 /// to the body (a free body has a chain of one).
+///
+/// The poses are compiled once and shared by every copy (cloning is cheap); a copy
+/// renumbered for a term's local coordinate vector ([`FrameMap::remap`]) differs only in
+/// where it reads each of its coordinates.
 #[derive(Clone, Debug)]
 pub struct FrameMap {
-    chain: Vec<PoseMap>,
-    /// What the derivative code needs to know about the chain, worked out once.
-    shape: jet::Shape,
+    shape: Arc<jet::Shape>,
+    /// Where in the coordinate vector each of the frame's coordinates is read, in the order
+    /// of `shape.vars` (the global indices themselves, or a term's local indices).
+    index: Arc<[usize]>,
 }
 
 /// Velocity Jacobians of a body-fixed point, with respect to every coordinate (columns).
@@ -118,8 +118,11 @@ pub struct PointJacobian {
 
 impl FrameMap {
     fn from_chain(chain: Vec<PoseMap>) -> Self {
-        let shape = jet::Shape::new(&chain);
-        FrameMap { chain, shape }
+        let shape = jet::Shape::new(chain);
+        FrameMap {
+            index: shape.vars.clone().into(),
+            shape: Arc::new(shape),
+        }
     }
 
     /// A frame posed directly in the lab.
@@ -127,41 +130,66 @@ impl FrameMap {
         FrameMap::from_chain(vec![pose])
     }
 
-    /// A frame posed relative to `self` (a body riding on another body).
+    /// A frame posed relative to `self` (a body riding on another body); `pose` reads the
+    /// same coordinate vector as `self`.
     pub fn child(&self, pose: PoseMap) -> Self {
-        let mut chain = self.chain.clone();
+        let mut chain = self.poses();
         chain.push(pose);
         FrameMap::from_chain(chain)
     }
 
+    /// The poses reading the coordinate vector this map reads.
+    fn poses(&self) -> Vec<PoseMap> {
+        let renumbered = self.index.as_ref() != self.shape.vars.as_slice();
+        let at = |g: usize| {
+            self.shape
+                .vars
+                .binary_search(&g)
+                .map_or(g, |i| self.index[i])
+        };
+        self.shape
+            .chain
+            .iter()
+            .map(|p| {
+                if renumbered {
+                    PoseMap {
+                        entries: std::array::from_fn(|i| p.entries[i].remap(&at)),
+                    }
+                } else {
+                    p.clone()
+                }
+            })
+            .collect()
+    }
+
     /// Evaluates the frame at coordinates `x` (any scalar: values or dual numbers).
     pub fn eval<D: Real>(&self, x: &[D]) -> Frame<D> {
-        let mut frames = self.chain.iter().map(|p| p.eval(x));
+        let mut frames = self
+            .shape
+            .poses
+            .iter()
+            .map(|p| Frame::from_pose(p.eval(x, &self.index)));
         let first = frames.next().unwrap_or_else(Frame::identity);
         frames.fold(first, |parent, local| parent.compose(&local))
     }
 
     /// Indices of the coordinates this frame depends on.
     pub fn vars(&self) -> BTreeSet<usize> {
-        self.shape.vars.iter().copied().collect()
+        self.index.iter().copied().collect()
     }
 
-    /// Indices of the coordinates this frame depends on, ascending (the order of the
-    /// derivatives in [`FrameJet`]).
+    /// Indices of the coordinates this frame depends on, in the order of the derivatives in
+    /// [`FrameJet`] (ascending, for the global map and for order-keeping renumberings).
     pub fn var_list(&self) -> &[usize] {
-        &self.shape.vars
+        &self.index
     }
 
     /// The same map with coordinates renumbered (global index -> a term's local index).
     pub fn remap(&self, map: &dyn Fn(usize) -> usize) -> FrameMap {
-        FrameMap::from_chain(
-            self.chain
-                .iter()
-                .map(|p| PoseMap {
-                    entries: std::array::from_fn(|i| p.entries[i].remap(map)),
-                })
-                .collect(),
-        )
+        FrameMap {
+            shape: self.shape.clone(),
+            index: self.index.iter().map(|&i| map(i)).collect(),
+        }
     }
 
     /// Jacobians of the body-fixed point `p` (m, frame coordinates) and of the frame's
