@@ -9,7 +9,8 @@
 use std::time::{Duration, Instant};
 
 use pendkit_energy::{
-    Derivatives, FrameAt, JetPoint, OffForm, OffHessian, PartOff, Scratch, System, TensionOff, Term,
+    Derivatives, FrameAt, JetPoint, OffForm, OffHessian, PartOff, Scratch, System, TensionOff,
+    Term, on_stack,
 };
 use pendkit_geometry::{FrameJet, JetOrder};
 
@@ -296,19 +297,10 @@ impl<'s> Evaluator<'s> {
             jet: &jets[frames.bodies[k]],
             local: &frames.maps[k],
         };
-        // the frames on the stack: up to four per term take the fast path
-        let done = match frames.bodies.len() {
-            1 => call(term, &self.local_x, &[view(0)], &mut out),
-            2 => call(term, &self.local_x, &[view(0), view(1)], &mut out),
-            3 => call(term, &self.local_x, &[view(0), view(1), view(2)], &mut out),
-            4 => call(
-                term,
-                &self.local_x,
-                &[view(0), view(1), view(2), view(3)],
-                &mut out,
-            ),
-            _ => false,
-        };
+        let x = &self.local_x;
+        let done = on_stack(frames.bodies.len(), view, |frames| {
+            term.fast_derivatives(&JetPoint { x, frames }, &mut out)
+        }) == Some(true);
         let off_form = out.off_form;
         if done && hessians {
             self.groups[g].off_form = off_form;
@@ -429,8 +421,4 @@ impl<'s> Evaluator<'s> {
         }
         out
     }
-}
-
-fn call(term: &Term, x: &[f64], frames: &[FrameAt], out: &mut Derivatives) -> bool {
-    term.fast_derivatives(&JetPoint { x, frames }, out)
 }

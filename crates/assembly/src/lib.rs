@@ -341,16 +341,26 @@ pub fn assemble(
 }
 
 /// [`assemble`] with a choice of derivative path, recording the time of each phase
-/// (`equilibrium`, `hessian:<kind>`, `mass`) into `times` when given. The terms Newton
-/// minimised and its last evaluation at the equilibrium are reused.
+/// (`terms`: building them, `equilibrium`: Newton, `hessian:<kind>`, `mass`) into `times`
+/// when given. The terms Newton minimised and its last evaluation at the equilibrium are
+/// reused.
 pub fn assemble_with(
     system: &System,
     stage: Stage,
     options: &AssemblyOptions,
     mut times: Option<&mut PhaseTimes>,
 ) -> Result<Assembled, AssemblyError> {
-    let (mut evaluator, before, equilibrium) = timed(&mut times, "equilibrium", 1, || {
-        equilibrium_search(system, options)
+    let early = system.early_wire_terms != EarlyWireTerms::No;
+    let (mut evaluator, before) = timed(&mut times, "terms", 1, || {
+        terms_before(system, options.derivatives, early)
+    })?;
+    let equilibrium = timed(&mut times, "equilibrium", 1, || {
+        equilibrium::newton(
+            &mut evaluator,
+            system,
+            &system.start(),
+            &options.equilibrium,
+        )
     })?;
     // plug-in terms that joined the equilibrium only are not part of the matrices
     if system.early_wire_terms != EarlyWireTerms::Yes {
@@ -395,16 +405,24 @@ fn finish(
     let x = &equilibrium.coords;
     let Before { kinds_0a, core } = before;
     let kept_plugins = evaluator.terms().len() - core;
-    let shared = SharedBodies::new();
-    let plugins = if system.early_wire_terms == EarlyWireTerms::Yes {
-        Vec::new()
-    } else {
-        kind_terms(system, x, &shared, |s| s != Stage::S0A && s <= stage)?
-    };
-    let new_plugins = plugins.len();
-    evaluator.extend(plugins);
-    evaluator.extend(extra_terms(system, ExtraPhase::AfterEquilibrium, Some(x))?);
-    evaluator.extend(constraint_terms(system, x));
+    let new_plugins = timed(
+        &mut times,
+        "terms",
+        0,
+        || -> Result<usize, AssemblyError> {
+            let shared = SharedBodies::new();
+            let plugins = if system.early_wire_terms == EarlyWireTerms::Yes {
+                Vec::new()
+            } else {
+                kind_terms(system, x, &shared, |s| s != Stage::S0A && s <= stage)?
+            };
+            let count = plugins.len();
+            evaluator.extend(plugins);
+            evaluator.extend(extra_terms(system, ExtraPhase::AfterEquilibrium, Some(x))?);
+            evaluator.extend(constraint_terms(system, x));
+            Ok(count)
+        },
+    )?;
     evaluator.timing = times.is_some();
     evaluator.evaluate(x, true);
     if let Some(t) = times.as_deref_mut() {

@@ -5,9 +5,8 @@
 //! deflection Δ, whose derivatives come from the two frames' jets.
 
 use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
-use num_dual::HyperDual64;
 use pendkit_geometry::{Frame, FrameMap};
-use pendkit_rotations::{Real, angles, c, rotation};
+use pendkit_rotations::{ANGLE_ENTRIES, Real, angle_derivatives, angles, c, rotation};
 
 use crate::{
     Attached, Derivatives, Element, EnergyError, JetPoint, LocalFrames, OffForm, Potential,
@@ -274,33 +273,6 @@ impl SpringEnergy {
     }
 }
 
-/// Entries of a rotation matrix that (yaw, pitch, roll) are read from
-/// ([`pendkit_rotations::angles`]).
-const ANGLE_ENTRIES: [(usize, usize); 5] = [(0, 0), (1, 0), (2, 0), (2, 1), (2, 2)];
-
-/// Gradient (3 × 5) and Hessians (3 × 5 × 5) of (yaw, pitch, roll) = angles(M) with respect
-/// to the five entries of M it reads, by hyper-dual evaluation of the same function the
-/// energy uses (15 evaluations of a small function).
-fn angle_derivatives(m: &Matrix3<f64>) -> ([[f64; 5]; 3], [[[f64; 5]; 5]; 3]) {
-    let (mut g, mut h) = ([[0.0; 5]; 3], [[[0.0; 5]; 5]; 3]);
-    for e in 0..5 {
-        for f in e..5 {
-            let mut md = m.map(HyperDual64::from_re);
-            md[ANGLE_ENTRIES[e]].eps1 = 1.0;
-            md[ANGLE_ENTRIES[f]].eps2 = 1.0;
-            let a = angles(&md);
-            for k in 0..3 {
-                if e == f {
-                    g[k][e] = a[k].eps1;
-                }
-                h[k][e][f] = a[k].eps1eps2;
-                h[k][f][e] = a[k].eps1eps2;
-            }
-        }
-    }
-    (g, h)
-}
-
 impl SpringEnergy {
     /// The fast path: Δ = (A0ᵀ(o1 − o0), angles(A0ᵀ A1)) with A_k = R_k R_att,k and o_k the
     /// attachment points; its first derivatives over the local coordinates from the two
@@ -325,7 +297,8 @@ impl SpringEnergy {
         let d = o[1] - o[0];
         let r = a0.transpose() * d;
         let m = a0.transpose() * a1;
-        let (ga, ha) = angle_derivatives(&m);
+        let angle = angle_derivatives(&m);
+        let (ga, ha) = (&angle.gradient, &angle.hessian);
         let [yaw, pitch, roll] = angles(&m);
         let delta = Vector6::new(r[0], r[1], r[2], yaw, pitch, roll);
         out.values[0] = self.energy_of(&delta);
@@ -350,10 +323,11 @@ impl SpringEnergy {
             dr[l] = da[l].transpose() * d + a0.transpose() * dd[l];
             dm[l] = da[l].transpose() * a1 + a0.transpose() * da[n + l];
         }
-        // ∇Δ (6 × n): rows 0..3 from r, rows 3..6 through the angles
+        // ∇Δ (6 × n): rows 0..3 from r, rows 3..6 through the angles; and K ∇Δ (6 × n),
+        // for the quadratic part of every Hessian entry
         scratch.numbers.clear();
-        scratch.numbers.resize(6 * n, 0.0);
-        let grad_delta = &mut scratch.numbers;
+        scratch.numbers.resize(12 * n, 0.0);
+        let (grad_delta, k_grad) = scratch.numbers.split_at_mut(6 * n);
         for l in 0..n {
             for q in 0..3 {
                 grad_delta[q * n + l] = dr[l][q];
@@ -361,6 +335,15 @@ impl SpringEnergy {
                     (0..5).map(|e| ga[q][e] * dm[l][ANGLE_ENTRIES[e]]).sum();
             }
         }
+        for p in 0..6 {
+            for l in 0..n {
+                k_grad[p * n + l] = (0..6)
+                    .map(|q| self.stiffness[(p, q)] * grad_delta[q * n + l])
+                    .sum();
+            }
+        }
+        // the five entries of a matrix that the angles read
+        let read = |m: &Matrix3<f64>| ANGLE_ENTRIES.map(|e| m[e]);
         let weights_on = self.stiffness * delta + self.preload;
         let weights_off = self.stiffness * delta;
         // rounding scale: Δ's translations are differences of points of size |o0| + |o1|
@@ -414,26 +397,21 @@ impl SpringEnergy {
                     }
                 }
                 let mut dd_delta = [0.0; 6];
+                let (ma, mb) = (read(&dm[a]), read(&dm[b]));
                 for q in 0..3 {
                     dd_delta[q] = ddr[q];
                     let mut v = 0.0;
                     for e in 0..5 {
                         v += ga[q][e] * ddm[ANGLE_ENTRIES[e]];
-                        for f in 0..5 {
-                            v += ha[q][e][f] * dm[a][ANGLE_ENTRIES[e]] * dm[b][ANGLE_ENTRIES[f]];
-                        }
+                        let row: f64 = (0..5).map(|f| ha[q][e][f] * mb[f]).sum();
+                        v += ma[e] * row;
                     }
                     dd_delta[3 + q] = v;
                 }
-                let mut quadratic = 0.0;
-                for p in 0..6 {
-                    for q in 0..6 {
-                        let kpq = self.stiffness[(p, q)];
-                        if kpq != 0.0 {
-                            quadratic += kpq * grad_delta[p * n + a] * grad_delta[q * n + b];
-                        }
-                    }
-                }
+                // ∇Δ_aᵀ K ∇Δ_b
+                let quadratic: f64 = (0..6)
+                    .map(|p| grad_delta[p * n + a] * k_grad[p * n + b])
+                    .sum();
                 let on = quadratic + (0..6).map(|q| weights_on[q] * dd_delta[q]).sum::<f64>();
                 let off = quadratic + (0..6).map(|q| weights_off[q] * dd_delta[q]).sum::<f64>();
                 out.on[a * n + b] = on;

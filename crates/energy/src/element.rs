@@ -100,8 +100,11 @@ pub trait Element: Sync {
 /// gets the one another kind already built, or builds it.
 #[derive(Default)]
 pub struct SharedBodies {
-    bodies: RefCell<Vec<(TypeId, usize, Arc<dyn Any + Send + Sync>)>>,
+    bodies: RefCell<Vec<SharedEntry>>,
 }
+
+/// One shared body: its type, its index among bodies of that type, and the body.
+type SharedEntry = (TypeId, usize, Arc<dyn Any + Send + Sync>);
 
 impl SharedBodies {
     /// An empty collection.

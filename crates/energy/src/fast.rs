@@ -208,3 +208,23 @@ pub fn hyper_dual_over_frames<const F: usize>(
     }
     true
 }
+
+/// Most frames a term on the fast path reads (a term with more takes the reference path).
+pub const MAX_FRAMES: usize = 4;
+
+/// Calls `f` with the `count` frames `view(0..count)` as a slice on the stack, so that
+/// evaluating a term does not allocate; None for more than [`MAX_FRAMES`] frames.
+pub fn on_stack<'a, R>(
+    count: usize,
+    view: impl Fn(usize) -> FrameAt<'a>,
+    f: impl FnOnce(&[FrameAt<'a>]) -> R,
+) -> Option<R> {
+    Some(match count {
+        0 => f(&[]),
+        1 => f(&[view(0)]),
+        2 => f(&[view(0), view(1)]),
+        3 => f(&[view(0), view(1), view(2)]),
+        4 => f(&[view(0), view(1), view(2), view(3)]),
+        _ => return None,
+    })
+}

@@ -18,8 +18,8 @@ pub use element::{
 };
 pub use extra::{CONSTRAINT_TAG, constraint_terms, extra_terms};
 pub use fast::{
-    Attached, Derivatives, FrameAt, JetPoint, MAX_PARTS, OffForm, Scratch, add_curvature,
-    add_jacobian, hyper_dual_over_frames,
+    Attached, Derivatives, FrameAt, JetPoint, MAX_FRAMES, MAX_PARTS, OffForm, Scratch,
+    add_curvature, add_jacobian, hyper_dual_over_frames, on_stack,
 };
 pub use pendkit_rotations::Real;
 pub use stage::{Stage, UnknownStage};

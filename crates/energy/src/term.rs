@@ -16,7 +16,7 @@ use pendkit_geometry::{FrameJet, JetOrder};
 use pendkit_rotations::Real;
 
 use crate::LocalFrames;
-use crate::fast::{Derivatives, FrameAt, JetPoint, OffForm, Scratch};
+use crate::fast::{Derivatives, FrameAt, JetPoint, OffForm, Scratch, on_stack};
 
 /// The energy of one term as a function of its own (local) coordinate vector, written once
 /// for every scalar type.
@@ -197,13 +197,22 @@ pub enum OffHessian {
     Matrix(Vec<f64>),
 }
 
-/// The outputs of a fast evaluation outside an assembly (layout of [`Derivatives`]).
-struct Standalone {
+/// Buffers for evaluating single terms outside an assembly (layout of [`Derivatives`]),
+/// kept per thread so that repeated calls do not allocate for their workings.
+#[derive(Default)]
+struct Buffers {
+    x: Vec<f64>,
+    jets: Vec<FrameJet>,
     values: Vec<f64>,
     gradients: Vec<f64>,
+    scales: Vec<f64>,
     on: Vec<f64>,
     off: Vec<f64>,
-    off_form: OffForm,
+    scratch: Scratch,
+}
+
+thread_local! {
+    static STANDALONE: std::cell::RefCell<Buffers> = std::cell::RefCell::new(Buffers::default());
 }
 
 /// One potential-energy term: an energy body, the global coordinates it reads, a damping
@@ -355,34 +364,33 @@ impl Term {
     /// term's fast path when it has one (computing its frames' jets here), otherwise by
     /// [`Term::reference_derivatives`].
     pub fn derivatives(&self, x_global: &[f64]) -> LocalDerivatives {
-        match self.standalone_fast(x_global) {
-            Some(fast) => {
-                let (n, part) = (self.coords.len(), self.body_parts().2);
-                LocalDerivatives {
-                    value: fast.values[part],
-                    gradient: fast.gradients[part * n..(part + 1) * n].to_vec(),
-                    hessian: fast.on[part * n * n..(part + 1) * n * n].to_vec(),
-                }
-            }
-            None => self.reference_derivatives(x_global),
-        }
+        let (n, part) = (self.coords.len(), self.body_parts().2);
+        self.standalone_fast(x_global, |b, _| LocalDerivatives {
+            value: b.values[part],
+            gradient: b.gradients[part * n..(part + 1) * n].to_vec(),
+            hessian: b.on[part * n * n..(part + 1) * n * n].to_vec(),
+        })
+        .unwrap_or_else(|| self.reference_derivatives(x_global))
     }
 
     /// Hessians with the tension on and off at `x_global`, the off term built there, by
     /// the fast path (`fast`) when the term has one, or by the reference path.
     pub fn hessians(&self, x_global: &[f64], fast: bool) -> (Vec<f64>, OffHessian) {
-        if fast && let Some(fast) = self.standalone_fast(x_global) {
-            let (n, part) = (self.coords.len(), self.body_parts().2);
-            let on = fast.on[part * n * n..(part + 1) * n * n].to_vec();
-            let off = match self.part_off().map_or(fast.off_form, |p| match p {
+        let (n, part) = (self.coords.len(), self.body_parts().2);
+        let read = |b: &Buffers, form: OffForm| {
+            let on = b.on[part * n * n..(part + 1) * n * n].to_vec();
+            let off = match self.part_off().map_or(form, |p| match p {
                 PartOff::Unchanged => OffForm::Same,
                 PartOff::Vanishes => OffForm::Zero,
             }) {
                 OffForm::Same => OffHessian::Same,
                 OffForm::Zero => OffHessian::Zero,
-                OffForm::Written => OffHessian::Matrix(fast.off),
+                OffForm::Written => OffHessian::Matrix(b.off.clone()),
             };
-            return (on, off);
+            (on, off)
+        };
+        if fast && let Some(result) = self.standalone_fast(x_global, read) {
+            return result;
         }
         let off = match self.tension_off(x_global) {
             TensionOff::Unchanged => OffHessian::Same,
@@ -412,59 +420,61 @@ impl Term {
     }
 
     /// The fast path outside an assembly: the term's frames' jets over its local
-    /// coordinates, then [`Term::fast_derivatives`] with both Hessians.
-    fn standalone_fast(&self, x_global: &[f64]) -> Option<Standalone> {
+    /// coordinates, then [`Term::fast_derivatives`] with both Hessians, into this thread's
+    /// reusable buffers, from which `read` takes what it needs (layout of [`Derivatives`]).
+    /// None when the term has no fast path.
+    fn standalone_fast<R>(
+        &self,
+        x_global: &[f64],
+        read: impl FnOnce(&Buffers, OffForm) -> R,
+    ) -> Option<R> {
         let frames = self.frames.as_deref()?;
-        let x = self.local(x_global);
-        let jets: Vec<FrameJet> = frames
-            .frames
-            .iter()
-            .map(|f| {
-                let mut jet = FrameJet::new();
-                f.jet(&x, JetOrder::Second, &mut jet);
-                jet
-            })
-            .collect();
-        let views: Vec<FrameAt> = jets
-            .iter()
-            .map(|jet| FrameAt {
-                jet,
-                local: jet.vars(),
-            })
-            .collect();
-        let (n, parts) = (x.len(), self.body_parts().1);
-        let (mut values, mut gradients, mut scales) =
-            (vec![0.0; parts], vec![0.0; parts * n], vec![0.0; parts * n]);
-        let (mut on, mut off, mut scratch) = (
-            vec![0.0; parts * n * n],
-            vec![0.0; n * n],
-            Scratch::default(),
-        );
-        let mut out = Derivatives {
-            n,
-            hessian: true,
-            values: &mut values,
-            gradients: &mut gradients,
-            force_scales: &mut scales,
-            on: &mut on,
-            off: &mut off,
-            off_form: OffForm::Same,
-            scratch: &mut scratch,
-        };
-        let at = JetPoint {
-            x: &x,
-            frames: &views,
-        };
-        if !self.fast_derivatives(&at, &mut out) {
-            return None;
-        }
-        let off_form = out.off_form;
-        Some(Standalone {
-            values,
-            gradients,
-            on,
-            off,
-            off_form,
+        STANDALONE.with(|cell| {
+            let mut fresh = Buffers::default();
+            let mut borrowed = cell.try_borrow_mut();
+            let b: &mut Buffers = match borrowed.as_deref_mut() {
+                Ok(b) => b,
+                Err(_) => &mut fresh,
+            };
+            let (n, parts) = (self.coords.len(), self.body_parts().1);
+            b.x.clear();
+            b.x.extend(self.coords.iter().map(|&i| x_global[i]));
+            b.jets.resize_with(frames.frames.len(), FrameJet::new);
+            for (f, jet) in frames.frames.iter().zip(b.jets.iter_mut()) {
+                f.jet(&b.x, JetOrder::Second, jet);
+            }
+            for (v, len) in [
+                (&mut b.values, parts),
+                (&mut b.gradients, parts * n),
+                (&mut b.scales, parts * n),
+                (&mut b.on, parts * n * n),
+                (&mut b.off, n * n),
+            ] {
+                v.clear();
+                v.resize(len, 0.0);
+            }
+            let mut out = Derivatives {
+                n,
+                hessian: true,
+                values: &mut b.values,
+                gradients: &mut b.gradients,
+                force_scales: &mut b.scales,
+                on: &mut b.on,
+                off: &mut b.off,
+                off_form: OffForm::Same,
+                scratch: &mut b.scratch,
+            };
+            // the jets of the local frames read the local vector directly
+            let jets = &b.jets;
+            let view = |k: usize| FrameAt {
+                jet: &jets[k],
+                local: jets[k].vars(),
+            };
+            let done = on_stack(jets.len(), view, |frames| {
+                self.fast_derivatives(&JetPoint { x: &b.x, frames }, &mut out)
+            });
+            let off_form = out.off_form;
+            (done == Some(true)).then(|| read(b, off_form))
         })
     }
 

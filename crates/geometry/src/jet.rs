@@ -47,6 +47,9 @@ const INLINE: usize = 8;
 pub(crate) struct PoseShape {
     entries: [Entry; 6],
     moves: Vec<bool>,
+    /// Every entry is a constant or a single coordinate: the entries have no second
+    /// derivatives (the usual case), so the jet skips them.
+    linear: bool,
 }
 
 /// A frame map's poses as the evaluation and derivative code reads them, worked out once
@@ -123,7 +126,12 @@ impl Shape {
                         moves[at(g)] = true;
                     }
                 }
-                PoseShape { entries, moves }
+                let linear = entries.iter().all(|e| !matches!(e, Entry::General { .. }));
+                PoseShape {
+                    entries,
+                    moves,
+                    linear,
+                }
             })
             .collect();
         Shape { chain, vars, poses }
@@ -339,6 +347,10 @@ fn pose_derivs(
             .copied()
             .unwrap_or(f64::NAN)
     };
+    if shape.linear {
+        linear_pose_derivs(shape, &read, k, second, out);
+        return;
+    }
     let EntryScratch {
         values,
         grads,
@@ -348,8 +360,10 @@ fn pose_derivs(
     let kk = k * k;
     grads.clear();
     grads.resize(6 * k, 0.0);
+    // second derivatives of the entries themselves, when any entry has them
+    let curved = second && !shape.linear;
     hessians.clear();
-    if second {
+    if curved {
         hessians.resize(6 * kk, 0.0);
     }
     // value, gradient and Hessian of each entry
@@ -392,14 +406,14 @@ fn pose_derivs(
     for i in 0..k {
         out.d_origin[i] = Vector3::new(grad(0, i), grad(1, i), grad(2, i));
     }
-    if second {
+    if curved {
         let hess = |m: usize, ij: usize| hessians[m * kk + ij];
         for ij in 0..kk {
             out.dd_origin[ij] = Vector3::new(hess(0, ij), hess(1, ij), hess(2, ij));
         }
     }
     // rotation: chain rule through the three angles
-    let r = rotation_derivatives(values[3], values[4], values[5]);
+    let r = rotation_derivatives(values[3], values[4], values[5], second);
     out.rotation = r.value;
     for i in 0..k {
         let mut d = Matrix3::zeros();
@@ -425,13 +439,61 @@ fn pose_derivs(
                             }
                         }
                     }
-                    let h = hessians[(3 + m) * kk + i * k + j];
+                    let h = if curved {
+                        hessians[(3 + m) * kk + i * k + j]
+                    } else {
+                        0.0
+                    };
                     if h != 0.0 {
                         d += r.first[m] * h;
                     }
                 }
                 out.dd_rotation[i * k + j] = d;
                 out.dd_rotation[j * k + i] = d;
+            }
+        }
+    }
+}
+
+/// [`pose_derivs`] for a pose whose entries are constants or single coordinates (a free
+/// body, a blade tip sliding along an axis): each entry's gradient is a unit vector and its
+/// Hessian zero, so ∂R/∂q_i is the sum of ∂R/∂θ_m over the angles m read from coordinate i,
+/// and ∂²R/∂q_i∂q_j that of ∂²R/∂θ_m∂θ_n.
+fn linear_pose_derivs(
+    shape: &PoseShape,
+    read: &dyn Fn(usize) -> f64,
+    k: usize,
+    second: bool,
+    out: &mut Derivs,
+) {
+    let at = |m: usize| match shape.entries[m] {
+        Entry::Var { at } => Some(at),
+        _ => None,
+    };
+    let value = |m: usize| match &shape.entries[m] {
+        Entry::Const(v) => *v,
+        Entry::Var { at } => read(*at),
+        // not in a linear pose
+        Entry::General { .. } => f64::NAN,
+    };
+    out.reset(k, second);
+    out.origin = Vector3::new(value(0), value(1), value(2));
+    for m in 0..3 {
+        if let Some(i) = at(m) {
+            out.d_origin[i][m] += 1.0;
+        }
+    }
+    let r = rotation_derivatives(value(3), value(4), value(5), second);
+    out.rotation = r.value;
+    for m in 0..3 {
+        let Some(i) = at(3 + m) else { continue };
+        out.d_rotation[i] += r.first[m];
+        if !second {
+            continue;
+        }
+        for n in 0..3 {
+            if let Some(j) = at(3 + n) {
+                out.dd_rotation[i * k + j] += r.second[m][n];
             }
         }
     }
@@ -589,6 +651,11 @@ mod tests {
         let child = parent.child(pose(&names, ["0.3", "q*q", "0.1 + q", "q", "0", "c"]));
         check_against_hyper_duals(&child, &[0.2, -0.3, 0.4, 0.05]);
         check_against_hyper_duals(&parent, &[0.2, -0.3, 0.4, 0.05]);
+        // a pose of single coordinates (the fast linear form) that reads one coordinate in
+        // several entries, riding on a free body
+        let free = FrameMap::root(pose(&names, ["a", "b", "c", "q", "a", "b"]));
+        let linear = free.child(pose(&names, ["q", "0.2", "q", "c", "q", "q"]));
+        check_against_hyper_duals(&linear, &[0.2, -0.3, 0.4, 0.05]);
     }
 
     #[test]

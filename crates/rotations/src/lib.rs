@@ -49,52 +49,54 @@ pub struct RotationDerivatives {
     pub second: [[Matrix3<f64>; 3]; 3],
 }
 
-/// R = Rz(yaw) Ry(pitch) Rx(roll) and its first and second angle derivatives, each a
-/// product of the three axis rotations or their derivatives (angles in rad).
-pub fn rotation_derivatives(yaw: f64, pitch: f64, roll: f64) -> RotationDerivatives {
-    let (sy, cy) = yaw.sin_cos();
-    let (sp, cp) = pitch.sin_cos();
-    let (sr, cr) = roll.sin_cos();
-    // each axis rotation and its first and second derivative with respect to its angle
-    let z = [
-        Matrix3::new(cy, -sy, 0.0, sy, cy, 0.0, 0.0, 0.0, 1.0),
-        Matrix3::new(-sy, -cy, 0.0, cy, -sy, 0.0, 0.0, 0.0, 0.0),
-        Matrix3::new(-cy, sy, 0.0, -sy, -cy, 0.0, 0.0, 0.0, 0.0),
-    ];
-    let y = [
-        Matrix3::new(cp, 0.0, sp, 0.0, 1.0, 0.0, -sp, 0.0, cp),
-        Matrix3::new(-sp, 0.0, cp, 0.0, 0.0, 0.0, -cp, 0.0, -sp),
-        Matrix3::new(-cp, 0.0, -sp, 0.0, 0.0, 0.0, sp, 0.0, -cp),
-    ];
-    let x = [
-        Matrix3::new(1.0, 0.0, 0.0, 0.0, cr, -sr, 0.0, sr, cr),
-        Matrix3::new(0.0, 0.0, 0.0, 0.0, -sr, -cr, 0.0, cr, -sr),
-        Matrix3::new(0.0, 0.0, 0.0, 0.0, -cr, sr, 0.0, -sr, -cr),
-    ];
-    // derivative orders (yaw, pitch, roll) of one product Z^(a) Y^(b) X^(c)
-    let product = |a: usize, b: usize, c: usize| mul(&mul(&z[a], &y[b]), &x[c]);
-    let order = |m: usize, n: usize| -> [usize; 3] {
-        let mut o = [0; 3];
-        o[m] += 1;
-        o[n] += 1;
-        o
+/// R as a multilinear form in (1, cos θ, sin θ) of each angle: every entry of
+/// R = Rz(yaw) Ry(pitch) Rx(roll) is a sum of products of one of these per angle. Passing
+/// (0, −sin θ, cos θ) for an angle (the derivatives of the three) differentiates R with
+/// respect to it, and (0, −cos θ, −sin θ) twice.
+fn multilinear(y: [f64; 3], p: [f64; 3], r: [f64; 3]) -> Matrix3<f64> {
+    Matrix3::new(
+        y[1] * p[1] * r[0],
+        y[1] * p[2] * r[2] - y[2] * p[0] * r[1],
+        y[1] * p[2] * r[1] + y[2] * p[0] * r[2],
+        y[2] * p[1] * r[0],
+        y[2] * p[2] * r[2] + y[1] * p[0] * r[1],
+        y[2] * p[2] * r[1] - y[1] * p[0] * r[2],
+        -y[0] * p[2] * r[0],
+        y[0] * p[1] * r[2],
+        y[0] * p[1] * r[1],
+    )
+}
+
+/// R = Rz(yaw) Ry(pitch) Rx(roll) and its angle derivatives (first only unless `second`;
+/// the second derivatives are zero then), angles in rad.
+pub fn rotation_derivatives(yaw: f64, pitch: f64, roll: f64, second: bool) -> RotationDerivatives {
+    // per angle: (1, c, s), its derivative and its second derivative
+    let trig = |a: f64| {
+        let (s, c) = a.sin_cos();
+        [[1.0, c, s], [0.0, -s, c], [0.0, -c, -s]]
     };
-    let first = std::array::from_fn(|m| {
-        let mut o = [0; 3];
-        o[m] = 1;
-        product(o[0], o[1], o[2])
-    });
-    let second = std::array::from_fn(|m| {
-        std::array::from_fn(|n| {
-            let o = order(m, n);
-            product(o[0], o[1], o[2])
-        })
-    });
-    RotationDerivatives {
-        value: product(0, 0, 0),
+    let t = [trig(yaw), trig(pitch), trig(roll)];
+    // R differentiated `o[k]` times with respect to angle k
+    let form = |o: [usize; 3]| multilinear(t[0][o[0]], t[1][o[1]], t[2][o[2]]);
+    let unit = |m: usize| std::array::from_fn(|k| usize::from(k == m));
+    let first = std::array::from_fn(|m| form(unit(m)));
+    let mut out = RotationDerivatives {
+        value: form([0, 0, 0]),
         first,
-        second,
+        second: [[Matrix3::zeros(); 3]; 3],
+    };
+    if second {
+        for m in 0..3 {
+            for n in m..3 {
+                let mut o = unit(m);
+                o[n] += 1;
+                let d = form(o);
+                out.second[m][n] = d;
+                out.second[n][m] = d;
+            }
+        }
     }
+    out
 }
 
 /// A · B for 3×3 matrices, written out: nalgebra's generic product is not inlined for dual
@@ -173,6 +175,70 @@ pub fn angles<D: Real>(r: &Matrix3<D>) -> [D; 3] {
     let pitch = (-r[(2, 0)]).atan2((r[(0, 0)] * r[(0, 0)] + r[(1, 0)] * r[(1, 0)]).sqrt());
     let roll = r[(2, 1)].atan2(r[(2, 2)]);
     [yaw, pitch, roll]
+}
+
+/// The entries of a rotation matrix that [`angles`] reads: (0,0), (1,0), (2,0), (2,1), (2,2).
+pub const ANGLE_ENTRIES: [(usize, usize); 5] = [(0, 0), (1, 0), (2, 0), (2, 1), (2, 2)];
+
+/// First and second derivatives of (yaw, pitch, roll) = [`angles`]`(M)` with respect to the
+/// five entries of M it reads ([`ANGLE_ENTRIES`]), in closed form.
+#[derive(Clone, Copy, Debug)]
+pub struct AngleDerivatives {
+    /// `gradient[k][e]` = ∂angle_k/∂M_e.
+    pub gradient: [[f64; 5]; 3],
+    /// `hessian[k][e][f]` = ∂²angle_k/∂M_e∂M_f.
+    pub hessian: [[[f64; 5]; 5]; 3],
+}
+
+/// Gradient (∂/∂y, ∂/∂x) and Hessian (yy, xx, xy) of atan2(y, x).
+fn atan2_derivatives(y: f64, x: f64) -> ([f64; 2], [f64; 3]) {
+    let r2 = x * x + y * y;
+    let r4 = r2 * r2;
+    (
+        [x / r2, -y / r2],
+        [-2.0 * x * y / r4, 2.0 * x * y / r4, (y * y - x * x) / r4],
+    )
+}
+
+/// The derivatives of [`angles`] at M (|pitch| < π/2): yaw = atan2(M10, M00),
+/// pitch = atan2(−M20, b) with b = sqrt(M00² + M10²), roll = atan2(M21, M22).
+pub fn angle_derivatives(m: &Matrix3<f64>) -> AngleDerivatives {
+    let mut d = AngleDerivatives {
+        gradient: [[0.0; 5]; 3],
+        hessian: [[[0.0; 5]; 5]; 3],
+    };
+    let (m00, m10, m20, m21, m22) = (m[(0, 0)], m[(1, 0)], m[(2, 0)], m[(2, 1)], m[(2, 2)]);
+    // yaw and roll: atan2 of two entries each (entry indices of y and x)
+    for (k, (y, x), (ey, ex)) in [(0, (m10, m00), (1, 0)), (2, (m21, m22), (3, 4))] {
+        let ([gy, gx], [hyy, hxx, hxy]) = atan2_derivatives(y, x);
+        d.gradient[k][ey] = gy;
+        d.gradient[k][ex] = gx;
+        d.hessian[k][ey][ey] = hyy;
+        d.hessian[k][ex][ex] = hxx;
+        d.hessian[k][ey][ex] = hxy;
+        d.hessian[k][ex][ey] = hxy;
+    }
+    // pitch = atan2(a, b), a = −M20, b = sqrt(M00² + M10²)
+    let b = (m00 * m00 + m10 * m10).sqrt();
+    let ([pa, pb], [paa, pbb, pab]) = atan2_derivatives(-m20, b);
+    let db = [m00 / b, m10 / b];
+    let b3 = b * b * b;
+    let ddb = [
+        [m10 * m10 / b3, -m00 * m10 / b3],
+        [-m00 * m10 / b3, m00 * m00 / b3],
+    ];
+    for e in 0..2 {
+        d.gradient[1][e] = pb * db[e];
+        for f in 0..2 {
+            d.hessian[1][e][f] = pbb * db[e] * db[f] + pb * ddb[e][f];
+        }
+        // a = −M20 (entry 2): ∂a/∂M20 = −1
+        d.hessian[1][2][e] = -pab * db[e];
+        d.hessian[1][e][2] = -pab * db[e];
+    }
+    d.gradient[1][2] = -pa;
+    d.hessian[1][2][2] = paa;
+    d
 }
 
 /// The vector of a skew-symmetric matrix: vee([ω]×) = ω.
@@ -272,7 +338,9 @@ mod tests {
         // every first and second angle derivative against a hyper-dual evaluation of R
         use num_dual::HyperDual64;
         let angles = [0.3, -0.4, 0.7];
-        let d = rotation_derivatives(angles[0], angles[1], angles[2]);
+        let d = rotation_derivatives(angles[0], angles[1], angles[2], true);
+        let f = rotation_derivatives(angles[0], angles[1], angles[2], false);
+        assert_eq!(d.first, f.first);
         assert!(max_abs(&(d.value - rotation(angles[0], angles[1], angles[2]))) < 1e-15);
         for m in 0..3 {
             for n in 0..3 {
@@ -284,6 +352,30 @@ mod tests {
                 let r = rotation(a[0], a[1], a[2]);
                 assert!(max_abs(&(r.map(|e| e.eps1) - d.first[m])) < 1e-15);
                 assert!(max_abs(&(r.map(|e| e.eps1eps2) - d.second[m][n])) < 1e-15);
+            }
+        }
+    }
+
+    #[test]
+    fn angle_derivatives_match_hyper_duals() {
+        // the closed form against hyper-dual evaluation of `angles` itself, on a rotation
+        // times a general matrix (off the rotation group, as the chain rule needs)
+        use num_dual::HyperDual64;
+        let m =
+            rotation(0.4, -0.3, 0.9) * Matrix3::new(1.1, 0.1, -0.2, 0.05, 0.9, 0.3, -0.1, 0.2, 1.2);
+        let d = angle_derivatives(&m);
+        for e in 0..5 {
+            for f in 0..5 {
+                let mut md = m.map(HyperDual64::from_re);
+                md[ANGLE_ENTRIES[e]].eps1 = 1.0;
+                md[ANGLE_ENTRIES[f]].eps2 = 1.0;
+                for (k, a) in angles(&md).iter().enumerate() {
+                    assert!((a.eps1 - d.gradient[k][e]).abs() < 1e-14, "{k} {e}");
+                    assert!(
+                        (a.eps1eps2 - d.hessian[k][e][f]).abs() < 1e-13,
+                        "{k} {e} {f}"
+                    );
+                }
             }
         }
     }
