@@ -423,3 +423,32 @@ fn very_stiff_wires_converge_to_the_rounding_floor() {
         assert!((mode.hz - f).abs() < 1e-9 * f, "{} Hz vs {f} Hz", mode.hz);
     }
 }
+
+#[test]
+fn a_model_at_its_equilibrium_costs_one_gradient_check() {
+    // The quad starts at its nominal geometry, which is its equilibrium to rounding (the
+    // model derives wire lengths and blade preloads from the static loads): Newton accepts
+    // it on forces alone, so no Hessian is evaluated there and the assembly evaluates each
+    // stage-0A term's Hessians once (each kind's phase counts every one of its terms).
+    let system = build("quad", &[]);
+    let mut times = pendkit_assembly::PhaseTimes::new();
+    let a = assemble_with(
+        &system,
+        Stage::S0A,
+        &AssemblyOptions::default(),
+        Some(&mut times),
+    )
+    .unwrap();
+    assert_eq!(a.equilibrium.iterations, 0);
+    let calls = |name: &str| {
+        times
+            .phases()
+            .iter()
+            .find(|p| p.name == name)
+            .map_or(0, |p| p.calls)
+    };
+    assert_eq!(calls("hessian:wire-stretch"), system.wires.len());
+    assert_eq!(calls("hessian:spring"), system.springs.len());
+    let massive = system.bodies.iter().filter(|b| b.mass != 0.0).count();
+    assert_eq!(calls("hessian:gravity"), massive);
+}

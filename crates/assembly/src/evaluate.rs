@@ -39,7 +39,7 @@ enum Level {
 #[derive(Debug)]
 struct Group {
     /// Term indices and the part each is.
-    members: Vec<(usize, usize)>,
+    members: Members,
     /// Number of local coordinates.
     n: usize,
     /// Energy parts the body yields.
@@ -59,6 +59,24 @@ struct Group {
     /// [`Evaluator::take_times`].
     time: Duration,
     timed: usize,
+}
+
+/// The terms of a group with the part each is: one, or several for a shared body (without
+/// allocating for one).
+#[derive(Debug)]
+struct Members {
+    first: (usize, usize),
+    more: Vec<(usize, usize)>,
+}
+
+impl Members {
+    fn iter(&self) -> impl Iterator<Item = &(usize, usize)> {
+        std::iter::once(&self.first).chain(&self.more)
+    }
+
+    fn len(&self) -> usize {
+        1 + self.more.len()
+    }
 }
 
 /// Evaluates a set of terms of one system, sharing frame jets and keeping results at the
@@ -120,7 +138,7 @@ impl<'s> Evaluator<'s> {
             let joined = (parts > 1)
                 .then(|| {
                     self.groups.iter().position(|g| {
-                        let first = &self.terms[g.members[0].0];
+                        let first = &self.terms[g.members.first.0];
                         first.body_parts().0 == body && first.coords == term.coords
                     })
                 })
@@ -131,13 +149,16 @@ impl<'s> Evaluator<'s> {
                     if group.kinds[0] != Some(term.kind) {
                         group.kinds[1] = Some(term.kind);
                     }
-                    group.members.push((t, part));
+                    group.members.more.push((t, part));
                     group.level = Level::Nothing;
                     g
                 }
                 None => {
                     self.groups.push(Group {
-                        members: vec![(t, part)],
+                        members: Members {
+                            first: (t, part),
+                            more: Vec::new(),
+                        },
                         n,
                         parts,
                         value_at: self.values.len(),
@@ -221,7 +242,7 @@ impl<'s> Evaluator<'s> {
                 if self.groups[g].level >= want || self.groups[g].fast == Some(false) {
                     continue;
                 }
-                let t = self.groups[g].members[0].0;
+                let t = self.groups[g].members.first.0;
                 if let Some(frames) = self.terms[t].frames() {
                     for &b in &frames.bodies {
                         if !self.jet_ready[b] {
@@ -261,7 +282,7 @@ impl<'s> Evaluator<'s> {
     /// One fast evaluation of group `g`'s body; false if it has no fast path here.
     fn evaluate_fast(&mut self, g: usize, hessians: bool) -> bool {
         let group = &self.groups[g];
-        let term = &self.terms[group.members[0].0];
+        let term = &self.terms[group.members.first.0];
         let Some(frames) = term.frames() else {
             return false;
         };
@@ -295,7 +316,7 @@ impl<'s> Evaluator<'s> {
         let jets = &self.jets;
         let view = |k: usize| FrameAt {
             jet: &jets[frames.bodies[k]],
-            local: &frames.maps[k],
+            local: frames.frames[k].var_list(),
         };
         let x = &self.local_x;
         let done = on_stack(frames.bodies.len(), view, |frames| {
@@ -312,7 +333,7 @@ impl<'s> Evaluator<'s> {
     fn evaluate_reference(&mut self, g: usize, hessians: bool) {
         let group = &self.groups[g];
         let n = group.n;
-        for &(t, part) in &group.members {
+        for &(t, part) in group.members.iter() {
             let term = &self.terms[t];
             let already = self.groups[g].level >= Level::Gradient;
             if !already {

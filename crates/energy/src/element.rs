@@ -101,6 +101,7 @@ pub trait Element: Sync {
 #[derive(Default)]
 pub struct SharedBodies {
     bodies: RefCell<Vec<SharedEntry>>,
+    frames: RefCell<Vec<Arc<LocalFrames>>>,
 }
 
 /// One shared body: its type, its index among bodies of that type, and the body.
@@ -110,6 +111,22 @@ impl SharedBodies {
     /// An empty collection.
     pub fn new() -> Self {
         SharedBodies::default()
+    }
+
+    /// The frames of `bodies` of `system` over one local vector, shared by every term on
+    /// the same bodies (a wire's torsion and beam).
+    pub fn frames(&self, system: &System, bodies: &[BodyId]) -> Arc<LocalFrames> {
+        let found = self
+            .frames
+            .borrow()
+            .iter()
+            .find(|f| f.bodies == bodies)
+            .cloned();
+        found.unwrap_or_else(|| {
+            let frames = Arc::new(LocalFrames::new(system, bodies));
+            self.frames.borrow_mut().push(frames.clone());
+            frames
+        })
     }
 
     /// The body of type `T` with index `index`, built by `make` if nobody has yet.
@@ -162,12 +179,11 @@ pub struct LocalFrames {
     pub coords: Vec<usize>,
     /// One frame per requested body, reading the local vector.
     pub frames: Vec<FrameMap>,
-    /// The requested bodies, in order.
+    /// The requested bodies, in order. The local frame of body `k` reads its coordinates
+    /// at `frames[k].var_list()`, in the order of the body's own frame's coordinates: that
+    /// is how a jet of the body's frame over the global coordinates maps into the local
+    /// vector.
     pub bodies: Vec<BodyId>,
-    /// For each body, the local index of each coordinate its frame depends on (in the
-    /// order of [`FrameMap::var_list`]): how a jet of the body's frame over the global
-    /// coordinates maps into this local vector.
-    pub maps: Vec<Vec<usize>>,
 }
 
 impl LocalFrames {
@@ -185,22 +201,10 @@ impl LocalFrames {
             .iter()
             .map(|&b| system.bodies[b].frame.remap(&local))
             .collect();
-        let maps = bodies
-            .iter()
-            .map(|&b| {
-                system.bodies[b]
-                    .frame
-                    .var_list()
-                    .iter()
-                    .map(|&g| local(g))
-                    .collect()
-            })
-            .collect();
         LocalFrames {
             coords,
             frames,
             bodies: bodies.to_vec(),
-            maps,
         }
     }
 }

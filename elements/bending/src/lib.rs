@@ -87,10 +87,8 @@ pub fn shared_beam(
 ) -> Result<Arc<SharedBeam>, EnergyError> {
     shared.get_or_try_insert(index, || {
         let wire = &reference.system.wires[index];
-        Ok(
-            WireBeam::new(reference, wire)?
-                .map(|(beam, frames)| (Arc::new(beam), Arc::new(frames))),
-        )
+        let frames = shared.frames(reference.system, &[wire.ends[0].body, wire.ends[1].body]);
+        Ok(WireBeam::new(reference, wire, &frames)?.map(|beam| (Arc::new(beam), frames)))
     })
 }
 
@@ -124,12 +122,14 @@ pub fn beam_terms(
 }
 
 impl WireBeam {
-    /// The beam of `wire` built around `reference`, with the frames it reads; `None` when
-    /// the wire has no bending stiffness or both ends are hinged (no bending energy).
+    /// The beam of `wire` built around `reference`, reading the frames `local` of the
+    /// wire's two end bodies; `None` when the wire has no bending stiffness or both ends
+    /// are hinged (no bending energy).
     pub fn new(
         reference: &Reference,
         wire: &Wire,
-    ) -> Result<Option<(WireBeam, LocalFrames)>, EnergyError> {
+        local: &LocalFrames,
+    ) -> Result<Option<WireBeam>, EnergyError> {
         let sec = &wire.section;
         let fail = |message: String| EnergyError::Element {
             kind: "wire-bending",
@@ -173,7 +173,6 @@ impl WireBeam {
                 ei,
             }
         };
-        let local = LocalFrames::new(reference.system, &[wire.ends[0].body, wire.ends[1].body]);
         let beam = WireBeam {
             frames: [local.frames[0].clone(), local.frames[1].clone()],
             points: [wire.ends[0].point, wire.ends[1].point],
@@ -186,7 +185,7 @@ impl WireBeam {
                 .iter()
                 .all(|end| !matches!(end.direction, EndDirection::Explicit(_))),
         };
-        Ok(Some((beam, local)))
+        Ok(Some(beam))
     }
 
     /// Total and bending energy at local coordinates `x`.

@@ -10,8 +10,8 @@
 
 use nalgebra::{Matrix3, Vector3};
 use pendkit_energy::{
-    Derivatives, Element, EnergyError, JetPoint, LocalFrames, OffForm, Potential, Reference,
-    Registration, Stage, TensionOff, Term, hyper_dual_over_frames, inventory,
+    Derivatives, Element, EnergyError, JetPoint, OffForm, Potential, Reference, Registration,
+    SharedBodies, Stage, TensionOff, Term, hyper_dual_over_frames, inventory,
 };
 use pendkit_geometry::{Frame, FrameMap};
 use pendkit_rotations::{Real, dot, mul_tr_const, small_rotation, tr_mul, tr_mul_vec, vee};
@@ -140,6 +140,14 @@ impl Element for WireTorsion {
         "twist ½ κ Δθ² of each wire, κ = (G Je + T J/A)/l"
     }
     fn terms(&self, reference: &Reference) -> Result<Vec<Term>, EnergyError> {
+        self.terms_shared(reference, &SharedBodies::new())
+    }
+    /// One term per wire, on the wire's frames as the other wire kinds share them.
+    fn terms_shared(
+        &self,
+        reference: &Reference,
+        shared: &SharedBodies,
+    ) -> Result<Vec<Term>, EnergyError> {
         let system = reference.system;
         let mut terms = Vec::new();
         for wire in &system.wires {
@@ -155,7 +163,7 @@ impl Element for WireTorsion {
             } else {
                 0.0
             };
-            let local = LocalFrames::new(system, &[wire.ends[0].body, wire.ends[1].body]);
+            let local = shared.frames(system, &[wire.ends[0].body, wire.ends[1].body]);
             let r0 = system.bodies[wire.ends[0].body]
                 .frame
                 .eval(reference.coords)
