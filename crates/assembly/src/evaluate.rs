@@ -44,10 +44,14 @@ struct Group {
     n: usize,
     /// Energy parts the body yields.
     parts: usize,
-    /// Offsets into the value, gradient and Hessian buffers.
+    /// Offsets into the value and gradient buffers.
     value_at: usize,
     gradient_at: usize,
-    hessian_at: usize,
+    /// Hessians of every part with the tension on (part p at p n²), and the tension-off
+    /// Hessian of a single-part body: the group's own buffers, handed over to the
+    /// assembled matrices at the end.
+    on: Vec<f64>,
+    off: Vec<f64>,
     /// Whether the body has a fast path (known after its first evaluation).
     fast: Option<bool>,
     level: Level,
@@ -96,8 +100,6 @@ pub(crate) struct Evaluator<'s> {
     values: Vec<f64>,
     gradients: Vec<f64>,
     force_scales: Vec<f64>,
-    on: Vec<f64>,
-    off: Vec<f64>,
     /// Reference-path tension-off Hessians (their own allocations: the slow path).
     reference_off: Vec<Option<OffHessian>>,
     scratch: Scratch,
@@ -120,8 +122,6 @@ impl<'s> Evaluator<'s> {
             values: Vec::new(),
             gradients: Vec::new(),
             force_scales: Vec::new(),
-            on: Vec::new(),
-            off: Vec::new(),
             reference_off: Vec::new(),
             scratch: Scratch::default(),
             local_x: Vec::new(),
@@ -163,7 +163,12 @@ impl<'s> Evaluator<'s> {
                         parts,
                         value_at: self.values.len(),
                         gradient_at: self.gradients.len(),
-                        hessian_at: self.on.len(),
+                        on: vec![0.0; parts * n * n],
+                        off: if parts == 1 {
+                            vec![0.0; n * n]
+                        } else {
+                            Vec::new()
+                        },
                         fast: None,
                         level: Level::Nothing,
                         off_form: OffForm::Same,
@@ -174,8 +179,6 @@ impl<'s> Evaluator<'s> {
                     self.values.resize(self.values.len() + parts, 0.0);
                     self.gradients.resize(self.gradients.len() + parts * n, 0.0);
                     self.force_scales.resize(self.gradients.len(), 0.0);
-                    self.on.resize(self.on.len() + parts * n * n, 0.0);
-                    self.off.resize(self.on.len(), 0.0);
                     self.groups.len() - 1
                 }
             };
@@ -281,7 +284,7 @@ impl<'s> Evaluator<'s> {
 
     /// One fast evaluation of group `g`'s body; false if it has no fast path here.
     fn evaluate_fast(&mut self, g: usize, hessians: bool) -> bool {
-        let group = &self.groups[g];
+        let group = &mut self.groups[g];
         let term = &self.terms[group.members.first.0];
         let Some(frames) = term.frames() else {
             return false;
@@ -293,8 +296,7 @@ impl<'s> Evaluator<'s> {
         let values = &mut self.values[group.value_at..group.value_at + parts];
         let gradients = &mut self.gradients[group.gradient_at..group.gradient_at + parts * n];
         let scales = &mut self.force_scales[group.gradient_at..group.gradient_at + parts * n];
-        let on = &mut self.on[group.hessian_at..group.hessian_at + parts * n * n];
-        let off = &mut self.off[group.hessian_at..group.hessian_at + parts * n * n];
+        let (on, off) = (&mut group.on, &mut group.off);
         values.fill(0.0);
         gradients.fill(0.0);
         scales.fill(0.0);
@@ -324,26 +326,25 @@ impl<'s> Evaluator<'s> {
         }) == Some(true);
         let off_form = out.off_form;
         if done && hessians {
-            self.groups[g].off_form = off_form;
+            group.off_form = off_form;
         }
         done
     }
 
     /// The reference path for every term of group `g`, one by one.
     fn evaluate_reference(&mut self, g: usize, hessians: bool) {
-        let group = &self.groups[g];
+        let group = &mut self.groups[g];
         let n = group.n;
+        let already = group.level >= Level::Gradient;
         for &(t, part) in group.members.iter() {
             let term = &self.terms[t];
-            let already = self.groups[g].level >= Level::Gradient;
             if !already {
                 let d = term.reference_derivatives(&self.point);
                 self.values[group.value_at + part] = d.value;
                 let at = group.gradient_at + part * n;
                 self.gradients[at..at + n].copy_from_slice(&d.gradient);
                 self.force_scales[at..at + n].fill(0.0);
-                let at = group.hessian_at + part * n * n;
-                self.on[at..at + n * n].copy_from_slice(&d.hessian);
+                group.on[part * n * n..(part + 1) * n * n].copy_from_slice(&d.hessian);
             }
             if hessians {
                 self.reference_off[t] = Some(match term.tension_off(&self.point) {
@@ -391,29 +392,43 @@ impl<'s> Evaluator<'s> {
     /// Tension-on Hessian of term `t` (row-major over its coordinates).
     pub(crate) fn on(&self, t: usize) -> &[f64] {
         let (g, part) = self.slot(t);
-        let at = g.hessian_at + part * g.n * g.n;
-        &self.on[at..at + g.n * g.n]
+        &g.on[part * g.n * g.n..(part + 1) * g.n * g.n]
     }
 
-    /// Tension-off Hessian of term `t`, the off term built at the current configuration.
-    pub(crate) fn off(&self, t: usize) -> OffHessian {
-        if let Some(off) = &self.reference_off[t] {
-            return off.clone();
-        }
-        let (g, part) = self.slot(t);
-        let form = match self.terms[t].part_off() {
+    /// The tension-off form of term `t` from its group's last fast evaluation (fixed per
+    /// part for a shared body).
+    fn off_form(&self, t: usize) -> OffForm {
+        match self.terms[t].part_off() {
             Some(PartOff::Unchanged) => OffForm::Same,
             Some(PartOff::Vanishes) => OffForm::Zero,
-            None => g.off_form,
-        };
-        match form {
-            OffForm::Same => OffHessian::Same,
-            OffForm::Zero => OffHessian::Zero,
-            OffForm::Written => {
-                let at = g.hessian_at + part * g.n * g.n;
-                OffHessian::Matrix(self.off[at..at + g.n * g.n].to_vec())
-            }
+            None => self.groups[self.group_of[t]].off_form,
         }
+    }
+
+    /// Hands over term `t`'s Hessians (tension on and off), the off term built at the
+    /// current configuration, without copying them where the term has its body to itself;
+    /// the group is left without its results.
+    pub(crate) fn take_hessians(&mut self, t: usize) -> (Vec<f64>, OffHessian) {
+        let form = self.off_form(t);
+        let reference_off = self.reference_off[t].take();
+        let g = &mut self.groups[self.group_of[t]];
+        g.level = Level::Nothing;
+        let off = match (reference_off, form) {
+            (Some(off), _) => off,
+            (None, OffForm::Same) => OffHessian::Same,
+            (None, OffForm::Zero) => OffHessian::Zero,
+            (None, OffForm::Written) => OffHessian::Matrix(std::mem::take(&mut g.off)),
+        };
+        if g.parts == 1 {
+            return (std::mem::take(&mut g.on), off);
+        }
+        let part = g
+            .members
+            .iter()
+            .find(|&&(m, _)| m == t)
+            .map_or(0, |&(_, p)| p);
+        let nn = g.n * g.n;
+        (g.on[part * nn..(part + 1) * nn].to_vec(), off)
     }
 
     /// Time spent on Hessians per phase since the last call (phase name, time, terms

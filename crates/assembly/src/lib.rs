@@ -442,24 +442,25 @@ fn finish(
         .chain(kinds_0a..core)
         .chain((core..total).filter(|t| !plugin_range.contains(t)))
         .collect();
+    let layout = Layout::new(system);
+    let mass = timed(&mut times, "mass", 1, || {
+        mass_at(system, &layout, &mut evaluator, x)
+    })?;
     let matrices = order
         .into_iter()
         .map(|t| {
+            let (on, off) = evaluator.take_hessians(t);
             let term = &evaluator.terms()[t];
             TermMatrices {
                 label: term.label.clone(),
                 kind: term.kind,
                 tag: term.tag.clone(),
                 coords: term.coords.clone(),
-                on: evaluator.on(t).to_vec(),
-                off: evaluator.off(t),
+                on,
+                off,
             }
         })
         .collect();
-    let layout = Layout::new(system);
-    let mass = timed(&mut times, "mass", 1, || {
-        mass_at(system, &layout, &mut evaluator, x)
-    })?;
     Ok(Assembled {
         stage,
         layout,
