@@ -452,3 +452,18 @@ fn a_model_at_its_equilibrium_costs_one_gradient_check() {
     let massive = system.bodies.iter().filter(|b| b.mass != 0.0).count();
     assert_eq!(calls("hessian:gravity"), massive);
 }
+
+#[test]
+fn very_stiff_wires_converge_on_the_reference_path_too() {
+    // the reference path takes its rounding floor from the Hessian (ε |H| |x|), the fast
+    // path from each term's own cancellation scale (k (|p0| + |p1| + l0) for a wire): both
+    // find the nominal geometry of the stiff double pendulum
+    let system = build("double-pendulum", &["r_wire=scale(30)"]);
+    let options = AssemblyOptions {
+        derivatives: DerivativePath::Reference,
+        ..AssemblyOptions::default()
+    };
+    let r = pendkit::run_stage_with(system, Stage::S0A, &options, None).unwrap();
+    let i = r.system.coord("z2").unwrap();
+    assert!((r.assembled.equilibrium.coords[i] + 1.2).abs() < 1e-12);
+}

@@ -30,8 +30,9 @@ pub struct EquilibriumOptions {
     /// Residual forces below this many machine epsilons of the forces that make them up
     /// are rounding and count as zero: per coordinate, the sum over terms of each term's
     /// force and of the larger forces it is a difference of (a stiff wire's force is k
-    /// times a small difference of lengths of size l, so its rounding is about k l ε). So
-    /// stiffness ratios of 1e8 between wires converge instead of hunting below rounding.
+    /// times a small difference of lengths of size l, so its rounding is about k l ε; on
+    /// the reference path, ε Σ_b |H_ab| |x_b|). So stiffness ratios of 1e8 between wires
+    /// converge instead of hunting below rounding.
     pub rounding_factor: f64,
     /// A coordinate moving further than this from its start (m or rad) means the
     /// potential has no minimum nearby (a model without support, a wrong sign).

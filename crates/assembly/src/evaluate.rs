@@ -343,7 +343,13 @@ impl<'s> Evaluator<'s> {
                 self.values[group.value_at + part] = d.value;
                 let at = group.gradient_at + part * n;
                 self.gradients[at..at + n].copy_from_slice(&d.gradient);
-                self.force_scales[at..at + n].fill(0.0);
+                // rounding scale of the forces: a coordinate rounded by ε|x_b| moves force
+                // a by ε |H_ab| |x_b| (the reference path has the Hessian at hand)
+                for a in 0..n {
+                    self.force_scales[at + a] = (0..n)
+                        .map(|b| d.hessian[a * n + b].abs() * self.point[term.coords[b]].abs())
+                        .sum();
+                }
                 group.on[part * n * n..(part + 1) * n * n].copy_from_slice(&d.hessian);
             }
             if hessians {

@@ -1,6 +1,7 @@
 //! Potential-energy terms of bodies, wires and springs, generic over the dual-number
-//! scalar; the `Element` trait and the link-time registry of element kinds; and the numeric
-//! description of a model (`System`) that elements read.
+//! scalar, with their derivatives (the hyper-dual reference path and the optional fast path
+//! from shared frame jets); the `Element` trait and the link-time registry of element
+//! kinds; and the numeric description of a model (`System`) that elements read.
 
 mod core;
 mod damping;

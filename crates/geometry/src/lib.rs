@@ -1,5 +1,6 @@
 //! Frames of rigid bodies as functions of the model's coordinates: where a body-fixed point
-//! is, how a body is turned, how one frame sits relative to another, and the velocity
+//! is, how a body is turned, how one frame sits relative to another, the frames' first and
+//! second derivatives (jets) that energy derivatives are built from, and the velocity
 //! Jacobians that build the mass matrix and linearised sensors.
 //!
 //! A body's pose is six expressions of the coordinates (x, y, z in m; yaw, pitch, roll in

@@ -241,7 +241,7 @@ pub fn angle_derivatives(m: &Matrix3<f64>) -> AngleDerivatives {
     d
 }
 
-/// The vector of a skew-symmetric matrix: vee([ω]×) = ω.
+/// The vector of a skew-symmetric matrix: vee(\[ω\]×) = ω.
 pub fn vee<D: Real>(m: &Matrix3<D>) -> Vector3<D> {
     let half = 0.5;
     Vector3::new(
