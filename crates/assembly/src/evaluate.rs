@@ -188,13 +188,19 @@ impl<'s> Evaluator<'s> {
         }
     }
 
-    /// Removes the terms from index `len` on (they must form whole groups).
+    /// Removes the terms from index `len` on. They were added last and form whole groups
+    /// (a shared body's terms are always added together), so their groups are the last
+    /// ones and the indices of the groups kept do not change.
     pub(crate) fn truncate(&mut self, len: usize) {
+        let first_removed = self
+            .groups
+            .iter()
+            .position(|g| g.members.iter().any(|&(t, _)| t >= len))
+            .unwrap_or(self.groups.len());
+        self.groups.truncate(first_removed);
         self.terms.truncate(len);
         self.group_of.truncate(len);
         self.reference_off.truncate(len);
-        self.groups
-            .retain(|g| g.members.iter().all(|&(t, _)| t < len));
     }
 
     pub(crate) fn path(&self) -> DerivativePath {
