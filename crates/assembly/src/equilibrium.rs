@@ -1,11 +1,18 @@
 //! Equilibrium by minimising the potential over the free variables and floats: Newton's
 //! method with exact gradient and Hessian, a diagonal shift that makes indefinite Hessians
 //! usable as a descent direction, and a backtracking line search on the energy.
+//!
+//! Each iterate is first checked on its forces alone (no Hessian): a model that starts at
+//! its equilibrium costs one gradient evaluation. The Hessian is evaluated only when a
+//! step is needed, at the same point and from the same frame jets, with the tension-off
+//! Hessians alongside, so that when that point is the equilibrium the assembly takes it
+//! over instead of evaluating again.
 
 use nalgebra::{DMatrix, DVector};
 use pendkit_energy::{CoordKind, System, Term};
 
 use crate::AssemblyError;
+use crate::evaluate::{DerivativePath, Evaluator};
 
 /// Controls of the equilibrium search.
 #[derive(Clone, Debug)]
@@ -20,6 +27,13 @@ pub struct EquilibriumOptions {
     /// Residual forces (N) or torques (N m) below this count as zero whatever the scale
     /// (a model without loads, g = 0, is in equilibrium where it starts).
     pub force_floor: f64,
+    /// Residual forces below this many machine epsilons of the forces that make them up
+    /// are rounding and count as zero: per coordinate, the sum over terms of each term's
+    /// force and of the larger forces it is a difference of (a stiff wire's force is k
+    /// times a small difference of lengths of size l, so its rounding is about k l ε; on
+    /// the reference path, ε Σ_b |H_ab| |x_b|). So stiffness ratios of 1e8 between wires
+    /// converge instead of hunting below rounding.
+    pub rounding_factor: f64,
     /// A coordinate moving further than this from its start (m or rad) means the
     /// potential has no minimum nearby (a model without support, a wrong sign).
     pub max_excursion: f64,
@@ -32,6 +46,7 @@ impl Default for EquilibriumOptions {
             force_tolerance: 1e-11,
             step_tolerance: 1e-12,
             force_floor: 1e-9,
+            rounding_factor: 4.0,
             max_excursion: 100.0,
         }
     }
@@ -50,38 +65,50 @@ pub struct Equilibrium {
     pub energy: f64,
 }
 
-/// Energy, gradient and Hessian of the sum of `terms` over the free coordinates `free`,
-/// plus the largest single-term force (a scale for the convergence test).
+/// Energy, gradient and Hessian of the sum of the terms over the free coordinates, plus
+/// the largest single-term force (a scale for the convergence test) and, per free
+/// coordinate, the rounding floor of its residual force.
 struct Evaluation {
     energy: f64,
     gradient: DVector<f64>,
     hessian: DMatrix<f64>,
     force_scale: f64,
+    rounding: DVector<f64>,
 }
 
-fn evaluate(terms: &[Term], x: &[f64], slot: &[Option<usize>], n: usize) -> Evaluation {
-    let mut ev = Evaluation {
-        energy: 0.0,
-        gradient: DVector::zeros(n),
-        hessian: DMatrix::zeros(n, n),
-        force_scale: 0.0,
-    };
-    for term in terms {
-        let d = term.derivatives(x);
-        let m = term.coords.len();
-        ev.energy += d.value;
+/// Sums the evaluator's per-term values and gradients at its current point over the free
+/// coordinates (`slot` maps a global index to its free index).
+fn gradient_sums(ev: &Evaluator, slot: &[Option<usize>], out: &mut Evaluation) {
+    out.energy = 0.0;
+    out.gradient.fill(0.0);
+    out.rounding.fill(0.0);
+    out.force_scale = 0.0;
+    for (t, term) in ev.terms().iter().enumerate() {
+        out.energy += ev.value(t);
+        let (g, scale) = (ev.gradient(t), ev.force_scale(t));
         for (a, &ga) in term.coords.iter().enumerate() {
             let Some(i) = slot[ga] else { continue };
-            ev.gradient[i] += d.gradient[a];
-            ev.force_scale = ev.force_scale.max(d.gradient[a].abs());
+            out.gradient[i] += g[a];
+            out.rounding[i] += g[a].abs() + scale[a];
+            out.force_scale = out.force_scale.max(g[a].abs());
+        }
+    }
+}
+
+/// Sums the per-term tension-on Hessians over the free coordinates.
+fn hessian_sum(ev: &Evaluator, slot: &[Option<usize>], out: &mut Evaluation) {
+    out.hessian.fill(0.0);
+    for (t, term) in ev.terms().iter().enumerate() {
+        let (h, m) = (ev.on(t), term.coords.len());
+        for (a, &ga) in term.coords.iter().enumerate() {
+            let Some(i) = slot[ga] else { continue };
             for (b, &gb) in term.coords.iter().enumerate() {
                 if let Some(j) = slot[gb] {
-                    ev.hessian[(i, j)] += d.hessian[a * m + b];
+                    out.hessian[(i, j)] += h[a * m + b];
                 }
             }
         }
     }
-    ev
 }
 
 fn total_energy(terms: &[Term], x: &[f64]) -> f64 {
@@ -122,6 +149,19 @@ pub fn find_equilibrium(
     start: &[f64],
     options: &EquilibriumOptions,
 ) -> Result<Equilibrium, AssemblyError> {
+    let mut evaluator = Evaluator::new(system, DerivativePath::Fast);
+    evaluator.extend(terms.iter().cloned());
+    newton(&mut evaluator, system, start, options)
+}
+
+/// Newton's method over the terms of `evaluator`, which is left holding its evaluation at
+/// the equilibrium.
+pub(crate) fn newton(
+    evaluator: &mut Evaluator,
+    system: &System,
+    start: &[f64],
+    options: &EquilibriumOptions,
+) -> Result<Equilibrium, AssemblyError> {
     let free: Vec<usize> = (0..system.coords.len())
         .filter(|&i| {
             let c = &system.coords[i];
@@ -135,10 +175,19 @@ pub fn find_equilibrium(
     let n = free.len();
     let mut x = start.to_vec();
     let name = |k: usize| system.coords[free[k]].name.clone();
+    let mut ev = Evaluation {
+        energy: 0.0,
+        gradient: DVector::zeros(n),
+        hessian: DMatrix::zeros(n, n),
+        force_scale: 0.0,
+        rounding: DVector::zeros(n),
+    };
+    let mut trial = x.clone();
 
     let mut iteration = 0;
     loop {
-        let ev = evaluate(terms, &x, &slot, n);
+        evaluator.evaluate(&x, false);
+        gradient_sums(evaluator, &slot, &mut ev);
         if !ev.energy.is_finite() || ev.gradient.iter().any(|g| !g.is_finite()) {
             return Err(AssemblyError::NotFinite {
                 iteration,
@@ -160,24 +209,30 @@ pub fn find_equilibrium(
             residual: max_residual,
             coordinate: name(worst),
         };
-        let forces_ok = max_residual <= options.force_tolerance * ev.force_scale;
-        if n == 0 || max_residual <= options.force_floor {
-            return Ok(Equilibrium {
-                coords: x,
-                iterations: iteration,
-                max_residual,
-                energy: ev.energy,
-            });
+        let equilibrium = |x: Vec<f64>, energy: f64| Equilibrium {
+            coords: x,
+            iterations: iteration,
+            max_residual,
+            energy,
+        };
+        // Converged on forces alone: every residual is below the absolute floor or within
+        // the rounding of the forces that make it up.
+        let rounding = options.rounding_factor * f64::EPSILON;
+        let at_rounding = ev
+            .gradient
+            .iter()
+            .zip(ev.rounding.iter())
+            .all(|(g, r)| g.abs() <= options.force_floor.max(rounding * r));
+        if n == 0 || at_rounding {
+            return Ok(equilibrium(x, ev.energy));
         }
+        evaluator.evaluate(&x, true);
+        hessian_sum(evaluator, &slot, &mut ev);
+        let forces_ok = max_residual <= options.force_tolerance * ev.force_scale;
         let (dx, newton) = descent_step(&ev).ok_or_else(not_converged)?;
         // Converged on forces and on the size of the step that would still be taken.
         if forces_ok && dx.amax() <= options.step_tolerance {
-            return Ok(Equilibrium {
-                coords: x,
-                iterations: iteration,
-                max_residual,
-                energy: ev.energy,
-            });
+            return Ok(equilibrium(x, ev.energy));
         }
         if iteration == options.max_iterations {
             return Err(not_converged());
@@ -189,11 +244,11 @@ pub fn find_equilibrium(
         let rounding = 1e-13 * ev.energy.abs().max(ev.force_scale * 1e-3);
         if !(newton && -slope < rounding) {
             loop {
-                let mut trial = x.clone();
+                trial.copy_from_slice(&x);
                 for (k, &i) in free.iter().enumerate() {
                     trial[i] += alpha * dx[k];
                 }
-                let e = total_energy(terms, &trial);
+                let e = total_energy(evaluator.terms(), &trial);
                 if e.is_finite() && e <= ev.energy + 1e-4 * alpha * slope {
                     break;
                 }

@@ -2,18 +2,32 @@
 //! Newton minimisation, differentiates each term twice over its own coordinates (tension on
 //! and off) and assembles the master stiffness matrix (blocks K, C_XQ, C_XS, Q, C_QS, S) and
 //! the mass matrix from the bodies.
+//!
+//! Nothing is done twice: the terms are built once (the stage-0A terms Newton minimises
+//! are the ones assembled), every body's frame jet is computed once per configuration and
+//! shared by its terms and the mass matrix, shared energy bodies (a wire's beam) are
+//! evaluated once for all their terms, and Newton's last evaluation is taken over when it
+//! was made at the equilibrium. [`assemble_with`] can record the time of each phase.
 
 mod equilibrium;
+mod evaluate;
+mod timing;
 
 use std::collections::BTreeMap;
 
-use nalgebra::DMatrix;
+use nalgebra::{DMatrix, Vector3};
 use pendkit_energy::{
-    CoordKind, EarlyWireTerms, EnergyError, ExtraPhase, Reference, Stage, System, TensionOff, Term,
-    constraint_terms, extra_terms, registry,
+    CoordKind, EarlyWireTerms, EnergyError, ExtraPhase, Reference, SharedBodies, Stage, System,
+    Term, constraint_terms, extra_terms, registry,
 };
+use pendkit_geometry::FrameJet;
 
 pub use equilibrium::{Equilibrium, EquilibriumOptions, find_equilibrium};
+pub use evaluate::DerivativePath;
+pub use pendkit_energy::OffHessian;
+pub use timing::{Phase, PhaseTimes, timed};
+
+use evaluate::Evaluator;
 
 /// Errors of the equilibrium search and assembly.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -116,17 +130,6 @@ impl Layout {
     pub fn is_empty(&self) -> bool {
         self.position.is_empty()
     }
-}
-
-/// The tension-off part of one term's Hessian (DESIGN.md §4).
-#[derive(Clone, Debug)]
-pub enum OffHessian {
-    /// Equal to the tension-on Hessian: all of the term's stiffness is lossy.
-    Same,
-    /// Zero: all of the term's stiffness is lossless.
-    Zero,
-    /// A different matrix (row-major, over the term's coordinates).
-    Matrix(Vec<f64>),
 }
 
 /// One term differentiated at the equilibrium.
@@ -236,27 +239,78 @@ fn check_plugin_kinds(system: &System) -> Result<(), EnergyError> {
     Ok(())
 }
 
-/// Terms of every registered kind whose stage passes `include`, built around `x`.
+/// How to assemble: the equilibrium search's controls and the derivative path.
+#[derive(Clone, Debug, Default)]
+pub struct AssemblyOptions {
+    /// Controls of the equilibrium search.
+    pub equilibrium: EquilibriumOptions,
+    /// Fast (default) or reference derivatives.
+    pub derivatives: DerivativePath,
+}
+
+/// Terms of every registered kind whose stage passes `include`, built around `x`, with
+/// bodies shared between kinds taken from `shared`.
 fn kind_terms(
     system: &System,
     x: &[f64],
+    shared: &SharedBodies,
     include: impl Fn(Stage) -> bool,
 ) -> Result<Vec<Term>, EnergyError> {
     let reference = Reference { system, coords: x };
     let mut terms = Vec::new();
     for kind in registry().into_iter().filter(|k| include(k.stage())) {
-        terms.extend(kind.terms(&reference)?);
+        terms.extend(kind.terms_shared(&reference, shared)?);
     }
     Ok(terms)
 }
 
-/// Terms minimised for the equilibrium: stage-0A kinds, the user's pre-equilibrium terms and,
-/// when asked for, the plug-in terms built around `x`.
-fn equilibrium_terms(system: &System, x: &[f64]) -> Result<Vec<Term>, EnergyError> {
+/// How the terms built before the equilibrium sit in an evaluator: stage-0A kinds first,
+/// then the user's pre-equilibrium terms, then any plug-in terms built around the start.
+#[derive(Clone, Copy, Debug)]
+struct Before {
+    /// Number of stage-0A kind terms.
+    kinds_0a: usize,
+    /// ... plus pre-equilibrium user terms.
+    core: usize,
+}
+
+/// An evaluator with the terms built before the equilibrium: the stage-0A kinds (around
+/// the start; they do not depend on it), the user's pre-equilibrium terms and, when `early`,
+/// the plug-in terms built around the start (all stages, as the source does).
+fn terms_before(
+    system: &System,
+    path: DerivativePath,
+    early: bool,
+) -> Result<(Evaluator<'_>, Before), AssemblyError> {
+    check_plugin_kinds(system)?;
+    let start = system.start();
+    let shared = SharedBodies::new();
+    let mut evaluator = Evaluator::new(system, path);
+    evaluator.extend(kind_terms(system, &start, &shared, |s| s == Stage::S0A)?);
+    let kinds_0a = evaluator.terms().len();
+    evaluator.extend(extra_terms(system, ExtraPhase::BeforeEquilibrium, None)?);
+    let core = evaluator.terms().len();
+    if early {
+        evaluator.extend(kind_terms(system, &start, &shared, |s| s != Stage::S0A)?);
+    }
+    Ok((evaluator, Before { kinds_0a, core }))
+}
+
+/// Newton over the terms minimised for the equilibrium; the evaluator is left holding its
+/// last evaluation, at the equilibrium.
+fn equilibrium_search<'s>(
+    system: &'s System,
+    options: &AssemblyOptions,
+) -> Result<(Evaluator<'s>, Before, Equilibrium), AssemblyError> {
     let early = system.early_wire_terms != EarlyWireTerms::No;
-    let mut terms = kind_terms(system, x, |s| s == Stage::S0A || early)?;
-    terms.extend(extra_terms(system, ExtraPhase::BeforeEquilibrium, None)?);
-    Ok(terms)
+    let (mut evaluator, before) = terms_before(system, options.derivatives, early)?;
+    let equilibrium = equilibrium::newton(
+        &mut evaluator,
+        system,
+        &system.start(),
+        &options.equilibrium,
+    )?;
+    Ok((evaluator, before, equilibrium))
 }
 
 /// Finds the equilibrium of `system`. Plug-in terms that join early are built around the
@@ -266,9 +320,11 @@ pub fn solve_equilibrium(
     system: &System,
     options: &EquilibriumOptions,
 ) -> Result<Equilibrium, AssemblyError> {
-    check_plugin_kinds(system)?;
-    let start = system.start();
-    find_equilibrium(system, &equilibrium_terms(system, &start)?, &start, options)
+    let options = AssemblyOptions {
+        equilibrium: options.clone(),
+        ..AssemblyOptions::default()
+    };
+    Ok(equilibrium_search(system, &options)?.2)
 }
 
 /// Finds the equilibrium and differentiates every term of `stage` there.
@@ -277,8 +333,40 @@ pub fn assemble(
     stage: Stage,
     options: &EquilibriumOptions,
 ) -> Result<Assembled, AssemblyError> {
-    let equilibrium = solve_equilibrium(system, options)?;
-    assemble_at(system, stage, equilibrium)
+    let options = AssemblyOptions {
+        equilibrium: options.clone(),
+        ..AssemblyOptions::default()
+    };
+    assemble_with(system, stage, &options, None)
+}
+
+/// [`assemble`] with a choice of derivative path, recording the time of each phase
+/// (`terms`: building them, `equilibrium`: Newton, `hessian:<kind>`, `mass`) into `times`
+/// when given. The terms Newton minimised and its last evaluation at the equilibrium are
+/// reused.
+pub fn assemble_with(
+    system: &System,
+    stage: Stage,
+    options: &AssemblyOptions,
+    mut times: Option<&mut PhaseTimes>,
+) -> Result<Assembled, AssemblyError> {
+    let early = system.early_wire_terms != EarlyWireTerms::No;
+    let (mut evaluator, before) = timed(&mut times, "terms", 1, || {
+        terms_before(system, options.derivatives, early)
+    })?;
+    let equilibrium = timed(&mut times, "equilibrium", 1, || {
+        equilibrium::newton(
+            &mut evaluator,
+            system,
+            &system.start(),
+            &options.equilibrium,
+        )
+    })?;
+    // plug-in terms that joined the equilibrium only are not part of the matrices
+    if system.early_wire_terms != EarlyWireTerms::Yes {
+        evaluator.truncate(before.core);
+    }
+    finish(system, stage, evaluator, before, equilibrium, times)
 }
 
 /// Differentiates every term of `stage` at a known equilibrium (reused across stages).
@@ -287,39 +375,92 @@ pub fn assemble_at(
     stage: Stage,
     equilibrium: Equilibrium,
 ) -> Result<Assembled, AssemblyError> {
+    assemble_at_with(system, stage, equilibrium, DerivativePath::Fast)
+}
+
+/// [`assemble_at`] with a choice of derivative path.
+pub fn assemble_at_with(
+    system: &System,
+    stage: Stage,
+    equilibrium: Equilibrium,
+    path: DerivativePath,
+) -> Result<Assembled, AssemblyError> {
+    let early = system.early_wire_terms == EarlyWireTerms::Yes;
+    let (evaluator, before) = terms_before(system, path, early)?;
+    finish(system, stage, evaluator, before, equilibrium, None)
+}
+
+/// Adds the terms built at the equilibrium to `evaluator` (which holds the stage-0A and
+/// pre-equilibrium terms, then any plug-in terms kept from the start), differentiates
+/// whatever is not known there yet and collects the matrices in the order: stage-0A kinds,
+/// plug-ins, user terms before and after the equilibrium, constraints.
+fn finish(
+    system: &System,
+    stage: Stage,
+    mut evaluator: Evaluator,
+    before: Before,
+    equilibrium: Equilibrium,
+    mut times: Option<&mut PhaseTimes>,
+) -> Result<Assembled, AssemblyError> {
     let x = &equilibrium.coords;
-    let mut terms = kind_terms(system, x, |s| s == Stage::S0A)?;
-    // plug-in terms: those of the stage, built around the equilibrium; or, when they joined
-    // the equilibrium for good, all of them, built around the start as they were there
-    let plugins = if system.early_wire_terms == EarlyWireTerms::Yes {
-        kind_terms(system, &system.start(), |s| s != Stage::S0A)?
-    } else {
-        kind_terms(system, x, |s| s != Stage::S0A && s <= stage)?
-    };
-    terms.extend(plugins);
-    terms.extend(extra_terms(system, ExtraPhase::BeforeEquilibrium, None)?);
-    terms.extend(extra_terms(system, ExtraPhase::AfterEquilibrium, Some(x))?);
-    terms.extend(constraint_terms(system, x));
-    let matrices = terms
-        .iter()
-        .map(|t| {
-            let off = match t.tension_off(x) {
-                TensionOff::Unchanged => OffHessian::Same,
-                TensionOff::Vanishes => OffHessian::Zero,
-                TensionOff::Replaced(t_off) => OffHessian::Matrix(t_off.derivatives(x).hessian),
+    let Before { kinds_0a, core } = before;
+    let kept_plugins = evaluator.terms().len() - core;
+    let new_plugins = timed(
+        &mut times,
+        "terms",
+        0,
+        || -> Result<usize, AssemblyError> {
+            let shared = SharedBodies::new();
+            let plugins = if system.early_wire_terms == EarlyWireTerms::Yes {
+                Vec::new()
+            } else {
+                kind_terms(system, x, &shared, |s| s != Stage::S0A && s <= stage)?
             };
+            let count = plugins.len();
+            evaluator.extend(plugins);
+            evaluator.extend(extra_terms(system, ExtraPhase::AfterEquilibrium, Some(x))?);
+            evaluator.extend(constraint_terms(system, x));
+            Ok(count)
+        },
+    )?;
+    evaluator.timing = times.is_some();
+    evaluator.evaluate(x, true);
+    if let Some(t) = times.as_deref_mut() {
+        for (phase, time, calls) in evaluator.take_times() {
+            t.add(&phase, time, calls);
+        }
+    }
+    // output order: 0A kinds, plug-ins (kept or new), pre-equilibrium, the rest
+    let total = evaluator.terms().len();
+    let plugin_range = if kept_plugins > 0 {
+        core..core + kept_plugins
+    } else {
+        core + kept_plugins..core + kept_plugins + new_plugins
+    };
+    let order: Vec<usize> = (0..kinds_0a)
+        .chain(plugin_range.clone())
+        .chain(kinds_0a..core)
+        .chain((core..total).filter(|t| !plugin_range.contains(t)))
+        .collect();
+    let layout = Layout::new(system);
+    let mass = timed(&mut times, "mass", 1, || {
+        mass_at(system, &layout, &mut evaluator, x)
+    })?;
+    let matrices = order
+        .into_iter()
+        .map(|t| {
+            let (on, off) = evaluator.take_hessians(t);
+            let term = &evaluator.terms()[t];
             TermMatrices {
-                label: t.label.clone(),
-                kind: t.kind,
-                tag: t.tag.clone(),
-                coords: t.coords.clone(),
-                on: t.derivatives(x).hessian,
+                label: term.label.clone(),
+                kind: term.kind,
+                tag: term.tag.clone(),
+                coords: term.coords.clone(),
+                on,
                 off,
             }
         })
         .collect();
-    let layout = Layout::new(system);
-    let mass = mass_matrix(system, &layout, x)?;
     Ok(Assembled {
         stage,
         layout,
@@ -336,36 +477,84 @@ pub fn mass_matrix(
     layout: &Layout,
     x: &[f64],
 ) -> Result<DMatrix<f64>, AssemblyError> {
+    let mut jet = FrameJet::new();
+    mass_from(system, layout, |b, columns| {
+        system.bodies[b]
+            .frame
+            .jet(x, pendkit_geometry::JetOrder::First, &mut jet);
+        jet_columns(&jet, &system.bodies[b].centre_of_mass, columns);
+    })
+}
+
+/// The velocity columns (∂p_com/∂q_i, ω_B per unit rate) of a body from its jet, in the
+/// order of its frame's coordinates.
+fn jet_columns(jet: &FrameJet, com: &Vector3<f64>, columns: &mut Vec<[Vector3<f64>; 2]>) {
+    columns.clear();
+    columns.extend((0..jet.vars().len()).map(|i| {
+        let [p, w, _] = jet.velocity(i, com);
+        [p, w]
+    }));
+}
+
+/// The mass matrix at the evaluator's equilibrium: from the shared jets on the fast path,
+/// from forward-mode dual numbers on the reference path (an independent route).
+fn mass_at(
+    system: &System,
+    layout: &Layout,
+    evaluator: &mut Evaluator,
+    x: &[f64],
+) -> Result<DMatrix<f64>, AssemblyError> {
+    let reference = evaluator.path() == DerivativePath::Reference;
+    mass_from(system, layout, |b, columns| {
+        let body = &system.bodies[b];
+        if reference {
+            let jac = body.frame.reference_jacobian(x, &body.centre_of_mass);
+            columns.clear();
+            columns.extend(body.frame.var_list().iter().map(|&g| {
+                [
+                    jac.position.column(g).into_owned(),
+                    jac.omega_body.column(g).into_owned(),
+                ]
+            }));
+        } else {
+            jet_columns(evaluator.jet(b), &body.centre_of_mass, columns);
+        }
+    })
+}
+
+/// M from each massive body's velocity columns, given by `columns(body, out)` in the
+/// order of the body's frame coordinates.
+fn mass_from(
+    system: &System,
+    layout: &Layout,
+    mut columns: impl FnMut(usize, &mut Vec<[Vector3<f64>; 2]>),
+) -> Result<DMatrix<f64>, AssemblyError> {
     let nx = layout.variables.len();
     let mut m = DMatrix::zeros(nx, nx);
-    for body in &system.bodies {
+    let mut cols = Vec::new();
+    for (b, body) in system.bodies.iter().enumerate() {
         if body.mass == 0.0 && body.inertia.iter().all(|&v| v == 0.0) {
             continue;
         }
-        let jac = body.frame.jacobian(x, &body.centre_of_mass);
-        for g in body.frame.vars() {
-            if system.coords[g].kind == CoordKind::Float {
-                let moves =
-                    jac.position.column(g).norm() > 0.0 || jac.omega_body.column(g).norm() > 0.0;
-                if moves {
-                    return Err(AssemblyError::MassiveFloat {
-                        float: system.coords[g].name.clone(),
-                        body: body.name.clone(),
-                    });
-                }
+        columns(b, &mut cols);
+        let vars = body.frame.var_list();
+        for (&g, [p, w]) in vars.iter().zip(&cols) {
+            if system.coords[g].kind == CoordKind::Float && (p.norm() > 0.0 || w.norm() > 0.0) {
+                return Err(AssemblyError::MassiveFloat {
+                    float: system.coords[g].name.clone(),
+                    body: body.name.clone(),
+                });
             }
         }
-        let vars: Vec<usize> = body
-            .frame
-            .vars()
-            .into_iter()
-            .filter(|&g| system.coords[g].kind == CoordKind::Variable)
-            .collect();
-        for &gi in &vars {
-            let (pi, wi) = (jac.position.column(gi), jac.omega_body.column(gi));
-            for &gj in &vars {
-                let (pj, wj) = (jac.position.column(gj), jac.omega_body.column(gj));
-                let value = body.mass * pi.dot(&pj) + wi.dot(&(body.inertia * wj));
+        for (&gi, [pi, wi]) in vars.iter().zip(&cols) {
+            if system.coords[gi].kind != CoordKind::Variable {
+                continue;
+            }
+            for (&gj, [pj, wj]) in vars.iter().zip(&cols) {
+                if system.coords[gj].kind != CoordKind::Variable {
+                    continue;
+                }
+                let value = body.mass * pi.dot(pj) + wi.dot(&(body.inertia * wj));
                 m[(layout.position[gi], layout.position[gj])] += value;
             }
         }

@@ -183,3 +183,55 @@ fn every_bundled_case_file_runs() {
     }
     assert!(count >= 5, "found {count} case files");
 }
+
+#[test]
+fn bench_json_has_the_contract_shape() {
+    // `pendkit bench` reports times, which are not asserted; its shape is (issue 9):
+    // {"model", "stage", "phases": [{"name", "median_s", "min_s", "calls"}], "total_median_s"}
+    let (ok, stdout, stderr) = pendkit(&[
+        "bench", "pendulum", "--repeat", "3", "--json", "--noise", "x1", "--points", "4",
+    ]);
+    assert!(ok, "{stderr}");
+    let v: serde_json::Value = serde_json::from_str(&stdout).expect("valid JSON");
+    let keys: Vec<&str> = v.as_object().unwrap().keys().map(String::as_str).collect();
+    assert_eq!(keys.len(), 4, "{keys:?}");
+    assert_eq!(v["model"], "pendulum");
+    assert_eq!(v["stage"], "2", "stage 2 is the default");
+    let phases = v["phases"].as_array().unwrap();
+    let names: Vec<&str> = phases.iter().map(|p| p["name"].as_str().unwrap()).collect();
+    for expected in ["build", "equilibrium", "mass", "modes", "noise"] {
+        assert!(
+            names.contains(&expected),
+            "{expected} missing from {names:?}"
+        );
+    }
+    // one phase per element kind whose Hessians were evaluated (the pendulum's fibres
+    // bend: their beam is shared by the bending and extra-stretch kinds)
+    assert!(names.contains(&"hessian:wire-torsion"), "{names:?}");
+    assert!(
+        names.contains(&"hessian:wire-bending+wire-extra-stretch"),
+        "{names:?}"
+    );
+    let mut least_total = 0.0;
+    for p in phases {
+        assert_eq!(p.as_object().unwrap().len(), 4, "{p}");
+        let (median, min) = (
+            p["median_s"].as_f64().unwrap(),
+            p["min_s"].as_f64().unwrap(),
+        );
+        assert!(min >= 0.0 && min <= median, "{p}");
+        assert!(p["calls"].as_u64().unwrap() >= 1, "{p}");
+        if p["name"] != "noise" {
+            least_total += min;
+        }
+    }
+    let noise = phases.iter().find(|p| p["name"] == "noise").unwrap();
+    assert_eq!(noise["calls"], 4, "one call per frequency");
+    // every repetition's total is at least the sum of the phases' minima (noise excluded)
+    assert!(v["total_median_s"].as_f64().unwrap() >= least_total);
+    // and bad input is an error like everywhere else
+    let (ok, _, stderr) = pendkit(&["bench", "pendulum", "--stage", "0a", "--noise", "x1"]);
+    assert!(!ok && stderr.contains("stage 0b or later"), "{stderr}");
+    let (ok, _, stderr) = pendkit(&["bench", "pendulum", "--repeat", "0"]);
+    assert!(!ok && stderr.contains("--repeat"), "{stderr}");
+}

@@ -1,12 +1,16 @@
 //! The core element kinds of stage 0A: gravity, springs and wire stretch (DESIGN.md §3).
+//!
+//! Each has a fast derivative path shaped like its physics: gravity and wire stretch in
+//! closed form from the attachment points' jets, springs by the chain rule through the
+//! deflection Δ, whose derivatives come from the two frames' jets.
 
-use nalgebra::{Matrix6, Vector3, Vector6};
+use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
 use pendkit_geometry::{Frame, FrameMap};
-use pendkit_rotations::{Real, angles, c};
+use pendkit_rotations::{ANGLE_ENTRIES, Real, angle_derivatives, angles, c, rotation};
 
 use crate::{
-    Element, EnergyError, LocalFrames, Potential, Reference, Registration, SpringEnd, Stage,
-    TensionOff, Term,
+    Attached, Derivatives, Element, EnergyError, JetPoint, LocalFrames, OffForm, Potential,
+    Reference, Registration, SpringEnd, Stage, TensionOff, Term, add_curvature, add_jacobian,
 };
 
 /// Tag of gravity terms (lossless whatever multipliers the tag is given).
@@ -30,6 +34,30 @@ impl Potential for GravityEnergy {
     fn tension_off(&self, _x_eq: &[f64]) -> TensionOff<Self> {
         TensionOff::Vanishes
     }
+
+    /// m g times the height of the centre of mass: linear in the point, so its gradient and
+    /// Hessian are the weight times the point's first and second derivatives.
+    fn fast_derivatives(&self, at: &JetPoint, out: &mut Derivatives) -> bool {
+        let [frame] = at.frames else {
+            return false;
+        };
+        let (jet, a, n) = (frame.jet, &self.centre_of_mass, out.n);
+        out.values[0] = jet.point(a)[2] * self.weight;
+        for (i, &li) in frame.local.iter().enumerate() {
+            out.gradients[li] += jet.d_point(i, a)[2] * self.weight;
+        }
+        if out.hessian {
+            add_curvature(
+                frame,
+                Attached::Point(a),
+                &Vector3::new(0.0, 0.0, self.weight),
+                out.on,
+                n,
+            );
+        }
+        out.off_form = OffForm::Zero;
+        true
+    }
 }
 
 struct Gravity;
@@ -51,16 +79,17 @@ impl Element for Gravity {
             .map(|b| {
                 let body = &system.bodies[b];
                 let local = LocalFrames::new(system, &[b]);
-                Term::new(
+                let energy = GravityEnergy {
+                    frame: local.frames[0].clone(),
+                    centre_of_mass: body.centre_of_mass,
+                    weight: body.mass * system.gravity,
+                };
+                Term::on_frames(
                     format!("gravity {}", body.name),
                     "gravity",
                     GRAVITY_TAG,
-                    local.coords,
-                    GravityEnergy {
-                        frame: local.frames[0].clone(),
-                        centre_of_mass: body.centre_of_mass,
-                        weight: body.mass * system.gravity,
-                    },
+                    local,
+                    energy,
                 )
             })
             .collect())
@@ -101,6 +130,56 @@ impl Potential for WireStretchEnergy {
             ..self.clone()
         })
     }
+
+    /// Closed form on the chord c = p1 − p0 (l = |c|, u = c/l, s = l − l0): gradient
+    /// k s u and Hessian k [u uᵀ + (s/l)(I − u uᵀ)] with respect to c, carried to the
+    /// coordinates by the chain rule with the points' jets. With J the chord's Jacobian and
+    /// a = Jᵀu: H = k [(1 − s/l) a aᵀ + (s/l) JᵀJ] + k s Σ_k u_k ∇²c_k. The tension-off
+    /// wire, unstretched at this point, has s = 0: H_off = k a aᵀ, from the same pass.
+    fn fast_derivatives(&self, at: &JetPoint, out: &mut Derivatives) -> bool {
+        let [f0, f1] = at.frames else {
+            return false;
+        };
+        let n = out.n;
+        let [a0, a1] = &self.points;
+        let (p0, p1) = (f0.jet.point(a0), f1.jet.point(a1));
+        let chord = p1 - p0;
+        let l = chord.norm();
+        let u = chord / l;
+        let k = self.stiffness;
+        let s = l - self.unstretched_length;
+        out.values[0] = 0.5 * k * s * s;
+        let columns = out.scratch.zero_vectors(n);
+        add_jacobian(f1, Attached::Point(a1), 1.0, columns);
+        add_jacobian(f0, Attached::Point(a0), -1.0, columns);
+        // the rounding of s = l − l0 is that of lengths of size |p0| + |p1| + l0
+        let cancelled = k * (p0.norm() + p1.norm() + self.unstretched_length);
+        for (i, col) in columns.iter().enumerate() {
+            let a = col.dot(&u);
+            out.gradients[i] = k * s * a;
+            out.force_scales[i] = cancelled * a.abs();
+        }
+        if !out.hessian {
+            return true;
+        }
+        let ratio = s / l;
+        for i in 0..n {
+            let ai = columns[i].dot(&u);
+            for j in i..n {
+                let aj = columns[j].dot(&u);
+                let on = k * ((1.0 - ratio) * ai * aj + ratio * columns[i].dot(&columns[j]));
+                let off = k * ai * aj;
+                out.on[i * n + j] = on;
+                out.on[j * n + i] = on;
+                out.off[i * n + j] = off;
+                out.off[j * n + i] = off;
+            }
+        }
+        add_curvature(f1, Attached::Point(a1), &(u * (k * s)), out.on, n);
+        add_curvature(f0, Attached::Point(a0), &(u * (-k * s)), out.on, n);
+        out.off_form = OffForm::Written;
+        true
+    }
 }
 
 struct WireStretch;
@@ -128,17 +207,18 @@ impl Element for WireStretch {
                     });
                 }
                 let local = LocalFrames::new(system, &[wire.ends[0].body, wire.ends[1].body]);
-                Ok(Term::new(
+                let energy = WireStretchEnergy {
+                    frames: [local.frames[0].clone(), local.frames[1].clone()],
+                    points: [wire.ends[0].point, wire.ends[1].point],
+                    stiffness: wire.stiffness,
+                    unstretched_length: wire.unstretched_length,
+                };
+                Ok(Term::on_frames(
                     format!("wire-stretch {}", wire.name),
                     "wire-stretch",
                     wire.tags.stretch.clone(),
-                    local.coords,
-                    WireStretchEnergy {
-                        frames: [local.frames[0].clone(), local.frames[1].clone()],
-                        points: [wire.ends[0].point, wire.ends[1].point],
-                        stiffness: wire.stiffness,
-                        unstretched_length: wire.unstretched_length,
-                    },
+                    local,
+                    energy,
                 ))
             })
             .collect()
@@ -177,11 +257,9 @@ impl SpringEnergy {
             roll,
         )
     }
-}
 
-impl Potential for SpringEnergy {
-    fn energy<D: Real>(&self, x: &[D]) -> D {
-        let d = self.deflection(x);
+    /// ½ Δᵀ K Δ + fᵀ Δ for a deflection Δ.
+    fn energy_of<D: Real>(&self, d: &Vector6<D>) -> D {
         let mut e = c::<D>(0.0);
         for i in 0..6 {
             e += d[i] * self.preload[i];
@@ -192,6 +270,168 @@ impl Potential for SpringEnergy {
             }
         }
         e
+    }
+}
+
+impl SpringEnergy {
+    /// The fast path: Δ = (A0ᵀ(o1 − o0), angles(A0ᵀ A1)) with A_k = R_k R_att,k and o_k the
+    /// attachment points; its first derivatives over the local coordinates from the two
+    /// frames' jets by the product rule, its second derivatives pair by pair, and
+    /// H = ∇Δᵀ K ∇Δ + Σ_m (K Δ + f)_m ∇²Δ_m; the tension-off spring (no preload) differs only
+    /// in the weights K Δ of the curvature sum, so it comes from the same pass.
+    fn jets(&self, at: &JetPoint, out: &mut Derivatives) -> bool {
+        let [f0, f1] = at.frames else {
+            return false;
+        };
+        let n = out.n;
+        let turn: [Matrix3<f64>; 2] = std::array::from_fn(|k| {
+            let [y, p, r] = self.ends[k].angles;
+            rotation(y, p, r)
+        });
+        let frames = [f0, f1];
+        // attachment frames at the point
+        let attach = |k: usize| frames[k].jet.rotation() * turn[k];
+        let (a0, a1) = (attach(0), attach(1));
+        let o: [Vector3<f64>; 2] =
+            std::array::from_fn(|k| frames[k].jet.point(&self.ends[k].point));
+        let d = o[1] - o[0];
+        let r = a0.transpose() * d;
+        let m = a0.transpose() * a1;
+        let angle = angle_derivatives(&m);
+        let (ga, ha) = (&angle.gradient, &angle.hessian);
+        let [yaw, pitch, roll] = angles(&m);
+        let delta = Vector6::new(r[0], r[1], r[2], yaw, pitch, roll);
+        out.values[0] = self.energy_of(&delta);
+        // first derivatives over the local coordinates: of A0, A1 (matrices), of d, and
+        // from them of r and M, then of Δ
+        let scratch = &mut *out.scratch;
+        scratch.matrices.clear();
+        scratch.matrices.resize(4 * n, Matrix3::zeros());
+        scratch.vectors.clear();
+        scratch.vectors.resize(2 * n, Vector3::zeros());
+        let (da, dm) = scratch.matrices.split_at_mut(2 * n);
+        let (dd, dr) = scratch.vectors.split_at_mut(n);
+        for k in 0..2 {
+            let f = frames[k];
+            let sign = if k == 0 { -1.0 } else { 1.0 };
+            for (i, &l) in f.local.iter().enumerate() {
+                da[k * n + l] = f.jet.d_rotation(i) * turn[k];
+                dd[l] += f.jet.d_point(i, &self.ends[k].point) * sign;
+            }
+        }
+        for l in 0..n {
+            dr[l] = da[l].transpose() * d + a0.transpose() * dd[l];
+            dm[l] = da[l].transpose() * a1 + a0.transpose() * da[n + l];
+        }
+        // ∇Δ (6 × n): rows 0..3 from r, rows 3..6 through the angles; and K ∇Δ (6 × n),
+        // for the quadratic part of every Hessian entry
+        scratch.numbers.clear();
+        scratch.numbers.resize(12 * n, 0.0);
+        let (grad_delta, k_grad) = scratch.numbers.split_at_mut(6 * n);
+        for l in 0..n {
+            for q in 0..3 {
+                grad_delta[q * n + l] = dr[l][q];
+                grad_delta[(3 + q) * n + l] =
+                    (0..5).map(|e| ga[q][e] * dm[l][ANGLE_ENTRIES[e]]).sum();
+            }
+        }
+        for p in 0..6 {
+            for l in 0..n {
+                k_grad[p * n + l] = (0..6)
+                    .map(|q| self.stiffness[(p, q)] * grad_delta[q * n + l])
+                    .sum();
+            }
+        }
+        // the five entries of a matrix that the angles read
+        let read = |m: &Matrix3<f64>| ANGLE_ENTRIES.map(|e| m[e]);
+        let weights_on = self.stiffness * delta + self.preload;
+        let weights_off = self.stiffness * delta;
+        // rounding scale: Δ's translations are differences of points of size |o0| + |o1|
+        let size = o[0].norm() + o[1].norm();
+        for l in 0..n {
+            let mut g = 0.0;
+            let mut scale = 0.0;
+            for q in 0..6 {
+                let dq = grad_delta[q * n + l];
+                g += weights_on[q] * dq;
+                let spread = if q < 3 { size } else { 1.0 };
+                let load: f64 = self.preload[q].abs()
+                    + (0..6)
+                        .map(|p| self.stiffness[(q, p)].abs() * (delta[p].abs() + spread))
+                        .sum::<f64>();
+                scale += dq.abs() * load;
+            }
+            out.gradients[l] = g;
+            out.force_scales[l] = scale;
+        }
+        if !out.hessian {
+            return true;
+        }
+        for a in 0..n {
+            let at_a = [f0.position(a), f1.position(a)];
+            for b in a..n {
+                let at_b = [f0.position(b), f1.position(b)];
+                // second derivatives of r = A0ᵀ d and M = A0ᵀ A1 at (a, b), product rule
+                let mut ddr = Vector3::zeros();
+                let mut ddm = Matrix3::zeros();
+                if let (Some(i), Some(j)) = (at_a[0], at_b[0]) {
+                    let dda0 = f0.jet.dd_rotation(i, j) * turn[0];
+                    ddr += dda0.transpose() * d
+                        - a0.transpose() * f0.jet.dd_point(i, j, &self.ends[0].point);
+                    ddm += dda0.transpose() * a1;
+                }
+                if let (Some(i), Some(j)) = (at_a[1], at_b[1]) {
+                    ddr += a0.transpose() * f1.jet.dd_point(i, j, &self.ends[1].point);
+                    ddm += a0.transpose() * (f1.jet.dd_rotation(i, j) * turn[1]);
+                }
+                if at_a[0].is_some() {
+                    ddr += da[a].transpose() * dd[b];
+                    if at_b[1].is_some() {
+                        ddm += da[a].transpose() * da[n + b];
+                    }
+                }
+                if at_b[0].is_some() {
+                    ddr += da[b].transpose() * dd[a];
+                    if at_a[1].is_some() {
+                        ddm += da[b].transpose() * da[n + a];
+                    }
+                }
+                let mut dd_delta = [0.0; 6];
+                let (ma, mb) = (read(&dm[a]), read(&dm[b]));
+                for q in 0..3 {
+                    dd_delta[q] = ddr[q];
+                    let mut v = 0.0;
+                    for e in 0..5 {
+                        v += ga[q][e] * ddm[ANGLE_ENTRIES[e]];
+                        let row: f64 = (0..5).map(|f| ha[q][e][f] * mb[f]).sum();
+                        v += ma[e] * row;
+                    }
+                    dd_delta[3 + q] = v;
+                }
+                // ∇Δ_aᵀ K ∇Δ_b
+                let quadratic: f64 = (0..6)
+                    .map(|p| grad_delta[p * n + a] * k_grad[p * n + b])
+                    .sum();
+                let on = quadratic + (0..6).map(|q| weights_on[q] * dd_delta[q]).sum::<f64>();
+                let off = quadratic + (0..6).map(|q| weights_off[q] * dd_delta[q]).sum::<f64>();
+                out.on[a * n + b] = on;
+                out.on[b * n + a] = on;
+                out.off[a * n + b] = off;
+                out.off[b * n + a] = off;
+            }
+        }
+        out.off_form = OffForm::Written;
+        true
+    }
+}
+
+impl Potential for SpringEnergy {
+    fn energy<D: Real>(&self, x: &[D]) -> D {
+        self.energy_of(&self.deflection(x))
+    }
+
+    fn fast_derivatives(&self, at: &JetPoint, out: &mut Derivatives) -> bool {
+        self.jets(at, out)
     }
 
     /// Without preload only the spring's own deformation stores energy.
@@ -222,17 +462,18 @@ impl Element for SpringKind {
             .iter()
             .map(|s| {
                 let local = LocalFrames::new(system, &[s.ends[0].body, s.ends[1].body]);
-                Term::new(
+                let energy = SpringEnergy {
+                    frames: [local.frames[0].clone(), local.frames[1].clone()],
+                    ends: s.ends.clone(),
+                    stiffness: s.stiffness,
+                    preload: s.preload,
+                };
+                Term::on_frames(
                     format!("spring {}", s.name),
                     "spring",
                     s.tag.clone(),
-                    local.coords,
-                    SpringEnergy {
-                        frames: [local.frames[0].clone(), local.frames[1].clone()],
-                        ends: s.ends.clone(),
-                        stiffness: s.stiffness,
-                        preload: s.preload,
-                    },
+                    local,
+                    energy,
                 )
             })
             .collect())
@@ -242,3 +483,168 @@ impl Element for SpringKind {
 inventory::submit! { Registration(&Gravity) }
 inventory::submit! { Registration(&WireStretch) }
 inventory::submit! { Registration(&SpringKind) }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{Body, CoordKind, Coordinate, OffHessian, Spring, System};
+    use nalgebra::Matrix3;
+    use pendkit_expr::{Slot, parse};
+    use pendkit_geometry::PoseMap;
+
+    /// Two free bodies (12 coordinates) below a support driven by six parameters.
+    fn two_bodies() -> System {
+        let names: Vec<String> = ["s", "a", "b"]
+            .iter()
+            .flat_map(|b| ["x", "y", "z", "yaw", "pitch", "roll"].map(|c| format!("{c}{b}")))
+            .collect();
+        let coords = names
+            .iter()
+            .enumerate()
+            .map(|(i, n)| Coordinate {
+                name: n.clone(),
+                kind: if i < 6 {
+                    CoordKind::Parameter
+                } else {
+                    CoordKind::Variable
+                },
+                start: 0.0,
+                pinned: false,
+            })
+            .collect();
+        let slot = |s: &str| names.iter().position(|n| n == s).map(Slot::Var);
+        let body = |k: usize, name: &str, mass: f64| Body {
+            name: name.into(),
+            frame: FrameMap::root(PoseMap {
+                entries: std::array::from_fn(|m| {
+                    parse(&names[6 * k + m]).unwrap().compile(&slot).unwrap()
+                }),
+            }),
+            mass,
+            inertia: Matrix3::identity(),
+            centre_of_mass: Vector3::new(0.01, -0.02, 0.03),
+        };
+        System {
+            coords,
+            bodies: vec![
+                body(0, "support", 0.0),
+                body(1, "upper", 3.0),
+                body(2, "lower", 5.0),
+            ],
+            gravity: 9.81,
+            ..System::default()
+        }
+    }
+
+    /// Largest |fast − reference| relative to the reference's largest entry.
+    fn mismatch(fast: &[f64], reference: &[f64]) -> f64 {
+        let scale = reference.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        let diff = fast
+            .iter()
+            .zip(reference)
+            .fold(0.0f64, |a, (f, r)| a.max((f - r).abs()));
+        diff / scale.max(f64::MIN_POSITIVE)
+    }
+
+    fn check(term: &Term, x: &[f64]) {
+        let (fast, reference) = (term.derivatives(x), term.reference_derivatives(x));
+        assert!(
+            (fast.value - reference.value).abs() <= 1e-13 * reference.value.abs().max(1e-3),
+            "{}",
+            term.label
+        );
+        assert!(
+            mismatch(&fast.gradient, &reference.gradient) < 1e-12,
+            "{}",
+            term.label
+        );
+        let (on_fast, off_fast) = term.hessians(x, true);
+        let (on_ref, off_ref) = term.hessians(x, false);
+        assert!(
+            mismatch(&on_fast, &on_ref) < 1e-12,
+            "{}: {:e}",
+            term.label,
+            mismatch(&on_fast, &on_ref)
+        );
+        match (off_fast, off_ref) {
+            (OffHessian::Matrix(f), OffHessian::Matrix(r)) => {
+                assert!(
+                    mismatch(&f, &r) < 1e-12,
+                    "{} off: {:e}",
+                    term.label,
+                    mismatch(&f, &r)
+                )
+            }
+            (f, r) => assert_eq!(f, r, "{}", term.label),
+        }
+    }
+
+    #[test]
+    fn core_kinds_fast_paths_match_the_hyper_dual_reference() {
+        let mut system = two_bodies();
+        system.wires.push(crate::Wire::from_tension(
+            "w",
+            [
+                crate::WireEnd {
+                    body: 1,
+                    point: Vector3::new(0.1, 0.2, -0.05),
+                    direction: crate::EndDirection::Auto,
+                },
+                crate::WireEnd {
+                    body: 2,
+                    point: Vector3::new(-0.05, 0.15, 0.04),
+                    direction: crate::EndDirection::Auto,
+                },
+            ],
+            crate::WireSection::round(3e-4, 2e11, 8e10, 7800.0),
+            0.4,
+            50.0,
+            crate::WireTags {
+                stretch: "s".into(),
+                bending: "b".into(),
+                torsion: "t".into(),
+            },
+        ));
+        let mut stiffness =
+            Matrix6::from_fn(|i, j| if i == j { 1e3 * (i + 1) as f64 } else { 0.0 });
+        stiffness[(0, 4)] = 40.0;
+        stiffness[(4, 0)] = 40.0;
+        system.springs.push(Spring {
+            name: "blade".into(),
+            ends: [
+                SpringEnd {
+                    body: 0,
+                    point: Vector3::new(0.0, 0.1, -0.1),
+                    angles: [0.1, -0.2, 0.05],
+                },
+                SpringEnd {
+                    body: 1,
+                    point: Vector3::new(0.02, 0.0, 0.1),
+                    angles: [0.0, 0.3, 0.0],
+                },
+            ],
+            stiffness,
+            preload: Vector6::new(1.0, -2.0, 30.0, 0.1, 0.2, -0.3),
+            tag: "blade".into(),
+        });
+        // a configuration away from any equilibrium: bodies displaced and turned
+        let x: Vec<f64> = (0..18)
+            .map(|i| {
+                let base = [
+                    0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.01, -0.02, -0.3, 0.05, -0.03, 0.02, 0.03, 0.01,
+                    -0.75, -0.04, 0.06, 0.1,
+                ];
+                base[i] + 1e-3 * ((i * 7 % 5) as f64 - 2.0)
+            })
+            .collect();
+        let reference = Reference {
+            system: &system,
+            coords: &x,
+        };
+        for kind in [&Gravity as &dyn Element, &WireStretch, &SpringKind] {
+            for term in kind.terms(&reference).unwrap() {
+                check(&term, &x);
+            }
+        }
+    }
+}

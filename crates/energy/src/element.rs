@@ -6,6 +6,10 @@
 //! dropped by the linker (inventory issue #50), so the `pendkit` facade names every bundled
 //! element crate and a test asserts the registered set.
 
+use std::any::{Any, TypeId};
+use std::cell::RefCell;
+use std::sync::Arc;
+
 use nalgebra::Vector3;
 use pendkit_geometry::FrameMap;
 
@@ -75,6 +79,76 @@ pub trait Element: Sync {
     fn summary(&self) -> &'static str;
     /// The kind's terms for `reference.system`, built around `reference`.
     fn terms(&self, reference: &Reference) -> Result<Vec<Term>, EnergyError>;
+
+    /// The kind's terms, with energy bodies shared with other kinds built around the same
+    /// reference taken from (or put into) `shared`. Kinds that share nothing keep the
+    /// default, which is [`Element::terms`]; the assembly always calls this one.
+    fn terms_shared(
+        &self,
+        reference: &Reference,
+        _shared: &SharedBodies,
+    ) -> Result<Vec<Term>, EnergyError> {
+        self.terms(reference)
+    }
+}
+
+/// Energy bodies shared between the terms of different element kinds built around one
+/// reference configuration, such as the beam of a wire: its bending strain energy is a
+/// stage-1B term and its work against tension a stage-2 term of another kind, and both come
+/// from one evaluation of the beam. The assembly passes one `SharedBodies` to every kind
+/// it builds at a reference; a kind asks for a body by type and index (e.g. the wire's) and
+/// gets the one another kind already built, or builds it.
+#[derive(Default)]
+pub struct SharedBodies {
+    bodies: RefCell<Vec<SharedEntry>>,
+    frames: RefCell<Vec<Arc<LocalFrames>>>,
+}
+
+/// One shared body: its type, its index among bodies of that type, and the body.
+type SharedEntry = (TypeId, usize, Arc<dyn Any + Send + Sync>);
+
+impl SharedBodies {
+    /// An empty collection.
+    pub fn new() -> Self {
+        SharedBodies::default()
+    }
+
+    /// The frames of `bodies` of `system` over one local vector, shared by every term on
+    /// the same bodies (a wire's torsion and beam).
+    pub fn frames(&self, system: &System, bodies: &[BodyId]) -> Arc<LocalFrames> {
+        let found = self
+            .frames
+            .borrow()
+            .iter()
+            .find(|f| f.bodies == bodies)
+            .cloned();
+        found.unwrap_or_else(|| {
+            let frames = Arc::new(LocalFrames::new(system, bodies));
+            self.frames.borrow_mut().push(frames.clone());
+            frames
+        })
+    }
+
+    /// The body of type `T` with index `index`, built by `make` if nobody has yet.
+    pub fn get_or_try_insert<T: Any + Send + Sync, E>(
+        &self,
+        index: usize,
+        make: impl FnOnce() -> Result<T, E>,
+    ) -> Result<Arc<T>, E> {
+        let key = TypeId::of::<T>();
+        let found = self
+            .bodies
+            .borrow()
+            .iter()
+            .find(|(t, i, _)| *t == key && *i == index)
+            .map(|(_, _, body)| body.clone());
+        if let Some(body) = found.and_then(|b| b.downcast::<T>().ok()) {
+            return Ok(body);
+        }
+        let body = Arc::new(make()?);
+        self.bodies.borrow_mut().push((key, index, body.clone()));
+        Ok(body)
+    }
 }
 
 /// A registry entry; submit one per element kind with `inventory::submit!`.
@@ -99,29 +173,38 @@ pub fn find_kind(name: &str) -> Option<&'static dyn Element> {
 
 /// Frames of several bodies over one shared local coordinate vector: the union of the
 /// coordinates the bodies depend on, and each frame renumbered into it.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Default)]
 pub struct LocalFrames {
     /// Global indices of the local coordinates, ascending.
     pub coords: Vec<usize>,
     /// One frame per requested body, reading the local vector.
     pub frames: Vec<FrameMap>,
+    /// The requested bodies, in order. The local frame of body `k` reads its coordinates
+    /// at `frames[k].var_list()`, in the order of the body's own frame's coordinates: that
+    /// is how a jet of the body's frame over the global coordinates maps into the local
+    /// vector.
+    pub bodies: Vec<BodyId>,
 }
 
 impl LocalFrames {
     /// Collects the frames of `bodies` of `system`.
     pub fn new(system: &System, bodies: &[BodyId]) -> Self {
-        let coords: Vec<usize> = bodies
+        let mut coords: Vec<usize> = bodies
             .iter()
-            .flat_map(|&b| system.bodies[b].frame.vars())
-            .collect::<std::collections::BTreeSet<_>>()
-            .into_iter()
+            .flat_map(|&b| system.bodies[b].frame.var_list().iter().copied())
             .collect();
+        coords.sort_unstable();
+        coords.dedup();
         // every variable of every frame is in `coords` by construction
         let local = |g: usize| coords.binary_search(&g).unwrap_or(0);
         let frames = bodies
             .iter()
             .map(|&b| system.bodies[b].frame.remap(&local))
             .collect();
-        LocalFrames { coords, frames }
+        LocalFrames {
+            coords,
+            frames,
+            bodies: bodies.to_vec(),
+        }
     }
 }

@@ -1,23 +1,33 @@
 //! Potential-energy terms of bodies, wires and springs, generic over the dual-number
-//! scalar; the `Element` trait and the link-time registry of element kinds; and the numeric
-//! description of a model (`System`) that elements read.
+//! scalar, with their derivatives (the hyper-dual reference path and the optional fast path
+//! from shared frame jets); the `Element` trait and the link-time registry of element
+//! kinds; and the numeric description of a model (`System`) that elements read.
 
 mod core;
 mod damping;
 mod element;
 mod extra;
+mod fast;
 mod stage;
 mod system;
 mod term;
 
 pub use crate::core::{GRAVITY_TAG, GravityEnergy, SpringEnergy, WireStretchEnergy};
 pub use damping::{Damping, TagDamping};
-pub use element::{Element, LocalFrames, Reference, Registration, find_kind, registry};
+pub use element::{
+    Element, LocalFrames, Reference, Registration, SharedBodies, find_kind, registry,
+};
 pub use extra::{CONSTRAINT_TAG, constraint_terms, extra_terms};
+pub use fast::{
+    Attached, Derivatives, FrameAt, JetPoint, MAX_FRAMES, MAX_PARTS, OffForm, Scratch,
+    add_curvature, add_jacobian, hyper_dual_over_frames, on_stack,
+};
 pub use pendkit_rotations::Real;
 pub use stage::{Stage, UnknownStage};
 pub use system::*;
-pub use term::{LocalDerivatives, Potential, TensionOff, Term};
+pub use term::{
+    LocalDerivatives, OffHessian, PartOff, Potential, SharedPotential, TensionOff, Term,
+};
 
 /// Re-exported so plug-in crates can register without depending on `inventory` directly.
 pub use inventory;

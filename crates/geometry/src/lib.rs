@@ -1,17 +1,25 @@
 //! Frames of rigid bodies as functions of the model's coordinates: where a body-fixed point
-//! is, how a body is turned, how one frame sits relative to another, and the velocity
+//! is, how a body is turned, how one frame sits relative to another, the frames' first and
+//! second derivatives (jets) that energy derivatives are built from, and the velocity
 //! Jacobians that build the mass matrix and linearised sensors.
 //!
 //! A body's pose is six expressions of the coordinates (x, y, z in m; yaw, pitch, roll in
 //! rad) relative to a parent frame (the lab for a free body), so constrained bodies and
 //! bodies that ride on other bodies (blade tips) are both expressed the same way.
 
+mod jet;
+
 use std::collections::BTreeSet;
+use std::sync::Arc;
 
 use nalgebra::{Matrix3, Matrix3xX, Vector3};
 use num_dual::Dual64;
 use pendkit_expr::Compiled;
-use pendkit_rotations::{Real, c, rotation, vee};
+use pendkit_rotations::{
+    Real, c, mul, mul_const, mul_const_vec, mul_vec, rotation, tr_mul, tr_mul_vec, vee,
+};
+
+pub use jet::{FrameJet, JetOrder};
 
 /// A frame in space: origin (m) and rotation from frame axes to lab axes.
 #[derive(Clone, Debug, PartialEq)]
@@ -44,35 +52,34 @@ impl<D: Real> Frame<D> {
         self.origin + self.direction(p)
     }
 
-    /// Lab components of a vector given in frame coordinates: R v.
+    /// Lab components of a vector given in frame coordinates: R v (the constant vector is
+    /// not lifted to the scalar type).
     pub fn direction(&self, v: &Vector3<f64>) -> Vector3<D> {
-        self.rotation * v.map(c::<D>)
+        mul_const_vec(&self.rotation, v)
     }
 
     /// The frame `local` (given relative to `self`) expressed in the lab.
     pub fn compose(&self, local: &Frame<D>) -> Frame<D> {
         Frame {
-            origin: self.origin + self.rotation * local.origin,
-            rotation: self.rotation * local.rotation,
+            origin: self.origin + mul_vec(&self.rotation, &local.origin),
+            rotation: mul(&self.rotation, &local.rotation),
         }
     }
 
     /// `other` seen from `self`: the pose that composes with `self` to give `other`.
     pub fn relative(&self, other: &Frame<D>) -> Frame<D> {
-        let rt = self.rotation.transpose();
         Frame {
-            origin: rt * (other.origin - self.origin),
-            rotation: rt * other.rotation,
+            origin: tr_mul_vec(&self.rotation, &(other.origin - self.origin)),
+            rotation: tr_mul(&self.rotation, &other.rotation),
         }
     }
 
     /// The same frame turned by fixed attachment angles (yaw, pitch, roll in rad) about its
     /// own axes.
     pub fn turned(&self, angles: &[f64; 3]) -> Frame<D> {
-        let r = rotation(c::<D>(angles[0]), c(angles[1]), c(angles[2]));
         Frame {
             origin: self.origin,
-            rotation: self.rotation * r,
+            rotation: mul_const(&self.rotation, &rotation(angles[0], angles[1], angles[2])),
         }
     }
 }
@@ -85,17 +92,18 @@ pub struct PoseMap {
     pub entries: [Compiled; 6],
 }
 
-impl PoseMap {
-    fn eval<D: Real>(&self, x: &[D]) -> Frame<D> {
-        Frame::from_pose(std::array::from_fn(|i| self.entries[i].eval(x)))
-    }
-}
-
 /// How to compute a body's frame from the coordinates: a chain of poses from the lab down
 /// to the body (a free body has a chain of one).
+///
+/// The poses are compiled once and shared by every copy (cloning is cheap); a copy
+/// renumbered for a term's local coordinate vector ([`FrameMap::remap`]) differs only in
+/// where it reads each of its coordinates.
 #[derive(Clone, Debug)]
 pub struct FrameMap {
-    chain: Vec<PoseMap>,
+    shape: Arc<jet::Shape>,
+    /// Where in the coordinate vector each of the frame's coordinates is read, in the order
+    /// of `shape.vars` (the global indices themselves, or a term's local indices).
+    index: Arc<[usize]>,
 }
 
 /// Velocity Jacobians of a body-fixed point, with respect to every coordinate (columns).
@@ -110,50 +118,93 @@ pub struct PointJacobian {
 }
 
 impl FrameMap {
-    /// A frame posed directly in the lab.
-    pub fn root(pose: PoseMap) -> Self {
-        FrameMap { chain: vec![pose] }
+    fn from_chain(chain: Vec<PoseMap>) -> Self {
+        let shape = jet::Shape::new(chain);
+        FrameMap {
+            index: shape.vars.clone().into(),
+            shape: Arc::new(shape),
+        }
     }
 
-    /// A frame posed relative to `self` (a body riding on another body).
+    /// A frame posed directly in the lab.
+    pub fn root(pose: PoseMap) -> Self {
+        FrameMap::from_chain(vec![pose])
+    }
+
+    /// A frame posed relative to `self` (a body riding on another body); `pose` reads the
+    /// same coordinate vector as `self`.
     pub fn child(&self, pose: PoseMap) -> Self {
-        let mut chain = self.chain.clone();
+        let mut chain = self.poses();
         chain.push(pose);
-        FrameMap { chain }
+        FrameMap::from_chain(chain)
+    }
+
+    /// The poses reading the coordinate vector this map reads.
+    fn poses(&self) -> Vec<PoseMap> {
+        let renumbered = self.index.as_ref() != self.shape.vars.as_slice();
+        let at = |g: usize| {
+            self.shape
+                .vars
+                .binary_search(&g)
+                .map_or(g, |i| self.index[i])
+        };
+        self.shape
+            .chain
+            .iter()
+            .map(|p| {
+                if renumbered {
+                    PoseMap {
+                        entries: std::array::from_fn(|i| p.entries[i].remap(&at)),
+                    }
+                } else {
+                    p.clone()
+                }
+            })
+            .collect()
     }
 
     /// Evaluates the frame at coordinates `x` (any scalar: values or dual numbers).
     pub fn eval<D: Real>(&self, x: &[D]) -> Frame<D> {
-        let mut frames = self.chain.iter().map(|p| p.eval(x));
+        let mut frames = self
+            .shape
+            .poses
+            .iter()
+            .map(|p| Frame::from_pose(p.eval(x, &self.index)));
         let first = frames.next().unwrap_or_else(Frame::identity);
         frames.fold(first, |parent, local| parent.compose(&local))
     }
 
     /// Indices of the coordinates this frame depends on.
     pub fn vars(&self) -> BTreeSet<usize> {
-        self.chain
-            .iter()
-            .flat_map(|p| p.entries.iter().flat_map(|e| e.vars()))
-            .collect()
+        self.index.iter().copied().collect()
+    }
+
+    /// Indices of the coordinates this frame depends on, in the order of the derivatives in
+    /// [`FrameJet`] (ascending, for the global map and for order-keeping renumberings).
+    pub fn var_list(&self) -> &[usize] {
+        &self.index
     }
 
     /// The same map with coordinates renumbered (global index -> a term's local index).
     pub fn remap(&self, map: &dyn Fn(usize) -> usize) -> FrameMap {
         FrameMap {
-            chain: self
-                .chain
-                .iter()
-                .map(|p| PoseMap {
-                    entries: std::array::from_fn(|i| p.entries[i].remap(map)),
-                })
-                .collect(),
+            shape: self.shape.clone(),
+            index: self.index.iter().map(|&i| map(i)).collect(),
         }
     }
 
     /// Jacobians of the body-fixed point `p` (m, frame coordinates) and of the frame's
-    /// angular velocity, at coordinates `x`, one forward-mode derivative per coordinate the
-    /// frame depends on.
+    /// angular velocity, at coordinates `x`, from the frame's first-order jet.
     pub fn jacobian(&self, x: &[f64], p: &Vector3<f64>) -> PointJacobian {
+        let mut jet = FrameJet::new();
+        self.jet(x, JetOrder::First, &mut jet);
+        jet.jacobian(x.len(), p)
+    }
+
+    /// [`FrameMap::jacobian`] computed independently of the jets: one forward-mode dual
+    /// evaluation of the pose expressions per coordinate the frame depends on (the
+    /// reference the jets are checked against).
+    pub fn reference_jacobian(&self, x: &[f64], p: &Vector3<f64>) -> PointJacobian {
         let n = x.len();
         let mut jac = PointJacobian {
             position: Matrix3xX::zeros(n),
@@ -161,17 +212,47 @@ impl FrameMap {
             omega_space: Matrix3xX::zeros(n),
         };
         let mut xd: Vec<Dual64> = x.iter().map(|&v| Dual64::from(v)).collect();
-        for j in self.vars() {
+        for &j in self.var_list() {
             xd[j].eps = 1.0;
             let f = self.eval(&xd);
             xd[j].eps = 0.0;
             let r = f.rotation.map(|e| e.re);
             let dr = f.rotation.map(|e| e.eps);
-            let dpos = f.point(p).map(|e| e.eps);
-            jac.position.set_column(j, &dpos);
+            jac.position.set_column(j, &f.point(p).map(|e| e.eps));
             // ω̂_B = Rᵀ ∂R/∂x_j and ω̂_S = ∂R/∂x_j Rᵀ per unit rate of coordinate j.
             jac.omega_body.set_column(j, &vee(&(r.transpose() * dr)));
             jac.omega_space.set_column(j, &vee(&(dr * r.transpose())));
+        }
+        jac
+    }
+}
+
+impl FrameJet {
+    /// Velocity of the body-fixed point `a` (m, frame coordinates) and angular velocity of
+    /// the frame per unit rate of coordinate `vars()[i]`: (∂p/∂q_i, ω_B, ω_S), with
+    /// ω̂_B = Rᵀ ∂R/∂q_i and ω̂_S = ∂R/∂q_i Rᵀ.
+    pub fn velocity(&self, i: usize, a: &Vector3<f64>) -> [Vector3<f64>; 3] {
+        let (r, dr) = (self.rotation(), self.d_rotation(i));
+        [
+            self.d_point(i, a),
+            vee(&(r.transpose() * dr)),
+            vee(&(dr * r.transpose())),
+        ]
+    }
+
+    /// The velocity Jacobians of the body-fixed point `a` over all `n` coordinates of the
+    /// vector the jet was evaluated at (zero columns for coordinates the frame ignores).
+    pub fn jacobian(&self, n: usize, a: &Vector3<f64>) -> PointJacobian {
+        let mut jac = PointJacobian {
+            position: Matrix3xX::zeros(n),
+            omega_body: Matrix3xX::zeros(n),
+            omega_space: Matrix3xX::zeros(n),
+        };
+        for (i, &g) in self.vars().iter().enumerate() {
+            let [dp, wb, ws] = self.velocity(i, a);
+            jac.position.set_column(g, &dp);
+            jac.omega_body.set_column(g, &wb);
+            jac.omega_space.set_column(g, &ws);
         }
         jac
     }
@@ -241,8 +322,15 @@ mod tests {
         }
         // the rotational columns reproduce the analytic rate matrices
         let omega_b = pendkit_rotations::body_rate_matrix(x[3], x[4], x[5]);
+        let omega_s = pendkit_rotations::space_rate_matrix(x[3], x[4], x[5]);
         for k in 0..3 {
             assert!((jac.omega_body.column(3 + k) - omega_b.column(k)).norm() < 1e-14);
+            assert!((jac.omega_space.column(3 + k) - omega_s.column(k)).norm() < 1e-14);
         }
+        // and the jet route agrees with the dual-number one
+        let dual = map.reference_jacobian(&x, &p);
+        assert!((dual.position - &jac.position).norm() < 1e-15);
+        assert!((dual.omega_body - &jac.omega_body).norm() < 1e-15);
+        assert!((dual.omega_space - &jac.omega_space).norm() < 1e-15);
     }
 }

@@ -36,6 +36,118 @@ pub fn rotation<D: Real>(yaw: D, pitch: D, roll: D) -> Matrix3<D> {
     )
 }
 
+/// Value and angle derivatives of R(yaw, pitch, roll) (f64): the first derivatives
+/// ∂R/∂θ_m and the second derivatives ∂²R/∂θ_m∂θ_n for θ = (yaw, pitch, roll), the
+/// pieces a frame's coordinate derivatives are assembled from by the chain rule.
+#[derive(Clone, Copy, Debug)]
+pub struct RotationDerivatives {
+    /// R itself.
+    pub value: Matrix3<f64>,
+    /// ∂R/∂θ_m, m = yaw, pitch, roll (per rad).
+    pub first: [Matrix3<f64>; 3],
+    /// ∂²R/∂θ_m∂θ_n (per rad²), indexed `[m][n]` (symmetric).
+    pub second: [[Matrix3<f64>; 3]; 3],
+}
+
+/// R as a multilinear form in (1, cos θ, sin θ) of each angle: every entry of
+/// R = Rz(yaw) Ry(pitch) Rx(roll) is a sum of products of one of these per angle. Passing
+/// (0, −sin θ, cos θ) for an angle (the derivatives of the three) differentiates R with
+/// respect to it, and (0, −cos θ, −sin θ) twice.
+fn multilinear(y: [f64; 3], p: [f64; 3], r: [f64; 3]) -> Matrix3<f64> {
+    Matrix3::new(
+        y[1] * p[1] * r[0],
+        y[1] * p[2] * r[2] - y[2] * p[0] * r[1],
+        y[1] * p[2] * r[1] + y[2] * p[0] * r[2],
+        y[2] * p[1] * r[0],
+        y[2] * p[2] * r[2] + y[1] * p[0] * r[1],
+        y[2] * p[2] * r[1] - y[1] * p[0] * r[2],
+        -y[0] * p[2] * r[0],
+        y[0] * p[1] * r[2],
+        y[0] * p[1] * r[1],
+    )
+}
+
+/// R = Rz(yaw) Ry(pitch) Rx(roll) and its angle derivatives (first only unless `second`;
+/// the second derivatives are zero then), angles in rad.
+pub fn rotation_derivatives(yaw: f64, pitch: f64, roll: f64, second: bool) -> RotationDerivatives {
+    // per angle: (1, c, s), its derivative and its second derivative
+    let trig = |a: f64| {
+        let (s, c) = a.sin_cos();
+        [[1.0, c, s], [0.0, -s, c], [0.0, -c, -s]]
+    };
+    let t = [trig(yaw), trig(pitch), trig(roll)];
+    // R differentiated `o[k]` times with respect to angle k
+    let form = |o: [usize; 3]| multilinear(t[0][o[0]], t[1][o[1]], t[2][o[2]]);
+    let unit = |m: usize| std::array::from_fn(|k| usize::from(k == m));
+    let first = std::array::from_fn(|m| form(unit(m)));
+    let mut out = RotationDerivatives {
+        value: form([0, 0, 0]),
+        first,
+        second: [[Matrix3::zeros(); 3]; 3],
+    };
+    if second {
+        for m in 0..3 {
+            for n in m..3 {
+                let mut o = unit(m);
+                o[n] += 1;
+                let d = form(o);
+                out.second[m][n] = d;
+                out.second[n][m] = d;
+            }
+        }
+    }
+    out
+}
+
+/// A · B for 3×3 matrices, written out: nalgebra's generic product is not inlined for dual
+/// numbers, which made it the largest cost of Hessian evaluation.
+#[inline]
+pub fn mul<D: Real>(a: &Matrix3<D>, b: &Matrix3<D>) -> Matrix3<D> {
+    Matrix3::from_fn(|i, j| a[(i, 0)] * b[(0, j)] + a[(i, 1)] * b[(1, j)] + a[(i, 2)] * b[(2, j)])
+}
+
+/// Aᵀ · B for 3×3 matrices, written out.
+#[inline]
+pub fn tr_mul<D: Real>(a: &Matrix3<D>, b: &Matrix3<D>) -> Matrix3<D> {
+    Matrix3::from_fn(|i, j| a[(0, i)] * b[(0, j)] + a[(1, i)] * b[(1, j)] + a[(2, i)] * b[(2, j)])
+}
+
+/// A · Bᵀ for 3×3 matrices, with B constant (f64): no derivative is carried through B.
+#[inline]
+pub fn mul_tr_const<D: Real>(a: &Matrix3<D>, b: &Matrix3<f64>) -> Matrix3<D> {
+    Matrix3::from_fn(|i, j| a[(i, 0)] * b[(j, 0)] + a[(i, 1)] * b[(j, 1)] + a[(i, 2)] * b[(j, 2)])
+}
+
+/// A · B for 3×3 matrices, with B constant (f64).
+#[inline]
+pub fn mul_const<D: Real>(a: &Matrix3<D>, b: &Matrix3<f64>) -> Matrix3<D> {
+    Matrix3::from_fn(|i, j| a[(i, 0)] * b[(0, j)] + a[(i, 1)] * b[(1, j)] + a[(i, 2)] * b[(2, j)])
+}
+
+/// A · v, written out.
+#[inline]
+pub fn mul_vec<D: Real>(a: &Matrix3<D>, v: &Vector3<D>) -> Vector3<D> {
+    Vector3::from_fn(|i, _| a[(i, 0)] * v[0] + a[(i, 1)] * v[1] + a[(i, 2)] * v[2])
+}
+
+/// Aᵀ · v, written out.
+#[inline]
+pub fn tr_mul_vec<D: Real>(a: &Matrix3<D>, v: &Vector3<D>) -> Vector3<D> {
+    Vector3::from_fn(|i, _| a[(0, i)] * v[0] + a[(1, i)] * v[1] + a[(2, i)] * v[2])
+}
+
+/// A · v with a constant (f64) vector v: the vector is not lifted to the scalar type.
+#[inline]
+pub fn mul_const_vec<D: Real>(a: &Matrix3<D>, v: &Vector3<f64>) -> Vector3<D> {
+    Vector3::from_fn(|i, _| a[(i, 0)] * v[0] + a[(i, 1)] * v[1] + a[(i, 2)] * v[2])
+}
+
+/// u · v, written out.
+#[inline]
+pub fn dot<D: Real>(u: &Vector3<D>, v: &Vector3<D>) -> D {
+    u[0] * v[0] + u[1] * v[1] + u[2] * v[2]
+}
+
 /// Body-frame angular velocity map Ω_B: ω_B = Ω_B · (d yaw, d pitch, d roll)/dt, in rad/s per
 /// rad/s. Derived from ω̂_B = Rᵀ Ṙ (tests check it against a numerical derivative of R).
 pub fn body_rate_matrix<D: Real>(_yaw: D, pitch: D, roll: D) -> Matrix3<D> {
@@ -65,7 +177,71 @@ pub fn angles<D: Real>(r: &Matrix3<D>) -> [D; 3] {
     [yaw, pitch, roll]
 }
 
-/// The vector of a skew-symmetric matrix: vee([ω]×) = ω.
+/// The entries of a rotation matrix that [`angles`] reads: (0,0), (1,0), (2,0), (2,1), (2,2).
+pub const ANGLE_ENTRIES: [(usize, usize); 5] = [(0, 0), (1, 0), (2, 0), (2, 1), (2, 2)];
+
+/// First and second derivatives of (yaw, pitch, roll) = [`angles`]`(M)` with respect to the
+/// five entries of M it reads ([`ANGLE_ENTRIES`]), in closed form.
+#[derive(Clone, Copy, Debug)]
+pub struct AngleDerivatives {
+    /// `gradient[k][e]` = ∂angle_k/∂M_e.
+    pub gradient: [[f64; 5]; 3],
+    /// `hessian[k][e][f]` = ∂²angle_k/∂M_e∂M_f.
+    pub hessian: [[[f64; 5]; 5]; 3],
+}
+
+/// Gradient (∂/∂y, ∂/∂x) and Hessian (yy, xx, xy) of atan2(y, x).
+fn atan2_derivatives(y: f64, x: f64) -> ([f64; 2], [f64; 3]) {
+    let r2 = x * x + y * y;
+    let r4 = r2 * r2;
+    (
+        [x / r2, -y / r2],
+        [-2.0 * x * y / r4, 2.0 * x * y / r4, (y * y - x * x) / r4],
+    )
+}
+
+/// The derivatives of [`angles`] at M (|pitch| < π/2): yaw = atan2(M10, M00),
+/// pitch = atan2(−M20, b) with b = sqrt(M00² + M10²), roll = atan2(M21, M22).
+pub fn angle_derivatives(m: &Matrix3<f64>) -> AngleDerivatives {
+    let mut d = AngleDerivatives {
+        gradient: [[0.0; 5]; 3],
+        hessian: [[[0.0; 5]; 5]; 3],
+    };
+    let (m00, m10, m20, m21, m22) = (m[(0, 0)], m[(1, 0)], m[(2, 0)], m[(2, 1)], m[(2, 2)]);
+    // yaw and roll: atan2 of two entries each (entry indices of y and x)
+    for (k, (y, x), (ey, ex)) in [(0, (m10, m00), (1, 0)), (2, (m21, m22), (3, 4))] {
+        let ([gy, gx], [hyy, hxx, hxy]) = atan2_derivatives(y, x);
+        d.gradient[k][ey] = gy;
+        d.gradient[k][ex] = gx;
+        d.hessian[k][ey][ey] = hyy;
+        d.hessian[k][ex][ex] = hxx;
+        d.hessian[k][ey][ex] = hxy;
+        d.hessian[k][ex][ey] = hxy;
+    }
+    // pitch = atan2(a, b), a = −M20, b = sqrt(M00² + M10²)
+    let b = (m00 * m00 + m10 * m10).sqrt();
+    let ([pa, pb], [paa, pbb, pab]) = atan2_derivatives(-m20, b);
+    let db = [m00 / b, m10 / b];
+    let b3 = b * b * b;
+    let ddb = [
+        [m10 * m10 / b3, -m00 * m10 / b3],
+        [-m00 * m10 / b3, m00 * m00 / b3],
+    ];
+    for e in 0..2 {
+        d.gradient[1][e] = pb * db[e];
+        for f in 0..2 {
+            d.hessian[1][e][f] = pbb * db[e] * db[f] + pb * ddb[e][f];
+        }
+        // a = −M20 (entry 2): ∂a/∂M20 = −1
+        d.hessian[1][2][e] = -pab * db[e];
+        d.hessian[1][e][2] = -pab * db[e];
+    }
+    d.gradient[1][2] = -pa;
+    d.hessian[1][2][2] = paa;
+    d
+}
+
+/// The vector of a skew-symmetric matrix: vee(\[ω\]×) = ω.
 pub fn vee<D: Real>(m: &Matrix3<D>) -> Vector3<D> {
     let half = 0.5;
     Vector3::new(
@@ -155,6 +331,68 @@ mod tests {
             prop_assert!((pitch - eps * b).abs() < 1e-13);
             prop_assert!((roll - eps * cc).abs() < 1e-13);
         }
+    }
+
+    #[test]
+    fn rotation_derivatives_match_hyper_duals() {
+        // every first and second angle derivative against a hyper-dual evaluation of R
+        use num_dual::HyperDual64;
+        let angles = [0.3, -0.4, 0.7];
+        let d = rotation_derivatives(angles[0], angles[1], angles[2], true);
+        let f = rotation_derivatives(angles[0], angles[1], angles[2], false);
+        assert_eq!(d.first, f.first);
+        assert!(max_abs(&(d.value - rotation(angles[0], angles[1], angles[2]))) < 1e-15);
+        for m in 0..3 {
+            for n in 0..3 {
+                let a: [HyperDual64; 3] = std::array::from_fn(|k| {
+                    let e1 = if k == m { 1.0 } else { 0.0 };
+                    let e2 = if k == n { 1.0 } else { 0.0 };
+                    HyperDual64::new(angles[k], e1, e2, 0.0)
+                });
+                let r = rotation(a[0], a[1], a[2]);
+                assert!(max_abs(&(r.map(|e| e.eps1) - d.first[m])) < 1e-15);
+                assert!(max_abs(&(r.map(|e| e.eps1eps2) - d.second[m][n])) < 1e-15);
+            }
+        }
+    }
+
+    #[test]
+    fn angle_derivatives_match_hyper_duals() {
+        // the closed form against hyper-dual evaluation of `angles` itself, on a rotation
+        // times a general matrix (off the rotation group, as the chain rule needs)
+        use num_dual::HyperDual64;
+        let m =
+            rotation(0.4, -0.3, 0.9) * Matrix3::new(1.1, 0.1, -0.2, 0.05, 0.9, 0.3, -0.1, 0.2, 1.2);
+        let d = angle_derivatives(&m);
+        for e in 0..5 {
+            for f in 0..5 {
+                let mut md = m.map(HyperDual64::from_re);
+                md[ANGLE_ENTRIES[e]].eps1 = 1.0;
+                md[ANGLE_ENTRIES[f]].eps2 = 1.0;
+                for (k, a) in angles(&md).iter().enumerate() {
+                    assert!((a.eps1 - d.gradient[k][e]).abs() < 1e-14, "{k} {e}");
+                    assert!(
+                        (a.eps1eps2 - d.hessian[k][e][f]).abs() < 1e-13,
+                        "{k} {e} {f}"
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn written_out_products_match_nalgebra() {
+        let a = rotation(0.1, 0.2, 0.3) * 1.5;
+        let b = rotation(-0.7, 0.4, 1.1) + Matrix3::identity();
+        let v = Vector3::new(0.3, -1.0, 2.0);
+        assert!(max_abs(&(mul(&a, &b) - a * b)) < 1e-15);
+        assert!(max_abs(&(tr_mul(&a, &b) - a.transpose() * b)) < 1e-15);
+        assert!(max_abs(&(mul_tr_const(&a, &b) - a * b.transpose())) < 1e-15);
+        assert!(max_abs(&(mul_const(&a, &b) - a * b)) < 1e-15);
+        assert!((mul_vec(&a, &v) - a * v).norm() < 1e-15);
+        assert!((mul_const_vec(&a, &v) - a * v).norm() < 1e-15);
+        assert!((tr_mul_vec(&a, &v) - a.transpose() * v).norm() < 1e-15);
+        assert!((dot(&v, &v) - v.norm_squared()).abs() < 1e-15);
     }
 
     #[test]

@@ -3,28 +3,13 @@
 //! from its chord. It is pure tension work, so it is lossless (it vanishes with the
 //! tension off) and carries the wire's stretch tag. The beam itself is the bending crate's.
 
-use pendkit_element_bending::WireBeam;
+use pendkit_element_bending::{EXTRA_STRETCH_PART, beam_terms};
 use pendkit_energy::{
-    Element, EnergyError, Potential, Reference, Registration, Stage, TensionOff, Term, inventory,
+    Element, EnergyError, Reference, Registration, SharedBodies, Stage, Term, inventory,
 };
-use pendkit_rotations::Real;
 
-/// U − U_b of one wire.
-#[derive(Clone, Debug)]
-struct ExtraStretchEnergy(WireBeam);
-
-impl Potential for ExtraStretchEnergy {
-    fn energy<D: Real>(&self, x: &[D]) -> D {
-        let e = self.0.energy(x);
-        e.total - e.bending
-    }
-
-    fn tension_off(&self, _x_eq: &[f64]) -> TensionOff<Self> {
-        TensionOff::Vanishes
-    }
-}
-
-/// The wire-extra-stretch element kind (stage 2).
+/// The wire-extra-stretch element kind (stage 2): part [`EXTRA_STRETCH_PART`] of each
+/// wire's beam, shared with the bending kind (so one evaluation gives both).
 pub struct WireExtraStretch;
 
 impl Element for WireExtraStretch {
@@ -38,19 +23,15 @@ impl Element for WireExtraStretch {
         "work against tension of each bent wire, U - EI dU/dEI (lossless)"
     }
     fn terms(&self, reference: &Reference) -> Result<Vec<Term>, EnergyError> {
-        let mut terms = Vec::new();
-        for wire in &reference.system.wires {
-            if let Some((beam, coords)) = WireBeam::new(reference, wire)? {
-                terms.push(Term::new(
-                    format!("wire-extra-stretch {}", wire.name),
-                    "wire-extra-stretch",
-                    wire.tags.stretch.clone(),
-                    coords,
-                    ExtraStretchEnergy(beam),
-                ));
-            }
-        }
-        Ok(terms)
+        self.terms_shared(reference, &SharedBodies::new())
+    }
+    /// U − U_b of each wire: pure tension work, lossless (it vanishes with the tension off).
+    fn terms_shared(
+        &self,
+        reference: &Reference,
+        shared: &SharedBodies,
+    ) -> Result<Vec<Term>, EnergyError> {
+        beam_terms(reference, shared, self.kind(), EXTRA_STRETCH_PART)
     }
 }
 

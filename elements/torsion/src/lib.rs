@@ -3,14 +3,18 @@
 //! end frames about the wire relative to the reference configuration. With the tension off
 //! only G J_e / l remains: the T J/A part is tension stiffening and so lossless. A hinged
 //! end frees bending, not twist, so every wire twists.
+//!
+//! Fast derivatives: at the configuration the term was built around the twist vanishes
+//! identically, so there the Hessian is exactly κ ∇Δθ ∇Δθᵀ (first derivatives only);
+//! elsewhere the energy is differentiated over frames rebuilt from the bodies' jets.
 
 use nalgebra::{Matrix3, Vector3};
 use pendkit_energy::{
-    Element, EnergyError, LocalFrames, Potential, Reference, Registration, Stage, TensionOff, Term,
-    inventory,
+    Derivatives, Element, EnergyError, JetPoint, OffForm, Potential, Reference, Registration,
+    SharedBodies, Stage, TensionOff, Term, hyper_dual_over_frames, inventory,
 };
-use pendkit_geometry::FrameMap;
-use pendkit_rotations::{Real, small_rotation};
+use pendkit_geometry::{Frame, FrameMap};
+use pendkit_rotations::{Real, dot, mul_tr_const, small_rotation, tr_mul, tr_mul_vec, vee};
 
 /// Twist energy of one wire.
 #[derive(Clone, Debug)]
@@ -23,21 +27,65 @@ struct TorsionEnergy {
     stiffness: f64,
     /// G J_e / l (N m/rad): κ with the tension off.
     stiffness_unloaded: f64,
+    /// The local coordinates of the reference, where the twist vanishes.
+    reference: Vec<f64>,
+}
+
+impl TorsionEnergy {
+    /// Δθ (rad): the rotation of end 1 relative to end 0 since the reference, in end 0's
+    /// axes, about the wire.
+    fn twist<D: Real>(&self, f0: &Frame<D>, f1: &Frame<D>) -> D {
+        let change = mul_tr_const(
+            &tr_mul(&f0.rotation, &f1.rotation),
+            &self.reference_relative,
+        );
+        let chord = f1.point(&self.points[1]) - f0.point(&self.points[0]);
+        let axis = tr_mul_vec(&f0.rotation, &chord);
+        let w = small_rotation(&change);
+        dot(&w, &axis) / dot(&axis, &axis).sqrt()
+    }
+
+    /// The Hessian at the reference. There Δθ = 0 identically (the change of relative
+    /// orientation is the identity), so every term of ∇²(½κΔθ²) = κ(∇Δθ∇Δθᵀ + Δθ∇²Δθ) but
+    /// the first vanishes and the gradient κΔθ∇Δθ is zero: H = κ ∇Δθ ∇Δθᵀ exactly. And
+    /// ∇Δθ = ∇w · axis/|axis|, the derivative of the axis multiplying w = 0.
+    fn at_reference(&self, at: &JetPoint, out: &mut Derivatives) -> bool {
+        let [f0, f1] = at.frames else {
+            return false;
+        };
+        let n = out.n;
+        let (r0, r1) = (f0.jet.rotation(), f1.jet.rotation());
+        let chord = f1.jet.point(&self.points[1]) - f0.jet.point(&self.points[0]);
+        let axis = r0.transpose() * chord;
+        let axis = axis / axis.norm();
+        // ∇Δθ_a = vee(∂C/∂q_a)·axis, C = R0ᵀ R1 Mᵀ
+        let grad = &mut out.scratch.numbers;
+        grad.clear();
+        grad.resize(n, 0.0);
+        let m_t = self.reference_relative.transpose();
+        for (i, &l) in f0.local.iter().enumerate() {
+            grad[l] += vee(&(f0.jet.d_rotation(i).transpose() * r1 * m_t)).dot(&axis);
+        }
+        for (i, &l) in f1.local.iter().enumerate() {
+            grad[l] += vee(&(r0.transpose() * f1.jet.d_rotation(i) * m_t)).dot(&axis);
+        }
+        if out.hessian {
+            for a in 0..n {
+                for b in 0..n {
+                    let g = grad[a] * grad[b];
+                    out.on[a * n + b] = self.stiffness * g;
+                    out.off[a * n + b] = self.stiffness_unloaded * g;
+                }
+            }
+        }
+        out.off_form = OffForm::Written;
+        true
+    }
 }
 
 impl Potential for TorsionEnergy {
     fn energy<D: Real>(&self, x: &[D]) -> D {
-        let f0 = self.frames[0].eval(x);
-        let f1 = self.frames[1].eval(x);
-        // rotation of end 1 relative to end 0 since the reference, in end 0's axes
-        let change = f0.rotation.transpose()
-            * f1.rotation
-            * self.reference_relative.map(D::from).transpose();
-        let chord = f1.point(&self.points[1]) - f0.point(&self.points[0]);
-        let axis = f0.rotation.transpose() * chord;
-        let axis_len = (axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2]).sqrt();
-        let w = small_rotation(&change);
-        let twist = (w[0] * axis[0] + w[1] * axis[1] + w[2] * axis[2]) / axis_len;
+        let twist = self.twist(&self.frames[0].eval(x), &self.frames[1].eval(x));
         twist * twist * (0.5 * self.stiffness)
     }
 
@@ -46,6 +94,35 @@ impl Potential for TorsionEnergy {
             stiffness: self.stiffness_unloaded,
             ..self.clone()
         })
+    }
+
+    /// At the reference the structured form (see [`TorsionEnergy::at_reference`]); elsewhere
+    /// ½Δθ² by hyper-dual numbers over frames rebuilt from the jets, times κ and κ_off
+    /// (the tension-off term differs only in its stiffness).
+    fn fast_derivatives(&self, at: &JetPoint, out: &mut Derivatives) -> bool {
+        if at.x == self.reference.as_slice() {
+            return self.at_reference(at, out);
+        }
+        let computed = hyper_dual_over_frames(at, 1, out, |[f0, f1], e| {
+            let twist = self.twist(f0, f1);
+            e[0] = twist * twist * 0.5;
+        });
+        if !computed {
+            return false;
+        }
+        let n = out.n;
+        out.values[0] *= self.stiffness;
+        for g in out.gradients.iter_mut() {
+            *g *= self.stiffness;
+        }
+        if out.hessian {
+            for (on, off) in out.on[..n * n].iter_mut().zip(out.off.iter_mut()) {
+                *off = *on * self.stiffness_unloaded;
+                *on *= self.stiffness;
+            }
+        }
+        out.off_form = OffForm::Written;
+        true
     }
 }
 
@@ -63,6 +140,14 @@ impl Element for WireTorsion {
         "twist ½ κ Δθ² of each wire, κ = (G Je + T J/A)/l"
     }
     fn terms(&self, reference: &Reference) -> Result<Vec<Term>, EnergyError> {
+        self.terms_shared(reference, &SharedBodies::new())
+    }
+    /// One term per wire, on the wire's frames as the other wire kinds share them.
+    fn terms_shared(
+        &self,
+        reference: &Reference,
+        shared: &SharedBodies,
+    ) -> Result<Vec<Term>, EnergyError> {
         let system = reference.system;
         let mut terms = Vec::new();
         for wire in &system.wires {
@@ -78,7 +163,7 @@ impl Element for WireTorsion {
             } else {
                 0.0
             };
-            let local = LocalFrames::new(system, &[wire.ends[0].body, wire.ends[1].body]);
+            let local = shared.frames(system, &[wire.ends[0].body, wire.ends[1].body]);
             let r0 = system.bodies[wire.ends[0].body]
                 .frame
                 .eval(reference.coords)
@@ -87,18 +172,20 @@ impl Element for WireTorsion {
                 .frame
                 .eval(reference.coords)
                 .rotation;
-            terms.push(Term::new(
+            let energy = TorsionEnergy {
+                frames: [local.frames[0].clone(), local.frames[1].clone()],
+                points: [wire.ends[0].point, wire.ends[1].point],
+                reference_relative: r0.transpose() * r1,
+                stiffness: unloaded + stiffening,
+                stiffness_unloaded: unloaded,
+                reference: local.coords.iter().map(|&g| reference.coords[g]).collect(),
+            };
+            terms.push(Term::on_frames(
                 format!("wire-torsion {}", wire.name),
                 "wire-torsion",
                 wire.tags.torsion.clone(),
-                local.coords,
-                TorsionEnergy {
-                    frames: [local.frames[0].clone(), local.frames[1].clone()],
-                    points: [wire.ends[0].point, wire.ends[1].point],
-                    reference_relative: r0.transpose() * r1,
-                    stiffness: unloaded + stiffening,
-                    stiffness_unloaded: unloaded,
-                },
+                local,
+                energy,
             ));
         }
         Ok(terms)

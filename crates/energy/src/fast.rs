@@ -1,0 +1,230 @@
+//! The fast derivative path: what an element's optional fast routine receives (the frame
+//! jets of the bodies its term touches, see [`pendkit_geometry::FrameJet`]) and where it
+//! writes (value, gradient, force scale and Hessians with the tension on and off), plus the
+//! pieces several kinds share: chain-rule helpers for body-fixed points and directions, and
+//! the general fallback that differentiates an energy written over frames by hyper-dual
+//! numbers whose frames are taken from the jets instead of re-evaluating pose expressions.
+
+use nalgebra::{Matrix3, Vector3};
+use num_dual::HyperDual64;
+use pendkit_geometry::{Frame, FrameJet};
+
+/// One frame a term reads, at the evaluation point: the body's jet and, for each of the
+/// jet's coordinates, its index in the term's local coordinate vector.
+#[derive(Clone, Copy, Debug)]
+pub struct FrameAt<'a> {
+    /// The body's frame and its derivatives.
+    pub jet: &'a FrameJet,
+    /// `local[i]` is the term-local index of the jet's coordinate `i`.
+    pub local: &'a [usize],
+}
+
+impl FrameAt<'_> {
+    /// The position of term-local coordinate `l` among the jet's coordinates, if the frame
+    /// depends on it.
+    pub fn position(&self, l: usize) -> Option<usize> {
+        self.local.iter().position(|&m| m == l)
+    }
+}
+
+/// Where a fast routine is evaluated: the term's local coordinates and its frames (in the
+/// order of the [`crate::LocalFrames`] the term was built with).
+#[derive(Clone, Copy, Debug)]
+pub struct JetPoint<'a> {
+    /// Local coordinates (m, rad).
+    pub x: &'a [f64],
+    /// One entry per frame of the term.
+    pub frames: &'a [FrameAt<'a>],
+}
+
+/// What became of the tension-off Hessian in a fast evaluation (it must agree with what
+/// the term's `tension_off`, built at the evaluation point, says).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum OffForm {
+    /// Equal to the tension-on Hessian (all of the stiffness is lossy).
+    Same,
+    /// Zero (all of the stiffness is lossless).
+    Zero,
+    /// Written into [`Derivatives::off`].
+    Written,
+}
+
+/// The outputs of one fast evaluation of a term's energy body over its `n` local
+/// coordinates. Every buffer is zeroed by the caller. A body with several energy parts
+/// (see [`crate::SharedPotential`]) writes part `p` at offset `p n` of the gradients and
+/// force scales, `p n²` of the Hessians, and `p` of the values.
+#[derive(Debug)]
+pub struct Derivatives<'a> {
+    /// Number of local coordinates.
+    pub n: usize,
+    /// Whether Hessians are wanted; otherwise only values, gradients and force scales.
+    pub hessian: bool,
+    /// Energy of each part (J).
+    pub values: &'a mut [f64],
+    /// Gradient of each part (N or N m per local coordinate).
+    pub gradients: &'a mut [f64],
+    /// Rounding scale of each gradient entry beyond its own size (N or N m): the size of
+    /// the large forces whose difference it is, e.g. k (l + l0) for a stretched wire, whose
+    /// force is k times a small difference of lengths. Leave zero when the gradient is not
+    /// such a difference. The equilibrium search uses it to know when residual forces are
+    /// rounding.
+    pub force_scales: &'a mut [f64],
+    /// Hessian of each part with the tension on (row-major n × n).
+    pub on: &'a mut [f64],
+    /// Hessian of the tension-off term built at the evaluation point (single-part bodies),
+    /// when [`Derivatives::off_form`] is set to [`OffForm::Written`].
+    pub off: &'a mut [f64],
+    /// What the routine did with the tension-off Hessian (preset to `Same`).
+    pub off_form: OffForm,
+    /// Scratch space the routine may use as it likes.
+    pub scratch: &'a mut Scratch,
+}
+
+/// Reusable scratch buffers for fast routines, so that evaluating a term does not allocate
+/// once the buffers have grown.
+#[derive(Clone, Debug, Default)]
+pub struct Scratch {
+    /// 3-vectors (e.g. a Jacobian's columns).
+    pub vectors: Vec<Vector3<f64>>,
+    /// 3 × 3 matrices (e.g. derivatives of a relative rotation).
+    pub matrices: Vec<Matrix3<f64>>,
+    /// Numbers.
+    pub numbers: Vec<f64>,
+}
+
+impl Scratch {
+    /// `len` zero vectors, reusing the buffer.
+    pub fn zero_vectors(&mut self, len: usize) -> &mut [Vector3<f64>] {
+        self.vectors.clear();
+        self.vectors.resize(len, Vector3::zeros());
+        &mut self.vectors
+    }
+}
+
+/// A body-fixed vector whose derivatives a term needs.
+#[derive(Clone, Copy, Debug)]
+pub enum Attached<'v> {
+    /// A point (m, body coordinates): X + R a.
+    Point(&'v Vector3<f64>),
+    /// A direction (body coordinates): R v.
+    Direction(&'v Vector3<f64>),
+}
+
+impl Attached<'_> {
+    fn first(&self, jet: &FrameJet, i: usize) -> Vector3<f64> {
+        match self {
+            Attached::Point(a) => jet.d_point(i, a),
+            Attached::Direction(v) => jet.d_rotation(i) * *v,
+        }
+    }
+
+    fn second(&self, jet: &FrameJet, i: usize, j: usize) -> Vector3<f64> {
+        match self {
+            Attached::Point(a) => jet.dd_point(i, j, a),
+            Attached::Direction(v) => jet.dd_rotation(i, j) * *v,
+        }
+    }
+
+    /// Its value (m or unit vector, lab axes).
+    pub fn value(&self, jet: &FrameJet) -> Vector3<f64> {
+        match self {
+            Attached::Point(a) => jet.point(a),
+            Attached::Direction(v) => jet.rotation() * *v,
+        }
+    }
+}
+
+/// Adds `sign` times the Jacobian of an attached vector over the local coordinates into
+/// `columns` (one 3-vector per local coordinate).
+pub fn add_jacobian(frame: &FrameAt, what: Attached, sign: f64, columns: &mut [Vector3<f64>]) {
+    for (i, &l) in frame.local.iter().enumerate() {
+        columns[l] += what.first(frame.jet, i) * sign;
+    }
+}
+
+/// Adds Σ_k w_k ∂²v_k/∂q_a∂q_b of an attached vector v into the n × n matrix `h`
+/// (row-major): the "gradient times second derivative of the input" half of the chain
+/// rule H = Jᵀ H_in J + Σ_k g_k ∇²in_k, with `w` the energy's gradient with respect to v.
+pub fn add_curvature(frame: &FrameAt, what: Attached, w: &Vector3<f64>, h: &mut [f64], n: usize) {
+    let local = frame.local;
+    for (i, &a) in local.iter().enumerate() {
+        for (j, &b) in local.iter().enumerate().skip(i) {
+            let v = what.second(frame.jet, i, j).dot(w);
+            h[a * n + b] += v;
+            if i != j {
+                h[b * n + a] += v;
+            }
+        }
+    }
+}
+
+/// Most energy parts a hyper-dual fallback evaluation handles at once.
+pub const MAX_PARTS: usize = 4;
+
+/// The general fallback for energies written over frames: value, gradient and Hessian of
+/// every part by one hyper-dual evaluation per pair (i ≤ j) of local coordinates, each with
+/// the frames rebuilt from the jets ([`FrameJet::hyper_dual`]) rather than re-evaluated
+/// from their pose expressions. `energy` writes the energy of each part. Exact to rounding
+/// at any configuration; costs n(n+1)/2 evaluations, so kinds use it where no structure
+/// is exact. Needs second-order jets when Hessians are wanted. Returns false (nothing
+/// written) for more than [`MAX_PARTS`] parts.
+pub fn hyper_dual_over_frames<const F: usize>(
+    at: &JetPoint,
+    parts: usize,
+    out: &mut Derivatives,
+    mut energy: impl FnMut(&[Frame<HyperDual64>; F], &mut [HyperDual64]),
+) -> bool {
+    if parts > MAX_PARTS || at.frames.len() != F {
+        return false;
+    }
+    let n = out.n;
+    let mut e = [HyperDual64::from_re(0.0); MAX_PARTS];
+    let frames_at = |i: Option<usize>, j: Option<usize>| -> [Frame<HyperDual64>; F] {
+        std::array::from_fn(|k| {
+            let f = &at.frames[k];
+            f.jet
+                .hyper_dual(i.and_then(|i| f.position(i)), j.and_then(|j| f.position(j)))
+        })
+    };
+    energy(&frames_at(None, None), &mut e[..parts]);
+    for (p, v) in e[..parts].iter().enumerate() {
+        out.values[p] = v.re;
+    }
+    for i in 0..n {
+        let last = if out.hessian { n } else { i + 1 };
+        for j in i..last {
+            energy(&frames_at(Some(i), Some(j)), &mut e[..parts]);
+            for (p, v) in e[..parts].iter().enumerate() {
+                if j == i {
+                    out.gradients[p * n + i] = v.eps1;
+                }
+                if out.hessian {
+                    let h = &mut out.on[p * n * n..(p + 1) * n * n];
+                    h[i * n + j] = v.eps1eps2;
+                    h[j * n + i] = v.eps1eps2;
+                }
+            }
+        }
+    }
+    true
+}
+
+/// Most frames a term on the fast path reads (a term with more takes the reference path).
+pub const MAX_FRAMES: usize = 4;
+
+/// Calls `f` with the `count` frames `view(0..count)` as a slice on the stack, so that
+/// evaluating a term does not allocate; None for more than [`MAX_FRAMES`] frames.
+pub fn on_stack<'a, R>(
+    count: usize,
+    view: impl Fn(usize) -> FrameAt<'a>,
+    f: impl FnOnce(&[FrameAt<'a>]) -> R,
+) -> Option<R> {
+    Some(match count {
+        0 => f(&[]),
+        1 => f(&[view(0)]),
+        2 => f(&[view(0), view(1)]),
+        3 => f(&[view(0), view(1), view(2)]),
+        4 => f(&[view(0), view(1), view(2), view(3)]),
+        _ => return None,
+    })
+}
