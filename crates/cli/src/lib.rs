@@ -11,11 +11,11 @@ use std::path::{Path, PathBuf};
 use nalgebra::{DVector, Vector3};
 use pendkit_assembly::{Assembled, AssemblyError, EquilibriumOptions, assemble};
 use pendkit_dynamics::{
-    DynamicsError, Input, Modes, Output, StageModel, eliminate_floats, normal_modes,
+    DynamicsError, Input, Modes, Output, Solver, StageModel, eliminate_floats, normal_modes,
 };
 use pendkit_energy::{Stage, System};
 use pendkit_model::{BuildError, DampingSpec, Model, Overrides};
-use pendkit_noise::{ThermalNoise, thermal_noise};
+use pendkit_noise::{NoiseOptions, ThermalNoise, thermal_noise_with};
 use pendkit_params::Resolved;
 
 // Name every bundled element crate so the linker keeps its registration.
@@ -282,17 +282,58 @@ pub struct StageResult {
     pub modes: Modes,
 }
 
+/// Which normal modes a stage run computes.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub enum ModeSelection {
+    /// Every mode, by the dense eigensolver block by block.
+    #[default]
+    All,
+    /// The modes below this frequency (Hz): by the dense eigensolver up to
+    /// [`DENSE_MODES_LIMIT`] variables, by shift-invert Lanczos on the sparse factorisation
+    /// above ([`StageModel::modes_below`]).
+    Below(f64),
+}
+
+/// Largest number of variables for which [`ModeSelection::Below`] uses the dense
+/// eigensolver (a few ms at this size); larger models use shift-invert.
+pub const DENSE_MODES_LIMIT: usize = 200;
+
 /// Equilibrium, stiffness, mass and modes of `system` at `stage`. The modes use the real
 /// stiffness at f = 0 (each tag's ε'(0); 1 unless a model says otherwise).
 pub fn run_stage(system: System, stage: Stage) -> Result<StageResult, Error> {
+    run_stage_with(system, stage, ModeSelection::All)
+}
+
+/// [`run_stage`] computing the modes `modes` selects.
+pub fn run_stage_with(
+    system: System,
+    stage: Stage,
+    modes: ModeSelection,
+) -> Result<StageResult, Error> {
     let assembled = assemble(&system, stage, &EquilibriumOptions::default())?;
     let model = StageModel::new(&system, &assembled);
-    let reduced = eliminate_floats(
-        &model.real_stiffness(&system.damping),
-        &assembled.layout,
-        &system,
-    )?;
-    let modes = normal_modes(&reduced.k_eff, &assembled.mass, &model.variables)?;
+    let dense = |below: Option<f64>| -> Result<Modes, Error> {
+        let reduced = eliminate_floats(
+            &model.real_stiffness(&system.damping),
+            &assembled.layout,
+            &system,
+        )?;
+        let mut modes = normal_modes(&reduced.k_eff, &assembled.mass, &model.variables)?;
+        if let Some(hz) = below {
+            modes.modes.retain(|m| m.hz < hz);
+        }
+        Ok(modes)
+    };
+    let modes = match modes {
+        ModeSelection::All => dense(None)?,
+        ModeSelection::Below(hz) if model.sizes.0 <= DENSE_MODES_LIMIT => {
+            if !(hz > 0.0 && hz.is_finite()) {
+                return Err(DynamicsError::BelowFrequency(hz).into());
+            }
+            dense(Some(hz))?
+        }
+        ModeSelection::Below(hz) => model.modes_below(&system.damping, hz)?,
+    };
     Ok(StageResult {
         system,
         assembled,
@@ -412,28 +453,54 @@ impl StageResult {
 impl StageResult {
     /// Transfer function from the named input to the named output (see
     /// [`StageResult::input`], [`StageResult::output`]) at `freqs` (Hz), with the model's
-    /// damping.
+    /// damping, solved over the blocks they couple to.
     pub fn transfer(
         &self,
         input: &str,
         output: &str,
         freqs: &[f64],
     ) -> Result<Vec<faer::c64>, Error> {
+        self.transfer_with(input, output, freqs, Solver::Restricted)
+    }
+
+    /// [`StageResult::transfer`] solved as `solver` says (restricted, full, or the dense
+    /// reference).
+    pub fn transfer_with(
+        &self,
+        input: &str,
+        output: &str,
+        freqs: &[f64],
+        solver: Solver,
+    ) -> Result<Vec<faer::c64>, Error> {
         let (i, o) = (self.input(input)?, self.output(output)?);
-        Ok(self.model.transfer(&self.system.damping, &i, &o, freqs))
+        Ok(self
+            .model
+            .transfer_with(&self.system.damping, &i, &o, freqs, solver)?)
     }
 
     /// Thermal noise (PSD, m²/Hz or rad²/Hz) of the named displacement output at `freqs`
-    /// (Hz), at the model's temperature, with its breakdown by term.
+    /// (Hz), at the model's temperature, with its breakdown by damping tag.
     pub fn noise(&self, output: &str, freqs: &[f64]) -> Result<ThermalNoise, Error> {
+        self.noise_with(output, freqs, &NoiseOptions::default())
+    }
+
+    /// [`StageResult::noise`] solved and broken down as `options` says (per term too, full
+    /// or restricted solve).
+    pub fn noise_with(
+        &self,
+        output: &str,
+        freqs: &[f64],
+        options: &NoiseOptions,
+    ) -> Result<ThermalNoise, Error> {
         match self.output(output)? {
-            Output::Displacement(v) => Ok(thermal_noise(
+            Output::Displacement(v) => Ok(thermal_noise_with(
                 &self.model,
                 &self.system.damping,
                 &v,
                 self.system.temperature,
                 freqs,
-            )),
+                options,
+            )?),
             Output::SupportForce(_) => Err(Error::Name {
                 name: output.to_string(),
                 message: "thermal noise needs a displacement output".into(),
