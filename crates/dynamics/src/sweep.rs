@@ -20,7 +20,8 @@
 
 use faer::linalg::solvers::Solve;
 use faer::{Mat, c64};
-use pendkit_energy::{Damping, TagDamping};
+use pendkit_energy::Damping;
+use pendkit_expr::Compiled;
 
 use crate::DynamicsError;
 use crate::lu;
@@ -47,13 +48,36 @@ pub enum Solver {
     DenseReference,
 }
 
+/// One of ε', ε'' of a tag: a constant, or an expression of f to evaluate per frequency.
+#[derive(Clone, Debug)]
+enum Coefficient {
+    Constant(f64),
+    OfFrequency(Compiled),
+}
+
+impl Coefficient {
+    fn of(expression: &Compiled) -> Self {
+        match expression.as_const() {
+            Some(x) => Coefficient::Constant(x),
+            None => Coefficient::OfFrequency(expression.clone()),
+        }
+    }
+
+    fn at(&self, f_hz: f64) -> f64 {
+        match self {
+            Coefficient::Constant(x) => *x,
+            Coefficient::OfFrequency(e) => e.eval(&[f_hz]),
+        }
+    }
+}
+
 /// The complex multiplier ε' + i ε'' of one tag over a sweep.
 #[derive(Clone, Debug)]
 enum Multiplier {
     /// Does not depend on frequency.
     Constant(c64),
-    /// Evaluated at each frequency.
-    Varying(TagDamping),
+    /// Evaluated at each frequency (only the parts that read f).
+    Varying(Coefficient, Coefficient),
 }
 
 impl Multiplier {
@@ -62,7 +86,7 @@ impl Multiplier {
             None => Multiplier::Constant(c64::new(1.0, 0.0)),
             Some(d) => match (d.real.as_const(), d.imag.as_const()) {
                 (Some(re), Some(im)) => Multiplier::Constant(c64::new(re, im)),
-                _ => Multiplier::Varying(d.clone()),
+                _ => Multiplier::Varying(Coefficient::of(&d.real), Coefficient::of(&d.imag)),
             },
         }
     }
@@ -184,13 +208,13 @@ impl<'m> Sweep<'m> {
             .map(|(tag, _)| Multiplier::of(damping, tag))
             .collect();
         let varying: Vec<usize> = (0..multipliers.len())
-            .filter(|&t| matches!(multipliers[t], Multiplier::Varying(_)))
+            .filter(|&t| matches!(multipliers[t], Multiplier::Varying(..)))
             .collect();
         let now = multipliers
             .iter()
             .map(|m| match m {
                 Multiplier::Constant(c) => *c,
-                Multiplier::Varying(_) => c64::new(f64::NAN, f64::NAN),
+                Multiplier::Varying(..) => c64::new(f64::NAN, f64::NAN),
             })
             .collect();
         let engine = match solver {
@@ -247,9 +271,8 @@ impl<'m> Sweep<'m> {
     /// Solves at `f_hz` (Hz) and returns the output per unit input.
     pub fn at(&mut self, f_hz: f64) -> Result<c64, DynamicsError> {
         for (k, &t) in self.varying.iter().enumerate() {
-            if let Multiplier::Varying(d) = &self.multipliers[t] {
-                let (re, im) = d.at(f_hz);
-                self.now[t] = c64::new(re, im);
+            if let Multiplier::Varying(re, im) = &self.multipliers[t] {
+                self.now[t] = c64::new(re.at(f_hz), im.at(f_hz));
                 self.now_varying[k] = self.now[t];
             }
         }
@@ -325,7 +348,7 @@ impl Fast {
             model.by_tag.iter().enumerate().map(|(t, (_, values))| {
                 let part = match &multipliers[t] {
                     Multiplier::Constant(m) => Part::Constant(*m),
-                    Multiplier::Varying(_) => {
+                    Multiplier::Varying(..) => {
                         Part::Varying(varying.iter().position(|&v| v == t).unwrap_or(0))
                     }
                 };
