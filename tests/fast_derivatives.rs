@@ -129,9 +129,12 @@ fn every_bundled_model_at_every_stage_matches_the_reference() {
 #[test]
 fn mode_frequencies_are_those_of_the_reference_path() {
     // Each path finds its own equilibrium (Newton with its own derivatives) and modes.
-    let reference = AssemblyOptions {
-        equilibrium: EquilibriumOptions::default(),
-        derivatives: DerivativePath::Reference,
+    let reference = pendkit::RunOptions {
+        assembly: AssemblyOptions {
+            equilibrium: EquilibriumOptions::default(),
+            derivatives: DerivativePath::Reference,
+        },
+        ..Default::default()
     };
     for (name, system) in cases() {
         for stage in Stage::ALL {
@@ -459,9 +462,12 @@ fn very_stiff_wires_converge_on_the_reference_path_too() {
     // path from each term's own cancellation scale (k (|p0| + |p1| + l0) for a wire): both
     // find the nominal geometry of the stiff double pendulum
     let system = build("double-pendulum", &["r_wire=scale(30)"]);
-    let options = AssemblyOptions {
-        derivatives: DerivativePath::Reference,
-        ..AssemblyOptions::default()
+    let options = pendkit::RunOptions {
+        assembly: AssemblyOptions {
+            derivatives: DerivativePath::Reference,
+            ..AssemblyOptions::default()
+        },
+        ..Default::default()
     };
     let r = pendkit::run_stage_with(system, Stage::S0A, &options, None).unwrap();
     let i = r.system.coord("z2").unwrap();

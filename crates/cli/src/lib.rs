@@ -13,11 +13,11 @@ use pendkit_assembly::{
     Assembled, AssemblyError, AssemblyOptions, PhaseTimes, assemble_with, timed,
 };
 use pendkit_dynamics::{
-    DynamicsError, Input, Modes, Output, StageModel, eliminate_floats, normal_modes,
+    DynamicsError, Input, Modes, Output, Solver, StageModel, eliminate_floats, normal_modes,
 };
 use pendkit_energy::{Stage, System};
 use pendkit_model::{BuildError, DampingSpec, Model, Overrides};
-use pendkit_noise::{ThermalNoise, thermal_noise};
+use pendkit_noise::{NoiseOptions, ThermalNoise, thermal_noise_with};
 use pendkit_params::Resolved;
 
 // Name every bundled element crate so the linker keeps its registration.
@@ -287,36 +287,77 @@ pub struct StageResult {
     pub modes: Modes,
 }
 
+/// Which normal modes a stage run computes.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub enum ModeSelection {
+    /// Every mode, by the dense eigensolver block by block.
+    #[default]
+    All,
+    /// The modes below this frequency (Hz): by the dense eigensolver up to
+    /// [`DENSE_MODES_LIMIT`] variables, by shift-invert Lanczos on the sparse factorisation
+    /// above ([`StageModel::modes_below`]).
+    Below(f64),
+}
+
+/// Largest number of variables for which [`ModeSelection::Below`] uses the dense
+/// eigensolver (a few ms at this size); larger models use shift-invert.
+pub const DENSE_MODES_LIMIT: usize = 200;
+
 /// Equilibrium, stiffness, mass and modes of `system` at `stage`. The modes use the real
 /// stiffness at f = 0 (each tag's ε'(0); 1 unless a model says otherwise).
 pub fn run_stage(system: System, stage: Stage) -> Result<StageResult, Error> {
-    run_stage_with(system, stage, &AssemblyOptions::default(), None)
+    run_stage_with(system, stage, &RunOptions::default(), None)
 }
 
-/// [`run_stage`] with assembly options (equilibrium controls, derivative path), recording
-/// the time of each phase into `times` when given: the assembly's (`equilibrium`,
-/// `hessian:<kind>`, `mass`), then `stage-model` (the stage's matrices by tag), `floats`
-/// (their elimination) and `modes`.
+/// How [`run_stage_with`] runs a stage: assembly options (equilibrium controls, derivative
+/// path) and which modes to compute.
+#[derive(Clone, Debug, Default)]
+pub struct RunOptions {
+    /// Equilibrium controls and derivative path.
+    pub assembly: AssemblyOptions,
+    /// All modes, or those below a frequency.
+    pub modes: ModeSelection,
+}
+
+/// [`run_stage`] with options, recording the time of each phase into `times` when given:
+/// the assembly's (`terms`, `equilibrium`, `hessian:<kind>`, `mass`), then `stage-model`
+/// (the stage's matrices by tag), `floats` (their elimination) and `modes`.
 pub fn run_stage_with(
     system: System,
     stage: Stage,
-    options: &AssemblyOptions,
+    options: &RunOptions,
     mut times: Option<&mut PhaseTimes>,
 ) -> Result<StageResult, Error> {
-    let assembled = assemble_with(&system, stage, options, times.as_deref_mut())?;
+    let assembled = assemble_with(&system, stage, &options.assembly, times.as_deref_mut())?;
     let model = timed(&mut times, "stage-model", 1, || {
         StageModel::new(&system, &assembled)
     });
-    let reduced = timed(&mut times, "floats", 1, || {
-        eliminate_floats(
-            &model.real_stiffness(&system.damping),
-            &assembled.layout,
-            &system,
-        )
-    })?;
-    let modes = timed(&mut times, "modes", 1, || {
-        normal_modes(&reduced.k_eff, &assembled.mass, &model.variables)
-    })?;
+    let modes = match options.modes {
+        ModeSelection::Below(hz) if !(hz > 0.0 && hz.is_finite()) => {
+            return Err(DynamicsError::BelowFrequency(hz).into());
+        }
+        ModeSelection::Below(hz) if model.sizes.0 > DENSE_MODES_LIMIT => {
+            timed(&mut times, "modes", 1, || {
+                model.modes_below(&system.damping, hz)
+            })?
+        }
+        selection => {
+            let reduced = timed(&mut times, "floats", 1, || {
+                eliminate_floats(
+                    &model.real_stiffness(&system.damping),
+                    &assembled.layout,
+                    &system,
+                )
+            })?;
+            let mut modes = timed(&mut times, "modes", 1, || {
+                normal_modes(&reduced.k_eff, &assembled.mass, &model.variables)
+            })?;
+            if let ModeSelection::Below(hz) = selection {
+                modes.modes.retain(|m| m.hz < hz);
+            }
+            modes
+        }
+    };
     Ok(StageResult {
         system,
         assembled,
@@ -436,28 +477,54 @@ impl StageResult {
 impl StageResult {
     /// Transfer function from the named input to the named output (see
     /// [`StageResult::input`], [`StageResult::output`]) at `freqs` (Hz), with the model's
-    /// damping.
+    /// damping, solved over the blocks they couple to.
     pub fn transfer(
         &self,
         input: &str,
         output: &str,
         freqs: &[f64],
     ) -> Result<Vec<faer::c64>, Error> {
+        self.transfer_with(input, output, freqs, Solver::Restricted)
+    }
+
+    /// [`StageResult::transfer`] solved as `solver` says (restricted, full, or the dense
+    /// reference).
+    pub fn transfer_with(
+        &self,
+        input: &str,
+        output: &str,
+        freqs: &[f64],
+        solver: Solver,
+    ) -> Result<Vec<faer::c64>, Error> {
         let (i, o) = (self.input(input)?, self.output(output)?);
-        Ok(self.model.transfer(&self.system.damping, &i, &o, freqs))
+        Ok(self
+            .model
+            .transfer_with(&self.system.damping, &i, &o, freqs, solver)?)
     }
 
     /// Thermal noise (PSD, m²/Hz or rad²/Hz) of the named displacement output at `freqs`
-    /// (Hz), at the model's temperature, with its breakdown by term.
+    /// (Hz), at the model's temperature, with its breakdown by damping tag.
     pub fn noise(&self, output: &str, freqs: &[f64]) -> Result<ThermalNoise, Error> {
+        self.noise_with(output, freqs, &NoiseOptions::default())
+    }
+
+    /// [`StageResult::noise`] solved and broken down as `options` says (per term too, full
+    /// or restricted solve).
+    pub fn noise_with(
+        &self,
+        output: &str,
+        freqs: &[f64],
+        options: &NoiseOptions,
+    ) -> Result<ThermalNoise, Error> {
         match self.output(output)? {
-            Output::Displacement(v) => Ok(thermal_noise(
+            Output::Displacement(v) => Ok(thermal_noise_with(
                 &self.model,
                 &self.system.damping,
                 &v,
                 self.system.temperature,
                 freqs,
-            )),
+                options,
+            )?),
             Output::SupportForce(_) => Err(Error::Name {
                 name: output.to_string(),
                 message: "thermal noise needs a displacement output".into(),
@@ -526,7 +593,7 @@ pub fn bench(
             Ok((case, system))
         })?;
         model = case.model.name().to_string();
-        let result = run_stage_with(system, stage, &AssemblyOptions::default(), Some(&mut times))?;
+        let result = run_stage_with(system, stage, &RunOptions::default(), Some(&mut times))?;
         if let Some((output, points)) = noise {
             times.time("noise", points, || result.noise(output, &grid))?;
         }

@@ -5,10 +5,12 @@ use std::io::Write as _;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
-use pendkit::{Case, Error, StageResult, log_grid, run_stage};
+use pendkit::{Case, Error, ModeSelection, RunOptions, StageResult, log_grid, run_stage_with};
+use pendkit_dynamics::Solver;
 use pendkit_dynamics::lab_motion;
 use pendkit_energy::{Stage, registry};
 use pendkit_export::{Matrix, Names};
+use pendkit_noise::NoiseOptions;
 use serde_json::json;
 
 #[derive(Parser)]
@@ -37,12 +39,21 @@ struct ModelArgs {
 }
 
 impl ModelArgs {
-    /// Builds the case and runs its stage (default `default`).
-    fn run(&self, default: Stage) -> Result<(Case, Stage, StageResult), Error> {
+    /// Builds the case and runs its stage (default `default`), computing the modes `modes`
+    /// selects.
+    fn run(
+        &self,
+        default: Stage,
+        modes: ModeSelection,
+    ) -> Result<(Case, Stage, StageResult), Error> {
         let case = Case::open(&self.model)?.with_sets(&self.sets)?;
         let stage = self.stage.unwrap_or(default);
         let (system, _) = case.build()?;
-        Ok((case, stage, run_stage(system, stage)?))
+        let options = RunOptions {
+            modes,
+            ..Default::default()
+        };
+        Ok((case, stage, run_stage_with(system, stage, &options, None)?))
     }
 
     /// As [`ModelArgs::run`], for results that need losses (stage 0B or later).
@@ -50,7 +61,7 @@ impl ModelArgs {
         if self.stage == Some(Stage::S0A) {
             return Err(Error::StageTooEarly);
         }
-        self.run(Stage::S2)
+        self.run(Stage::S2, ModeSelection::All)
     }
 }
 
@@ -83,6 +94,10 @@ enum Command {
         /// Print the modes even if the equilibrium is unstable (exit status stays 0).
         #[arg(long)]
         allow_unstable: bool,
+        /// Only the modes below this frequency (Hz); large models find them by shift-invert
+        /// on a sparse factorisation instead of the dense eigensolver.
+        #[arg(long, value_name = "HZ")]
+        below: Option<f64>,
     },
     /// Transfer function from a support displacement or a force to a displacement or a
     /// force on the support.
@@ -101,6 +116,10 @@ enum Command {
         /// Print f_hz,re,im rows.
         #[arg(long)]
         csv: bool,
+        /// Solve every variable and float instead of only the blocks the input and output
+        /// couple to (the same numbers, for checking).
+        #[arg(long)]
+        full: bool,
     },
     /// Thermal noise (fluctuation-dissipation) at an output, with its breakdown by tag.
     Noise {
@@ -114,9 +133,14 @@ enum Command {
         /// Print f_hz,asd rows.
         #[arg(long)]
         csv: bool,
-        /// Add one ASD column per damping tag (CSV) or per term (table).
+        /// Add one ASD column per damping tag (CSV) or name the dominant term instead of the
+        /// dominant tag (table; computes the per-term shares).
         #[arg(long)]
         breakdown: bool,
+        /// Solve every variable and float instead of only the blocks the output couples to
+        /// (the same numbers, for checking).
+        #[arg(long)]
+        full: bool,
     },
     /// State-space matrices A, B, C, D with names, to .mat, .npz or .json.
     Ss {
@@ -216,8 +240,10 @@ fn run(cli: Cli) -> Result<(), Error> {
             json,
             lab,
             allow_unstable,
+            below,
         } => {
-            let (case, stage, result) = args.run(Stage::S0A)?;
+            let selection = below.map_or(ModeSelection::All, ModeSelection::Below);
+            let (case, stage, result) = args.run(Stage::S0A, selection)?;
             let stable = result.modes.check_stable();
             if let (Err(e), false) = (&stable, allow_unstable) {
                 return Err(Error::Dynamics(e.clone()));
@@ -234,10 +260,11 @@ fn run(cli: Cli) -> Result<(), Error> {
             output,
             grid,
             csv,
+            full,
         } => {
             let (case, stage, r) = args.run_lossy()?;
             let freqs = log_grid(grid.from, grid.to, grid.points)?;
-            let h = r.transfer(&input, &output, &freqs)?;
+            let h = r.transfer_with(&input, &output, &freqs, solver(full))?;
             if csv {
                 out.push_str("f_hz,re,im\n");
             } else {
@@ -274,15 +301,21 @@ fn run(cli: Cli) -> Result<(), Error> {
             grid,
             csv,
             breakdown,
+            full,
         } => {
             let (case, stage, r) = args.run_lossy()?;
             let freqs = log_grid(grid.from, grid.to, grid.points)?;
-            let noise = r.noise(&output, &freqs)?;
+            let options = NoiseOptions {
+                solver: solver(full),
+                // the table names the dominant term; the CSV adds per-tag columns only
+                per_term: breakdown && !csv,
+            };
+            let noise = r.noise_with(&output, &freqs, &options)?;
             let tags = noise.by_tag();
             if csv {
                 out.push_str("f_hz,asd");
                 if breakdown {
-                    for (tag, _) in &tags {
+                    for (tag, _) in tags {
                         let _ = write!(out, ",{tag}");
                     }
                 }
@@ -302,30 +335,21 @@ fn run(cli: Cli) -> Result<(), Error> {
                 if csv {
                     let _ = write!(out, "{f:e},{asd:e}");
                     if breakdown {
-                        for (_, series) in &tags {
+                        for (_, series) in tags {
                             let _ = write!(out, ",{:e}", series[i].max(0.0).sqrt());
                         }
                     }
                     out.push('\n');
                 } else {
-                    let shares = if breakdown {
-                        &noise.by_term
+                    let total = noise.total[i];
+                    let top = if breakdown {
+                        dominant(
+                            noise.by_term.iter().map(|(n, _, s)| (n.as_str(), s[i])),
+                            total,
+                        )
                     } else {
-                        &tags
-                            .iter()
-                            .map(|(t, s)| (t.clone(), t.clone(), s.clone()))
-                            .collect()
+                        dominant(tags.iter().map(|(t, s)| (t.as_str(), s[i])), total)
                     };
-                    let top = shares
-                        .iter()
-                        .max_by(|a, b| a.2[i].total_cmp(&b.2[i]))
-                        .map(|(name, _, s)| {
-                            format!(
-                                "{name} {:.0}%",
-                                100.0 * s[i] / noise.total[i].max(f64::MIN_POSITIVE)
-                            )
-                        })
-                        .unwrap_or_default();
                     let _ = writeln!(out, "{f:>12.6e}  {asd:>12.6e}  {top}");
                 }
             }
@@ -382,6 +406,28 @@ fn run(cli: Cli) -> Result<(), Error> {
     }
     emit(&out);
     Ok(())
+}
+
+/// "name NN%" of the largest share, as a percentage of `total`.
+fn dominant<'a>(shares: impl Iterator<Item = (&'a str, f64)>, total: f64) -> String {
+    shares
+        .max_by(|a, b| a.1.total_cmp(&b.1))
+        .map(|(name, share)| {
+            format!(
+                "{name} {:.0}%",
+                100.0 * share / total.max(f64::MIN_POSITIVE)
+            )
+        })
+        .unwrap_or_default()
+}
+
+/// The solver `--full` asks for.
+fn solver(full: bool) -> Solver {
+    if full {
+        Solver::Full
+    } else {
+        Solver::Restricted
+    }
 }
 
 fn modes_json(case: &Case, stage: Stage, r: &pendkit::StageResult) -> String {

@@ -235,3 +235,85 @@ fn bench_json_has_the_contract_shape() {
     let (ok, _, stderr) = pendkit(&["bench", "pendulum", "--repeat", "0"]);
     assert!(!ok && stderr.contains("--repeat"), "{stderr}");
 }
+
+/// Rows of a CSV output as numbers (header skipped).
+fn csv_rows(stdout: &str) -> Vec<Vec<f64>> {
+    stdout
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').map(|x| x.parse().unwrap()).collect())
+        .collect()
+}
+
+#[test]
+fn full_solves_print_what_the_restricted_ones_print() {
+    // --full solves every unknown instead of the coupled blocks: the same numbers up to
+    // rounding (checked at 1e-12 relative against the dense reference in
+    // tests/fast_responses.rs; here the command line wiring, at 1e-10 on printed digits)
+    for args in [
+        &[
+            "tf", "quad", "--input", "x00", "--output", "x3", "--points", "7", "--csv",
+        ][..],
+        &["noise", "quad", "--output", "x3", "--points", "7", "--csv"][..],
+    ] {
+        let (ok, restricted, stderr) = pendkit(args);
+        assert!(ok, "{stderr}");
+        let (ok, full, stderr) = pendkit(&[args, &["--full"]].concat());
+        assert!(ok, "{stderr}");
+        for (a, b) in csv_rows(&restricted).iter().zip(&csv_rows(&full)) {
+            for (x, y) in a.iter().zip(b) {
+                assert!((x - y).abs() <= 1e-10 * y.abs(), "{args:?}: {x} vs {y}");
+            }
+        }
+    }
+}
+
+#[test]
+fn noise_names_the_dominant_tag_or_with_breakdown_the_dominant_term() {
+    let table = |extra: &[&str]| {
+        let (ok, out, stderr) = pendkit(
+            &[
+                &["noise", "quad", "--output", "x3", "--points", "2"][..],
+                extra,
+            ]
+            .concat(),
+        );
+        assert!(ok, "{stderr}");
+        out.lines().nth(2).unwrap().to_string()
+    };
+    // at 0.1 Hz the top-stage wire bending dominates: the tag, then one of its terms
+    assert!(
+        table(&[]).ends_with('%') && table(&[]).contains("wn_bending"),
+        "{}",
+        table(&[])
+    );
+    let by_term = table(&["--breakdown"]);
+    assert!(by_term.contains("wire-bending wn"), "{by_term}");
+}
+
+#[test]
+fn modes_below_a_frequency_are_the_lowest_modes() {
+    // small model: the dense solver, filtered; large model (30 beads per fibre, 384
+    // variables): shift-invert; both must be the lowest modes of the full list
+    for (sets, below) in [(&[][..], "2"), (&["--set", "n_beads=30"][..], "5")] {
+        let all = modes_json(&[&["modes", "quad", "--stage", "2", "--json"][..], sets].concat());
+        let some = modes_json(
+            &[
+                &["modes", "quad", "--stage", "2", "--json", "--below", below][..],
+                sets,
+            ]
+            .concat(),
+        );
+        let (all, some) = (frequencies(&all), frequencies(&some));
+        let limit: f64 = below.parse().unwrap();
+        let expected: Vec<f64> = all.into_iter().filter(|&f| f < limit).collect();
+        assert!(!expected.is_empty());
+        assert_eq!(some.len(), expected.len(), "{sets:?}");
+        for (a, b) in some.iter().zip(&expected) {
+            assert!((a - b).abs() <= 1e-9 * b, "{sets:?}: {a} vs {b}");
+        }
+    }
+    let (ok, _, stderr) = pendkit(&["modes", "quad", "--below=0"]);
+    assert!(!ok && stderr.contains("must be positive"), "{stderr}");
+    assert_eq!(stderr.trim_end().lines().count(), 1);
+}

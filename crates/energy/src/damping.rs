@@ -39,6 +39,12 @@ impl Damping {
         self.tags.get(tag).map_or((1.0, 0.0), |d| d.at(f_hz))
     }
 
+    /// The multipliers of `tag`, if it has explicit ones (a tag not listed has ε' = 1,
+    /// ε'' = 0 at every frequency).
+    pub fn get(&self, tag: &str) -> Option<&TagDamping> {
+        self.tags.get(tag)
+    }
+
     /// Tags with explicit multipliers.
     pub fn tags(&self) -> impl Iterator<Item = &str> {
         self.tags.keys().map(String::as_str)

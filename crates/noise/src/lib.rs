@@ -1,49 +1,57 @@
 //! Thermal noise by the fluctuation–dissipation theorem (DESIGN.md §5) at any output
-//! combination of the coordinates, with the share of every lossy term and damping tag.
+//! combination of the coordinates, with the share of every damping tag (and, when asked,
+//! of every lossy term).
 //!
 //! S(f) = (4 k_B T / ω) |Im(vᵀ E(f)⁻¹ v)| as a one-sided PSD (m²/Hz for a displacement
 //! output, rad²/Hz for an angle). With z = E⁻¹ v (floats included), Im(vᵀ z) = −z̄ᵀ Im(P) z
-//! and Im(P) = Σ_terms ε''_tag(f) P_off,term, so the noise splits exactly into one
-//! non-negative share per lossy term: which wire or blade dominates at which frequency.
-
-use std::collections::BTreeMap;
+//! and Im(P) = Σ_tags ε''_tag(f) P_tag = Σ_terms ε''_tag(f) P_off,term, so the noise splits
+//! exactly into one non-negative share per tag, or per lossy term: which wire or blade
+//! dominates at which frequency. Only the blocks of the stage that the output couples to
+//! are solved (see [`pendkit_dynamics::Solver`]), and the per-tag shares cost one sparse
+//! quadratic form per tag over them.
 
 use nalgebra::DVector;
-use pendkit_dynamics::StageModel;
+use pendkit_dynamics::{DynamicsError, Input, Output, Solver, StageModel, Sweep};
 use pendkit_energy::Damping;
 
 /// Boltzmann constant k_B (J/K).
 pub const BOLTZMANN: f64 = 1.380649e-23;
+
+/// How a noise curve is computed.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct NoiseOptions {
+    /// Which unknowns are solved (default: only the blocks the output couples to).
+    pub solver: Solver,
+    /// Also give the share of every lossy term ([`ThermalNoise::by_term`]); the per-tag
+    /// shares are always given.
+    pub per_term: bool,
+}
 
 /// Thermal noise at one output over a frequency grid.
 #[derive(Clone, Debug)]
 pub struct ThermalNoise {
     /// One-sided PSD (m²/Hz or rad²/Hz) per frequency.
     pub total: Vec<f64>,
-    /// Share of each lossy term: (term name, tag, PSD per frequency); they add up to
-    /// `total`.
+    /// Share of each damping tag with lossy terms, in tag-name order: (tag, PSD per
+    /// frequency); they add up to `total`.
+    pub tags: Vec<(String, Vec<f64>)>,
+    /// Share of each lossy term: (term name, tag, PSD per frequency), adding up to `total`;
+    /// empty unless asked for ([`NoiseOptions::per_term`]).
     pub by_term: Vec<(String, String, Vec<f64>)>,
 }
 
 impl ThermalNoise {
-    /// The breakdown summed per damping tag, in tag order.
-    pub fn by_tag(&self) -> Vec<(String, Vec<f64>)> {
-        let mut tags: BTreeMap<String, Vec<f64>> = BTreeMap::new();
-        for (_, tag, series) in &self.by_term {
-            let sum = tags
-                .entry(tag.clone())
-                .or_insert_with(|| vec![0.0; series.len()]);
-            for (s, v) in sum.iter_mut().zip(series) {
-                *s += v;
-            }
-        }
-        tags.into_iter().collect()
+    /// The breakdown per damping tag, in tag order.
+    pub fn by_tag(&self) -> &[(String, Vec<f64>)] {
+        &self.tags
     }
 }
 
 /// Thermal-noise PSD of the output combination `v` of the variables (m²/Hz or rad²/Hz) at
-/// temperature `temperature` (K) and frequencies `freqs` (Hz), with the share of every
-/// lossy term, for the stage `model` with damping `damping`.
+/// temperature `temperature` (K) and frequencies `freqs` (Hz), for the stage `model` with
+/// damping `damping`, with the share of every tag and every lossy term. An output of the
+/// wrong length, or a frequency where the dynamic stiffness is exactly singular, gives NaN;
+/// [`thermal_noise_with`] says which it was.
 pub fn thermal_noise(
     model: &StageModel,
     damping: &Damping,
@@ -51,48 +59,161 @@ pub fn thermal_noise(
     temperature: f64,
     freqs: &[f64],
 ) -> ThermalNoise {
-    let (nx, nq, _) = model.sizes;
-    let n = nx + nq;
-    let mut out = ThermalNoise {
-        total: Vec::with_capacity(freqs.len()),
-        by_term: model
-            .terms
-            .iter()
-            .map(|t| {
-                (
-                    t.label.clone(),
-                    t.tag.clone(),
-                    Vec::with_capacity(freqs.len()),
-                )
-            })
-            .collect(),
+    let options = NoiseOptions {
+        per_term: true,
+        ..Default::default()
     };
-    for &f in freqs {
-        let z = model.respond_to_force(damping, v, f);
-        let scale = 4.0 * BOLTZMANN * temperature / (2.0 * std::f64::consts::PI * f);
-        let response: faer::c64 = (0..nx).map(|i| z[i] * v[i]).sum();
-        out.total.push(scale * response.im.abs());
-        for (t, (_, _, series)) in model.terms.iter().zip(out.by_term.iter_mut()) {
-            let (_, loss) = damping.at(&t.tag, f);
-            // dissipation of this term: ε''(f) Re(z̄ᵀ P_off z) over its coordinates (the
-            // support's entries of z are zero: it is held)
-            let zl = |a: usize| {
-                t.positions
-                    .get(a)
-                    .filter(|&&p| p < n)
-                    .map_or(faer::c64::new(0.0, 0.0), |&p| z[p])
-            };
-            let m = t.positions.len();
-            let mut energy = 0.0;
-            if loss != 0.0 {
-                for a in 0..m {
-                    for b in 0..m {
-                        energy += (zl(a).conj() * zl(b)).re * t.off[a * m + b];
-                    }
-                }
-            }
-            series.push(scale * loss * energy);
+    thermal_noise_with(model, damping, v, temperature, freqs, &options).unwrap_or_else(|_| {
+        let nan = vec![f64::NAN; freqs.len()];
+        ThermalNoise {
+            total: nan.clone(),
+            tags: model
+                .by_tag
+                .iter()
+                .map(|(t, _)| (t.clone(), nan.clone()))
+                .collect(),
+            by_term: model
+                .terms
+                .iter()
+                .map(|t| (t.label.clone(), t.tag.clone(), nan.clone()))
+                .collect(),
+        }
+    })
+}
+
+/// One quadratic form Σ w_ij Re(z̄_i z_j) over the solved unknowns (upper triangle, the
+/// off-diagonal weights doubled).
+#[derive(Default)]
+struct Form {
+    entries: Vec<(usize, usize, f64)>,
+}
+
+impl Form {
+    fn push(&mut self, i: usize, j: usize, value: f64) {
+        if i == j {
+            self.entries.push((i, j, value));
+        } else if i < j {
+            self.entries.push((i, j, 2.0 * value));
         }
     }
-    out
+
+    fn energy(&self, z: &[faer::c64]) -> f64 {
+        self.entries
+            .iter()
+            .map(|&(i, j, w)| w * (z[i].re * z[j].re + z[i].im * z[j].im))
+            .sum()
+    }
+}
+
+/// Thermal noise as [`thermal_noise`], solved and broken down as `options` says.
+pub fn thermal_noise_with(
+    model: &StageModel,
+    damping: &Damping,
+    v: &DVector<f64>,
+    temperature: f64,
+    freqs: &[f64],
+    options: &NoiseOptions,
+) -> Result<ThermalNoise, DynamicsError> {
+    let input = Input::Force(v.clone());
+    let output = Output::Displacement(v.clone());
+    let mut sweep = Sweep::new(model, damping, &input, &output, options.solver)?;
+    // per-tag forms over the solved unknowns
+    let tag_forms: Vec<Form> = model
+        .by_tag
+        .iter()
+        .map(|(_, values)| {
+            let mut form = Form::default();
+            for (slot, &p) in values.iter().enumerate() {
+                let (r, c) = model.pattern.position(slot);
+                if let (Some(i), Some(j), true) = (sweep.local(r), sweep.local(c), p != 0.0) {
+                    form.push(i, j, p);
+                }
+            }
+            form
+        })
+        .collect();
+    // per-term forms, each with its tag's index
+    let term_forms: Vec<(usize, Form)> =
+        if options.per_term || options.solver == Solver::DenseReference {
+            model
+                .terms
+                .iter()
+                .map(|t| {
+                    let tag = model
+                        .by_tag
+                        .iter()
+                        .position(|(name, _)| *name == t.tag)
+                        .unwrap_or(0);
+                    let m = t.positions.len();
+                    let mut form = Form::default();
+                    for (a, &pa) in t.positions.iter().enumerate() {
+                        for (b, &pb) in t.positions.iter().enumerate() {
+                            if let (Some(i), Some(j)) = (sweep.local(pa), sweep.local(pb)) {
+                                // the full local matrix, each ordered pair once
+                                form.entries.push((i, j, t.off[a * m + b]));
+                            }
+                        }
+                    }
+                    (tag, form)
+                })
+                .collect()
+        } else {
+            Vec::new()
+        };
+    let mut total = Vec::with_capacity(freqs.len());
+    let mut tags: Vec<Vec<f64>> = vec![Vec::with_capacity(freqs.len()); model.by_tag.len()];
+    let mut terms: Vec<Vec<f64>> = vec![Vec::with_capacity(freqs.len()); term_forms.len()];
+    for &f in freqs {
+        let response = sweep.at(f)?;
+        let scale = 4.0 * BOLTZMANN * temperature / (2.0 * std::f64::consts::PI * f);
+        total.push(scale * response.im.abs());
+        let z = sweep.response();
+        for ((tag, form), series) in term_forms.iter().zip(terms.iter_mut()) {
+            let loss = sweep.multiplier(*tag).im;
+            series.push(if loss != 0.0 {
+                scale * loss * form.energy(z)
+            } else {
+                0.0
+            });
+        }
+        if options.solver == Solver::DenseReference {
+            // the reference adds the per-term shares up per tag
+            for series in tags.iter_mut() {
+                series.push(0.0);
+            }
+            for ((tag, _), series) in term_forms.iter().zip(&terms) {
+                if let (Some(sum), Some(last)) = (tags[*tag].last_mut(), series.last()) {
+                    *sum += last;
+                }
+            }
+        } else {
+            for (t, (form, series)) in tag_forms.iter().zip(tags.iter_mut()).enumerate() {
+                let loss = sweep.multiplier(t).im;
+                series.push(if loss != 0.0 {
+                    scale * loss * form.energy(z)
+                } else {
+                    0.0
+                });
+            }
+        }
+    }
+    Ok(ThermalNoise {
+        total,
+        tags: model
+            .by_tag
+            .iter()
+            .map(|(name, _)| name.clone())
+            .zip(tags)
+            .collect(),
+        by_term: if options.per_term {
+            model
+                .terms
+                .iter()
+                .zip(terms)
+                .map(|(t, series)| (t.label.clone(), t.tag.clone(), series))
+                .collect()
+        } else {
+            Vec::new()
+        },
+    })
 }

@@ -1,0 +1,191 @@
+//! Where the stage's matrices can be non-zero: one symmetric sparsity pattern over the
+//! master matrix (layout order x, q, s), the union over the lossless part, every damping
+//! tag and the mass matrix. Everything that runs per frequency works on this fixed pattern,
+//! and the exactly decoupled blocks of a suspension are its connected components.
+
+use std::ops::Range;
+
+/// A symmetric sparsity pattern of an n × n matrix in compressed rows, columns sorted in
+/// each row. A slot is the index of one stored position; values of a matrix on the pattern
+/// are a slice indexed by slot.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Pattern {
+    dim: usize,
+    row_start: Vec<usize>,
+    row_of: Vec<usize>,
+    cols: Vec<usize>,
+}
+
+impl Pattern {
+    /// The pattern holding every `(row, column)` of `positions` (duplicates allowed), and
+    /// the transposed positions too, so that it is symmetric.
+    pub fn from_positions(dim: usize, positions: impl IntoIterator<Item = (usize, usize)>) -> Self {
+        let mut rows: Vec<Vec<usize>> = vec![Vec::new(); dim];
+        for (i, j) in positions {
+            rows[i].push(j);
+            rows[j].push(i);
+        }
+        let mut row_start = Vec::with_capacity(dim + 1);
+        let mut row_of = Vec::new();
+        let mut cols = Vec::new();
+        row_start.push(0);
+        for (i, mut row) in rows.into_iter().enumerate() {
+            row.sort_unstable();
+            row.dedup();
+            row_of.extend(std::iter::repeat_n(i, row.len()));
+            cols.extend(row);
+            row_start.push(cols.len());
+        }
+        Pattern {
+            dim,
+            row_start,
+            row_of,
+            cols,
+        }
+    }
+
+    /// Number of rows (and columns).
+    pub fn dim(&self) -> usize {
+        self.dim
+    }
+
+    /// Number of stored positions.
+    pub fn len(&self) -> usize {
+        self.cols.len()
+    }
+
+    /// Whether nothing is stored.
+    pub fn is_empty(&self) -> bool {
+        self.cols.is_empty()
+    }
+
+    /// Slots of row `i`.
+    pub fn row_slots(&self, i: usize) -> Range<usize> {
+        self.row_start[i]..self.row_start[i + 1]
+    }
+
+    /// Columns stored in row `i`, ascending.
+    pub fn row(&self, i: usize) -> &[usize] {
+        &self.cols[self.row_slots(i)]
+    }
+
+    /// (row, column) of a slot.
+    pub fn position(&self, slot: usize) -> (usize, usize) {
+        (self.row_of[slot], self.cols[slot])
+    }
+
+    /// The slot of (i, j), if stored.
+    pub fn slot(&self, i: usize, j: usize) -> Option<usize> {
+        let range = self.row_slots(i);
+        self.cols[range.clone()]
+            .binary_search(&j)
+            .ok()
+            .map(|k| range.start + k)
+    }
+
+    /// The sub-pattern of the slots `keep` accepts, kept symmetric (a slot stays when it or
+    /// its transpose is accepted), and for each of its slots the slot it had here.
+    pub fn retain(&self, keep: impl Fn(usize) -> bool) -> (Pattern, Vec<usize>) {
+        let kept: Vec<bool> = (0..self.len())
+            .map(|s| {
+                let (i, j) = self.position(s);
+                keep(s) || self.slot(j, i).is_some_and(&keep)
+            })
+            .collect();
+        let pattern = Pattern::from_positions(
+            self.dim,
+            (0..self.len())
+                .filter(|&s| kept[s])
+                .map(|s| self.position(s)),
+        );
+        let old = (0..pattern.len())
+            .map(|s| {
+                let (i, j) = pattern.position(s);
+                self.slot(i, j).unwrap_or(usize::MAX)
+            })
+            .collect();
+        (pattern, old)
+    }
+
+    /// The compressed columns (column pointers, row indices) of the square sub-pattern over
+    /// `nodes` (ascending), numbered by `local` (the position of each node among `nodes`,
+    /// `usize::MAX` for nodes left out). Rows stay ascending in each column because the
+    /// numbering keeps the order.
+    pub fn restricted_columns(&self, nodes: &[usize], local: &[usize]) -> (Vec<usize>, Vec<usize>) {
+        let mut col_ptr = Vec::with_capacity(nodes.len() + 1);
+        let mut row_idx = Vec::new();
+        col_ptr.push(0);
+        for &c in nodes {
+            // symmetric: row c lists the rows of column c
+            row_idx.extend(
+                self.row(c)
+                    .iter()
+                    .filter_map(|&r| local.get(r).copied().filter(|&l| l != usize::MAX)),
+            );
+            col_ptr.push(row_idx.len());
+        }
+        (col_ptr, row_idx)
+    }
+
+    /// Connected components of the graph over the nodes `0..n` (n ≤ dim) whose edges are
+    /// the stored positions with both ends below n: a label per node, numbered from 0 in
+    /// order of each component's lowest node, and the number of components.
+    pub fn components(&self, n: usize) -> (Vec<usize>, usize) {
+        const NONE: usize = usize::MAX;
+        let mut label = vec![NONE; n];
+        let mut count = 0;
+        let mut stack = Vec::new();
+        for start in 0..n {
+            if label[start] != NONE {
+                continue;
+            }
+            label[start] = count;
+            stack.push(start);
+            while let Some(i) = stack.pop() {
+                for &j in self.row(i) {
+                    if j < n && label[j] == NONE {
+                        label[j] = count;
+                        stack.push(j);
+                    }
+                }
+            }
+            count += 1;
+        }
+        (label, count)
+    }
+}
+
+/// Connected components of a symmetric matrix given by `nonzero(i, j)` over `0..n`: a label
+/// per node (numbered from 0 in order of lowest node) and the number of components. O(n²):
+/// for dense matrices (the eigenproblem's K_eff and M).
+pub(crate) fn dense_components(
+    n: usize,
+    nonzero: impl Fn(usize, usize) -> bool,
+) -> (Vec<usize>, usize) {
+    let pattern = Pattern::from_positions(
+        n,
+        (0..n)
+            .flat_map(|i| (0..=i).map(move |j| (i, j)))
+            .filter(|&(i, j)| nonzero(i, j)),
+    );
+    pattern.components(n)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn components_follow_the_stored_positions() {
+        // 0–2 and 1–3 coupled, 4 alone: three components labelled by their lowest node
+        let p = Pattern::from_positions(5, [(0, 2), (3, 1), (4, 4), (2, 2)]);
+        assert_eq!(p.components(5), (vec![0, 1, 0, 1, 2], 3));
+        assert_eq!(p.slot(2, 0), Some(p.row_slots(2).start));
+        assert_eq!(p.slot(0, 1), None);
+        // only nodes below n count: 0 and 2 are still joined, 3 is cut from 1
+        assert_eq!(p.components(3), (vec![0, 1, 0], 2));
+        let (rows, cols): (Vec<_>, Vec<_>) = (0..p.len()).map(|s| p.position(s)).unzip();
+        assert_eq!(rows, [0, 1, 2, 2, 3, 4]);
+        assert_eq!(cols, [2, 3, 0, 2, 1, 4]);
+    }
+}

@@ -1,0 +1,423 @@
+//! The frequency-independent matrices of one stage on one fixed sparsity pattern (DESIGN.md
+//! §4–§5): P(f) = lossless + Σ_tag (ε'_tag(f) + i ε''_tag(f)) P_tag, the mass matrix, and
+//! the per-term tension-off Hessians for the noise breakdown; with the dense views, the
+//! complex float elimination and the state-space form built on them.
+//!
+//! The matrices are assembled once; damping enters only through the multipliers passed to
+//! each call, so trying other damping never re-assembles anything.
+
+use std::collections::BTreeMap;
+
+use faer::{Mat, c64};
+use nalgebra::{DMatrix, DVector};
+use pendkit_assembly::{Assembled, OffHessian};
+use pendkit_energy::{Damping, System};
+
+use crate::DynamicsError;
+use crate::pattern::Pattern;
+use crate::schur::eliminate;
+
+pub(crate) const TWO_PI: f64 = 2.0 * std::f64::consts::PI;
+
+/// One term's tension-off Hessian, kept for the per-term noise breakdown.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TermLoss {
+    /// Term name.
+    pub label: String,
+    /// Damping tag.
+    pub tag: String,
+    /// Master-matrix rows of the term's coordinates.
+    pub positions: Vec<usize>,
+    /// Tension-off Hessian over those coordinates (row-major; N/m, N/rad, N m/rad).
+    pub off: Vec<f64>,
+}
+
+/// The frequency-independent matrices of one stage, every one stored as values on the
+/// same symmetric pattern `pattern` (master-matrix order: variables, floats, parameters):
+/// P(f) = lossless + Σ_tag (ε'_tag(f) + i ε''_tag(f)) P_tag.
+///
+/// Build it with [`StageModel::new`]; the fields are the record of the stage (edit none of
+/// them: the pattern's blocks are computed from them once).
+#[derive(Clone, Debug)]
+pub struct StageModel {
+    /// Numbers of variables, floats and parameters (master-matrix order x, q, s).
+    pub sizes: (usize, usize, usize),
+    /// Variable names.
+    pub variables: Vec<String>,
+    /// Float names.
+    pub floats: Vec<String>,
+    /// Parameter names.
+    pub parameters: Vec<String>,
+    /// Where any part of the master matrix or the mass matrix can be non-zero.
+    pub pattern: Pattern,
+    /// Σ(P_on − P_off) on the pattern: stiffness from static loads through changing
+    /// geometry, lossless (N/m, N/rad, N m/rad).
+    pub lossless: Vec<f64>,
+    /// Σ P_off of each damping tag that has lossy terms, on the pattern, tags in name order.
+    pub by_tag: Vec<(String, Vec<f64>)>,
+    /// Per-term tension-off Hessians (for the per-term noise breakdown).
+    pub terms: Vec<TermLoss>,
+    /// Mass matrix over the variables (kg, kg m, kg m²).
+    pub mass: DMatrix<f64>,
+    /// The mass matrix on the pattern (zero outside the variables' block).
+    pub mass_on_pattern: Vec<f64>,
+    /// Connected component of each unknown (variables, then floats) in the pattern: the
+    /// exactly decoupled blocks.
+    pub(crate) blocks: Vec<usize>,
+}
+
+/// A displacement or force input.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Input {
+    /// Displacement of the parameters (m or rad per unit input), one entry per parameter.
+    Displacement(DVector<f64>),
+    /// Generalised force on the variables (N or N m per unit input), one per variable.
+    Force(DVector<f64>),
+}
+
+/// A displacement or support-force output.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Output {
+    /// A linear combination of the variables (m or rad).
+    Displacement(DVector<f64>),
+    /// A linear combination of the generalised forces on the parameters (N or N m).
+    SupportForce(DVector<f64>),
+}
+
+/// Real state-space matrices with names (DESIGN.md §5), damping as viscous at `f_d`.
+#[derive(Clone, Debug)]
+pub struct StateSpace {
+    /// State matrix (2n × 2n).
+    pub a: DMatrix<f64>,
+    /// Input matrix (2n × (n_s + n)).
+    pub b: DMatrix<f64>,
+    /// Output matrix ((n + n_s) × 2n).
+    pub c: DMatrix<f64>,
+    /// Feedthrough ((n + n_s) × (n_s + n)).
+    pub d: DMatrix<f64>,
+    /// State names: the variables, then their rates (`<name>_dot`).
+    pub states: Vec<String>,
+    /// Input names: support displacements, then `force:<variable>`.
+    pub inputs: Vec<String>,
+    /// Output names: the variables, then `force:<parameter>` (forces on the support).
+    pub outputs: Vec<String>,
+    /// Frequency (Hz) at which frequency-dependent damping was represented as viscous.
+    pub damping_frequency: f64,
+}
+
+/// Complex K_eff, C_XS,eff and S_eff at one frequency.
+#[derive(Clone, Debug)]
+pub struct ReducedComplex {
+    /// K_eff over the variables.
+    pub k_eff: Mat<c64>,
+    /// C_XS,eff: variables × parameters.
+    pub c_xs_eff: Mat<c64>,
+    /// S_eff over the parameters.
+    pub s_eff: Mat<c64>,
+}
+
+/// Accumulates local Hessians on a pattern in term order (the order of a dense scatter,
+/// so the sums are the same numbers a dense assembly gives).
+struct Scatter<'p> {
+    pattern: &'p Pattern,
+    slots: Vec<usize>,
+}
+
+impl<'p> Scatter<'p> {
+    fn new(pattern: &'p Pattern) -> Self {
+        Scatter {
+            pattern,
+            slots: Vec::new(),
+        }
+    }
+
+    /// Slots of a term's local matrix (row-major over its positions).
+    fn locate(&mut self, positions: &[usize]) {
+        self.slots.clear();
+        for &a in positions {
+            for &b in positions {
+                // every term position pair is in the pattern by construction
+                self.slots
+                    .push(self.pattern.slot(a, b).unwrap_or(usize::MAX));
+            }
+        }
+    }
+
+    fn add(&self, into: &mut [f64], local: &[f64]) {
+        for (&slot, &v) in self.slots.iter().zip(local) {
+            if let Some(x) = into.get_mut(slot) {
+                *x += v;
+            }
+        }
+    }
+}
+
+impl StageModel {
+    /// Collects the stage's matrices from an assembly: one pattern for every part, the
+    /// lossless part Σ(P_on − P_off), each damping tag's Σ P_off and the mass matrix on it.
+    pub fn new(system: &System, assembled: &Assembled) -> Self {
+        let layout = &assembled.layout;
+        let (nx, nq, ns) = layout.sizes();
+        let dim = nx + nq + ns;
+        let names = |ids: &[usize]| ids.iter().map(|&i| system.coords[i].name.clone()).collect();
+        let positions: Vec<Vec<usize>> = assembled
+            .terms
+            .iter()
+            .map(|t| t.coords.iter().map(|&g| layout.position[g]).collect())
+            .collect();
+        let mass = &assembled.mass;
+        let mass_entries = (0..nx)
+            .flat_map(|i| (0..nx).map(move |j| (i, j)))
+            .filter(|&(i, j)| mass[(i, j)] != 0.0);
+        let candidates = Pattern::from_positions(
+            dim,
+            positions
+                .iter()
+                .flat_map(|p| p.iter().flat_map(move |&a| p.iter().map(move |&b| (a, b))))
+                .chain(mass_entries),
+        );
+        // lossless = Σ_zero P_on + (Σ_replaced P_on − Σ_replaced P_off), as the dense
+        // dilution split adds them
+        let nnz = candidates.len();
+        let (mut zero_on, mut replaced_on, mut replaced_off) =
+            (vec![0.0; nnz], vec![0.0; nnz], vec![0.0; nnz]);
+        let mut by_tag: BTreeMap<String, Vec<f64>> = BTreeMap::new();
+        let mut terms = Vec::new();
+        let mut scatter = Scatter::new(&candidates);
+        for (t, pos) in assembled.terms.iter().zip(&positions) {
+            scatter.locate(pos);
+            let off = match &t.off {
+                OffHessian::Zero => {
+                    scatter.add(&mut zero_on, &t.on);
+                    continue;
+                }
+                OffHessian::Same => &t.on,
+                OffHessian::Matrix(m) => {
+                    scatter.add(&mut replaced_on, &t.on);
+                    scatter.add(&mut replaced_off, m);
+                    m
+                }
+            };
+            let tag = by_tag
+                .entry(t.tag.clone())
+                .or_insert_with(|| vec![0.0; nnz]);
+            scatter.add(tag, off);
+            terms.push(TermLoss {
+                label: t.label.clone(),
+                tag: t.tag.clone(),
+                positions: pos.clone(),
+                off: off.clone(),
+            });
+        }
+        let lossless: Vec<f64> = (0..nnz)
+            .map(|s| zero_on[s] + (replaced_on[s] - replaced_off[s]))
+            .collect();
+        let mass_on_candidates: Vec<f64> = (0..nnz)
+            .map(|s| {
+                let (i, j) = candidates.position(s);
+                if i < nx && j < nx { mass[(i, j)] } else { 0.0 }
+            })
+            .collect();
+        // the pattern holds what is non-zero after the sums: a term's local Hessian has
+        // exact zeros (a vertical wire does not couple x to y), and those decouple blocks
+        let (pattern, old) = candidates.retain(|s| {
+            lossless[s] != 0.0
+                || mass_on_candidates[s] != 0.0
+                || by_tag.values().any(|p| p[s] != 0.0)
+        });
+        let on_pattern = |values: &[f64]| old.iter().map(|&s| values[s]).collect::<Vec<f64>>();
+        let lossless = on_pattern(&lossless);
+        let mass_on_pattern = on_pattern(&mass_on_candidates);
+        let by_tag: BTreeMap<String, Vec<f64>> = by_tag
+            .into_iter()
+            .map(|(t, p)| (t, on_pattern(&p)))
+            .collect();
+        let (blocks, _) = pattern.components(nx + nq);
+        StageModel {
+            sizes: (nx, nq, ns),
+            variables: names(&layout.variables),
+            floats: names(&layout.floats),
+            parameters: names(&layout.parameters),
+            pattern,
+            lossless,
+            by_tag: by_tag.into_iter().collect(),
+            terms,
+            mass: mass.clone(),
+            mass_on_pattern,
+            blocks,
+        }
+    }
+
+    /// Number of unknowns solved for in a response: variables and floats.
+    pub fn unknowns(&self) -> usize {
+        self.sizes.0 + self.sizes.1
+    }
+
+    /// The real and imaginary parts of P(f) on the pattern, tags added in name order.
+    pub fn master_values(&self, damping: &Damping, f_hz: f64) -> (Vec<f64>, Vec<f64>) {
+        let mut re = self.lossless.clone();
+        let mut im = vec![0.0; re.len()];
+        for (tag, p) in &self.by_tag {
+            let (mr, mi) = damping.at(tag, f_hz);
+            for ((r, i), &v) in re.iter_mut().zip(im.iter_mut()).zip(p) {
+                *r += v * mr;
+                if mi != 0.0 {
+                    *i += v * mi;
+                }
+            }
+        }
+        (re, im)
+    }
+
+    /// Values on the pattern as a dense master matrix.
+    pub fn dense(&self, values: &[f64]) -> DMatrix<f64> {
+        let n = self.pattern.dim();
+        let mut m = DMatrix::zeros(n, n);
+        for (s, &v) in values.iter().enumerate() {
+            m[self.pattern.position(s)] = v;
+        }
+        m
+    }
+
+    /// Real stiffness at f = 0 (ε' of each tag at DC), dense: the matrix the modes use.
+    pub fn real_stiffness(&self, damping: &Damping) -> DMatrix<f64> {
+        self.dense(&self.master_values(damping, 0.0).0)
+    }
+
+    /// Complex master matrix P(f) (layout order x, q, s), dense real and imaginary parts.
+    pub fn master(&self, damping: &Damping, f_hz: f64) -> (DMatrix<f64>, DMatrix<f64>) {
+        let (re, im) = self.master_values(damping, f_hz);
+        (self.dense(&re), self.dense(&im))
+    }
+
+    /// Checks that an input and an output have one entry per parameter or variable.
+    pub fn check(&self, input: &Input, output: &Output) -> Result<(), DynamicsError> {
+        let (nx, _, ns) = self.sizes;
+        let sizes = [
+            match input {
+                Input::Displacement(s) => ("displacement input", s.len(), ns),
+                Input::Force(f) => ("force input", f.len(), nx),
+            },
+            match output {
+                Output::Displacement(o) => ("displacement output", o.len(), nx),
+                Output::SupportForce(o) => ("support-force output", o.len(), ns),
+            },
+        ];
+        for (what, got, expected) in sizes {
+            if got != expected {
+                return Err(DynamicsError::Length {
+                    what,
+                    expected,
+                    got,
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// Complex reduced matrices K_eff(f), C_XS,eff(f), S_eff(f): the Schur complement of
+    /// the floats done on the complex matrices, per frequency (DESIGN.md §5). The float
+    /// block is not checked here (the stage's modes check it at f = 0); see
+    /// [`StageModel::state_space`] for a checked use.
+    pub fn reduced(&self, damping: &Damping, f_hz: f64) -> ReducedComplex {
+        self.reduced_checked(damping, f_hz).0
+    }
+
+    fn reduced_checked(&self, damping: &Damping, f_hz: f64) -> (ReducedComplex, Option<usize>) {
+        let (nx, nq, ns) = self.sizes;
+        let (re, im) = self.master_values(damping, f_hz);
+        let n = self.pattern.dim();
+        let mut p = Mat::<c64>::zeros(n, n);
+        for s in 0..re.len() {
+            let (i, j) = self.pattern.position(s);
+            p[(i, j)] = c64::new(re[s], im[s]);
+        }
+        let kept: Vec<usize> = (0..nx).chain(nx + nq..n).collect();
+        let floats: Vec<usize> = (nx..nx + nq).collect();
+        let e = eliminate(|i, j| p[(i, j)], &kept, &floats);
+        let a = e.matrix;
+        let block = |r0: usize, c0: usize, nr: usize, nc: usize| {
+            Mat::<c64>::from_fn(nr, nc, |i, j| a[(r0 + i, c0 + j)])
+        };
+        (
+            ReducedComplex {
+                k_eff: block(0, 0, nx, nx),
+                c_xs_eff: block(0, nx, nx, ns),
+                s_eff: block(nx, nx, ns, ns),
+            },
+            e.singular,
+        )
+    }
+
+    /// State-space matrices with damping represented as viscous at `f_d` (Hz, > 0); exact
+    /// for viscous damping only.
+    pub fn state_space(&self, damping: &Damping, f_d: f64) -> Result<StateSpace, DynamicsError> {
+        if f_d.is_nan() || f_d <= 0.0 {
+            return Err(DynamicsError::DampingFrequency(f_d));
+        }
+        let (nx, _, ns) = self.sizes;
+        let (r, singular) = self.reduced_checked(damping, f_d);
+        if let Some(k) = singular {
+            return Err(DynamicsError::SingularFloats {
+                float: self.floats.get(k).cloned().unwrap_or_default(),
+            });
+        }
+        let m_inv = self
+            .mass
+            .clone()
+            .cholesky()
+            .ok_or_else(|| DynamicsError::SingularMass {
+                variable: self.variables.first().cloned().unwrap_or_default(),
+            })?
+            .inverse();
+        let re = |m: &Mat<c64>| DMatrix::from_fn(m.nrows(), m.ncols(), |i, j| m[(i, j)].re);
+        let im = |m: &Mat<c64>| DMatrix::from_fn(m.nrows(), m.ncols(), |i, j| m[(i, j)].im);
+        let mk_re = -(&m_inv * re(&r.k_eff));
+        let mk_im = -(&m_inv * im(&r.k_eff)) / (TWO_PI * f_d);
+        let mc_re = -(&m_inv * re(&r.c_xs_eff));
+        let mut a = DMatrix::zeros(2 * nx, 2 * nx);
+        a.view_mut((0, nx), (nx, nx)).fill_with_identity();
+        a.view_mut((nx, 0), (nx, nx)).copy_from(&mk_re);
+        a.view_mut((nx, nx), (nx, nx)).copy_from(&mk_im);
+        let mut b = DMatrix::zeros(2 * nx, ns + nx);
+        b.view_mut((nx, 0), (nx, ns)).copy_from(&mc_re);
+        b.view_mut((nx, ns), (nx, nx)).copy_from(&m_inv);
+        let mut c = DMatrix::zeros(nx + ns, 2 * nx);
+        c.view_mut((0, 0), (nx, nx)).fill_with_identity();
+        c.view_mut((nx, 0), (ns, nx))
+            .copy_from(&(-re(&r.c_xs_eff).transpose()));
+        let mut d = DMatrix::zeros(nx + ns, ns + nx);
+        d.view_mut((nx, 0), (ns, ns)).copy_from(&(-re(&r.s_eff)));
+        let forces = |names: &[String]| {
+            names
+                .iter()
+                .map(|n| format!("force:{n}"))
+                .collect::<Vec<_>>()
+        };
+        Ok(StateSpace {
+            a,
+            b,
+            c,
+            d,
+            states: self
+                .variables
+                .iter()
+                .cloned()
+                .chain(self.variables.iter().map(|n| format!("{n}_dot")))
+                .collect(),
+            inputs: self
+                .parameters
+                .iter()
+                .cloned()
+                .chain(forces(&self.variables))
+                .collect(),
+            outputs: self
+                .variables
+                .iter()
+                .cloned()
+                .chain(forces(&self.parameters))
+                .collect(),
+            damping_frequency: f_d,
+        })
+    }
+}

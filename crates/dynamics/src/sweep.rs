@@ -1,0 +1,552 @@
+//! Responses frequency by frequency on the stage's fixed pattern (DESIGN.md §5): the
+//! dynamic stiffness E(f) = P(f) − ω² diag(M, 0) over the unknowns (variables and floats)
+//! is assembled from parts prepared once per sweep, then factorised and solved.
+//!
+//! - Assembly: every tag whose multiplier does not depend on f (its compiled expressions
+//!   are constants) is folded, with the lossless part, into one complex array of values;
+//!   the tags that do depend on f keep their values on the fixed pattern and are added with
+//!   their multiplier at each frequency. Nothing is allocated per frequency.
+//! - Restriction ([`Solver::Restricted`]): z = E⁻¹ rhs is non-zero only in the connected
+//!   components of the pattern that the right-hand side touches, and the output reads only
+//!   the components its vector touches; the others are exactly decoupled (zero entries, not
+//!   small ones), so only the unknowns of components touched by both are solved, with no
+//!   approximation (the quad's x3 with input x00: the 8 unknowns of the x–pitch block).
+//! - Solvers by size: up to [`DENSE_LIMIT`] unknowns a dense complex LU in the sweep's own
+//!   storage; above, faer's sparse LU with the symbolic analysis (fill-reducing ordering)
+//!   done once per sweep and the numeric factorisation per frequency, which costs O(n) per
+//!   point for chain-like suspensions (beads, chains of stages).
+//! - [`Solver::DenseReference`] is the straightforward path kept to check the others:
+//!   P(f) summed densely over the whole master matrix and one dense LU over all unknowns.
+
+use faer::linalg::solvers::Solve;
+use faer::{Mat, c64};
+use pendkit_energy::Damping;
+use pendkit_expr::Compiled;
+
+use crate::DynamicsError;
+use crate::lu;
+use crate::sparse_lu::SparseLu;
+use crate::stage::{Input, Output, StageModel, TWO_PI};
+
+/// Largest number of unknowns solved by the dense LU; above it the sparse LU is used.
+/// The dense factorisation costs n³/3 complex operations, the sparse one a per-column
+/// overhead that pays once the blocks are a few dozen unknowns: measured on the quad with
+/// one bead per fibre (42 unknowns, all coupled) 13.5 µs per point dense against 12.4 µs
+/// sparse, and with two (54) 23 µs against 19 µs; the 8-unknown x–pitch block of the quad
+/// factorises densely in well under a microsecond.
+pub const DENSE_LIMIT: usize = 40;
+
+/// How a response is solved.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Solver {
+    /// Only the unknowns in the blocks that couple to both the input and the output (exact:
+    /// the other blocks are decoupled by exact zeros). The default.
+    #[default]
+    Restricted,
+    /// Every variable and float, by the same fast assembly and solvers.
+    Full,
+    /// The reference: P(f) summed densely over the master matrix and one dense LU over all
+    /// unknowns, per frequency (the straightforward algorithm; slow, for checking).
+    DenseReference,
+}
+
+/// One of ε', ε'' of a tag: a constant, or an expression of f to evaluate per frequency.
+#[derive(Clone, Debug)]
+enum Coefficient {
+    Constant(f64),
+    OfFrequency(Compiled),
+}
+
+impl Coefficient {
+    fn of(expression: &Compiled) -> Self {
+        match expression.as_const() {
+            Some(x) => Coefficient::Constant(x),
+            None => Coefficient::OfFrequency(expression.clone()),
+        }
+    }
+
+    fn at(&self, f_hz: f64) -> f64 {
+        match self {
+            Coefficient::Constant(x) => *x,
+            Coefficient::OfFrequency(e) => e.eval(&[f_hz]),
+        }
+    }
+}
+
+/// The complex multiplier ε' + i ε'' of one tag over a sweep.
+#[derive(Clone, Debug)]
+enum Multiplier {
+    /// Does not depend on frequency.
+    Constant(c64),
+    /// Evaluated at each frequency (only the parts that read f).
+    Varying(Coefficient, Coefficient),
+}
+
+impl Multiplier {
+    fn of(damping: &Damping, tag: &str) -> Self {
+        match damping.get(tag) {
+            None => Multiplier::Constant(c64::new(1.0, 0.0)),
+            Some(d) => match (d.real.as_const(), d.imag.as_const()) {
+                (Some(re), Some(im)) => Multiplier::Constant(c64::new(re, im)),
+                _ => Multiplier::Varying(Coefficient::of(&d.real), Coefficient::of(&d.imag)),
+            },
+        }
+    }
+}
+
+/// A complex array that is linear in the varying tags' multipliers:
+/// constant + Σ_varying m_t(f) part_t, with each part a sparse list of real entries.
+#[derive(Clone, Debug)]
+struct Linear {
+    constant: Vec<c64>,
+    parts: Vec<Vec<(usize, f64)>>,
+}
+
+impl Linear {
+    fn new(len: usize, varying: usize) -> Self {
+        Linear {
+            constant: vec![c64::new(0.0, 0.0); len],
+            parts: vec![Vec::new(); varying],
+        }
+    }
+
+    /// Adds `value` × the multiplier of the part `which` (None: constant `m`) at `index`.
+    fn add(&mut self, index: usize, value: f64, which: Part) {
+        match which {
+            Part::Constant(m) => self.constant[index] += m * value,
+            Part::Varying(k) => self.parts[k].push((index, value)),
+        }
+    }
+
+    /// out = constant + Σ m_t part_t.
+    fn evaluate(&self, varying: &[c64], out: &mut [c64]) {
+        out.copy_from_slice(&self.constant);
+        for (part, &m) in self.parts.iter().zip(varying) {
+            for &(i, v) in part {
+                out[i] += c64::new(m.re * v, m.im * v);
+            }
+        }
+    }
+}
+
+/// Where a part's values go: folded with a constant multiplier, or kept as varying part k.
+#[derive(Clone, Copy)]
+enum Part {
+    Constant(c64),
+    Varying(usize),
+}
+
+/// The factorisation of E(f) over the solved unknowns.
+enum Factor {
+    /// Dense column-major n × n (the values array is the matrix).
+    Dense { n: usize, pivots: Vec<usize> },
+    /// Compressed columns with a symbolic analysis done once.
+    Sparse(Box<SparseLu<c64>>),
+}
+
+const NONE: usize = usize::MAX;
+
+/// The fixed-pattern engine: parts prepared once, assembled and solved per frequency.
+struct Fast {
+    matrix: Linear,
+    mass: Vec<(usize, f64)>,
+    rhs: Linear,
+    out: Linear,
+    direct: Linear,
+    factor: Factor,
+    values: Vec<c64>,
+    scalar: Vec<c64>,
+}
+
+/// The reference engine: today's dense algorithm.
+struct Reference {
+    input: Input,
+    output: Output,
+}
+
+enum Engine {
+    Fast(Box<Fast>),
+    Reference(Box<Reference>),
+}
+
+/// One input and one output of a stage, prepared for solving at many frequencies: the
+/// response z = E(f)⁻¹ rhs(f) over the solved unknowns and the output value oᵀ z (+ the
+/// direct term of a support-force output) at each frequency given to [`Sweep::at`].
+pub struct Sweep<'m> {
+    model: &'m StageModel,
+    damping: &'m Damping,
+    unknowns: Vec<usize>,
+    local: Vec<usize>,
+    multipliers: Vec<Multiplier>,
+    varying: Vec<usize>,
+    now: Vec<c64>,
+    now_varying: Vec<c64>,
+    engine: Engine,
+    z: Vec<c64>,
+}
+
+impl<'m> Sweep<'m> {
+    /// Prepares `input` → `output` of `model` with `damping`, solving as `solver` says.
+    pub fn new(
+        model: &'m StageModel,
+        damping: &'m Damping,
+        input: &Input,
+        output: &Output,
+        solver: Solver,
+    ) -> Result<Self, DynamicsError> {
+        model.check(input, output)?;
+        let n_all = model.unknowns();
+        let unknowns: Vec<usize> = match solver {
+            Solver::Restricted => coupled_unknowns(model, input, output),
+            Solver::Full | Solver::DenseReference => (0..n_all).collect(),
+        };
+        let mut local = vec![NONE; n_all];
+        for (l, &u) in unknowns.iter().enumerate() {
+            local[u] = l;
+        }
+        let multipliers: Vec<Multiplier> = model
+            .by_tag
+            .iter()
+            .map(|(tag, _)| Multiplier::of(damping, tag))
+            .collect();
+        let varying: Vec<usize> = (0..multipliers.len())
+            .filter(|&t| matches!(multipliers[t], Multiplier::Varying(..)))
+            .collect();
+        let now = multipliers
+            .iter()
+            .map(|m| match m {
+                Multiplier::Constant(c) => *c,
+                Multiplier::Varying(..) => c64::new(f64::NAN, f64::NAN),
+            })
+            .collect();
+        let engine = match solver {
+            Solver::DenseReference => Engine::Reference(Box::new(Reference {
+                input: input.clone(),
+                output: output.clone(),
+            })),
+            _ => Engine::Fast(Box::new(Fast::new(
+                model,
+                &unknowns,
+                &local,
+                &multipliers,
+                &varying,
+                input,
+                output,
+            )?)),
+        };
+        Ok(Sweep {
+            model,
+            damping,
+            z: vec![c64::new(0.0, 0.0); unknowns.len()],
+            unknowns,
+            local,
+            now,
+            now_varying: vec![c64::new(0.0, 0.0); varying.len()],
+            multipliers,
+            varying,
+            engine,
+        })
+    }
+
+    /// Master indices (variables, then floats) of the unknowns solved for, ascending.
+    pub fn unknowns(&self) -> &[usize] {
+        &self.unknowns
+    }
+
+    /// Position of master unknown `u` among the solved ones.
+    pub fn local(&self, u: usize) -> Option<usize> {
+        self.local.get(u).copied().filter(|&l| l != NONE)
+    }
+
+    /// The response z over the solved unknowns at the last frequency given to
+    /// [`Sweep::at`] (every other unknown's response is exactly zero).
+    pub fn response(&self) -> &[c64] {
+        &self.z
+    }
+
+    /// The multiplier ε' + i ε'' of tag `t` (index into the model's `by_tag`) at the last
+    /// frequency given to [`Sweep::at`].
+    pub fn multiplier(&self, t: usize) -> c64 {
+        self.now[t]
+    }
+
+    /// Solves at `f_hz` (Hz) and returns the output per unit input.
+    pub fn at(&mut self, f_hz: f64) -> Result<c64, DynamicsError> {
+        for (k, &t) in self.varying.iter().enumerate() {
+            if let Multiplier::Varying(re, im) = &self.multipliers[t] {
+                self.now[t] = c64::new(re.at(f_hz), im.at(f_hz));
+                self.now_varying[k] = self.now[t];
+            }
+        }
+        let w2 = (TWO_PI * f_hz).powi(2);
+        let solved = match &mut self.engine {
+            Engine::Fast(fast) => fast.solve(&self.now_varying, w2, &mut self.z),
+            Engine::Reference(r) => r.solve(self.model, self.damping, f_hz, &mut self.z),
+        };
+        match solved {
+            Some(y) if y.re.is_finite() && y.im.is_finite() => Ok(y),
+            _ => Err(DynamicsError::Singular { f_hz }),
+        }
+    }
+}
+
+impl Fast {
+    fn new(
+        model: &StageModel,
+        unknowns: &[usize],
+        local: &[usize],
+        multipliers: &[Multiplier],
+        varying: &[usize],
+        input: &Input,
+        output: &Output,
+    ) -> Result<Self, DynamicsError> {
+        let n = unknowns.len();
+        let (nx, nq, _) = model.sizes;
+        let n_all = nx + nq;
+        let factor = if n <= DENSE_LIMIT {
+            Factor::Dense {
+                n,
+                pivots: vec![0; n],
+            }
+        } else {
+            let (col_ptr, row_idx) = model.pattern.restricted_columns(unknowns, local);
+            Factor::Sparse(Box::new(SparseLu::new(col_ptr, row_idx)?))
+        };
+        let len = match &factor {
+            Factor::Dense { n, .. } => n * n,
+            Factor::Sparse(s) => s.len(),
+        };
+        let index = |i: usize, j: usize| match &factor {
+            Factor::Dense { n, .. } => Some(i + j * n),
+            Factor::Sparse(s) => s.index(i, j),
+        };
+        let nv = varying.len();
+        let mut matrix = Linear::new(len, nv);
+        let mut rhs = Linear::new(n, nv);
+        let mut out = Linear::new(n, nv);
+        let mut direct = Linear::new(1, nv);
+        let loc = |u: usize| local.get(u).copied().filter(|&l| l != NONE);
+        match input {
+            Input::Force(force) => {
+                for (l, &u) in unknowns.iter().enumerate() {
+                    if u < nx {
+                        rhs.constant[l] = c64::new(force[u], 0.0);
+                    }
+                }
+            }
+            Input::Displacement(_) => {}
+        }
+        match output {
+            Output::Displacement(o) => {
+                for (l, &u) in unknowns.iter().enumerate() {
+                    if u < nx {
+                        out.constant[l] = c64::new(o[u], 0.0);
+                    }
+                }
+            }
+            Output::SupportForce(_) => {}
+        }
+        let parts = std::iter::once((&model.lossless, Part::Constant(c64::new(1.0, 0.0)))).chain(
+            model.by_tag.iter().enumerate().map(|(t, (_, values))| {
+                let part = match &multipliers[t] {
+                    Multiplier::Constant(m) => Part::Constant(*m),
+                    Multiplier::Varying(..) => {
+                        Part::Varying(varying.iter().position(|&v| v == t).unwrap_or(0))
+                    }
+                };
+                (values, part)
+            }),
+        );
+        for (values, part) in parts {
+            for (slot, &v) in values.iter().enumerate() {
+                if v == 0.0 {
+                    continue;
+                }
+                let (r, c) = model.pattern.position(slot);
+                match (r < n_all, c < n_all) {
+                    (true, true) => {
+                        if let Some(k) = loc(r).zip(loc(c)).and_then(|(i, j)| index(i, j)) {
+                            matrix.add(k, v, part);
+                        }
+                    }
+                    // the input's force on the unknowns: −P_us s
+                    (true, false) => {
+                        if let (Some(i), Input::Displacement(s)) = (loc(r), input) {
+                            let s_c = s[c - n_all];
+                            if s_c != 0.0 {
+                                rhs.add(i, -v * s_c, part);
+                            }
+                        }
+                    }
+                    // the support force read from the response: −o_s P_su z
+                    (false, true) => {
+                        if let (Some(j), Output::SupportForce(o)) = (loc(c), output) {
+                            let o_r = o[r - n_all];
+                            if o_r != 0.0 {
+                                out.add(j, -v * o_r, part);
+                            }
+                        }
+                    }
+                    // and straight from the input: −o_s P_ss s
+                    (false, false) => {
+                        if let (Input::Displacement(s), Output::SupportForce(o)) = (input, output) {
+                            let w = o[r - n_all] * s[c - n_all];
+                            if w != 0.0 {
+                                direct.add(0, -v * w, part);
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        let mut mass = Vec::new();
+        for (slot, &m) in model.mass_on_pattern.iter().enumerate() {
+            if m == 0.0 {
+                continue;
+            }
+            let (r, c) = model.pattern.position(slot);
+            if let Some(k) = loc(r).zip(loc(c)).and_then(|(i, j)| index(i, j)) {
+                mass.push((k, m));
+            }
+        }
+        Ok(Fast {
+            values: vec![c64::new(0.0, 0.0); len],
+            scalar: vec![c64::new(0.0, 0.0); 1],
+            matrix,
+            mass,
+            rhs,
+            out,
+            direct,
+            factor,
+        })
+    }
+
+    /// Assembles E(f), factorises, solves into `z` and returns the output value.
+    fn solve(&mut self, varying: &[c64], w2: f64, z: &mut [c64]) -> Option<c64> {
+        self.matrix.evaluate(varying, &mut self.values);
+        for &(k, m) in &self.mass {
+            self.values[k].re -= w2 * m;
+        }
+        self.rhs.evaluate(varying, z);
+        let solved = match &mut self.factor {
+            Factor::Dense { n, pivots } => {
+                let ok = lu::factor(&mut self.values, *n, pivots);
+                if ok {
+                    lu::solve(&self.values, *n, pivots, z);
+                }
+                ok
+            }
+            Factor::Sparse(s) => s.factor(&self.values) && s.solve(z),
+        };
+        if !solved {
+            return None;
+        }
+        self.direct.evaluate(varying, &mut self.scalar);
+        let mut y = self.scalar[0];
+        // out·z with the output's parts: constant + Σ varying
+        for (&o, &zi) in self.out.constant.iter().zip(z.iter()) {
+            y += o * zi;
+        }
+        for (part, &m) in self.out.parts.iter().zip(varying) {
+            for &(i, v) in part {
+                y += c64::new(m.re * v, m.im * v) * z[i];
+            }
+        }
+        Some(y)
+    }
+}
+
+impl Reference {
+    /// Today's algorithm: dense P(f), dense A(f) = P_{xq,xq} − ω² diag(M, 0), faer's LU.
+    fn solve(
+        &self,
+        model: &StageModel,
+        damping: &Damping,
+        f_hz: f64,
+        z: &mut [c64],
+    ) -> Option<c64> {
+        let (nx, nq, ns) = model.sizes;
+        let n = nx + nq;
+        let (re, im) = model.master(damping, f_hz);
+        let pc = |i: usize, j: usize| c64::new(re[(i, j)], im[(i, j)]);
+        let w2 = (TWO_PI * f_hz).powi(2);
+        let a = Mat::<c64>::from_fn(n, n, |i, j| {
+            let m = if i < nx && j < nx {
+                model.mass[(i, j)]
+            } else {
+                0.0
+            };
+            pc(i, j) - c64::new(w2 * m, 0.0)
+        });
+        let rhs = Mat::<c64>::from_fn(n, 1, |i, _| match &self.input {
+            Input::Force(force) => c64::new(if i < nx { force[i] } else { 0.0 }, 0.0),
+            Input::Displacement(s) => -(0..ns).map(|k| pc(i, n + k) * s[k]).sum::<c64>(),
+        });
+        let x = a.partial_piv_lu().solve(&rhs);
+        for (i, zi) in z.iter_mut().enumerate() {
+            *zi = x[(i, 0)];
+        }
+        Some(match &self.output {
+            Output::Displacement(o) => (0..nx).map(|i| z[i] * o[i]).sum(),
+            Output::SupportForce(o) => (0..ns)
+                .map(|k| {
+                    let row = n + k;
+                    let from_z: c64 = (0..n).map(|j| pc(row, j) * z[j]).sum();
+                    let from_s: c64 = match &self.input {
+                        Input::Displacement(s) => (0..ns).map(|j| pc(row, n + j) * s[j]).sum(),
+                        Input::Force(_) => c64::new(0.0, 0.0),
+                    };
+                    -(from_z + from_s) * o[k]
+                })
+                .sum(),
+        })
+    }
+}
+
+/// The unknowns (master indices, ascending) in the blocks of the pattern that both the
+/// input's right-hand side and the output's vector touch.
+pub fn coupled_unknowns(model: &StageModel, input: &Input, output: &Output) -> Vec<usize> {
+    let (nx, _, _) = model.sizes;
+    let n_all = model.unknowns();
+    let n_blocks = model.blocks.iter().map(|&b| b + 1).max().unwrap_or(0);
+    let mark = |touched: &mut Vec<bool>, u: usize| {
+        if let Some(&b) = model.blocks.get(u) {
+            touched[b] = true;
+        }
+    };
+    // the unknowns a parameter row or column reaches through the pattern
+    let through_parameters = |touched: &mut Vec<bool>, weights: &[f64]| {
+        for (k, &w) in weights.iter().enumerate() {
+            if w != 0.0 {
+                for &u in model.pattern.row(n_all + k) {
+                    if u < n_all {
+                        mark(touched, u);
+                    }
+                }
+            }
+        }
+    };
+    let direct = |touched: &mut Vec<bool>, weights: &[f64]| {
+        for (u, &w) in weights.iter().enumerate().take(nx) {
+            if w != 0.0 {
+                mark(touched, u);
+            }
+        }
+    };
+    let mut by_input = vec![false; n_blocks];
+    match input {
+        Input::Force(f) => direct(&mut by_input, f.as_slice()),
+        Input::Displacement(s) => through_parameters(&mut by_input, s.as_slice()),
+    }
+    let mut by_output = vec![false; n_blocks];
+    match output {
+        Output::Displacement(o) => direct(&mut by_output, o.as_slice()),
+        Output::SupportForce(o) => through_parameters(&mut by_output, o.as_slice()),
+    }
+    (0..n_all)
+        .filter(|&u| {
+            let b = model.blocks[u];
+            by_input[b] && by_output[b]
+        })
+        .collect()
+}
