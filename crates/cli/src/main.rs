@@ -3,8 +3,12 @@
 
 mod bench;
 mod common;
+mod error;
+mod format;
 mod modes;
 mod noise;
+mod plotting;
+mod progress;
 mod ss;
 mod tf;
 
@@ -13,8 +17,9 @@ use std::io::Write as _;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
-use pendkit::Error;
-use pendkit_energy::registry;
+use pendkit::energy::registrations;
+
+use crate::error::CliError;
 
 #[derive(Parser)]
 #[command(
@@ -42,7 +47,8 @@ enum Command {
     /// element kind, mass matrix, modes, and optionally noise): median and minimum over
     /// repetitions.
     Bench(bench::Args),
-    /// List the registered element kinds and the stage each joins at.
+    /// List the registered element kinds, the stage each joins at and the crate that
+    /// registered it.
     Elements,
     /// List the bundled models.
     Models,
@@ -63,21 +69,24 @@ fn main() -> ExitCode {
 }
 
 /// Runs one command and returns what it prints.
-fn run(cli: Cli) -> Result<String, Error> {
+fn run(cli: Cli) -> Result<String, CliError> {
     match cli.command {
         Command::Modes(a) => modes::run(a),
         Command::Tf(a) => tf::run(a),
         Command::Noise(a) => noise::run(a),
         Command::Ss(a) => ss::run(a),
-        Command::Bench(a) => bench::run(a),
+        Command::Bench(a) => Ok(bench::run(a)?),
         Command::Elements => {
             let mut out = String::new();
-            for kind in registry() {
+            let _ = writeln!(out, "{:<20} {:<5} {:<32} what", "kind", "stage", "crate");
+            for r in registrations() {
+                let kind = r.element;
                 let _ = writeln!(
                     out,
-                    "{:<16} stage {:<3} {}",
+                    "{:<20} {:<5} {:<32} {}",
                     kind.kind(),
-                    kind.stage(),
+                    kind.stage().name(),
+                    r.crate_name,
                     kind.summary()
                 );
             }
