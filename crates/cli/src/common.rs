@@ -118,14 +118,20 @@ impl ModelArgs {
     /// Builds the case and runs its stage, computing the modes `modes` selects; a spinner
     /// shows on a terminal while it takes more than a second.
     pub fn run(&self, modes: ModeSelection) -> Result<Run, CliError> {
-        self.run_with(modes, &self.sets)
+        self.run_with(modes, &self.sets, true)
     }
 
-    /// As [`ModelArgs::run`] with these overrides instead of `--set`'s (a sweep's).
-    pub fn run_with(&self, modes: ModeSelection, sets: &[String]) -> Result<Run, CliError> {
+    /// As [`ModelArgs::run`] with these overrides instead of `--set`'s (a sweep's), and a
+    /// spinner only if `spinner` (a sweep shows its own bar).
+    pub fn run_with(
+        &self,
+        modes: ModeSelection,
+        sets: &[String],
+        spinner: bool,
+    ) -> Result<Run, CliError> {
         let case = Case::open(&self.model)?.with_sets(sets)?;
         let stage = self.stage.unwrap_or(DEFAULT_STAGE);
-        let _progress = Progress::spinner(format!("{}: stage {stage}", case.name));
+        let _progress = spinner.then(|| Progress::spinner(format!("{}: stage {stage}", case.name)));
         let mut times = PhaseTimes::new();
         let (system, resolved) = times.time("build", 1, || case.build())?;
         let options = RunOptions {

@@ -10,6 +10,7 @@ mod noise;
 mod plotting;
 mod progress;
 mod ss;
+mod sweep;
 mod tf;
 
 use std::fmt::Write as _;
@@ -43,6 +44,9 @@ enum Command {
     Noise(noise::Args),
     /// State-space matrices A, B, C, D with names, to .mat, .npz or .json.
     Ss(ss::Args),
+    /// Modes (tracked by shape), thermal noise or a transfer function over a grid of
+    /// parameter values, as CSV against the swept values.
+    Sweep(sweep::Args),
     /// Time each phase of a calculation in this process (build, equilibrium, Hessians per
     /// element kind, mass matrix, modes, and optionally noise): median and minimum over
     /// repetitions.
@@ -75,6 +79,7 @@ fn run(cli: Cli) -> Result<String, CliError> {
         Command::Tf(a) => tf::run(a),
         Command::Noise(a) => noise::run(a),
         Command::Ss(a) => ss::run(a),
+        Command::Sweep(a) => sweep::run(a),
         Command::Bench(a) => Ok(bench::run(a)?),
         Command::Elements => {
             let mut out = String::new();

@@ -34,10 +34,11 @@ pub fn unit_ratio(numerator: &str, denominator: &str) -> String {
 }
 
 /// A unit as an identifier-safe suffix for CSV headers: `m/N` → `m_per_N`, `rad/(N m)` →
-/// `rad_per_N_m`, `m/√Hz` → `m_per_rthz`.
+/// `rad_per_N_m`, `m/√Hz` → `m_per_rthz`, `kg m^2` → `kg_m2`.
 pub fn unit_slug(unit: &str) -> String {
     let text = unit
         .replace("√Hz", "rthz")
+        .replace('^', "")
         .replace('/', " per ")
         .replace(['(', ')'], " ");
     text.split_whitespace().collect::<Vec<_>>().join("_")
