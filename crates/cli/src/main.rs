@@ -9,6 +9,7 @@ mod modes;
 mod noise;
 mod plotting;
 mod progress;
+mod report;
 mod ss;
 mod sweep;
 mod tf;
@@ -44,6 +45,9 @@ enum Command {
     Noise(noise::Args),
     /// State-space matrices A, B, C, D with names, to .mat, .npz or .json.
     Ss(ss::Args),
+    /// A self-contained HTML report (DIR/index.html): parameters, equilibrium, stability,
+    /// modes, standard transfer functions, thermal noise and timing, with inline figures.
+    Report(report::Args),
     /// Modes (tracked by shape), thermal noise or a transfer function over a grid of
     /// parameter values, as CSV against the swept values.
     Sweep(sweep::Args),
@@ -80,6 +84,7 @@ fn run(cli: Cli) -> Result<String, CliError> {
         Command::Noise(a) => noise::run(a),
         Command::Ss(a) => ss::run(a),
         Command::Sweep(a) => sweep::run(a),
+        Command::Report(a) => report::run(a),
         Command::Bench(a) => Ok(bench::run(a)?),
         Command::Elements => {
             let mut out = String::new();
