@@ -1,6 +1,6 @@
 //! The exported state space, loaded by scipy, reproduces pendkit's own transfer functions
 //! at ten frequencies to 1e-9. The model is the double pendulum with viscous loss on its
-//! wires and no floats, where DESIGN.md §5's form is exact for force inputs and for support
+//! wires and no floats, where docs/physics.md §3's form is exact for force inputs and for support
 //! inputs whose coupling is lossless (horizontal: the wires' loss is diluted away). Lossy
 //! support coupling (vertical) is not exact: B and D keep only Re(C_XS,eff) and S_eff, so
 //! the damping force of the support's velocity is dropped (the README says so).
