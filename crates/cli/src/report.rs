@@ -534,16 +534,33 @@ fn transfer_section(
             groups.push((kind.clone(), resp.unit.clone()));
         }
     }
+    // identically zero responses (a degree of freedom the input does not reach) have no
+    // place on log axes: they are listed instead of drawn
+    let zero: Vec<String> = responses
+        .iter()
+        .filter(|(_, resp)| resp.values.iter().all(|h| h.norm() == 0.0))
+        .map(|(_, resp)| resp.name.clone())
+        .collect();
+    if !zero.is_empty() {
+        page.paragraph(&format!(
+            "Zero at every frequency, so not drawn: {}.",
+            zero.join(", ")
+        ));
+    }
     for (kind, unit) in &groups {
         let list: Vec<Response> = responses
             .iter()
             .filter(|(k, resp)| k == kind && resp.unit == *unit)
+            .filter(|(_, resp)| !zero.contains(&resp.name))
             .map(|(_, resp)| Response {
                 name: resp.name.clone(),
                 unit: resp.unit.clone(),
                 values: resp.values.clone(),
             })
             .collect();
+        if list.is_empty() {
+            continue;
+        }
         let title = if kind == "support" {
             format!("Support to test mass ({unit}): {}", run.heading())
         } else {
@@ -606,13 +623,21 @@ fn noise_section(page: &mut Page, run: &Run, freqs: &[f64], compute: bool) -> Re
         return Ok(());
     };
     let noise = plotting::noise(run, &output, freqs)?;
-    page.figure(
-        &plotting::noise_budget(run, &output, freqs, &noise),
-        &format!(
-            "Thermal noise of the test mass's {} by the fluctuation-dissipation theorem: the total and each damping tag's share (ASD; the shares add in power).",
+    if noise.psd().iter().any(|&p| p > 0.0) {
+        page.figure(
+            &plotting::noise_budget(run, &output, freqs, &noise),
+            &format!(
+                "Thermal noise of the test mass's {} by the fluctuation-dissipation theorem: the total and each damping tag's share (ASD; the shares add in power).",
+                run.port(&output)
+            ),
+        )?;
+    } else {
+        // a log-log plot of zeros is empty: say why there is no figure instead
+        page.paragraph(&format!(
+            "The thermal noise of the test mass's {} is zero at every frequency: no lossy term couples to it (for example, only wire-stretch loss, which dilution removes from horizontal motion).",
             run.port(&output)
-        ),
-    )?;
+        ));
+    }
     let unit = format!("{}/√Hz", r.output_unit(&output).unwrap_or_default());
     let at = (0..freqs.len())
         .min_by(|&i, &j| {
