@@ -72,7 +72,7 @@ impl Browser {
             .spawn()
             .unwrap_or_else(|e| {
                 panic!(
-                    "cannot start '{binary}' ({e}): the report test needs headless Chromium; install it with `apt-get install -y chromium` (.ci/run does) or set PENDKIT_CHROMIUM"
+                    "cannot start '{binary}' ({e}): the report test needs headless Chromium; install it with `apt-get install -y chromium` (.ci/run does), set PENDKIT_CHROMIUM to its path, or skip these checks explicitly with PENDKIT_SKIP_BROWSER=1"
                 )
             });
         // Chromium prints the browser's websocket address on stderr; keep draining stderr
