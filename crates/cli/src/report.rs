@@ -8,8 +8,8 @@ use std::fmt::Write as _;
 use std::path::PathBuf;
 use std::time::Instant;
 
+use pendkit::ModeSelection;
 use pendkit::energy::{CoordKind, Shape, Stage, registrations};
-use pendkit::{ModeSelection, unit_slug};
 use pendkit_plot::Figure;
 
 use crate::common::{GridArgs, ModelArgs, Run};
@@ -673,7 +673,7 @@ fn noise_section(page: &mut Page, run: &Run, freqs: &[f64], compute: bool) -> Re
             "100%".into(),
         ],
     );
-    let header = format!("ASD at {} Hz ({})", sci(freqs[at], 3, 0), unit_slug(&unit));
+    let header = format!("ASD at {} Hz ({unit})", sci(freqs[at], 3, 0));
     page.table(&["damping tag", &header, "share of the PSD"], &rows);
     page.end_section();
     Ok(())
