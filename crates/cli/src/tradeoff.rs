@@ -52,7 +52,11 @@ pub struct Args {
 
 /// `F1:F2` as two frequencies (Hz), 0 < F1 < F2.
 fn band(text: &str) -> Result<(f64, f64), CliError> {
-    let bad = || CliError::usage(format!("--band '{text}': expected F1:F2 in Hz, 0 < F1 < F2"));
+    let bad = || {
+        CliError::usage(format!(
+            "--band '{text}': expected F1:F2 in Hz, 0 < F1 < F2"
+        ))
+    };
     let (a, b) = text.split_once(':').ok_or_else(bad)?;
     let (a, b): (f64, f64) = (
         a.trim().parse().map_err(|_| bad())?,
@@ -195,7 +199,11 @@ fn table(model: &str, question: &Question, result: &Tradeoff, tolerance: f64) ->
         let marks = format!(
             "{}{}",
             if front.contains(&i) { "*" } else { " " },
-            if r.errors.max() <= tolerance { "=" } else { " " }
+            if r.errors.max() <= tolerance {
+                "="
+            } else {
+                " "
+            }
         );
         let _ = writeln!(
             out,

@@ -297,11 +297,7 @@ pub fn match_modes(
         .iter()
         .map(|&i| restrict(&reference.modes[i], |s| s.0))
         .collect();
-    let vars: Vec<_> = variant
-        .modes
-        .iter()
-        .map(|m| restrict(m, |s| s.1))
-        .collect();
+    let vars: Vec<_> = variant.modes.iter().map(|m| restrict(m, |s| s.1)).collect();
     let norm = |v: &nalgebra::DVector<f64>| v.dot(&(&mass * v)).abs().sqrt();
     let mut pairs = Vec::with_capacity(refs.len() * vars.len());
     for (a, r) in refs.iter().enumerate() {
@@ -453,7 +449,11 @@ impl Tradeoff {
         let mut out =
             String::from("variant,seconds,modes_max_rel_err,noise_max_rel_err,tf_max_rel_err\n");
         for r in &self.rows {
-            let tf = r.errors.transfer.map(|e| format!("{e:e}")).unwrap_or_default();
+            let tf = r
+                .errors
+                .transfer
+                .map(|e| format!("{e:e}"))
+                .unwrap_or_default();
             out += &format!(
                 "{},{:e},{:e},{:e},{tf}\n",
                 r.variant, r.seconds, r.errors.modes, r.errors.noise
@@ -575,8 +575,7 @@ fn timed_answer(
     let mut best = f64::INFINITY;
     let mut first = None;
     let mut runs = 0;
-    while runs == 0
-        || (runs < timing.max_runs && started.elapsed().as_secs_f64() < timing.budget_s)
+    while runs == 0 || (runs < timing.max_runs && started.elapsed().as_secs_f64() < timing.budget_s)
     {
         let t = Instant::now();
         let answer = answer(variant, question, grid)?;
