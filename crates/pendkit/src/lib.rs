@@ -57,6 +57,7 @@
 
 mod describe;
 mod state_space;
+pub mod tradeoff;
 
 use std::path::{Path, PathBuf};
 
@@ -159,6 +160,14 @@ pub enum Error {
     /// Modes or eliminations failed.
     #[error(transparent)]
     Dynamics(#[from] DynamicsError),
+    /// The reference variant of a trade-off ladder cannot answer the question.
+    #[error("reference variant '{variant}' cannot answer: {message}")]
+    Reference {
+        /// The reference variant's name.
+        variant: String,
+        /// Why.
+        message: String,
+    },
     /// A benchmark asked to repeat nothing.
     #[error("--repeat must be at least 1")]
     ZeroRepeat,
