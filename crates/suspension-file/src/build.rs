@@ -17,7 +17,7 @@ use pendkit_energy::{
     System, Wire, WireEnd, WireSection, WireTags,
 };
 use pendkit_expr::Expr;
-use pendkit_model::{BodySpec, BuildError, SystemBuilder};
+use pendkit_model::{BodySpec, BuildError, Shape, SystemBuilder};
 use pendkit_params::Resolved;
 
 use crate::damping::{blade_tag, find_material, subtree};
@@ -401,6 +401,16 @@ impl<'s, 'c> Interpreter<'s, 'c> {
         for body in &self.spec.bodies {
             self.body(body)?;
         }
+        for scheme in &self.spec.name_schemes {
+            let pairs: Vec<(&str, &str)> = scheme
+                .bodies
+                .iter()
+                .map(|(body, alias)| (body.value.as_str(), alias.as_str()))
+                .collect();
+            self.b
+                .name_scheme(&scheme.scheme, scheme.dofs.each_ref().map(String::as_str), &pairs)
+                .map_err(placed(&scheme.at))?;
+        }
         // parts, stage by stage in the file's order: blades, then the wires from them
         let plans = std::mem::take(&mut self.plans);
         for plan in plans.iter().flatten() {
@@ -543,7 +553,10 @@ impl<'s, 'c> Interpreter<'s, 'c> {
             spec = spec.centre_of_mass(ctx.vec3(c)?);
         }
         if let Some(shape) = &body.shape {
-            evaluate_shape(ctx, shape)?;
+            spec = spec.shape(evaluate_shape(ctx, shape)?);
+        }
+        if let Some(family) = &body.mode_family {
+            spec = spec.mode_family(&family.value);
         }
         let id = self.b.body(spec).map_err(placed(&body.at))?;
         self.bodies.push((id, nominal, mass));
@@ -1129,7 +1142,8 @@ impl<'s, 'c> Interpreter<'s, 'c> {
                     .body(
                         BodySpec::new(format!("{}b{}", w.name, k + 1))
                             .pose([&names[0], &names[1], &names[2], "0", "0", "0"])
-                            .mass(bead_mass),
+                            .mass(bead_mass)
+                            .mode_family("violin"),
                     )
                     .map_err(placed(at))?;
                 (bead, Vector3::zeros(), EndDirection::Hinged)
@@ -1363,31 +1377,17 @@ fn known_bodies(spec: &Spec) -> String {
         .join(", ")
 }
 
-/// A body's drawing shape at the parameter values: sizes in m, all positive.
-#[derive(Clone, Debug, PartialEq)]
-pub enum Shape {
-    /// Half sizes along the body axes (m).
-    Box([f64; 3]),
-    /// Radius and half length (m) along an axis (0 x, 1 y, 2 z).
-    Cylinder {
-        /// Radius (m).
-        radius: f64,
-        /// Half length (m).
-        half_length: f64,
-        /// Axis index.
-        axis: usize,
-    },
-}
-
 /// Evaluates and checks a shape.
 pub fn evaluate_shape(ctx: &Ctx, shape: &ShapeFile) -> Result<Shape, BuildError> {
     match shape {
         ShapeFile::Box { half_sizes } => {
-            let mut v = [0.0; 3];
-            for (k, ex) in half_sizes.value.iter().enumerate() {
-                v[k] = ctx.positive(ex, "m")?;
+            let mut half_sizes_m = Vector3::zeros();
+            for (k, ex) in half_sizes.value.iter().enumerate().take(3) {
+                half_sizes_m[k] = ctx.positive(ex, "m")?;
             }
-            Ok(Shape::Box(v))
+            Ok(Shape::Box {
+                half_sizes: half_sizes_m,
+            })
         }
         ShapeFile::Cylinder {
             radius,

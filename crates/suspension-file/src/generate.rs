@@ -41,7 +41,7 @@ r_wire = {{ value = 0.5e-3, unit = "m", description = "wire radius (music wire)"
 E_wire = {{ value = 212e9, unit = "Pa", description = "Young's modulus of steel" }}
 nu_wire = {{ value = 0.29, unit = "-", description = "Poisson's ratio of steel" }}
 rho_wire = {{ value = 7800, unit = "kg/m^3", description = "density of steel" }}
-phi_wire = {{ value = 1e-7, unit = "-", description = "loss angle of the wires (as the small models' fibres, so that the models compare)" }}
+phi_wire = {{ value = 1e-7, unit = "rad", description = "loss angle of the wires (as the small models' fibres, so that the models compare)" }}
 
 [materials.steel]
 youngs_modulus = "E_wire"
@@ -62,7 +62,6 @@ driven = true
 coordinates = "{k}"
 mass = "m"
 inertia = ["Ix", "Iy", "Iz"]
-shape = {{ kind = "cylinder", radius = 0.17, half_length = 0.1, axis = "x" }}
 "#
         );
     }

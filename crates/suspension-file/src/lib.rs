@@ -64,7 +64,8 @@ use pendkit_model::{
 };
 use pendkit_params::{ParamError, ParamSet, Resolved};
 
-pub use build::{Reads, Shape};
+pub use build::Reads;
+pub use pendkit_model::Shape;
 pub use source::{At, FileError, Located, Origin, Source};
 pub use spec::Spec;
 
@@ -410,6 +411,11 @@ fn keep_parameter_documentation(base: &tree::Table, child: &mut Node) {
     }
 }
 
+/// A unit as reports print it: the file's `-` (a pure number or a count) is no unit.
+fn unit_of(written: &str) -> &str {
+    if written.trim() == "-" { "" } else { written }
+}
+
 impl Model for Suspension {
     fn name(&self) -> &str {
         &self.name
@@ -423,13 +429,18 @@ impl Model for Suspension {
         let mut set = ParamSet::new();
         for p in &self.spec.parameters {
             set.define(&p.name, &p.value.text)?;
+            if !p.unit.is_empty() {
+                set.set_unit(&p.name, unit_of(&p.unit))?;
+            }
         }
         if let Some(g) = &self.generator {
             set.define_value(g.parameter, g.default as f64)?;
+            set.set_unit(g.parameter, "")?;
         }
-        for (name, value, ..) in BUILT_IN {
+        for (name, value, unit, ..) in BUILT_IN {
             if !set.contains(name) {
                 set.define_value(name, value)?;
+                set.set_unit(name, unit_of(unit))?;
             }
         }
         Ok(set)

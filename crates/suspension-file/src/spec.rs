@@ -43,6 +43,23 @@ pub struct Spec {
     pub constraints: Vec<(Located<String>, Ex)>,
     /// `pin`: coordinates held at their start during the equilibrium search.
     pub pins: Vec<Located<String>>,
+    /// `[names.<scheme>]`: other names for bodies and their coordinates (e.g. LIGO's).
+    pub name_schemes: Vec<NameSchemeFile>,
+}
+
+/// `[names.<scheme>]`: a naming scheme such as LIGO's (`L3` for the test mass, `L3_P` for
+/// its pitch).
+#[derive(Clone, Debug)]
+pub struct NameSchemeFile {
+    /// The scheme's name (`ligo`), chosen on the command line with `--naming`.
+    pub scheme: String,
+    /// Where it is written.
+    pub at: At,
+    /// The scheme's names of the six pose entries in pose order (x, y, z, yaw, pitch, roll):
+    /// coordinates become `<body alias>_<dof>`. LIGO's `L T V Y P R` when absent.
+    pub dofs: [String; 6],
+    /// Body name and its name in the scheme, in the file's order.
+    pub bodies: Vec<(Located<String>, String)>,
 }
 
 /// One parameter: its definition, unit and description.
@@ -135,8 +152,11 @@ pub struct BodyFile {
     pub inertia: Option<Inertia>,
     /// Centre of mass in body coordinates (m).
     pub centre_of_mass: Option<Located<Vec<Ex>>>,
-    /// Drawing shape.
+    /// Drawing shape; the uniform box of the same mass and inertia when absent.
     pub shape: Option<ShapeFile>,
+    /// `mode_family`: modes dominated by this body's coordinates belong to this family
+    /// (e.g. `violin`) rather than to their degree of freedom.
+    pub mode_family: Option<Located<String>>,
 }
 
 /// An inertia as written: principal moments or a full tensor.
@@ -537,6 +557,9 @@ pub fn read(root: &Node, at: At) -> Result<Spec, FileError> {
         let stiffness = Ex::read(node, at.clone())?;
         spec.constraints.push((Located { value: name, at }, stiffness));
     }
+    for (scheme, node, at) in f.named("names")? {
+        spec.name_schemes.push(name_scheme(scheme, node, at)?);
+    }
     if let Some(pins) = f.strings("pin")? {
         spec.pins = pins
             .value
@@ -549,6 +572,42 @@ pub fn read(root: &Node, at: At) -> Result<Spec, FileError> {
     }
     f.finish()?;
     Ok(spec)
+}
+
+fn name_scheme(scheme: String, node: &Node, at: At) -> Result<NameSchemeFile, FileError> {
+    let mut f = Fields::of(node, at.clone())?;
+    let dofs = match f.strings("dofs")? {
+        None => pendkit_model::LIGO_DOF_NAMES.map(String::from),
+        Some(list) => <[String; 6]>::try_from(list.value).map_err(|given| {
+            list.at.error(format!(
+                "expected 6 names (x, y, z, yaw, pitch, roll), got {}",
+                given.len()
+            ))
+        })?,
+    };
+    let mut bodies = Vec::new();
+    for (body, alias, body_at) in f.named("bodies")? {
+        let Value::Str(alias) = &alias.value else {
+            return Err(body_at.error(format!(
+                "expected the body's name in the scheme (a string), got {}",
+                alias.value.type_name()
+            )));
+        };
+        bodies.push((
+            Located {
+                value: body,
+                at: body_at,
+            },
+            alias.clone(),
+        ));
+    }
+    f.finish()?;
+    Ok(NameSchemeFile {
+        scheme,
+        at,
+        dofs,
+        bodies,
+    })
 }
 
 fn parameter(name: String, node: &Node, at: At) -> Result<ParameterSpec, FileError> {
@@ -769,6 +828,7 @@ fn body(name: String, node: &Node, at: At) -> Result<BodyFile, FileError> {
         inertia,
         centre_of_mass: vector3(&mut f, "centre_of_mass")?,
         shape,
+        mode_family: f.string("mode_family")?,
     };
     f.planned("temperature", "a temperature per body")?;
     f.finish()?;

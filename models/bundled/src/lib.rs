@@ -200,3 +200,26 @@ pub fn names() -> &'static [&'static str] {
 pub fn files() -> impl Iterator<Item = (&'static str, &'static str, &'static str)> {
     FILES.iter().map(|f| (f.name, f.path, f.text))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The bundled chain file is the generator's text for its default count, so that reading
+    /// the file and generating it agree.
+    #[test]
+    fn chain_file_is_the_generators() {
+        let (_, text) = Bundled.file("chain").unwrap();
+        assert_eq!(text, chain(CHAIN.default));
+    }
+
+    /// Every bundled file reads (a broken file would only show when its model is built).
+    #[test]
+    fn every_bundled_model_reads() {
+        for name in names() {
+            let model = find(name).unwrap();
+            let s = model.suspension().unwrap_or_else(|e| panic!("{e}"));
+            assert_eq!(s.name(), *name);
+        }
+    }
+}
