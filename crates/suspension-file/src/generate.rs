@@ -1,5 +1,5 @@
 //! Suspension files written by a program: `chain`, any number of identical rigid bodies one
-//! below the other, each on four vertical steel wires (`pendkit generate chain --stages N`;
+//! below the other, each on four vertical steel wires (`pendkit chain-file N`;
 //! the bundled `chain` rewrites itself for its parameter `n_stages`).
 
 use std::fmt::Write as _;
@@ -15,7 +15,7 @@ pub const MAX_CHAIN_STAGES: usize = 200;
 /// x–pitch, y–roll, z and yaw blocks with exact zeros between them.
 pub fn chain(n: usize) -> String {
     let mut out = format!(
-        r#"# {n}-stage chain, written by `pendkit generate chain --stages {n}`: a suspension
+        r#"# {n}-stage chain, written by `pendkit chain-file {n}`: a suspension
 # whose size is a parameter of its generator, for scaling benchmarks (6 variables and
 # 4 wires per stage). Edit freely; docs/suspension-files.md describes every field.
 name = "chain"
