@@ -59,28 +59,30 @@ fn compare(name: &str, sets: &[&str]) {
     let o = overrides(sets);
     // the parameters: same names, definitions' values and units (the file writes a pure
     // number's unit as `-`, the Rust tables as nothing; both read as no unit)
-    let (rust_params, rust_values) = parameters_with(
-        &Defaults::of(rust_model(name)).unwrap(),
-        &o,
-    )
-    .unwrap();
+    let (rust_params, rust_values) =
+        parameters_with(&Defaults::of(rust_model(name)).unwrap(), &o).unwrap();
     let (file_params, file_values) =
         parameters_with(&Defaults::of(file_model(name)).unwrap(), &o).unwrap();
-    let listed = |r: &pendkit_params::Resolved| r.iter().map(|(n, _)| n.to_string()).collect::<Vec<_>>();
+    let listed =
+        |r: &pendkit_params::Resolved| r.iter().map(|(n, _)| n.to_string()).collect::<Vec<_>>();
     let rust_names = listed(&rust_values);
     let file_names = listed(&file_values);
     // the Rust tables carry derived rows that the files compute where they are used (wire
     // tensions T*, wire counts nw*, the blade count bd), and the files add each material's
     // surface-loss depth (the materials table's column the Rust loader drops)
-    let derived = |n: &str| {
-        ["T1", "T2", "T3", "Tn", "nw1", "nw2", "nw3", "nwn", "bd"].contains(&n)
-    };
-    let only_rust: Vec<_> = rust_names.iter().filter(|n| !file_names.contains(n) && !derived(n)).collect();
+    let derived = |n: &str| ["T1", "T2", "T3", "Tn", "nw1", "nw2", "nw3", "nwn", "bd"].contains(&n);
+    let only_rust: Vec<_> = rust_names
+        .iter()
+        .filter(|n| !file_names.contains(n) && !derived(n))
+        .collect();
     let only_file: Vec<_> = file_names
         .iter()
         .filter(|n| !rust_names.contains(n) && !n.ends_with("_dissipation_depth"))
         .collect();
-    assert!(only_rust.is_empty() && only_file.is_empty(), "{name}: parameters only in Rust {only_rust:?}, only in the file {only_file:?}");
+    assert!(
+        only_rust.is_empty() && only_file.is_empty(),
+        "{name}: parameters only in Rust {only_rust:?}, only in the file {only_file:?}"
+    );
     let mut unit_differences = Vec::new();
     for n in rust_names.iter().filter(|n| file_names.contains(n)) {
         close(
@@ -93,10 +95,17 @@ fn compare(name: &str, sets: &[&str]) {
         // where the Rust model declares a unit the file must give the same one (the Rust
         // triple declares none; its file does)
         if rust_params.unit(n).is_some() && unit(&rust_params) != unit(&file_params) {
-            unit_differences.push(format!("{n}: {} vs {}", unit(&rust_params), unit(&file_params)));
+            unit_differences.push(format!(
+                "{n}: {} vs {}",
+                unit(&rust_params),
+                unit(&file_params)
+            ));
         }
     }
-    assert!(unit_differences.is_empty(), "{name}: units {unit_differences:?}");
+    assert!(
+        unit_differences.is_empty(),
+        "{name}: units {unit_differences:?}"
+    );
     let (rust, _) = build_with(rust_model(name), &o).unwrap();
     let (file, _) = build_with(file_model(name), &o).unwrap_or_else(|e| panic!("{name}: {e}"));
     let label = format!("{name} {sets:?}");
@@ -115,8 +124,16 @@ fn compare_systems(label: &str, rust: &System, file: &System) {
     // naming schemes
     for (a, b) in rust.bodies.iter().zip(&file.bodies) {
         assert_eq!(a.name, b.name, "{label}: body");
-        assert_eq!(a.pose_coords, b.pose_coords, "{label}: {} coordinates", a.name);
-        assert_eq!(a.mode_family, b.mode_family, "{label}: {} mode family", a.name);
+        assert_eq!(
+            a.pose_coords, b.pose_coords,
+            "{label}: {} coordinates",
+            a.name
+        );
+        assert_eq!(
+            a.mode_family, b.mode_family,
+            "{label}: {} mode family",
+            a.name
+        );
         match (a.shape, b.shape) {
             (Some(Shape::Box { half_sizes: p }), Some(Shape::Box { half_sizes: q })) => {
                 for k in 0..3 {
@@ -126,7 +143,10 @@ fn compare_systems(label: &str, rust: &System, file: &System) {
             (p, q) => assert_eq!(p, q, "{label}: {} shape", a.name),
         }
     }
-    assert_eq!(rust.name_schemes, file.name_schemes, "{label}: name schemes");
+    assert_eq!(
+        rust.name_schemes, file.name_schemes,
+        "{label}: name schemes"
+    );
     for tag in rust.tags() {
         for f in [0.3, 10.0, 300.0] {
             let (a, b) = (rust.damping.at(&tag, f), file.damping.at(&tag, f));
@@ -144,9 +164,17 @@ fn compare_systems(label: &str, rust: &System, file: &System) {
     for stage in Stage::ALL {
         let a = run_stage(rust.clone(), stage).unwrap();
         let b = run_stage(file.clone(), stage).unwrap();
-        let (ea, eb) = (&a.assembled.equilibrium.coords, &b.assembled.equilibrium.coords);
+        let (ea, eb) = (
+            &a.assembled.equilibrium.coords,
+            &b.assembled.equilibrium.coords,
+        );
         for (c, (x, y)) in rust.coords.iter().zip(ea.iter().zip(eb)) {
-            close(*x, *y, 1.0, &format!("{label} {stage}: equilibrium {}", c.name));
+            close(
+                *x,
+                *y,
+                1.0,
+                &format!("{label} {stage}: equilibrium {}", c.name),
+            );
         }
         assert_eq!(a.modes.modes.len(), b.modes.modes.len());
         for (k, (ma, mb)) in a.modes.modes.iter().zip(&b.modes.modes).enumerate() {
@@ -161,7 +189,12 @@ fn compare_systems(label: &str, rust: &System, file: &System) {
             continue;
         }
         let freqs = [0.5, 3.0, 40.0];
-        let output = a.model.variables.iter().rev().find(|v| v.starts_with('x') && !v.contains('b'));
+        let output = a
+            .model
+            .variables
+            .iter()
+            .rev()
+            .find(|v| v.starts_with('x') && !v.contains('b'));
         let output = output.unwrap().clone();
         // the support's x, or the toy's one parameter
         let input = a.model.parameters.first().unwrap().clone();
@@ -215,7 +248,13 @@ fn quads() {
 
 #[test]
 fn triples() {
-    for name in ["triple", "triple-lite", "triple-full", "triple-lateral", "triple-v5"] {
+    for name in [
+        "triple",
+        "triple-lite",
+        "triple-full",
+        "triple-lateral",
+        "triple-v5",
+    ] {
         compare(name, &[]);
     }
     compare("triple", &["fibre_silica=1", "n_beads=3"]);

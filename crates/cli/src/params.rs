@@ -32,8 +32,18 @@ pub fn run(a: Args) -> Result<String, CliError> {
         return Ok(format!("{value:#}\n"));
     }
     let mut out = String::new();
-    let _ = writeln!(out, "# {} ({}): {} parameters", case.name, case.model.name(), rows.len());
-    let _ = writeln!(out, "{:<24} {:>14} {:<10} description", "name", "value", "unit");
+    let _ = writeln!(
+        out,
+        "# {} ({}): {} parameters",
+        case.name,
+        case.model.name(),
+        rows.len()
+    );
+    let _ = writeln!(
+        out,
+        "{:<24} {:>14} {:<10} description",
+        "name", "value", "unit"
+    );
     for r in &rows {
         let unit = if r.unit.is_empty() { "-" } else { &r.unit };
         let _ = writeln!(

@@ -39,7 +39,10 @@ fn example() -> String {
 
 /// A scratch folder of this test binary's own.
 fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("pendkit-suspension-files-{}-{name}", std::process::id()));
+    let dir = std::env::temp_dir().join(format!(
+        "pendkit-suspension-files-{}-{name}",
+        std::process::id()
+    ));
     std::fs::create_dir_all(&dir).unwrap();
     dir
 }
@@ -68,7 +71,15 @@ fn the_worked_example_runs() {
     let hz = frequencies(&["modes", &file, "--json"]);
     assert_eq!(hz.len(), 18, "3 bodies x 6 degrees of freedom");
     assert!(hz.iter().all(|f| *f > 0.0));
-    let common = ["tf", &file, "--input", "x0", "--freqs", "0.001,0.3,1,10", "--csv"];
+    let common = [
+        "tf",
+        &file,
+        "--input",
+        "x0",
+        "--freqs",
+        "0.001,0.3,1,10",
+        "--csv",
+    ];
     let named = tf_magnitudes(&[&common[..], &["--output", "optic_beam"]].concat());
     let point = tf_magnitudes(&[&common[..], &["--output", "optic@-0.05,0,0/1,0,0"]].concat());
     for (a, b) in named.iter().zip(&point) {
@@ -104,12 +115,22 @@ fn a_case_file_can_name_a_suspension_file() {
     let dir = scratch("case");
     std::fs::copy(example(), dir.join("three.toml")).unwrap();
     let case = dir.join("heavy.toml");
-    std::fs::write(&case, "model = \"three.toml\"\n[parameters]\nm_optic = 40\n").unwrap();
+    std::fs::write(
+        &case,
+        "model = \"three.toml\"\n[parameters]\nm_optic = 40\n",
+    )
+    .unwrap();
     let v = json(&["modes", case.to_str().unwrap(), "--json"]);
     assert_eq!(v["model"], "three-stage");
     let by_case = frequencies(&["modes", case.to_str().unwrap(), "--json"]);
     let file = dir.join("three.toml");
-    let by_set = frequencies(&["modes", file.to_str().unwrap(), "--set", "m_optic=40", "--json"]);
+    let by_set = frequencies(&[
+        "modes",
+        file.to_str().unwrap(),
+        "--set",
+        "m_optic=40",
+        "--json",
+    ]);
     let original = frequencies(&["modes", file.to_str().unwrap(), "--json"]);
     assert_eq!(by_case, by_set);
     assert_ne!(by_case, original);
@@ -122,20 +143,38 @@ fn params_lists_every_parameter() {
     let file = example();
     let rows = json(&["params", &file, "--set", "m_top=12", "--json"]);
     let rows = rows.as_array().unwrap();
-    let row = |name: &str| rows.iter().find(|r| r["name"] == name).unwrap_or_else(|| panic!("{name}"));
+    let row = |name: &str| {
+        rows.iter()
+            .find(|r| r["name"] == name)
+            .unwrap_or_else(|| panic!("{name}"))
+    };
     // the file defines 12 parameters; temperature and wire_terms_early are every model's
     assert_eq!(rows.len(), 14);
     let m = row("m_optic");
     assert_eq!(m["value"], 20.0);
     assert_eq!(m["unit"], "kg");
     assert_eq!(m["description"], "optic");
-    let readers: Vec<&str> = m["read_by"].as_array().unwrap().iter().map(|r| r.as_str().unwrap()).collect();
-    for expected in ["bodies.optic.mass", "bodies.optic.inertia[0]", "bodies.optic.inertia[1]"] {
+    let readers: Vec<&str> = m["read_by"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| r.as_str().unwrap())
+        .collect();
+    for expected in [
+        "bodies.optic.mass",
+        "bodies.optic.inertia[0]",
+        "bodies.optic.inertia[1]",
+    ] {
         assert!(readers.contains(&expected), "{readers:?}");
     }
     assert_eq!(row("m_top")["value"], 12.0);
     assert_eq!(row("temperature")["unit"], "K");
-    let breakoff: Vec<&str> = row("breakoff")["read_by"].as_array().unwrap().iter().map(|r| r.as_str().unwrap()).collect();
+    let breakoff: Vec<&str> = row("breakoff")["read_by"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| r.as_str().unwrap())
+        .collect();
     assert_eq!(breakoff.len(), 3, "{breakoff:?}");
     // a bundled model: units from the model, descriptions and readers from its file
     let (ok, table, stderr) = pendkit(&["params", "quad"]);
@@ -156,6 +195,9 @@ fn a_bad_file_names_file_line_and_field() {
     let (ok, _, stderr) = pendkit(&["modes", path.to_str().unwrap()]);
     assert!(!ok);
     let expected = format!("error: {}:{line}: bodies.middle.mass: ", path.display());
-    assert!(stderr.starts_with(&expected) && stderr.contains("m_mid"), "{stderr}");
+    assert!(
+        stderr.starts_with(&expected) && stderr.contains("m_mid"),
+        "{stderr}"
+    );
     assert_eq!(stderr.trim_end().lines().count(), 1, "{stderr}");
 }

@@ -604,8 +604,9 @@ impl SystemBuilder {
                     if wanted == CoordKind::Parameter {
                         return Err(BuildError::Invalid {
                             item,
-                            message: "a point on a body cannot be driven or carry the support force"
-                                .into(),
+                            message:
+                                "a point on a body cannot be driven or carry the support force"
+                                    .into(),
                         });
                     }
                     if !(direction.norm() > 0.0 && direction.norm().is_finite()) {

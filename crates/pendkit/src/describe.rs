@@ -169,7 +169,9 @@ impl StageResult {
             }
         });
         let first = units.next()??;
-        units.all(|u| u.as_deref() == Some(first.as_str())).then_some(first)
+        units
+            .all(|u| u.as_deref() == Some(first.as_str()))
+            .then_some(first)
     }
 
     /// Unit of the transfer function from `input` to `output`, e.g. `m/m`, `rad/(N m)`.

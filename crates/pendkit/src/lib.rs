@@ -66,14 +66,14 @@ pub use pendkit_export as export;
 pub use pendkit_expr as expr;
 #[cfg(feature = "files")]
 pub use pendkit_files as files;
-#[cfg(feature = "files")]
-pub use pendkit_models as bundled_files;
-#[cfg(feature = "files")]
-pub use pendkit_suspension as suspension;
 pub use pendkit_geometry as geometry;
 pub use pendkit_model as model;
+#[cfg(feature = "files")]
+pub use pendkit_models as bundled_files;
 pub use pendkit_noise as noise;
 pub use pendkit_params as params;
+#[cfg(feature = "files")]
+pub use pendkit_suspension as suspension;
 
 pub use pendkit_assembly::{AssemblyOptions, PhaseTimes};
 pub use pendkit_dynamics::{Input, Modes, Output, Solver, StageModel, StateSpace};
@@ -82,11 +82,11 @@ pub use pendkit_model::{Model, Overrides};
 pub use pendkit_noise::{NoiseOptions, ThermalNoise};
 pub use pendkit_params::Resolved;
 
+pub use describe::{DOF_FAMILIES, OTHER_FAMILY, unit_ratio, unit_slug};
 pub use parameters::{ParameterRow, parameter_table};
+pub use state_space::NamedStateSpace;
 #[cfg(feature = "files")]
 pub use suspension_files::load_suspension;
-pub use describe::{DOF_FAMILIES, OTHER_FAMILY, unit_ratio, unit_slug};
-pub use state_space::NamedStateSpace;
 
 /// pendkit's version, recorded in exports and reports.
 pub const VERSION: &str = env!("CARGO_PKG_VERSION");
@@ -260,8 +260,7 @@ impl Case {
             #[cfg(not(feature = "files"))]
             return Err(Error::Case {
                 path: path.to_path_buf(),
-                message: "reading case and suspension files needs pendkit's `files` feature"
-                    .into(),
+                message: "reading case and suspension files needs pendkit's `files` feature".into(),
             });
         }
         Case::model(spec)
@@ -500,7 +499,12 @@ impl StageResult {
     /// The displacement along `direction` (lab axes, normalised here) of `point` (m, body
     /// coordinates) on body `body`, per unit of each variable: the linearised geometry at
     /// the equilibrium (also the generalised force of a unit force there).
-    fn point_row(&self, body: usize, point: &Vector3<f64>, direction: &Vector3<f64>) -> DVector<f64> {
+    fn point_row(
+        &self,
+        body: usize,
+        point: &Vector3<f64>,
+        direction: &Vector3<f64>,
+    ) -> DVector<f64> {
         let jac = self.system.bodies[body]
             .frame
             .jacobian(&self.assembled.equilibrium.coords, point);
@@ -521,7 +525,11 @@ impl StageResult {
     /// displacements of them), points through [`StageResult::point_row`].
     fn named_vector(&self, signal: &NamedSignal, parameters: bool) -> Result<DVector<f64>, Error> {
         let m = &self.model;
-        let names = if parameters { &m.parameters } else { &m.variables };
+        let names = if parameters {
+            &m.parameters
+        } else {
+            &m.variables
+        };
         let mut v = DVector::zeros(names.len());
         for (coefficient, term) in &signal.terms {
             match term {

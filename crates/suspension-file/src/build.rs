@@ -13,8 +13,8 @@ use std::collections::{BTreeSet, HashMap};
 
 use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
 use pendkit_energy::{
-    BodyId, CoordKind, EndDirection, ExtraPhase, NamedSignal, SignalTerm, SpringEnd, Stage,
-    System, Wire, WireEnd, WireSection, WireTags,
+    BodyId, CoordKind, EndDirection, ExtraPhase, NamedSignal, SignalTerm, SpringEnd, Stage, System,
+    Wire, WireEnd, WireSection, WireTags,
 };
 use pendkit_expr::Expr;
 use pendkit_model::{BodySpec, BuildError, Shape, SystemBuilder};
@@ -408,7 +408,11 @@ impl<'s, 'c> Interpreter<'s, 'c> {
                 .map(|(body, alias)| (body.value.as_str(), alias.as_str()))
                 .collect();
             self.b
-                .name_scheme(&scheme.scheme, scheme.dofs.each_ref().map(String::as_str), &pairs)
+                .name_scheme(
+                    &scheme.scheme,
+                    scheme.dofs.each_ref().map(String::as_str),
+                    &pairs,
+                )
                 .map_err(placed(&scheme.at))?;
         }
         // parts, stage by stage in the file's order: blades, then the wires from them
@@ -638,7 +642,10 @@ impl<'s, 'c> Interpreter<'s, 'c> {
             if !is_coordinate(&s) && self.ctx.params.get(&s).is_err() {
                 return Err(invalid(
                     &ex.at,
-                    format!("`{}`: '{s}' is neither a coordinate defined so far nor a parameter", ex.text),
+                    format!(
+                        "`{}`: '{s}' is neither a coordinate defined so far nor a parameter",
+                        ex.text
+                    ),
                 ));
             }
         }
@@ -852,22 +859,25 @@ impl<'s, 'c> Interpreter<'s, 'c> {
         let ctx = self.ctx;
         let material = match &set.material {
             Some(m) => Some(
-                find_material(self.spec, &m.value, &m.at)
-                    .map_err(|e| invalid(&m.at, e.message))?,
+                find_material(self.spec, &m.value, &m.at).map_err(|e| invalid(&m.at, e.message))?,
             ),
             None => None,
         };
         let user = set.at.path.as_str();
-        let of_material = |pick: fn(&MaterialSpec) -> &Option<Ex>| -> Result<Option<f64>, BuildError> {
-            material
-                .and_then(|m| pick(m).as_ref())
-                .map(|ex| ctx.eval_for(ex, Some(user)))
-                .transpose()
-        };
+        let of_material =
+            |pick: fn(&MaterialSpec) -> &Option<Ex>| -> Result<Option<f64>, BuildError> {
+                material
+                    .and_then(|m| pick(m).as_ref())
+                    .map(|ex| ctx.eval_for(ex, Some(user)))
+                    .transpose()
+            };
         let e = match &set.youngs_modulus {
             Some(ex) => ctx.eval(ex)?,
             None => of_material(|m| &m.youngs_modulus)?.ok_or_else(|| {
-                invalid(&set.at, "needs `youngs_modulus` (Pa), here or in its material")
+                invalid(
+                    &set.at,
+                    "needs `youngs_modulus` (Pa), here or in its material",
+                )
             })?,
         };
         let g = match (&set.shear_modulus, material) {
@@ -943,11 +953,8 @@ impl<'s, 'c> Interpreter<'s, 'c> {
             bodies += self.bodies[self.index[name]].2;
         }
         // parts mounted on those bodies (the stages hanging from them): tips, then beads
-        let below: Vec<&PlannedStage> = plans
-            .iter()
-            .flatten()
-            .filter(|p| inside(p.upper))
-            .collect();
+        let below: Vec<&PlannedStage> =
+            plans.iter().flatten().filter(|p| inside(p.upper)).collect();
         let tips: f64 = below.iter().map(|p| p.tips_mass()).sum();
         let beads: f64 = below.iter().map(|p| p.beads_mass()).sum();
         (bodies + tips + beads) * self.g
@@ -989,7 +996,11 @@ impl<'s, 'c> Interpreter<'s, 'c> {
                     Some(t) => (tips[t], w.upper),
                     None => (upper, w.upper),
                 };
-                let tension = if w.vertical == set.length { share } else { share * set.length / w.vertical };
+                let tension = if w.vertical == set.length {
+                    share
+                } else {
+                    share * set.length / w.vertical
+                };
                 self.wire(set, w, upper_end, (lower, w.lower), tension, &tags)?;
             }
         }
@@ -1195,7 +1206,8 @@ impl<'s, 'c> Interpreter<'s, 'c> {
         let (ups, up_angles) = ends(&set.upper)?;
         let (lows, low_angles) = ends(&set.lower)?;
         let count = ups.len().max(lows.len());
-        let pick = |list: &[Vector3<f64>], k: usize| if list.len() == 1 { list[0] } else { list[k] };
+        let pick =
+            |list: &[Vector3<f64>], k: usize| if list.len() == 1 { list[0] } else { list[k] };
         if (ups.len() != 1 && ups.len() != count) || (lows.len() != 1 && lows.len() != count) {
             return Err(invalid(
                 &set.at,
@@ -1253,7 +1265,10 @@ impl<'s, 'c> Interpreter<'s, 'c> {
         let ctx = self.ctx;
         for choice in &self.spec.elements {
             let Some(kind) = pendkit_energy::find_kind(&choice.kind) else {
-                let known: Vec<&str> = pendkit_energy::registry().iter().map(|k| k.kind()).collect();
+                let known: Vec<&str> = pendkit_energy::registry()
+                    .iter()
+                    .map(|k| k.kind())
+                    .collect();
                 return Err(invalid(
                     &choice.at,
                     format!(
@@ -1324,7 +1339,10 @@ impl<'s, 'c> Interpreter<'s, 'c> {
                 .ok_or_else(|| {
                     invalid(
                         at,
-                        format!("unknown body '{body}' (bodies: {})", known_bodies(self.spec)),
+                        format!(
+                            "unknown body '{body}' (bodies: {})",
+                            known_bodies(self.spec)
+                        ),
                     )
                 })?;
             if direction.norm() == 0.0 {

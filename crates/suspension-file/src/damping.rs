@@ -74,17 +74,20 @@ pub fn find_material<'s>(
     name: &str,
     at: &crate::source::At,
 ) -> Result<&'s MaterialSpec, FileError> {
-    spec.materials.iter().find(|m| m.name == name).ok_or_else(|| {
-        let known: Vec<&str> = spec.materials.iter().map(|m| m.name.as_str()).collect();
-        at.error(format!(
-            "unknown material '{name}' (materials: {})",
-            if known.is_empty() {
-                "none defined".to_string()
-            } else {
-                known.join(", ")
-            }
-        ))
-    })
+    spec.materials
+        .iter()
+        .find(|m| m.name == name)
+        .ok_or_else(|| {
+            let known: Vec<&str> = spec.materials.iter().map(|m| m.name.as_str()).collect();
+            at.error(format!(
+                "unknown material '{name}' (materials: {})",
+                if known.is_empty() {
+                    "none defined".to_string()
+                } else {
+                    known.join(", ")
+                }
+            ))
+        })
 }
 
 /// Number of points a [`Points`] spreads to.
@@ -135,15 +138,9 @@ fn wire_damping(
         bending.thermoelastic = Some((delta, tau));
     }
     vec![
-        (
-            format!("{prefix}_stretch"),
-            DampingSpec::structural(&phi),
-        ),
+        (format!("{prefix}_stretch"), DampingSpec::structural(&phi)),
         (format!("{prefix}_bending"), bending),
-        (
-            format!("{prefix}_torsion"),
-            DampingSpec::structural(&phi),
-        ),
+        (format!("{prefix}_torsion"), DampingSpec::structural(&phi)),
     ]
 }
 
@@ -173,7 +170,10 @@ fn nominal_tension(spec: &Spec, stage: &StageFile, set: &WireSet) -> String {
         .filter_map(|b| b.mass.as_ref().map(Ex::paren))
         .collect();
     let wires: usize = stage.wire_sets().map(|s| point_count(&s.lower)).sum();
-    let gravity = spec.gravity.as_ref().map_or("(9.81)".to_string(), Ex::paren);
+    let gravity = spec
+        .gravity
+        .as_ref()
+        .map_or("(9.81)".to_string(), Ex::paren);
     let l = set.length.paren();
     // the first wire: the unmirrored points, on the first blade tip if there are blades
     let tip = stage.blades.as_ref().map(|b| &b.tips.base[0].value);

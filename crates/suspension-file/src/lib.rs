@@ -59,9 +59,7 @@ use std::path::Path;
 use std::sync::Arc;
 
 use pendkit_energy::System;
-use pendkit_model::{
-    BuildError, DampingSpec, DefaultsCache, Model, ParameterInfo, whole_number,
-};
+use pendkit_model::{BuildError, DampingSpec, DefaultsCache, Model, ParameterInfo, whole_number};
 use pendkit_params::{ParamError, ParamSet, Resolved};
 
 pub use build::Reads;
@@ -179,7 +177,10 @@ impl Suspension {
     }
 
     /// Reads a suspension from a source.
-    pub fn from_source(source: Arc<Source>, library: &dyn Library) -> Result<Suspension, FileError> {
+    pub fn from_source(
+        source: Arc<Source>,
+        library: &dyn Library,
+    ) -> Result<Suspension, FileError> {
         let mut chain = Vec::new();
         let root = load_tree(source.clone(), library, &mut chain)?;
         let at = At {
@@ -192,22 +193,18 @@ impl Suspension {
             .map(|s| s.to_string_lossy().into_owned())
             .unwrap_or_default();
         let name = spec.name.as_ref().map_or(stem, |n| n.value.clone());
-        let summary = spec
-            .summary
-            .as_ref()
-            .map_or_else(|| format!("suspension file {}", source.name), |s| s.value.clone());
+        let summary = spec.summary.as_ref().map_or_else(
+            || format!("suspension file {}", source.name),
+            |s| s.value.clone(),
+        );
         check_parameters(&spec)?;
         let damping = damping::damping(&spec)?;
         for (tag, d) in &damping {
             d.parse(tag).map_err(|e| {
-                let at = spec
-                    .damping
-                    .iter()
-                    .find(|x| &x.tag == tag)
-                    .map_or_else(|| FileError::file(&source.name, e.to_string()), |x| {
-                        x.at.error(e.to_string())
-                    });
-                at
+                spec.damping.iter().find(|x| &x.tag == tag).map_or_else(
+                    || FileError::file(&source.name, e.to_string()),
+                    |x| x.at.error(e.to_string()),
+                )
             })?;
         }
         Ok(Suspension {

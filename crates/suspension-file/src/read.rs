@@ -114,10 +114,9 @@ impl<'a> Fields<'a> {
             None => Ok(None),
             Some((node, at)) => match &node.value {
                 Value::Bool(b) => Ok(Some(Located { value: *b, at })),
-                other => Err(at.error(format!(
-                    "expected true or false, got {}",
-                    other.type_name()
-                ))),
+                other => {
+                    Err(at.error(format!("expected true or false, got {}", other.type_name())))
+                }
             },
         }
     }
@@ -142,25 +141,24 @@ impl<'a> Fields<'a> {
         match self.node(key) {
             None => Ok(None),
             Some((node, at)) => {
-                let items = match &node.value {
-                    Value::Str(s) => vec![s.clone()],
-                    Value::Array(items) => items
-                        .iter()
-                        .map(|n| match &n.value {
-                            Value::Str(s) => Ok(s.clone()),
-                            other => Err(at.error(format!(
-                                "expected strings, got {}",
+                let items =
+                    match &node.value {
+                        Value::Str(s) => vec![s.clone()],
+                        Value::Array(items) => items
+                            .iter()
+                            .map(|n| match &n.value {
+                                Value::Str(s) => Ok(s.clone()),
+                                other => Err(at
+                                    .error(format!("expected strings, got {}", other.type_name()))),
+                            })
+                            .collect::<Result<_, _>>()?,
+                        other => {
+                            return Err(at.error(format!(
+                                "expected a string or an array of strings, got {}",
                                 other.type_name()
-                            ))),
-                        })
-                        .collect::<Result<_, _>>()?,
-                    other => {
-                        return Err(at.error(format!(
-                            "expected a string or an array of strings, got {}",
-                            other.type_name()
-                        )));
-                    }
-                };
+                            )));
+                        }
+                    };
                 Ok(Some(Located { value: items, at }))
             }
         }

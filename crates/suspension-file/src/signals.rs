@@ -74,13 +74,17 @@ fn linear(
     }
 }
 
+/// A point on a body along a direction: the body's name, the point (m, body coordinates)
+/// and the direction (lab axes).
+pub type PointSignal = (String, Vector3<f64>, Vector3<f64>);
+
 /// A point signal `<body>@x,y,z/dx,dy,dz`: body name, point (m, body coordinates) and
 /// direction (lab axes), the numbers as expressions of the parameters (without `/`, which
 /// separates the point from the direction). `None` if the text is not of that form (no `@`).
 pub fn point_form(
     text: &str,
     value: &dyn Fn(&str) -> Option<f64>,
-) -> Option<Result<(String, Vector3<f64>, Vector3<f64>), String>> {
+) -> Option<Result<PointSignal, String>> {
     let (body, rest) = text.split_once('@')?;
     Some((|| {
         let bad = || "expected <body>@x,y,z/dx,dy,dz".to_string();
@@ -125,11 +129,9 @@ mod tests {
 
     fn form(text: &str) -> Result<Vec<(String, f64)>, String> {
         let e = pendkit_expr::parse(text).unwrap();
-        linear_form(
-            &e,
-            &|s| s.starts_with('x') || s.starts_with('z'),
-            &|s| (s == "theta").then_some(0.25),
-        )
+        linear_form(&e, &|s| s.starts_with('x') || s.starts_with('z'), &|s| {
+            (s == "theta").then_some(0.25)
+        })
     }
 
     #[test]

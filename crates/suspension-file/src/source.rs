@@ -140,7 +140,11 @@ impl FileError {
             out += &format!(": {}", self.field);
         }
         // messages are single lines; a multi-line one from a parser is folded
-        let message = self.message.split_whitespace().collect::<Vec<_>>().join(" ");
+        let message = self
+            .message
+            .split_whitespace()
+            .collect::<Vec<_>>()
+            .join(" ");
         format!("{out}: {message}")
     }
 }

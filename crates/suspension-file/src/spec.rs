@@ -231,10 +231,9 @@ impl Names {
             Names::Prefix(p) if count == 1 => Ok(vec![p.clone()]),
             Names::Prefix(p) => Ok((1..=count).map(|k| format!("{p}{k}")).collect()),
             Names::List(list) if list.value.len() == count => Ok(list.value.clone()),
-            Names::List(list) => Err(list.at.error(format!(
-                "{} names for {count} parts",
-                list.value.len()
-            ))),
+            Names::List(list) => Err(list
+                .at
+                .error(format!("{} names for {count} parts", list.value.len()))),
         }
         .and_then(|names| {
             if names.iter().any(|n| n.is_empty()) {
@@ -294,7 +293,10 @@ impl BladeFields {
     pub fn or(&self, defaults: &BladeFields) -> BladeFields {
         BladeFields {
             form: self.form.clone().or_else(|| defaults.form.clone()),
-            stiffness: self.stiffness.clone().or_else(|| defaults.stiffness.clone()),
+            stiffness: self
+                .stiffness
+                .clone()
+                .or_else(|| defaults.stiffness.clone()),
             tip_mass: self.tip_mass.clone().or_else(|| defaults.tip_mass.clone()),
             tip_inertia: self
                 .tip_inertia
@@ -555,7 +557,8 @@ pub fn read(root: &Node, at: At) -> Result<Spec, FileError> {
     }
     for (name, node, at) in f.named("constraints")? {
         let stiffness = Ex::read(node, at.clone())?;
-        spec.constraints.push((Located { value: name, at }, stiffness));
+        spec.constraints
+            .push((Located { value: name, at }, stiffness));
     }
     for (scheme, node, at) in f.named("names")? {
         spec.name_schemes.push(name_scheme(scheme, node, at)?);
@@ -677,9 +680,7 @@ fn material(name: String, node: &Node, at: At) -> Result<MaterialSpec, FileError
         dissipation_depth: f.expr("dissipation_depth")?,
     };
     if let (Some(_), Some(nu)) = (&m.shear_modulus, &m.poisson_ratio) {
-        return Err(nu
-            .at
-            .error("give shear_modulus or poisson_ratio, not both"));
+        return Err(nu.at.error("give shear_modulus or poisson_ratio, not both"));
     }
     f.finish()?;
     Ok(m)
@@ -785,9 +786,9 @@ fn body(name: String, node: &Node, at: At) -> Result<BodyFile, FileError> {
                 .ok_or_else(|| s.at.error("needs `kind` (box or cylinder)"))?;
             let shape = match kind.value.as_str() {
                 "box" => ShapeFile::Box {
-                    half_sizes: s.exprs("half_sizes", Some(3))?.ok_or_else(|| {
-                        s.at.error("a box needs `half_sizes` = [hx, hy, hz] (m)")
-                    })?,
+                    half_sizes: s
+                        .exprs("half_sizes", Some(3))?
+                        .ok_or_else(|| s.at.error("a box needs `half_sizes` = [hx, hy, hz] (m)"))?,
                 },
                 "cylinder" => {
                     let radius = s.required_expr("radius", "m")?;
@@ -881,10 +882,10 @@ fn points(node: &Node, at: At) -> Result<Points, FileError> {
             letters
                 .iter()
                 .map(|a| {
-                    ["x", "y", "z"]
-                        .iter()
-                        .position(|n| n == a)
-                        .ok_or_else(|| list.at.error(format!("cannot mirror across '{a}' (x, y or z)")))
+                    ["x", "y", "z"].iter().position(|n| n == a).ok_or_else(|| {
+                        list.at
+                            .error(format!("cannot mirror across '{a}' (x, y or z)"))
+                    })
                 })
                 .collect::<Result<_, _>>()?
         }
@@ -944,10 +945,15 @@ fn blade_fields(f: &mut Fields) -> Result<BladeFields, FileError> {
         material: f.string("material")?,
         tag: f.string("tag")?,
     };
-    f.planned("thickness", "blade thermoelastic loss from the blade's thickness")?;
+    f.planned(
+        "thickness",
+        "blade thermoelastic loss from the blade's thickness",
+    )?;
     f.planned("temperature", "a temperature per element")?;
     if let (Some(s), Some(_)) = (&fields.lateral_stiffness, &fields.lateral_ratio) {
-        return Err(s.at.error("give lateral_stiffness or lateral_ratio, not both"));
+        return Err(s
+            .at
+            .error("give lateral_stiffness or lateral_ratio, not both"));
     }
     Ok(fields)
 }
@@ -1007,9 +1013,9 @@ fn stage(body: String, node: &Node, at: At) -> Result<StageFile, FileError> {
     if let Some(l) = &link
         && (blades.is_some() || wires.is_some() || fibres.is_some() || springs.is_some())
     {
-        return Err(l
-            .at
-            .error("a rigid link fixes the body to the one above: the stage can have no other parts"));
+        return Err(l.at.error(
+            "a rigid link fixes the body to the one above: the stage can have no other parts",
+        ));
     }
     if let Some(b) = &blades
         && wires.is_none()
@@ -1083,7 +1089,10 @@ fn wire_set(slot: &'static str, body: &str, node: &Node, at: At) -> Result<WireS
         (None, None) => return Err(at.error("needs `radius` (m) or a `section`")),
         _ => {}
     }
-    f.planned("profile", "tapered fibres (a radius profile along the fibre)")?;
+    f.planned(
+        "profile",
+        "tapered fibres (a radius profile along the fibre)",
+    )?;
     f.planned("temperature", "a temperature per element")?;
     f.planned("dilution", "a given (measured) dilution factor")?;
     if let Some((node, joints_at)) = f.node("bead_joints")
@@ -1169,7 +1178,9 @@ fn element(kind: String, node: &Node, at: At) -> Result<ElementChoice, FileError
     let stage = match &node.value {
         Value::Bool(true) => None,
         Value::Bool(false) => Some(None),
-        Value::Str(s) => Some(Some(s.parse::<Stage>().map_err(|e| at.error(e.to_string()))?)),
+        Value::Str(s) => Some(Some(
+            s.parse::<Stage>().map_err(|e| at.error(e.to_string()))?,
+        )),
         other => {
             return Err(at.error(format!(
                 "expected a stage (\"0a\" ... \"2\"), true (its own stage) or false (off), got {}",

@@ -119,7 +119,11 @@ fn table_of(source: &Arc<Source>, table: &DeTable) -> Table {
                 source: source.clone(),
                 span: key.span(),
             };
-            (key.get_ref().to_string(), key_origin, node_of(source, value))
+            (
+                key.get_ref().to_string(),
+                key_origin,
+                node_of(source, value),
+            )
         })
         .collect();
     // the parser keeps keys sorted by name; the file's order is that of the keys' spans

@@ -63,13 +63,41 @@ fn the_good_file_builds() {
 
 #[test]
 fn reading_errors_name_file_line_and_field() {
-    starts(&broken("coordinates = \"1\"\nmass", "coordinates = \"1\"\nmas"), "bad.toml:12: bodies.bob.mas: ", "did you mean `mass`");
-    starts(&broken("mass = \"m\"", "mass = \"m*\""), "bad.toml:12: bodies.bob.mass: ", "expected an expression");
-    starts(&broken("inertia = [1, 1, 1]", "inertia = [1, 1]"), "bad.toml:13: bodies.bob.inertia: ", "expected 3 entries");
-    starts(&broken("radius = 0.3e-3\n", ""), "bad.toml:16: stages.bob.wires: ", "needs `radius`");
-    starts(&broken("[stages.bob.wires]", "[stages.bob.wires"), "bad.toml:16: ", "");
-    starts(&broken("mirror = \"y\" }\nlength", "mirror = \"w\" }\nlength"), "bad.toml:18: stages.bob.wires.lower.mirror: ", "cannot mirror across 'w'");
-    starts(&broken("{ value = 40,", "{ value = \"2*n\","), "bad.toml:2: parameters.m: ", "n");
+    starts(
+        &broken("coordinates = \"1\"\nmass", "coordinates = \"1\"\nmas"),
+        "bad.toml:12: bodies.bob.mas: ",
+        "did you mean `mass`",
+    );
+    starts(
+        &broken("mass = \"m\"", "mass = \"m*\""),
+        "bad.toml:12: bodies.bob.mass: ",
+        "expected an expression",
+    );
+    starts(
+        &broken("inertia = [1, 1, 1]", "inertia = [1, 1]"),
+        "bad.toml:13: bodies.bob.inertia: ",
+        "expected 3 entries",
+    );
+    starts(
+        &broken("radius = 0.3e-3\n", ""),
+        "bad.toml:16: stages.bob.wires: ",
+        "needs `radius`",
+    );
+    starts(
+        &broken("[stages.bob.wires]", "[stages.bob.wires"),
+        "bad.toml:16: ",
+        "",
+    );
+    starts(
+        &broken("mirror = \"y\" }\nlength", "mirror = \"w\" }\nlength"),
+        "bad.toml:18: stages.bob.wires.lower.mirror: ",
+        "cannot mirror across 'w'",
+    );
+    starts(
+        &broken("{ value = 40,", "{ value = \"2*n\","),
+        "bad.toml:2: parameters.m: ",
+        "n",
+    );
     starts(
         &broken("material = \"steel\"", "material = \"stell\""),
         "bad.toml:21: stages.bob.wires.material: ",
@@ -79,9 +107,21 @@ fn reading_errors_name_file_line_and_field() {
 
 #[test]
 fn building_errors_name_file_line_and_field() {
-    starts(&broken("mass = \"m\"", "mass = \"mm\""), "bad.toml:12: bodies.bob.mass: ", "unknown parameter 'mm'");
-    starts(&broken("from = \"support\"", "from = \"suport\""), "bad.toml:15: stages.bob.from: ", "unknown body 'suport'");
-    starts(&broken("length = 0.5", "length = -0.5"), "bad.toml:19: stages.bob.wires.length: ", "must be positive");
+    starts(
+        &broken("mass = \"m\"", "mass = \"mm\""),
+        "bad.toml:12: bodies.bob.mass: ",
+        "unknown parameter 'mm'",
+    );
+    starts(
+        &broken("from = \"support\"", "from = \"suport\""),
+        "bad.toml:15: stages.bob.from: ",
+        "unknown body 'suport'",
+    );
+    starts(
+        &broken("length = 0.5", "length = -0.5"),
+        "bad.toml:19: stages.bob.wires.length: ",
+        "must be positive",
+    );
     starts(
         &broken("from = \"support\"", "from = \"bob\""),
         "bad.toml:15: stages.bob.from: ",
@@ -92,5 +132,9 @@ fn building_errors_name_file_line_and_field() {
 #[test]
 fn extends_errors_name_the_file() {
     let e = Suspension::from_text("loop.toml", "extends = \"quad\"\n", &NoLibrary).unwrap_err();
-    assert!(e.to_string().starts_with("loop.toml:1: extends: no file 'quad'"), "{e}");
+    assert!(
+        e.to_string()
+            .starts_with("loop.toml:1: extends: no file 'quad'"),
+        "{e}"
+    );
 }

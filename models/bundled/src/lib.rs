@@ -111,9 +111,9 @@ impl BundledModel {
                 if self.name == "chain" {
                     return Suspension::generated("models/basic/chain.toml", CHAIN, &Bundled);
                 }
-                let (path, text) = Bundled.file(self.name).ok_or_else(|| {
-                    FileError::file(self.name, "no bundled file for this model")
-                })?;
+                let (path, text) = Bundled
+                    .file(self.name)
+                    .ok_or_else(|| FileError::file(self.name, "no bundled file for this model"))?;
                 Suspension::from_text(&path, text, &Bundled)
             })
             .as_ref()
@@ -147,15 +147,11 @@ impl Model for BundledModel {
     }
 
     fn damping(&self) -> BTreeMap<String, DampingSpec> {
-        self.suspension()
-            .map(|s| s.damping())
-            .unwrap_or_default()
+        self.suspension().map(|s| s.damping()).unwrap_or_default()
     }
 
     fn build(&self, params: &Resolved) -> Result<System, BuildError> {
-        self.suspension()
-            .map_err(|e| self.broken(e))?
-            .build(params)
+        self.suspension().map_err(|e| self.broken(e))?.build(params)
     }
 
     fn defaults_cache(&self) -> Option<&DefaultsCache> {
