@@ -7,6 +7,7 @@ mod error;
 mod format;
 mod modes;
 mod noise;
+mod params;
 mod plotting;
 mod progress;
 mod report;
@@ -66,6 +67,11 @@ enum Command {
     Elements,
     /// List the bundled models.
     Models,
+    /// List every parameter of a model, case or suspension file: value, unit,
+    /// description, and the parts that read it.
+    Params(params::Args),
+    /// Write an N-stage chain suspension file to standard output.
+    ChainFile(params::ChainArgs),
 }
 
 fn main() -> ExitCode {
@@ -93,6 +99,8 @@ fn run(cli: Cli) -> Result<String, CliError> {
         Command::Report(a) => report::run(a),
         Command::Bench(a) => Ok(bench::run(a)?),
         Command::Tradeoff(a) => tradeoff::run(a),
+        Command::Params(a) => params::run(a),
+        Command::ChainFile(a) => params::chain_file(a),
         Command::Elements => {
             let mut out = String::new();
             let _ = writeln!(out, "{:<20} {:<5} {:<32} what", "kind", "stage", "crate");
