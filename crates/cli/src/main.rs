@@ -7,12 +7,14 @@ mod error;
 mod format;
 mod modes;
 mod noise;
+mod params;
 mod plotting;
 mod progress;
 mod report;
 mod ss;
 mod sweep;
 mod tf;
+mod tradeoff;
 
 use std::fmt::Write as _;
 use std::io::Write as _;
@@ -55,11 +57,21 @@ enum Command {
     /// element kind, mass matrix, modes, and optionally noise): median and minimum over
     /// repetitions.
     Bench(bench::Args),
+    /// Speed against accuracy: a ladder of variants of one suspension (stages, violin
+    /// beads, blade-tip variants, restricted or full solve), each timed from the model's
+    /// name to the answer and measured against the richest; tradeoff.csv and tradeoff.svg,
+    /// and the cheapest variant within a tolerance.
+    Tradeoff(tradeoff::Args),
     /// List the registered element kinds, the stage each joins at and the crate that
     /// registered it.
     Elements,
     /// List the bundled models.
     Models,
+    /// List every parameter of a model, case or suspension file: value, unit,
+    /// description, and the parts that read it.
+    Params(params::Args),
+    /// Write an N-stage chain suspension file to standard output.
+    ChainFile(params::ChainArgs),
 }
 
 fn main() -> ExitCode {
@@ -86,6 +98,9 @@ fn run(cli: Cli) -> Result<String, CliError> {
         Command::Sweep(a) => sweep::run(a),
         Command::Report(a) => report::run(a),
         Command::Bench(a) => Ok(bench::run(a)?),
+        Command::Tradeoff(a) => tradeoff::run(a),
+        Command::Params(a) => params::run(a),
+        Command::ChainFile(a) => params::chain_file(a),
         Command::Elements => {
             let mut out = String::new();
             let _ = writeln!(out, "{:<20} {:<5} {:<32} what", "kind", "stage", "crate");
