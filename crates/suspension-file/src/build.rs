@@ -1007,7 +1007,7 @@ impl<'s, 'c> Interpreter<'s, 'c> {
         Ok(())
     }
 
-    /// Adds blade tip `t` of `blades` (source §6.3–§6.4) on body `parent` and returns the
+    /// Adds blade tip `t` of `blades` (T020205 §6.3–§6.4) on body `parent` and returns the
     /// tip body. Its spring's preload balances the wires' pull and the tip's weight, so that
     /// the tip is in equilibrium at the nominal geometry.
     fn blade(

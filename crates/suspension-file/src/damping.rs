@@ -97,7 +97,7 @@ pub fn point_count(p: &Points) -> usize {
 
 /// Material damping of a wire set's tags `<p>_stretch`, `<p>_bending`, `<p>_torsion`:
 /// structural φ on each and, for a round wire of a material with density, specific heat,
-/// conductivity and expansion, the thermoelastic peak on bending (physics_oracles.md §7, with
+/// conductivity and expansion, the thermoelastic peak on bending (docs/reference-values.md §7, with
 /// the stress term): Δ = (E T/ρC)(α − σβ/E)², τ = ρ C d² / (2.16 · 2π · K), σ = T/(π r²),
 /// T the nominal static tension from the weight of the bodies hung below (blade tips and
 /// beads, a fraction of a percent, left out).

@@ -324,7 +324,7 @@ impl BladeFields {
     }
 }
 
-/// How blade tips are modelled (source §6.3–§6.4).
+/// How blade tips are modelled (T020205 §6.3–§6.4).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum BladeForm {
     /// Massless tip moving along the mounting body's z axis: a float.
