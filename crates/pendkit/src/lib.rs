@@ -58,9 +58,9 @@
 mod describe;
 mod parameters;
 mod state_space;
-pub mod tradeoff;
 #[cfg(feature = "files")]
 mod suspension_files;
+pub mod tradeoff;
 
 use std::path::{Path, PathBuf};
 
