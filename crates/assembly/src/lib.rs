@@ -475,7 +475,7 @@ fn finish(
 }
 
 /// M = Σ_b J_bᵀ diag(m, m, m, I_b) J_b over the variables, with J_b the Jacobian of the
-/// body's centre-of-mass velocity and body-axis angular velocity (DESIGN.md §4).
+/// body's centre-of-mass velocity and body-axis angular velocity (docs/physics.md §2).
 pub fn mass_matrix(
     system: &System,
     layout: &Layout,

@@ -175,7 +175,7 @@ mod tests {
         );
         let e = parse_case("model = \"toy\"\nextra = 1\n").unwrap_err();
         assert!(e.to_string().contains("unknown field"), "{e}");
-        assert!(!e.to_string().contains('\n'));
+        assert!(!e.to_string().contains('\n'), "{e}");
     }
 
     #[test]

@@ -2,17 +2,36 @@
 //! pipeline from a model or case to equilibrium, normal modes, transfer functions, thermal
 //! noise and state space, for downstream tools that want one call.
 //!
-//! ```
-//! use pendkit::{Case, energy::Stage, log_grid, run_stage};
+//! The example in the README (`crates/pendkit/tests/readme.rs` checks that the two agree):
 //!
-//! let case = Case::model("pendulum")?.with_sets(&["m1=20".into()])?;
+//! ```
+//! use pendkit::{Case, NoiseOptions, Solver, Stage, log_grid, run_stage};
+//!
+//! // the aLIGO quad with a heavier test mass, at stage 2 (the complete model)
+//! let case = Case::model("quad")?.with_sets(&["m3=50".into()])?;
 //! let (system, _parameters) = case.build()?;
-//! let result = run_stage(system, Stage::S2)?;
-//! let lowest = &result.modes.modes[0];
-//! assert!((lowest.hz - 0.644).abs() < 1e-3); // sqrt(g/l)/2π with l = 0.6 m, plus flexure
-//! let freqs = log_grid(1.0, 100.0, 3)?;
-//! let noise = result.noise("x1", &freqs)?;
-//! assert_eq!(noise.asd().len(), 3); // m/√Hz; noise.psd() is the PSD in m²/Hz
+//! let r = run_stage(system, Stage::S2)?;
+//! assert_eq!(r.modes.modes.len(), 24); // four bodies, six degrees of freedom each
+//! for mode in &r.modes.modes {
+//!     println!("{:9.4} Hz  {:8}  {}", mode.hz, mode.label, r.mode_family(mode));
+//! }
+//! let freqs = log_grid(0.1, 100.0, 1000)?;
+//! let h = r.transfer("x00", "x3", &freqs)?; // complex, m/m: support to test mass
+//! assert!((h[0].re - 1.0).abs() < 0.1); // the test mass follows the support at 0.1 Hz
+//! let noise = r.noise("x3", &freqs)?; // thermal noise of the test mass along x
+//! println!("{:.3e} m/√Hz at {} Hz", noise.asd()[666], freqs[666]); // psd() in m²/Hz
+//! for (tag, asd) in noise.asd_by_tag() {
+//!     println!("{tag:>16}: {:.3e} m/√Hz", asd[666]);
+//! }
+//! // every unknown solved, and the share of every lossy term too
+//! let h_full = r.transfer_with("x00", "x3", &freqs, Solver::Full)?;
+//! assert!((h_full[500] - h[500]).norm() <= 1e-9 * h[500].norm());
+//! let options = NoiseOptions { solver: Solver::Full, per_term: true };
+//! let detailed = r.noise_with("x3", &freqs, &options)?; // .by_term: (term, tag, PSD)
+//! assert!(!detailed.by_term.is_empty());
+//! // the modes below 1 Hz, by shift-invert on the sparse factorisation
+//! let low = r.model.modes_below(&r.system.damping, 1.0)?;
+//! assert!(low.modes.iter().all(|m| m.hz < 1.0));
 //! # Ok::<(), pendkit::Error>(())
 //! ```
 //!
@@ -41,6 +60,7 @@ mod parameters;
 mod state_space;
 #[cfg(feature = "files")]
 mod suspension_files;
+pub mod tradeoff;
 
 use std::path::{Path, PathBuf};
 
@@ -156,6 +176,14 @@ pub enum Error {
     /// Modes or eliminations failed.
     #[error(transparent)]
     Dynamics(#[from] DynamicsError),
+    /// The reference variant of a trade-off ladder cannot answer the question.
+    #[error("reference variant '{variant}' cannot answer: {message}")]
+    Reference {
+        /// The reference variant's name.
+        variant: String,
+        /// Why.
+        message: String,
+    },
     /// A benchmark asked to repeat nothing.
     #[error("--repeat must be at least 1")]
     ZeroRepeat,

@@ -81,7 +81,7 @@ impl StageResult {
 
     /// Writes the state space to `path` (`.mat`, `.npz` or `.json`, by the extension):
     /// `A B C D`, the names `states inputs outputs` and their units `state_units
-    /// input_units output_units`, and the provenance: `model`, `case`, `stage`,
+    /// input_units output_units`, and the provenance: `model`, `case_name`, `stage`,
     /// `naming`, `pendkit_version` (one-item string lists), `damping_frequency_hz` (1 x 1),
     /// and the resolved parameters `parameter_names`, `parameter_values` (n x 1) and
     /// `parameter_units` (empty where the model declares none).
@@ -140,11 +140,11 @@ impl StageResult {
 
 #[cfg(feature = "export")]
 impl Provenance {
-    /// Adds `model`, `case`, `stage`, `naming`, `pendkit_version` and the parameters to an
+    /// Adds `model`, `case_name` (`case` is a MATLAB keyword), `stage`, `naming`, `pendkit_version` and the parameters to an
     /// export's metadata.
     pub fn add_to(&self, meta: &mut pendkit_export::Metadata, stage: &str, scheme: Option<&str>) {
         meta.text("model", vec![self.model.clone()])
-            .text("case", vec![self.case.clone()])
+            .text("case_name", vec![self.case.clone()])
             .text("stage", vec![stage.to_string()])
             .text("naming", vec![scheme.unwrap_or("model").to_string()])
             .text("pendkit_version", vec![crate::VERSION.to_string()])
