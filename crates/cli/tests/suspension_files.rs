@@ -104,6 +104,7 @@ fn chain_file_is_the_bundled_chain() {
     for (a, b) in file.iter().zip(&rust) {
         assert!((a - b).abs() <= 1e-9 * b, "{a} vs {b}");
     }
+    let _ = std::fs::remove_dir_all(path.parent().unwrap());
     let (ok, _, stderr) = pendkit(&["chain-file", "0"]);
     assert!(!ok && stderr.contains("1 to 200"), "{stderr}");
 }
@@ -134,6 +135,7 @@ fn a_case_file_can_name_a_suspension_file() {
     let original = frequencies(&["modes", file.to_str().unwrap(), "--json"]);
     assert_eq!(by_case, by_set);
     assert_ne!(by_case, original);
+    let _ = std::fs::remove_dir_all(dir);
 }
 
 /// `pendkit params` lists every parameter with value, unit, description and readers: the
@@ -193,6 +195,7 @@ fn a_bad_file_names_file_line_and_field() {
     let path = scratch("bad").join("bad.toml");
     std::fs::write(&path, bad).unwrap();
     let (ok, _, stderr) = pendkit(&["modes", path.to_str().unwrap()]);
+    let _ = std::fs::remove_dir_all(path.parent().unwrap());
     assert!(!ok);
     let expected = format!("error: {}:{line}: bodies.middle.mass: ", path.display());
     assert!(
