@@ -6,18 +6,20 @@
 //! # The ladder
 //!
 //! The *base* is the case as given, at stage 2, with its own number of violin beads,
-//! solved over the restricted blocks. The ladder changes one thing of the base at a time:
+//! solved over the restricted blocks. The ladder holds:
 //!
-//! - the stage: 0A, 0B, 1A, 1B, 2 (0A has no losses, so it cannot answer a noise question
-//!   and is listed as skipped, with the reason);
-//! - the violin beads per fibre (`n_beads`), where the model has that parameter
-//!   (default 0, 1, 2, 5, 10, 20, 40);
-//! - the blade-tip variant of the same family, where the model has them: by the LIGO
-//!   toolkit's names, `<base>` (xtra-lite: tips are massless floats), `<base>-lite` (tips
-//!   with mass, 1 DOF), `<base>-lateral` (xtra-lite plus lateral compliance) and
-//!   `<base>-full` (tips as 6-DOF bodies on 6x6 springs), in that order of richness;
-//! - the solve: every variable and float ([`Solver::Full`]) instead of only the blocks the
-//!   output couples to.
+//! - the base at each stage: 0A, 0B, 1A, 1B, 2 (0A has no losses, so it cannot answer a
+//!   noise question and is listed as skipped, with the reason);
+//! - at stage 2, every blade-tip variant of the same family with every number of violin
+//!   beads per fibre (`n_beads`, where the model has that parameter; default 0, 1, 2, 5,
+//!   10, 20, 40). The family, where the model has one, by the LIGO toolkit's names:
+//!   `<base>` (xtra-lite: tips are massless floats), `<base>-lite` (tips with mass, 1
+//!   DOF), `<base>-lateral` (xtra-lite plus lateral compliance) and `<base>-full` (tips as
+//!   6-DOF bodies on 6x6 springs), in that order of richness. Both refinements together,
+//!   because they act on different parts (blade tips move the pitch modes, beads carry
+//!   the fibres' mass) and a question may need some of each;
+//! - the base solved over every variable and float ([`Solver::Full`]) instead of only the
+//!   blocks the output couples to.
 //!
 //! The *reference* is the richest of everything: the last family member, stage 2, the most
 //! beads of the ladder, the full solve. Every variant's errors are measured against it, so
@@ -514,19 +516,21 @@ pub fn ladder(case: &Case, ladder: &Ladder) -> Result<Vec<Variant>, Error> {
             ..base.clone()
         });
     }
-    if has_beads {
-        for &beads in &ladder.beads {
+    // every blade-tip variant with every bead count: the two refinements that matter
+    // together (blade tips move the pitch modes, beads the fibres' mass)
+    for member in family {
+        let beads: Vec<Option<usize>> = if has_beads {
+            ladder.beads.iter().map(|&b| Some(b)).collect()
+        } else {
+            vec![base.beads]
+        };
+        for beads in beads {
             push(Variant {
-                beads: Some(beads),
+                case: member.clone(),
+                beads,
                 ..base.clone()
             });
         }
-    }
-    for member in family {
-        push(Variant {
-            case: member,
-            ..base.clone()
-        });
     }
     if ladder.solvers {
         push(Variant {
