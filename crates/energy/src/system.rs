@@ -329,6 +329,9 @@ pub struct System {
     pub temperature: f64,
     /// Other names for the model's bodies and coordinates, by scheme (e.g. `ligo`).
     pub name_schemes: BTreeMap<String, NameScheme>,
+    /// Outputs the model names: each a linear combination of variables, as (variable name,
+    /// coefficient) pairs (e.g. a test mass's motion along the beam, x + θ z).
+    pub named_outputs: BTreeMap<String, Vec<(String, f64)>>,
 }
 
 /// Another set of names for some of a model's bodies and coordinates, declared by the model

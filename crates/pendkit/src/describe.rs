@@ -137,6 +137,13 @@ impl StageResult {
         if output.contains('@') {
             return Some("m".into());
         }
+        if let Some(terms) = self.system.named_outputs.get(&output) {
+            // a named combination has the unit of its coordinates
+            return terms
+                .first()
+                .and_then(|(c, _)| self.coordinate_unit(c))
+                .map(str::to_string);
+        }
         match output.strip_prefix("force:") {
             Some(target) => self
                 .coordinate_unit(target)

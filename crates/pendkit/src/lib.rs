@@ -510,8 +510,8 @@ impl StageResult {
         }
     }
 
-    /// Parses an output: a variable, `<body>@x,y,z/dx,dy,dz`, or `force:<parameter>` (the
-    /// force on the support). Names of a scheme the model declares are accepted too
+    /// Parses an output: a variable, `<body>@x,y,z/dx,dy,dz`, an output the model names
+    /// (e.g. `tm_beam`), or `force:<parameter>` (the force on the support). Names of a scheme the model declares are accepted too
     /// (`L3_L`, `L3@0,0,0/1,0,0`).
     pub fn output(&self, name: &str) -> Result<Output, Error> {
         let name = &self.unalias(name);
@@ -524,6 +524,16 @@ impl StageResult {
         }
         if let Some(v) = self.point_vector(name) {
             return Ok(Output::Displacement(v?));
+        }
+        if let Some(terms) = self.system.named_outputs.get(name.as_str()) {
+            let mut v = DVector::zeros(m.variables.len());
+            for (coord, c) in terms {
+                let k = m.variables.iter().position(|v| v == coord).ok_or_else(|| {
+                    self.names_error(coord, "a variable of this stage", &m.variables)
+                })?;
+                v[k] += c;
+            }
+            return Ok(Output::Displacement(v));
         }
         match m.variables.iter().position(|v| v == name) {
             Some(k) => Ok(Output::Displacement(Self::unit(m.variables.len(), k))),

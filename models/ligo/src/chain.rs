@@ -5,6 +5,7 @@ use std::collections::BTreeMap;
 
 use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
 use pendkit_energy::{BodyId, EndDirection, SpringEnd, Wire, WireEnd, WireSection, WireTags};
+use pendkit_model::losses::WireLoss;
 use pendkit_model::{BodySpec, BuildError, DampingSpec, Shape, SystemBuilder};
 use pendkit_params::Resolved;
 
@@ -385,9 +386,10 @@ pub fn beads_mass(section: &WireSection, length: f64, beads: usize) -> f64 {
 
 /// Damping of a wire set from its material: structural φ on stretch, bending and torsion,
 /// plus the thermoelastic peak on bending (physics_oracles.md §7, with the stress term):
-/// Δ = (Y T/ρC)(α − σβ/Y)², τ = ρ C d² / (2.16 · 2π · κ), σ = tension / area.
-/// `material` prefixes the material parameters (`<m>_phi`, `<m>_rho`, ...); `tension` and
-/// `radius`, `youngs` name the wire set's parameters.
+/// Δ = (Y T/ρC)(α − σβ/Y)², τ = ρ C d² / (2.16 · 2π · κ), σ = tension / area; no surface
+/// loss (the 2005 models' convention). `material` prefixes the material parameters
+/// (`<m>_phi`, `<m>_rho`, ...); `tension` and `radius`, `youngs` name the wire set's
+/// parameters. See [`pendkit_model::losses`] for the general form.
 pub fn wire_damping(
     set: &str,
     material: &str,
@@ -395,24 +397,17 @@ pub fn wire_damping(
     radius: &str,
     youngs: &str,
 ) -> Vec<(String, DampingSpec)> {
-    let phi = format!("{material}_phi");
-    let stress = format!("({tension})/(pi*{radius}^2)");
-    let delta = format!(
-        "{youngs}*temperature/({material}_rho*{material}_C)*({material}_alpha - {stress}*{material}_dlnE_dT/{youngs})^2"
-    );
-    let tau = format!("{material}_rho*{material}_C*(2*{radius})^2/(2.16*2*pi*{material}_K)");
-    vec![
-        (format!("{set}_stretch"), DampingSpec::structural(&phi)),
-        (
-            format!("{set}_bending"),
-            DampingSpec {
-                structural: Some(phi.clone()),
-                thermoelastic: Some((delta, tau)),
-                ..Default::default()
-            },
-        ),
-        (format!("{set}_torsion"), DampingSpec::structural(&phi)),
-    ]
+    WireLoss {
+        set,
+        material,
+        tension,
+        youngs,
+        clamp_radius: radius,
+        surface: None,
+        temperature: "temperature",
+        dilution_scale: None,
+    }
+    .damping()
 }
 
 /// Collects damping entries into the map a model returns.
