@@ -229,6 +229,23 @@ impl FibreProfile {
     }
 }
 
+/// The expression of a tapered fibre's strain-energy-weighted 1/r (see
+/// [`FibreProfile::stretch_inverse_radius`]: `power` 2 for stretch, 4 for torsion) over
+/// the parameters named by `(length, neck_length, neck_radius, middle_radius)`.
+pub fn fibre_inverse_radius(
+    (length, neck_length, neck_radius, middle_radius): (&str, &str, &str, &str),
+    power: u32,
+) -> String {
+    let (ends, middle) = (
+        format!("2*{neck_length}"),
+        format!("({length}-2*{neck_length})"),
+    );
+    format!(
+        "({ends}/{neck_radius}^{p1} + {middle}/{middle_radius}^{p1})/({ends}/{neck_radius}^{power} + {middle}/{middle_radius}^{power})",
+        p1 = power + 1
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

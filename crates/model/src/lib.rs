@@ -22,7 +22,7 @@ use pendkit_geometry::{FrameMap, PoseMap};
 use pendkit_params::{ParamError, ParamSet, Resolved};
 
 pub use damping::{DampingSpec, ParsedDamping};
-pub use fibre::FibreProfile;
+pub use fibre::{FibreProfile, fibre_inverse_radius};
 pub use pendkit_energy::Shape;
 
 /// Errors in a model definition; each names the item and what is wrong with it.

@@ -6,7 +6,7 @@ use std::collections::BTreeMap;
 use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
 use pendkit_energy::{BodyId, EndDirection, SpringEnd, Wire, WireEnd, WireSection, WireTags};
 use pendkit_model::losses::WireLoss;
-use pendkit_model::{BodySpec, BuildError, DampingSpec, Shape, SystemBuilder};
+use pendkit_model::{BodySpec, BuildError, DampingSpec, FibreProfile, Shape, SystemBuilder};
 use pendkit_params::Resolved;
 
 /// How blade tips are modelled (source §6.3–§6.4).
@@ -317,12 +317,14 @@ pub fn bead_count(p: &Resolved) -> Result<usize, BuildError> {
 /// (±sl, ±n5, d4) (parameters of those names, m), each of length `l3` and carrying a quarter
 /// of `weight` (N) along its slope, with `beads` violin beads each. `heights` are the two
 /// bodies' nominal centre heights (m); the bodies are level and centred on the z axis there.
+/// With a `profile` (a tapered fibre of length `l3`), each fibre is one effective wire of
+/// that profile ([`FibreProfile::wire`]) and takes no beads.
 pub fn lowest_wires(
     b: &mut SystemBuilder,
     p: &Resolved,
     (upper, lower): (BodyId, BodyId),
     heights: [f64; 2],
-    (section, weight): (&WireSection, f64),
+    (section, profile, weight): (&WireSection, Option<&FibreProfile>, f64),
     beads: usize,
     tags: &WireTags,
 ) -> Result<(), BuildError> {
@@ -343,6 +345,27 @@ pub fn lowest_wires(
             Vector3::new(sx * sl, sy * n4, -d3),
             Vector3::new(sx * sl, sy * n5, d4),
         );
+        let tension = weight / 4.0 * l3 / vert;
+        if let Some(profile) = profile {
+            if beads > 0 {
+                return Err(BuildError::Invalid {
+                    item: "parameter 'n_beads'".into(),
+                    message: "violin beads on tapered fibres are not modelled; use 0".into(),
+                });
+            }
+            let end = |body, point| WireEnd {
+                body,
+                point,
+                direction: EndDirection::Auto,
+            };
+            b.wire(profile.wire(
+                format!("f{}", k + 1),
+                [end(upper, upper_point), end(lower, lower_point)],
+                tension,
+                tags.clone(),
+            ))?;
+            continue;
+        }
         beaded_fibre(
             b,
             &Fibre {
@@ -355,7 +378,7 @@ pub fn lowest_wires(
                 ],
                 section,
                 length: l3,
-                tension: weight / 4.0 * l3 / vert,
+                tension,
                 beads,
             },
             p.get("g")?,

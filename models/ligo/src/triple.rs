@@ -374,7 +374,7 @@ impl Model for Triple {
             p,
             (intermediate, optic),
             [z2, z3],
-            (&sec_3, m3 * g),
+            (&sec_3, None, m3 * g),
             beads,
             &chain::tags("w3"),
         )?;
