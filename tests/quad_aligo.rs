@@ -106,7 +106,7 @@ fn tm_beam_is_x3_plus_theta_z3() {
 #[test]
 fn impossible_fibres_are_named() {
     for (set, needle) in [
-        ("n_beads=2", "n_beads"),
+        ("n_beads=0.5", "n_beads"),
         ("l3_neck=0.4", "fibres"),
         ("r3_neck=-1e-4", "fibres"),
     ] {
@@ -117,4 +117,30 @@ fn impossible_fibres_are_named() {
         let e = case.build().unwrap_err().to_string();
         assert!(e.contains(needle), "{set}: {e}");
     }
+}
+
+#[test]
+fn beads_on_tapered_fibres_follow_the_profile() {
+    // the first violin mode of a tapered fibre (20 beads per fibre, each segment the slice
+    // of the profile it spans) lies between those of uniform strings f = √(T/μ)/(2L): with
+    // the mean density of the profile (necks included: the heaviest it can be) and with
+    // the middle's density stiffened by the clamps' bending, (1 + 2λ/L) with the neck's λ
+    // (the lightest and stiffest); T = 39.6 kg g/4, L = 0.59 m, ρ = 2200 kg/m³
+    let pi = std::f64::consts::PI;
+    let (t, l) = (39.6 * 9.80665 / 4.0, 0.59);
+    let mass = 2200.0 * pi * (0.09 * 400e-6f64.powi(2) + 0.5 * 205e-6f64.powi(2));
+    let lambda = (7.2e10 * pi * 400e-6f64.powi(4) / 4.0 / t).sqrt();
+    let low = (t / (mass / l)).sqrt() / (2.0 * l);
+    let high =
+        (t / (2200.0 * pi * 205e-6f64.powi(2))).sqrt() / (2.0 * l) * (1.0 + 2.0 * lambda / l);
+    let r = run("quad-aligo", &["n_beads=20"], Stage::S2);
+    let violin: Vec<f64> = r
+        .modes
+        .modes
+        .iter()
+        .filter(|m| r.mode_family(m) == "violin")
+        .map(|m| m.hz)
+        .collect();
+    let first = violin.first().copied().expect("violin modes");
+    assert!(first > low && first < high, "{low} < {first} < {high} Hz");
 }

@@ -127,6 +127,24 @@ impl FibreProfile {
             .sum::<f64>()
     }
 
+    /// The part of the profile between `from` and `to` (m from the upper end, clamped to
+    /// the profile), e.g. one segment between violin beads.
+    pub fn slice(&self, from: f64, to: f64) -> FibreProfile {
+        let mut pieces = Vec::new();
+        let mut start = 0.0;
+        for &(l, r) in &self.pieces {
+            let (a, b) = (from.max(start), to.min(start + l));
+            if b > a {
+                pieces.push((b - a, r));
+            }
+            start += l;
+        }
+        FibreProfile {
+            pieces,
+            ..self.clone()
+        }
+    }
+
     /// Radius at the upper and lower clamps (m).
     pub fn clamp_radii(&self) -> (f64, f64) {
         let first = self.pieces.first().map_or(0.0, |p| p.1);
@@ -167,9 +185,15 @@ impl FibreProfile {
     /// The effective section at nominal tension `tension` (N): area and moments of area of
     /// the upper clamp's piece (both clamps are alike in a symmetric profile; the bending
     /// term takes one section), torsion constants that give the series twist stiffness and
-    /// its tension slope for total length `length`, and the mean linear density.
+    /// its tension slope, and the mean linear density.
     pub fn section(&self, tension: f64) -> WireSection {
-        let (r_clamp, _) = self.clamp_radii();
+        self.section_bent_at(tension, self.clamp_radii().0)
+    }
+
+    /// [`FibreProfile::section`] with the moments of area of radius `r_clamp` (m): the
+    /// radius at the end that is clamped, when only one is (a segment between a clamp and
+    /// a hinged bead).
+    pub fn section_bent_at(&self, tension: f64, r_clamp: f64) -> WireSection {
         let g = self.shear_modulus;
         // per piece: c = G J + T J/A with J = π r⁴/2, J/A = r²/2
         let compliance: f64 = self
@@ -216,6 +240,19 @@ impl FibreProfile {
         tension: f64,
         tags: WireTags,
     ) -> pendkit_energy::Wire {
+        self.wire_with_section(name, ends, tension, self.section(tension), tags)
+    }
+
+    /// [`FibreProfile::wire`] with a given effective section (see
+    /// [`FibreProfile::section_bent_at`]).
+    pub fn wire_with_section(
+        &self,
+        name: impl Into<String>,
+        ends: [WireEnd; 2],
+        tension: f64,
+        section: WireSection,
+        tags: WireTags,
+    ) -> pendkit_energy::Wire {
         let length = self.length();
         let stiffness = self.stretch_stiffness();
         pendkit_energy::Wire {
@@ -223,7 +260,7 @@ impl FibreProfile {
             ends,
             stiffness,
             unstretched_length: length - tension / stiffness,
-            section: self.section(tension),
+            section,
             tags,
         }
     }
@@ -310,6 +347,24 @@ mod tests {
         // surface-loss weights lie between the two radii's 1/r
         let w = p.stretch_inverse_radius();
         assert!(w > 1.0 / 400e-6 && w < 1.0 / 205e-6);
+    }
+
+    #[test]
+    fn slices_cover_the_profile() {
+        // 7 equal segments of the 0.59 m fibre: their lengths and masses add up to the
+        // whole; the first and last end in a neck, one segment straddles each junction
+        let p = silica(0.59);
+        let s = 0.59 / 7.0;
+        let slices: Vec<FibreProfile> = (0..7)
+            .map(|k| p.slice(k as f64 * s, (k + 1) as f64 * s))
+            .collect();
+        let (l, m): (f64, f64) = slices
+            .iter()
+            .fold((0.0, 0.0), |(l, m), x| (l + x.length(), m + x.mass()));
+        assert!((l - 0.59).abs() < 1e-12 && (m / p.mass() - 1.0).abs() < 1e-12);
+        assert_eq!(slices[0].clamp_radii(), (400e-6, 205e-6));
+        assert_eq!(slices[6].clamp_radii(), (205e-6, 400e-6));
+        assert_eq!(slices[3].pieces, vec![(s, 205e-6)]);
     }
 
     #[test]

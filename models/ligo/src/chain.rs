@@ -250,12 +250,16 @@ pub struct Fibre<'a> {
     pub tension: f64,
     /// Number of beads (0: one plain fibre).
     pub beads: usize,
+    /// A radius profile along the fibre (tapered fibres): each segment is then the slice of
+    /// the profile it spans, and `section` is not used.
+    pub profile: Option<&'a FibreProfile>,
 }
 
 /// Adds a fibre split into `beads + 1` segments with point-mass beads between them, each
-/// bead carrying one segment's mass μ L / (N + 1) (the lumped-mass rule). The fibre is
-/// clamped at both ends and hinged at the beads (a string between them); each segment
-/// carries the tension of the lowest plus the weight of the beads below it.
+/// bead carrying one segment's mass μ L / (N + 1) (the lumped-mass rule; with a profile,
+/// half of each neighbouring segment's mass). The fibre is clamped at both ends and hinged
+/// at the beads (a string between them); each segment carries the tension of the lowest
+/// plus the weight of the beads below it.
 pub fn beaded_fibre(
     b: &mut SystemBuilder,
     f: &Fibre,
@@ -263,7 +267,20 @@ pub fn beaded_fibre(
     tags: &WireTags,
 ) -> Result<(), BuildError> {
     let segment = f.length / (f.beads + 1) as f64;
-    let bead_mass = f.section.linear_density * segment;
+    let slices: Vec<FibreProfile> = f
+        .profile
+        .map(|p| {
+            (0..=f.beads)
+                .map(|k| p.slice(k as f64 * segment, (k + 1) as f64 * segment))
+                .collect()
+        })
+        .unwrap_or_default();
+    let bead_masses: Vec<f64> = (0..f.beads)
+        .map(|k| match (slices.get(k), slices.get(k + 1)) {
+            (Some(upper), Some(lower)) => 0.5 * (upper.mass() + lower.mass()),
+            _ => f.section.linear_density * segment,
+        })
+        .collect();
     let mut above = (f.upper.0, f.upper.1, EndDirection::Auto);
     for k in 0..=f.beads {
         let below = if k < f.beads {
@@ -276,7 +293,7 @@ pub fn beaded_fibre(
             let bead = b.body(
                 BodySpec::new(format!("{}b{}", f.name, k + 1))
                     .pose([&names[0], &names[1], &names[2], "0", "0", "0"])
-                    .mass(bead_mass)
+                    .mass(bead_masses[k])
                     .mode_family("violin"),
             )?;
             (bead, Vector3::zeros(), EndDirection::Hinged)
@@ -293,15 +310,33 @@ pub fn beaded_fibre(
         } else {
             format!("{}s{}", f.name, k + 1)
         };
-        let carried = f.tension + (f.beads - k) as f64 * bead_mass * g;
-        b.wire(Wire::from_tension(
-            name,
-            [end(&above), end(&below)],
-            f.section.clone(),
-            segment,
-            carried,
-            tags.clone(),
-        ))?;
+        let ends = [end(&above), end(&below)];
+        match slices.get(k) {
+            None => {
+                let carried =
+                    f.tension + (f.beads - k) as f64 * (f.section.linear_density * segment) * g;
+                b.wire(Wire::from_tension(
+                    name,
+                    ends,
+                    f.section.clone(),
+                    segment,
+                    carried,
+                    tags.clone(),
+                ))?
+            }
+            Some(slice) => {
+                let carried = f.tension + bead_masses[k..].iter().sum::<f64>() * g;
+                // the segment bends at its clamped end: the lower one for the last segment
+                let (upper_r, lower_r) = slice.clamp_radii();
+                let r = if k == f.beads && k > 0 {
+                    lower_r
+                } else {
+                    upper_r
+                };
+                let section = slice.section_bent_at(carried, r);
+                b.wire(slice.wire_with_section(name, ends, carried, section, tags.clone()))?
+            }
+        };
         above = below;
     }
     Ok(())
@@ -317,8 +352,8 @@ pub fn bead_count(p: &Resolved) -> Result<usize, BuildError> {
 /// (±sl, ±n5, d4) (parameters of those names, m), each of length `l3` and carrying a quarter
 /// of `weight` (N) along its slope, with `beads` violin beads each. `heights` are the two
 /// bodies' nominal centre heights (m); the bodies are level and centred on the z axis there.
-/// With a `profile` (a tapered fibre of length `l3`), each fibre is one effective wire of
-/// that profile ([`FibreProfile::wire`]) and takes no beads.
+/// With a `profile` (a tapered fibre of length `l3`), each segment follows the profile
+/// ([`FibreProfile::slice`]); without beads a fibre is one effective wire of it.
 pub fn lowest_wires(
     b: &mut SystemBuilder,
     p: &Resolved,
@@ -346,26 +381,6 @@ pub fn lowest_wires(
             Vector3::new(sx * sl, sy * n5, d4),
         );
         let tension = weight / 4.0 * l3 / vert;
-        if let Some(profile) = profile {
-            if beads > 0 {
-                return Err(BuildError::Invalid {
-                    item: "parameter 'n_beads'".into(),
-                    message: "violin beads on tapered fibres are not modelled; use 0".into(),
-                });
-            }
-            let end = |body, point| WireEnd {
-                body,
-                point,
-                direction: EndDirection::Auto,
-            };
-            b.wire(profile.wire(
-                format!("f{}", k + 1),
-                [end(upper, upper_point), end(lower, lower_point)],
-                tension,
-                tags.clone(),
-            ))?;
-            continue;
-        }
         beaded_fibre(
             b,
             &Fibre {
@@ -380,6 +395,7 @@ pub fn lowest_wires(
                 length: l3,
                 tension,
                 beads,
+                profile,
             },
             p.get("g")?,
             tags,
@@ -398,12 +414,25 @@ pub fn cylinder_along_x(radius: f64, length: f64) -> Shape {
     }
 }
 
-/// Mass (kg) of the beads of one fibre.
-pub fn beads_mass(section: &WireSection, length: f64, beads: usize) -> f64 {
+/// Mass (kg) of the beads of one fibre: N/(N + 1) of a uniform fibre's mass, or with a
+/// `profile`, the whole mass less half of the two end segments' (which the end bodies
+/// carry, as in [`beaded_fibre`]).
+pub fn beads_mass(
+    section: &WireSection,
+    profile: Option<&FibreProfile>,
+    length: f64,
+    beads: usize,
+) -> f64 {
     if beads == 0 {
-        0.0
-    } else {
-        section.linear_density * length * beads as f64 / (beads + 1) as f64
+        return 0.0;
+    }
+    match profile {
+        None => section.linear_density * length * beads as f64 / (beads + 1) as f64,
+        Some(p) => {
+            let segment = length / (beads + 1) as f64;
+            let ends = p.slice(0.0, segment).mass() + p.slice(length - segment, length).mass();
+            p.mass() - 0.5 * ends
+        }
     }
 }
 

@@ -394,12 +394,6 @@ impl Model for Quad {
         let profile = match self.design {
             Design::Quad2005 => None,
             Design::AsBuilt => {
-                if beads > 0 {
-                    return Err(BuildError::Invalid {
-                        item: "parameter 'n_beads'".into(),
-                        message: "violin beads on tapered fibres are not modelled; use 0".into(),
-                    });
-                }
                 let profile = FibreProfile::tapered(
                     l3,
                     (v("l3_neck")?, v("r3_neck")?),
@@ -410,7 +404,7 @@ impl Model for Quad {
                 Some(profile)
             }
         };
-        let m_beads = 4.0 * chain::beads_mass(&sec_3, l3, beads);
+        let m_beads = 4.0 * chain::beads_mass(&sec_3, profile.as_ref(), l3, beads);
 
         // nominal geometry: centre-of-mass heights from the wire lengths (the derived tl*)
         let vert_n = vertical(v("ln")?, v("nn0")? - v("nn1")?);
