@@ -364,7 +364,10 @@ mod tests {
         assert!((l - 0.59).abs() < 1e-12 && (m / p.mass() - 1.0).abs() < 1e-12);
         assert_eq!(slices[0].clamp_radii(), (400e-6, 205e-6));
         assert_eq!(slices[6].clamp_radii(), (205e-6, 400e-6));
-        assert_eq!(slices[3].pieces, vec![(s, 205e-6)]);
+        // one middle piece of the segment's length (to rounding of the end positions)
+        assert_eq!(slices[3].pieces.len(), 1);
+        let (len, r) = slices[3].pieces[0];
+        assert!((len - s).abs() < 1e-15 && r == 205e-6, "{len} {r}");
     }
 
     #[test]
