@@ -26,6 +26,8 @@ impl TagDamping {
 #[derive(Clone, Debug, Default)]
 pub struct Damping {
     tags: BTreeMap<String, TagDamping>,
+    /// Tags whose terms sit at their own temperature (K) for thermal noise.
+    temperatures: BTreeMap<String, f64>,
 }
 
 impl Damping {
@@ -43,6 +45,17 @@ impl Damping {
     /// ε'' = 0 at every frequency).
     pub fn get(&self, tag: &str) -> Option<&TagDamping> {
         self.tags.get(tag)
+    }
+
+    /// Sets the noise temperature (K) of the terms tagged `tag` (their fluctuation–
+    /// dissipation share is 4 k_B T_tag/ω times their loss); others use the model's.
+    pub fn set_temperature(&mut self, tag: &str, kelvin: f64) {
+        self.temperatures.insert(tag.to_string(), kelvin);
+    }
+
+    /// The noise temperature (K) of `tag`, if it has its own.
+    pub fn temperature(&self, tag: &str) -> Option<f64> {
+        self.temperatures.get(tag).copied()
     }
 
     /// Tags with explicit multipliers.

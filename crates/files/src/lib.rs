@@ -133,6 +133,7 @@ pub fn parse_case(text: &str) -> Result<CaseFile, FileError> {
             viscous: field("viscous", &d.viscous)?,
             imag: field("imag", &d.imag)?,
             thermoelastic,
+            ..Default::default()
         };
         overrides.damping.insert(tag.clone(), spec);
     }

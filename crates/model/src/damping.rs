@@ -24,6 +24,9 @@ pub struct DampingSpec {
     pub thermoelastic: Option<(String, String)>,
     /// Any further ε''(f).
     pub imag: Option<String>,
+    /// Temperature (K) of the terms with this tag for thermal noise, an expression over the
+    /// model's parameters (not `f`); the model's `temperature` when absent.
+    pub temperature: Option<String>,
 }
 
 impl DampingSpec {
@@ -46,13 +49,15 @@ impl DampingSpec {
         pick(&mut self.structural, &other.structural);
         pick(&mut self.viscous, &other.viscous);
         pick(&mut self.imag, &other.imag);
+        pick(&mut self.temperature, &other.temperature);
         if other.thermoelastic.is_some() {
             self.thermoelastic.clone_from(&other.thermoelastic);
         }
     }
 
     /// Sets one field by name (`real`, `structural`, `viscous`, `imag`,
-    /// `thermoelastic.delta`, `thermoelastic.tau`), as `--set damping.<tag>.<field>=...` does.
+    /// `thermoelastic.delta`, `thermoelastic.tau`, `temperature`), as
+    /// `--set damping.<tag>.<field>=...` does.
     pub fn set_field(&mut self, field: &str, text: &str) -> Result<(), String> {
         let t = Some(text.to_string());
         match field {
@@ -60,6 +65,7 @@ impl DampingSpec {
             "structural" => self.structural = t,
             "viscous" => self.viscous = t,
             "imag" => self.imag = t,
+            "temperature" => self.temperature = t,
             "thermoelastic.delta" | "thermoelastic.tau" => {
                 let (mut d, mut tau) = self
                     .thermoelastic
@@ -74,7 +80,7 @@ impl DampingSpec {
             }
             _ => {
                 return Err(format!(
-                    "unknown damping field '{field}' (real, structural, viscous, imag, thermoelastic.delta, thermoelastic.tau)"
+                    "unknown damping field '{field}' (real, structural, viscous, imag, thermoelastic.delta, thermoelastic.tau, temperature)"
                 ));
             }
         }
@@ -85,6 +91,38 @@ impl DampingSpec {
     /// ([`DampingSpec::parse`], then [`ParsedDamping::compile`]).
     pub fn resolve(&self, tag: &str, params: &Resolved) -> Result<TagDamping, BuildError> {
         self.parse(tag)?.compile(tag, params)
+    }
+
+    /// The tag's own noise temperature (K) against resolved parameters, `None` when it has
+    /// none (the model's `temperature` applies); it must be positive.
+    pub fn temperature_value(
+        &self,
+        tag: &str,
+        params: &Resolved,
+    ) -> Result<Option<f64>, BuildError> {
+        let Some(text) = &self.temperature else {
+            return Ok(None);
+        };
+        let which = context(tag, "temperature");
+        let expr = parse(text).map_err(|e| BuildError::Expression {
+            context: which.clone(),
+            message: e.to_string(),
+        })?;
+        let compiled = expr
+            .compile(&|s: &str| params.get(s).ok().map(Slot::Const))
+            .map_err(|e| BuildError::Expression {
+                context: which.clone(),
+                message: e.to_string(),
+            })?;
+        let value: f64 = compiled.eval(&[]);
+        if value.is_finite() && value > 0.0 {
+            Ok(Some(value))
+        } else {
+            Err(BuildError::Invalid {
+                item: which,
+                message: format!("must be positive (got {value} K)"),
+            })
+        }
     }
 
     /// Parses the multipliers of tag `tag`: ε' (`real`, 1 when absent) and ε'' (the sum of

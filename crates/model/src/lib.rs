@@ -6,6 +6,8 @@
 //! kg m^2, stiffnesses in N/m (or N m/rad), forces in N, moduli in Pa.
 
 mod damping;
+mod fibre;
+pub mod losses;
 
 use std::collections::{BTreeMap, HashMap, HashSet};
 use std::sync::{Arc, OnceLock};
@@ -20,6 +22,7 @@ use pendkit_geometry::{FrameMap, PoseMap};
 use pendkit_params::{ParamError, ParamSet, Resolved};
 
 pub use damping::{DampingSpec, ParsedDamping};
+pub use fibre::{FibreProfile, fibre_inverse_radius};
 pub use pendkit_energy::Shape;
 
 /// Errors in a model definition; each names the item and what is wrong with it.
@@ -668,6 +671,29 @@ impl SystemBuilder {
         Ok(())
     }
 
+    /// Names an output: the combination Σ cᵢ qᵢ of the variables `terms` = (name, cᵢ),
+    /// e.g. `[("x3", 1.0), ("z3", theta)]`; all of them should share a unit. A shorthand
+    /// for [`SystemBuilder::named_signal`] with coordinate terms.
+    pub fn named_output(&mut self, name: &str, terms: &[(&str, f64)]) -> Result<(), BuildError> {
+        let context = format!("output '{name}'");
+        if self.coord_ids.contains_key(name) {
+            return Err(BuildError::Duplicate {
+                what: "output",
+                name: name.to_string(),
+            });
+        }
+        let mut signal = NamedSignal {
+            name: name.to_string(),
+            force: false,
+            terms: Vec::with_capacity(terms.len()),
+        };
+        for &(coord, c) in terms {
+            let id = self.coord_id(&context, coord)?;
+            signal.terms.push((c, SignalTerm::Coordinate(id)));
+        }
+        self.named_signal(signal, true)
+    }
+
     /// The finished model.
     pub fn build(self) -> Result<System, BuildError> {
         check_finite("model", "gravity", self.system.gravity, "m/s^2")?;
@@ -939,17 +965,26 @@ pub fn build_with(
         .keys()
         .filter(|t| !defaults.damping.contains_key(*t));
     for tag in defaults.damping.keys().chain(case_only) {
-        let damping = match (defaults.damping.get(tag), overrides.damping.get(tag)) {
-            (Some(parsed), None) => parsed.compile(tag, &resolved)?,
+        let (damping, temperature) = match (defaults.damping.get(tag), overrides.damping.get(tag)) {
+            (Some(parsed), None) => (
+                parsed.compile(tag, &resolved)?,
+                parsed.spec().temperature_value(tag, &resolved)?,
+            ),
             (parsed, over) => {
                 let mut spec = parsed.map(|p| p.spec().clone()).unwrap_or_default();
                 if let Some(over) = over {
                     spec.merge(over);
                 }
-                spec.resolve(tag, &resolved)?
+                (
+                    spec.resolve(tag, &resolved)?,
+                    spec.temperature_value(tag, &resolved)?,
+                )
             }
         };
         system.damping.set(tag, damping);
+        if let Some(t) = temperature {
+            system.damping.set_temperature(tag, t);
+        }
     }
     system.temperature = resolved.get("temperature")?;
     if system.temperature <= 0.0 {

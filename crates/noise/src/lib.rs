@@ -188,6 +188,15 @@ pub fn thermal_noise_with(
         } else {
             Vec::new()
         };
+    // each tag's terms at their own temperature (K) when the damping gives one: the
+    // fluctuation–dissipation theorem per dissipating term, S = Σ 4 k_B T_tag ε''_tag
+    // z̄ᵀ P_tag z / ω; with one temperature this is the total below
+    let tag_temperature: Vec<f64> = model
+        .by_tag
+        .iter()
+        .map(|(name, _)| damping.temperature(name).unwrap_or(temperature))
+        .collect();
+    let uniform = tag_temperature.iter().all(|&t| t == temperature);
     let mut total = Vec::with_capacity(freqs.len());
     let mut tags: Vec<Vec<f64>> = vec![Vec::with_capacity(freqs.len()); model.by_tag.len()];
     let mut terms: Vec<Vec<f64>> = vec![Vec::with_capacity(freqs.len()); term_forms.len()];
@@ -196,10 +205,11 @@ pub fn thermal_noise_with(
         let scale = 4.0 * BOLTZMANN * temperature / (2.0 * std::f64::consts::PI * f);
         total.push(scale * response.im.abs());
         let z = sweep.response();
+        let tag_scale = |t: usize| scale * tag_temperature.get(t).map_or(1.0, |k| k / temperature);
         for ((tag, form), series) in term_forms.iter().zip(terms.iter_mut()) {
             let loss = sweep.multiplier(*tag).im;
             series.push(if loss != 0.0 {
-                scale * loss * form.energy(z)
+                tag_scale(*tag) * loss * form.energy(z)
             } else {
                 0.0
             });
@@ -218,11 +228,14 @@ pub fn thermal_noise_with(
             for (t, (form, series)) in tag_forms.iter().zip(tags.iter_mut()).enumerate() {
                 let loss = sweep.multiplier(t).im;
                 series.push(if loss != 0.0 {
-                    scale * loss * form.energy(z)
+                    tag_scale(t) * loss * form.energy(z)
                 } else {
                     0.0
                 });
             }
+        }
+        if !uniform && let Some(last) = total.last_mut() {
+            *last = tags.iter().filter_map(|s| s.last()).sum();
         }
     }
     Ok(ThermalNoise {

@@ -636,8 +636,8 @@ impl StageResult {
         }
     }
 
-    /// Parses an output: a named output the model declares, a variable,
-    /// `<body>@x,y,z/dx,dy,dz`, or `force:<parameter>` (the force on the support). Names of a scheme the model declares are accepted too
+    /// Parses an output: a variable, `<body>@x,y,z/dx,dy,dz`, an output the model names
+    /// (e.g. `tm_beam`), or `force:<parameter>` (the force on the support). Names of a scheme the model declares are accepted too
     /// (`L3_L`, `L3@0,0,0/1,0,0`).
     pub fn output(&self, name: &str) -> Result<Output, Error> {
         if let Some(signal) = self.system.outputs.iter().find(|s| s.name == name) {

@@ -55,6 +55,7 @@ pub fn damping(spec: &Spec) -> Result<BTreeMap<String, DampingSpec>, FileError> 
                 .thermoelastic
                 .as_ref()
                 .map(|(delta, tau)| (delta.text.clone(), tau.text.clone())),
+            temperature: text(&d.temperature),
         };
         out.entry(d.tag.clone()).or_default().merge(&given);
     }

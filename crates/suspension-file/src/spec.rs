@@ -457,6 +457,9 @@ pub struct DampingFile {
     pub thermoelastic: Option<(Ex, Ex)>,
     /// Any ε''(f).
     pub imag: Option<Ex>,
+    /// Temperature (K) of the terms with this tag for thermal noise; the model's
+    /// `temperature` when absent.
+    pub temperature: Option<Ex>,
 }
 
 /// An element kind moved or switched off.
@@ -1169,6 +1172,7 @@ fn damping(tag: String, node: &Node, at: At) -> Result<DampingFile, FileError> {
         viscous: f.expr("viscous")?,
         thermoelastic,
         imag: f.expr("imag")?,
+        temperature: f.expr("temperature")?,
     };
     f.finish()?;
     Ok(d)

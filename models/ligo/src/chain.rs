@@ -5,7 +5,8 @@ use std::collections::BTreeMap;
 
 use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
 use pendkit_energy::{BodyId, EndDirection, SpringEnd, Wire, WireEnd, WireSection, WireTags};
-use pendkit_model::{BodySpec, BuildError, DampingSpec, Shape, SystemBuilder};
+use pendkit_model::losses::WireLoss;
+use pendkit_model::{BodySpec, BuildError, DampingSpec, FibreProfile, Shape, SystemBuilder};
 use pendkit_params::Resolved;
 
 /// How blade tips are modelled (T020205 §6.3–§6.4).
@@ -249,12 +250,16 @@ pub struct Fibre<'a> {
     pub tension: f64,
     /// Number of beads (0: one plain fibre).
     pub beads: usize,
+    /// A radius profile along the fibre (tapered fibres): each segment is then the slice of
+    /// the profile it spans, and `section` is not used.
+    pub profile: Option<&'a FibreProfile>,
 }
 
 /// Adds a fibre split into `beads + 1` segments with point-mass beads between them, each
-/// bead carrying one segment's mass μ L / (N + 1) (the lumped-mass rule). The fibre is
-/// clamped at both ends and hinged at the beads (a string between them); each segment
-/// carries the tension of the lowest plus the weight of the beads below it.
+/// bead carrying one segment's mass μ L / (N + 1) (the lumped-mass rule; with a profile,
+/// half of each neighbouring segment's mass). The fibre is clamped at both ends and hinged
+/// at the beads (a string between them); each segment carries the tension of the lowest
+/// plus the weight of the beads below it.
 pub fn beaded_fibre(
     b: &mut SystemBuilder,
     f: &Fibre,
@@ -262,7 +267,20 @@ pub fn beaded_fibre(
     tags: &WireTags,
 ) -> Result<(), BuildError> {
     let segment = f.length / (f.beads + 1) as f64;
-    let bead_mass = f.section.linear_density * segment;
+    let slices: Vec<FibreProfile> = f
+        .profile
+        .map(|p| {
+            (0..=f.beads)
+                .map(|k| p.slice(k as f64 * segment, (k + 1) as f64 * segment))
+                .collect()
+        })
+        .unwrap_or_default();
+    let bead_masses: Vec<f64> = (0..f.beads)
+        .map(|k| match (slices.get(k), slices.get(k + 1)) {
+            (Some(upper), Some(lower)) => 0.5 * (upper.mass() + lower.mass()),
+            _ => f.section.linear_density * segment,
+        })
+        .collect();
     let mut above = (f.upper.0, f.upper.1, EndDirection::Auto);
     for k in 0..=f.beads {
         let below = if k < f.beads {
@@ -275,7 +293,7 @@ pub fn beaded_fibre(
             let bead = b.body(
                 BodySpec::new(format!("{}b{}", f.name, k + 1))
                     .pose([&names[0], &names[1], &names[2], "0", "0", "0"])
-                    .mass(bead_mass)
+                    .mass(bead_masses[k])
                     .mode_family("violin"),
             )?;
             (bead, Vector3::zeros(), EndDirection::Hinged)
@@ -292,15 +310,33 @@ pub fn beaded_fibre(
         } else {
             format!("{}s{}", f.name, k + 1)
         };
-        let carried = f.tension + (f.beads - k) as f64 * bead_mass * g;
-        b.wire(Wire::from_tension(
-            name,
-            [end(&above), end(&below)],
-            f.section.clone(),
-            segment,
-            carried,
-            tags.clone(),
-        ))?;
+        let ends = [end(&above), end(&below)];
+        match slices.get(k) {
+            None => {
+                let carried =
+                    f.tension + (f.beads - k) as f64 * (f.section.linear_density * segment) * g;
+                b.wire(Wire::from_tension(
+                    name,
+                    ends,
+                    f.section.clone(),
+                    segment,
+                    carried,
+                    tags.clone(),
+                ))?
+            }
+            Some(slice) => {
+                let carried = f.tension + bead_masses[k..].iter().sum::<f64>() * g;
+                // the segment bends at its clamped end: the lower one for the last segment
+                let (upper_r, lower_r) = slice.clamp_radii();
+                let r = if k == f.beads && k > 0 {
+                    lower_r
+                } else {
+                    upper_r
+                };
+                let section = slice.section_bent_at(carried, r);
+                b.wire(slice.wire_with_section(name, ends, carried, section, tags.clone()))?
+            }
+        };
         above = below;
     }
     Ok(())
@@ -316,12 +352,14 @@ pub fn bead_count(p: &Resolved) -> Result<usize, BuildError> {
 /// (±sl, ±n5, d4) (parameters of those names, m), each of length `l3` and carrying a quarter
 /// of `weight` (N) along its slope, with `beads` violin beads each. `heights` are the two
 /// bodies' nominal centre heights (m); the bodies are level and centred on the z axis there.
+/// With a `profile` (a tapered fibre of length `l3`), each segment follows the profile
+/// ([`FibreProfile::slice`]); without beads a fibre is one effective wire of it.
 pub fn lowest_wires(
     b: &mut SystemBuilder,
     p: &Resolved,
     (upper, lower): (BodyId, BodyId),
     heights: [f64; 2],
-    (section, weight): (&WireSection, f64),
+    (section, profile, weight): (&WireSection, Option<&FibreProfile>, f64),
     beads: usize,
     tags: &WireTags,
 ) -> Result<(), BuildError> {
@@ -342,6 +380,7 @@ pub fn lowest_wires(
             Vector3::new(sx * sl, sy * n4, -d3),
             Vector3::new(sx * sl, sy * n5, d4),
         );
+        let tension = weight / 4.0 * l3 / vert;
         beaded_fibre(
             b,
             &Fibre {
@@ -354,8 +393,9 @@ pub fn lowest_wires(
                 ],
                 section,
                 length: l3,
-                tension: weight / 4.0 * l3 / vert,
+                tension,
                 beads,
+                profile,
             },
             p.get("g")?,
             tags,
@@ -374,20 +414,34 @@ pub fn cylinder_along_x(radius: f64, length: f64) -> Shape {
     }
 }
 
-/// Mass (kg) of the beads of one fibre.
-pub fn beads_mass(section: &WireSection, length: f64, beads: usize) -> f64 {
+/// Mass (kg) of the beads of one fibre: N/(N + 1) of a uniform fibre's mass, or with a
+/// `profile`, the whole mass less half of the two end segments' (which the end bodies
+/// carry, as in [`beaded_fibre`]).
+pub fn beads_mass(
+    section: &WireSection,
+    profile: Option<&FibreProfile>,
+    length: f64,
+    beads: usize,
+) -> f64 {
     if beads == 0 {
-        0.0
-    } else {
-        section.linear_density * length * beads as f64 / (beads + 1) as f64
+        return 0.0;
+    }
+    match profile {
+        None => section.linear_density * length * beads as f64 / (beads + 1) as f64,
+        Some(p) => {
+            let segment = length / (beads + 1) as f64;
+            let ends = p.slice(0.0, segment).mass() + p.slice(length - segment, length).mass();
+            p.mass() - 0.5 * ends
+        }
     }
 }
 
 /// Damping of a wire set from its material: structural φ on stretch, bending and torsion,
 /// plus the thermoelastic peak on bending (docs/reference-values.md §7, with the stress term):
-/// Δ = (Y T/ρC)(α − σβ/Y)², τ = ρ C d² / (2.16 · 2π · κ), σ = tension / area.
-/// `material` prefixes the material parameters (`<m>_phi`, `<m>_rho`, ...); `tension` and
-/// `radius`, `youngs` name the wire set's parameters.
+/// Δ = (Y T/ρC)(α − σβ/Y)², τ = ρ C d² / (2.16 · 2π · κ), σ = tension / area; no surface
+/// loss (the 2005 models' convention). `material` prefixes the material parameters
+/// (`<m>_phi`, `<m>_rho`, ...); `tension` and `radius`, `youngs` name the wire set's
+/// parameters. See [`pendkit_model::losses`] for the general form.
 pub fn wire_damping(
     set: &str,
     material: &str,
@@ -395,24 +449,17 @@ pub fn wire_damping(
     radius: &str,
     youngs: &str,
 ) -> Vec<(String, DampingSpec)> {
-    let phi = format!("{material}_phi");
-    let stress = format!("({tension})/(pi*{radius}^2)");
-    let delta = format!(
-        "{youngs}*temperature/({material}_rho*{material}_C)*({material}_alpha - {stress}*{material}_dlnE_dT/{youngs})^2"
-    );
-    let tau = format!("{material}_rho*{material}_C*(2*{radius})^2/(2.16*2*pi*{material}_K)");
-    vec![
-        (format!("{set}_stretch"), DampingSpec::structural(&phi)),
-        (
-            format!("{set}_bending"),
-            DampingSpec {
-                structural: Some(phi.clone()),
-                thermoelastic: Some((delta, tau)),
-                ..Default::default()
-            },
-        ),
-        (format!("{set}_torsion"), DampingSpec::structural(&phi)),
-    ]
+    WireLoss {
+        set,
+        material,
+        tension,
+        youngs,
+        clamp_radius: radius,
+        surface: None,
+        temperature: "temperature",
+        dilution_scale: None,
+    }
+    .damping()
 }
 
 /// Collects damping entries into the map a model returns.

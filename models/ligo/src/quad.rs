@@ -10,18 +10,34 @@ use std::collections::BTreeMap;
 
 use nalgebra::Vector3;
 use pendkit_energy::System;
+use pendkit_model::losses::{WireLoss, blade_loss};
 use pendkit_model::{
-    BodySpec, BuildError, DampingSpec, DefaultsCache, LIGO_DOF_NAMES, Model, SystemBuilder,
+    BodySpec, BuildError, DampingSpec, DefaultsCache, FibreProfile, LIGO_DOF_NAMES, Model,
+    SystemBuilder,
 };
 use pendkit_params::{ParamError, ParamSet, Resolved};
 
 use crate::chain::{self, Blade, Blades, vertical};
 use crate::tables;
 
+/// Which numbers a quad variant uses.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Design {
+    /// `params/quad2005.csv` exactly: uniform 200 µm fibres, bulk losses only.
+    Quad2005,
+    /// aLIGO as built, as pygwinc 0.6.2's aLIGO `ifo.yaml` `Suspension` gives it: masses,
+    /// stage lengths, wire radii, blade vertical stiffnesses and thicknesses, tapered
+    /// fibres, materials and temperature, with surface loss, blade thermoelastic loss,
+    /// per-set temperatures and optional given dilution factors; the geometry pygwinc does
+    /// not carry (attachment points, break-offs, inertias) stays the 2005 set's.
+    AsBuilt,
+}
+
 /// One variant of the quad.
 pub struct Quad {
     name: &'static str,
     summary: &'static str,
+    design: Design,
     blades: Blades,
     /// Default number of violin beads per fibre (parameter `n_beads`).
     beads: usize,
@@ -30,10 +46,11 @@ pub struct Quad {
 }
 
 /// The bundled quad variants.
-pub static QUADS: [Quad; 5] = [
+pub static QUADS: [Quad; 6] = [
     Quad {
         name: "quad",
         summary: "aLIGO quad, xtra-lite (massless blade tips as floats), quad2005 parameters",
+        design: Design::Quad2005,
         blades: Blades::XtraLite,
         beads: 0,
         cache: DefaultsCache::new(),
@@ -41,6 +58,7 @@ pub static QUADS: [Quad; 5] = [
     Quad {
         name: "quad-lite",
         summary: "aLIGO quad, lite (blade tips with mass, 1 DOF each)",
+        design: Design::Quad2005,
         blades: Blades::Lite,
         beads: 0,
         cache: DefaultsCache::new(),
@@ -48,6 +66,7 @@ pub static QUADS: [Quad; 5] = [
     Quad {
         name: "quad-full",
         summary: "aLIGO quad, full (blade tips as 6-DOF bodies on 6x6 springs)",
+        design: Design::Quad2005,
         blades: Blades::Full,
         beads: 0,
         cache: DefaultsCache::new(),
@@ -55,6 +74,7 @@ pub static QUADS: [Quad; 5] = [
     Quad {
         name: "quad-lateral",
         summary: "aLIGO quad, xtra-lite with lateral blade compliance (the source's preferred model)",
+        design: Design::Quad2005,
         blades: Blades::Lateral,
         beads: 0,
         cache: DefaultsCache::new(),
@@ -62,11 +82,201 @@ pub static QUADS: [Quad; 5] = [
     Quad {
         name: "quad-v5",
         summary: "aLIGO quad, xtra-lite with 5 violin beads per fibre (n_beads sets any N)",
+        design: Design::Quad2005,
         blades: Blades::XtraLite,
         beads: 5,
         cache: DefaultsCache::new(),
     },
+    Quad {
+        name: "quad-aligo",
+        summary: "aLIGO quad as built (pygwinc 0.6.2 aLIGO numbers): tapered fibres, surface and blade thermoelastic loss, output tm_beam",
+        design: Design::AsBuilt,
+        blades: Blades::XtraLite,
+        beads: 0,
+        cache: DefaultsCache::new(),
+    },
 ];
+
+/// pygwinc 0.6.2's aLIGO `Suspension` numbers (ifo.yaml), as overrides of the 2005 set
+/// and new parameters: (name, value, unit, what).
+const AS_BUILT: &[(&str, &str, &str, &str)] = &[
+    (
+        "g",
+        "9.80665",
+        "m/s^2",
+        "standard gravity (pygwinc's scipy.constants.g)",
+    ),
+    ("mn", "22.1", "kg", "top mass"),
+    ("m1", "21.8", "kg", "UIM"),
+    ("m2", "39.6", "kg", "PUM"),
+    ("m3", "39.6", "kg", "test mass"),
+    ("rn", "520e-6", "m", "top wire radius"),
+    ("r1", "350e-6", "m", "UIM wire radius"),
+    ("r2", "310e-6", "m", "PUM wire radius"),
+    (
+        "r3",
+        "205e-6",
+        "m",
+        "fibre radius in the middle (Fiber.Radius)",
+    ),
+    (
+        "r3_neck",
+        "400e-6",
+        "m",
+        "fibre radius at the necks (Fiber.EndRadius)",
+    ),
+    (
+        "l3_neck",
+        "45e-3",
+        "m",
+        "length of each neck (Fiber.EndLength)",
+    ),
+    ("l3", "0.59", "m", "fibre length (the TM stage's Length)"),
+    ("Yn", "steel_Y", "Pa", "C70 steel"),
+    ("Y1", "steel_Y", "Pa", "C70 steel"),
+    ("Y2", "steel_Y", "Pa", "C70 steel"),
+    ("Y3", "silica_Y", "Pa", "fused silica"),
+    // the blades' vertical stiffness per stage (both blades), as the uncoupled frequency
+    // the 2005 set's build reads: kc per blade = ½ (2π f)² m = K/2
+    (
+        "kv_n",
+        "3400",
+        "N/m",
+        "vertical stiffness of the top blades (both)",
+    ),
+    (
+        "kv_1",
+        "3900",
+        "N/m",
+        "vertical stiffness of the UIM blades (both)",
+    ),
+    (
+        "kv_2",
+        "5200",
+        "N/m",
+        "vertical stiffness of the PUM blades (both)",
+    ),
+    (
+        "ufcn",
+        "sqrt(kv_n/mn)/(2*pi)",
+        "Hz",
+        "top blade frequency from kv_n",
+    ),
+    (
+        "ufc1",
+        "sqrt(kv_1/m1)/(2*pi)",
+        "Hz",
+        "UIM blade frequency from kv_1",
+    ),
+    (
+        "ufc2",
+        "sqrt(kv_2/m2)/(2*pi)",
+        "Hz",
+        "PUM blade frequency from kv_2",
+    ),
+    ("blade_n_thickness", "4300e-6", "m", "top blade thickness"),
+    ("blade_1_thickness", "4600e-6", "m", "UIM blade thickness"),
+    ("blade_2_thickness", "4200e-6", "m", "PUM blade thickness"),
+    // the vertical-to-beam coupling angle pygwinc derives: arm length / Earth radius
+    ("arm_length", "3995", "m", "interferometer arm length"),
+    (
+        "earth_radius",
+        "6.3781e6",
+        "m",
+        "Earth radius (pygwinc const.R_earth)",
+    ),
+    (
+        "vh_theta",
+        "arm_length/earth_radius",
+        "rad",
+        "vertical-to-beam coupling angle",
+    ),
+    (
+        "temperature",
+        "290",
+        "K",
+        "temperature of every element unless its own is set",
+    ),
+];
+
+/// The wire sets of the quad: (tag prefix, material, tension, radius at the clamps,
+/// Young's modulus, length) parameter names.
+const WIRE_SETS: [(&str, &str, &str, &str, &str, &str); 4] = [
+    ("wn", "steel", "Tn", "rn", "Yn", "ln"),
+    ("w1", "steel", "T1", "r1", "Y1", "l1"),
+    ("w2", "steel", "T2", "r2", "Y2", "l2"),
+    ("fibre", "silica", "T3", "r3", "Y3", "l3"),
+];
+
+/// The blades' damping tags, top to bottom.
+const BLADE_TAGS: [&str; 3] = ["blade_n", "blade_1", "blade_2"];
+
+/// [`WIRE_SETS`] as quad-aligo reads them: the fibres bend at their necks.
+fn as_built_wire_sets() -> [(
+    &'static str,
+    &'static str,
+    &'static str,
+    &'static str,
+    &'static str,
+    &'static str,
+); 4] {
+    WIRE_SETS.map(|w| {
+        if w.0 == "fibre" {
+            (w.0, w.1, w.2, "r3_neck", w.4, w.5)
+        } else {
+            w
+        }
+    })
+}
+
+/// The dilution factor l/λ (λ = √(Y π r⁴/4 / T), the bending length) as an expression.
+fn computed_dilution(length: &str, youngs: &str, radius: &str, tension: &str) -> String {
+    format!("{length}/sqrt({youngs}*pi*{radius}^4/4/{tension})")
+}
+
+/// quad-aligo's damping: bulk, surface and thermoelastic loss of every wire set (the
+/// fibres' surface loss weighted over their profile), blade thermoelastic loss, each at
+/// its own temperature parameter, the bending loss scaled to a given dilution if one is set.
+fn as_built_damping() -> BTreeMap<String, DampingSpec> {
+    let mut d = BTreeMap::new();
+    for (set, material, tension, radius, youngs, length) in as_built_wire_sets() {
+        let surface = if set == "fibre" {
+            let profile = ("l3", "l3_neck", "r3_neck", "r3");
+            (
+                pendkit_model::fibre_inverse_radius(profile, 2),
+                pendkit_model::fibre_inverse_radius(profile, 4),
+            )
+        } else {
+            (format!("1/{radius}"), format!("1/{radius}"))
+        };
+        let temperature = format!("temp_{set}");
+        let loss = WireLoss {
+            set,
+            material,
+            tension,
+            youngs,
+            clamp_radius: radius,
+            surface: Some(surface),
+            temperature: &temperature,
+            dilution_scale: Some(format!(
+                "({})/dilution_{set}",
+                computed_dilution(length, youngs, radius, tension)
+            )),
+        };
+        d.extend(loss.damping());
+    }
+    for blade in BLADE_TAGS {
+        d.insert(
+            blade.to_string(),
+            blade_loss(
+                "maraging",
+                &format!("{blade}_thickness"),
+                &format!("temp_{blade}"),
+            ),
+        );
+    }
+    d
+}
 
 impl Model for Quad {
     fn name(&self) -> &'static str {
@@ -116,10 +326,37 @@ impl Model for Quad {
         for (name, value) in self.blades.parameters() {
             set.define(name, value)?;
         }
+        if self.design == Design::AsBuilt {
+            for &(name, value, unit, _) in AS_BUILT {
+                if set.contains(name) {
+                    set.apply_text(name, value)?;
+                } else {
+                    set.define(name, value)?;
+                }
+                set.set_unit(name, unit)?;
+            }
+            // each wire set and blade at its own temperature, the model's by default
+            for set_name in WIRE_SETS.map(|w| w.0).into_iter().chain(BLADE_TAGS) {
+                let name = format!("temp_{set_name}");
+                set.define(&name, "temperature")?;
+                set.set_unit(&name, "K")?;
+            }
+            // the pendulum dilution factor of each wire set: by default l/λ, what the
+            // bending terms give a wire clamped at both ends (so the bending loss is not
+            // rescaled); a number imposes a given (measured) dilution
+            for (wires, _, tension, radius, youngs, length) in as_built_wire_sets() {
+                let name = format!("dilution_{wires}");
+                set.define(&name, &computed_dilution(length, youngs, radius, tension))?;
+                set.set_unit(&name, "")?;
+            }
+        }
         Ok(set)
     }
 
     fn damping(&self) -> BTreeMap<String, DampingSpec> {
+        if self.design == Design::AsBuilt {
+            return as_built_damping();
+        }
         let mut d = chain::damping_map(
             [
                 ("wn", "steel", "Tn", "rn", "Yn"),
@@ -130,7 +367,7 @@ impl Model for Quad {
             .into_iter()
             .flat_map(|(set, m, t, r, y)| chain::wire_damping(set, m, t, r, y)),
         );
-        for blade in ["blade_n", "blade_1", "blade_2"] {
+        for blade in BLADE_TAGS {
             d.insert(blade.into(), DampingSpec::structural("maraging_phi"));
         }
         d
@@ -153,7 +390,21 @@ impl Model for Quad {
         let (sec_n, sec_1, sec_2) = (steel("rn", "Yn")?, steel("r1", "Y1")?, steel("r2", "Y2")?);
         let sec_3 = chain::round_section(p, "r3", "Y3", "nu_silica", "silica_rho")?;
         let l3 = v("l3")?;
-        let m_beads = 4.0 * chain::beads_mass(&sec_3, l3, beads);
+        // quad-aligo's fibres: necks at both ends, one effective wire each
+        let profile = match self.design {
+            Design::Quad2005 => None,
+            Design::AsBuilt => {
+                let profile = FibreProfile::tapered(
+                    l3,
+                    (v("l3_neck")?, v("r3_neck")?),
+                    v("r3")?,
+                    (sec_3.youngs_modulus, sec_3.shear_modulus, v("silica_rho")?),
+                );
+                profile.check("the fibres (l3, l3_neck, r3_neck, r3)")?;
+                Some(profile)
+            }
+        };
+        let m_beads = 4.0 * chain::beads_mass(&sec_3, profile.as_ref(), l3, beads);
 
         // nominal geometry: centre-of-mass heights from the wire lengths (the derived tl*)
         let vert_n = vertical(v("ln")?, v("nn0")? - v("nn1")?);
@@ -344,10 +595,14 @@ impl Model for Quad {
             p,
             (pum, tm),
             [z2, z3],
-            (&sec_3, m3 * g),
+            (&sec_3, profile.as_ref(), m3 * g),
             beads,
             &chain::tags("fibre"),
         )?;
+        if self.design == Design::AsBuilt {
+            // the test mass along the beam: x3 + θ z3 (see the README for the sign)
+            b.named_output("tm_beam", &[("x3", 1.0), ("z3", v("vh_theta")?)])?;
+        }
         b.build()
     }
 }

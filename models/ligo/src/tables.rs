@@ -58,7 +58,7 @@ fn units(table: &str) -> impl Iterator<Item = (&str, &str)> {
 }
 
 /// Units of the materials table's columns (its header spells them `rho_kg_m3`, ...).
-const MATERIAL_UNITS: [(&str, &str); 7] = [
+const MATERIAL_UNITS: [(&str, &str); 8] = [
     ("rho", "kg/m^3"),
     ("C", "J/(kg K)"),
     ("K", "W/(m K)"),
@@ -66,6 +66,7 @@ const MATERIAL_UNITS: [(&str, &str); 7] = [
     ("dlnE_dT", "1/K"),
     ("phi", "rad"),
     ("Y", "Pa"),
+    ("dissdepth", "m"),
 ];
 
 /// Short prefix of each material's parameters.
@@ -75,10 +76,11 @@ const MATERIAL_PREFIX: [(&str, &str); 3] = [
     ("maraging_steel_blade", "maraging"),
 ];
 
-/// Defines `<m>_rho, <m>_C, <m>_K, <m>_alpha, <m>_dlnE_dT, <m>_phi, <m>_Y` for the
-/// materials (m = silica, steel, maraging), in SI units as in the table's header.
+/// Defines `<m>_rho, <m>_C, <m>_K, <m>_alpha, <m>_dlnE_dT, <m>_phi, <m>_Y, <m>_dissdepth`
+/// for the materials (m = silica, steel, maraging), in SI units as in the table's header;
+/// an empty dissipation depth (no surface loss known) is 0.
 pub fn define_materials(set: &mut ParamSet) -> Result<(), ParamError> {
-    let columns = ["rho", "C", "K", "alpha", "dlnE_dT", "phi", "Y"];
+    let columns = ["rho", "C", "K", "alpha", "dlnE_dT", "phi", "Y", "dissdepth"];
     for line in MATERIALS.lines().filter(|l| !l.starts_with('#')).skip(1) {
         let fields: Vec<&str> = line.split(',').map(str::trim).collect();
         let Some((_, prefix)) = MATERIAL_PREFIX.iter().find(|(name, _)| *name == fields[0]) else {
@@ -86,7 +88,7 @@ pub fn define_materials(set: &mut ParamSet) -> Result<(), ParamError> {
         };
         for (column, value) in columns.iter().zip(&fields[1..]) {
             let name = format!("{prefix}_{column}");
-            set.define(&name, value)?;
+            set.define(&name, if value.is_empty() { "0" } else { value })?;
             if let Some((_, unit)) = MATERIAL_UNITS.iter().find(|(c, _)| c == column) {
                 set.set_unit(&name, unit)?;
             }
@@ -109,6 +111,10 @@ mod tests {
         assert_eq!(r.get("l1").unwrap(), 0.3085);
         assert_eq!(r.get("silica_phi").unwrap(), 4.1e-10);
         assert_eq!(r.get("maraging_Y").unwrap(), 1.87e11);
+        // the dissipation-depth column (empty for the blades' steel: no surface loss)
+        assert_eq!(r.get("silica_dissdepth").unwrap(), 1.5e-2);
+        assert_eq!(r.get("maraging_dissdepth").unwrap(), 0.0);
+        assert_eq!(set.unit("silica_dissdepth"), Some("m"));
         assert!(r.get("tln").is_err());
         // units from the tables' unit column and header
         assert_eq!(set.unit("m3"), Some("kg"));

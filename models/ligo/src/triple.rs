@@ -246,7 +246,7 @@ impl Model for Triple {
         let (n0, n1, n2, n3, n4, n5) = (v("n0")?, v("n1")?, v("n2")?, v("n3")?, v("n4")?, v("n5")?);
         let (d0, d1, d2, d3, d4) = (v("d0")?, v("d1")?, v("d2")?, v("d3")?, v("d4")?);
         let si = v("si")?;
-        let m_beads = 4.0 * chain::beads_mass(&sec_3, l3, beads);
+        let m_beads = 4.0 * chain::beads_mass(&sec_3, None, l3, beads);
 
         // nominal geometry: centre-of-mass heights from the wires' vertical extents
         let (vert_1, vert_2, vert_3) = (
@@ -374,7 +374,7 @@ impl Model for Triple {
             p,
             (intermediate, optic),
             [z2, z3],
-            (&sec_3, m3 * g),
+            (&sec_3, None, m3 * g),
             beads,
             &chain::tags("w3"),
         )?;

@@ -1,0 +1,146 @@
+//! `quad-aligo`'s own physics switches, each against an exact relation: per-element
+//! temperatures (the fluctuation–dissipation theorem term by term), given dilution
+//! factors (the bending loss rescaled by computed/given), the `tm_beam` output
+//! (x3 + θ z3), and one-line errors for impossible fibres. The comparison with pygwinc is
+//! in `pygwinc_quad_aligo.rs`.
+
+use pendkit::{Case, ThermalNoise};
+use pendkit_energy::Stage;
+use pendkit_tests::run;
+
+const FREQS: [f64; 4] = [10.0, 20.0, 50.0, 100.0];
+
+fn noise(sets: &[&str], output: &str) -> ThermalNoise {
+    run("quad-aligo", sets, Stage::S2)
+        .noise(output, &FREQS)
+        .expect("noise")
+}
+
+fn share<'a>(n: &'a ThermalNoise, tag: &str) -> &'a [f64] {
+    &n.by_tag()
+        .iter()
+        .find(|(t, _)| t == tag)
+        .unwrap_or_else(|| panic!("no tag {tag}"))
+        .1
+}
+
+#[test]
+fn an_element_at_its_own_temperature_scales_its_share_alone() {
+    // S = Σ_terms 4 k_B T_term ε''_term z̄ᵀ P_term z / ω: halving the noise temperature of
+    // the fibres' bending terms halves their share (the loss and the dynamics do not
+    // change), leaves every other share as it was, and the total is the sum of the shares
+    let base = noise(&[], "tm_beam");
+    let cold = noise(&["damping.fibre_bending.temperature=145"], "tm_beam");
+    for (k, f) in FREQS.iter().enumerate() {
+        for (tag, psd) in base.by_tag() {
+            let expected = if tag == "fibre_bending" {
+                0.5 * psd[k]
+            } else {
+                psd[k]
+            };
+            let got = share(&cold, tag)[k];
+            assert!(
+                (got - expected).abs() <= 1e-12 * base.psd()[k],
+                "{f} Hz {tag}: {got} vs {expected}"
+            );
+        }
+        let sum: f64 = cold.by_tag().iter().map(|(_, p)| p[k]).sum();
+        assert!((cold.psd()[k] / sum - 1.0).abs() < 1e-12);
+        if *f >= 20.0 {
+            // above the 9.7 Hz bounce mode the fibres' bending dominates
+            assert!(cold.psd()[k] < 0.8 * base.psd()[k], "{f} Hz");
+        }
+    }
+    // the fibres' temperature parameter also enters their thermoelastic Δ ∝ T: the
+    // stretch and torsion shares (no thermoelastic part) halve exactly, bending by more
+    let cold_fibres = noise(&["temp_fibre=145"], "tm_beam");
+    for k in 0..FREQS.len() {
+        for tag in ["fibre_stretch", "fibre_torsion"] {
+            let (a, b) = (share(&cold_fibres, tag)[k], share(&base, tag)[k]);
+            assert!((a - 0.5 * b).abs() <= 1e-9 * b, "{tag}: {a} vs {b}");
+        }
+        assert!(share(&cold_fibres, "fibre_bending")[k] < 0.5 * share(&base, "fibre_bending")[k]);
+    }
+}
+
+#[test]
+fn a_given_dilution_rescales_the_bending_loss() {
+    // the default dilution is l/λ, λ = √(Y π r⁴/4 / T) at the necks, written out here from
+    // the numbers of pygwinc's aLIGO ifo.yaml (l = 0.59 m, r = 400 µm, Y = 72 GPa,
+    // T = 39.6 kg · 9.80665 m/s² / 4 along a vertical fibre); giving half of it doubles
+    // the fibres' bending share of the noise and nothing else
+    let tension = 39.6 * 9.80665 / 4.0;
+    let lambda = (7.2e10 * std::f64::consts::PI * 400e-6f64.powi(4) / 4.0 / tension).sqrt();
+    let computed = 0.59 / lambda;
+    let base = noise(&[], "tm_beam");
+    let given = noise(&[&format!("dilution_fibre={}", computed / 2.0)], "tm_beam");
+    for k in 0..FREQS.len() {
+        let (a, b) = (
+            share(&given, "fibre_bending")[k],
+            share(&base, "fibre_bending")[k],
+        );
+        assert!((a / b - 2.0).abs() < 1e-9, "{a} vs 2 x {b}");
+        let (a, b) = (
+            share(&given, "w2_bending")[k],
+            share(&base, "w2_bending")[k],
+        );
+        assert!((a / b - 1.0).abs() < 1e-9);
+    }
+}
+
+#[test]
+fn tm_beam_is_x3_plus_theta_z3() {
+    // x (x–pitch block) and z (y–z–roll block) do not couple in the symmetric quad, so the
+    // PSD at x3 + θ z3 is PSD(x3) + θ² PSD(z3) exactly; θ = 3995 m / 6.3781e6 m
+    let theta: f64 = 3995.0 / 6.3781e6;
+    let (beam, x, z) = (noise(&[], "tm_beam"), noise(&[], "x3"), noise(&[], "z3"));
+    for k in 0..FREQS.len() {
+        let expected = x.psd()[k] + theta * theta * z.psd()[k];
+        assert!((beam.psd()[k] / expected - 1.0).abs() < 1e-9);
+    }
+    // the vertical part is a few % of the PSD at 20 Hz (pygwinc's "vert" terms)
+    let vertical = theta * theta * z.psd()[1] / beam.psd()[1];
+    assert!(vertical > 0.01 && vertical < 0.1, "{vertical}");
+}
+
+#[test]
+fn impossible_fibres_are_named() {
+    for (set, needle) in [
+        ("n_beads=0.5", "n_beads"),
+        ("l3_neck=0.4", "fibres"),
+        ("r3_neck=-1e-4", "fibres"),
+    ] {
+        let case = Case::model("quad-aligo")
+            .unwrap()
+            .with_sets(&[set.to_string()])
+            .unwrap();
+        let e = case.build().unwrap_err().to_string();
+        assert!(e.contains(needle), "{set}: {e}");
+    }
+}
+
+#[test]
+fn beads_on_tapered_fibres_follow_the_profile() {
+    // the first violin mode of a tapered fibre (20 beads per fibre, each segment the slice
+    // of the profile it spans) lies between those of uniform strings f = √(T/μ)/(2L): with
+    // the mean density of the profile (necks included: the heaviest it can be) and with
+    // the middle's density stiffened by the clamps' bending, (1 + 2λ/L) with the neck's λ
+    // (the lightest and stiffest); T = 39.6 kg g/4, L = 0.59 m, ρ = 2200 kg/m³
+    let pi = std::f64::consts::PI;
+    let (t, l) = (39.6 * 9.80665 / 4.0, 0.59);
+    let mass = 2200.0 * pi * (0.09 * 400e-6f64.powi(2) + 0.5 * 205e-6f64.powi(2));
+    let lambda = (7.2e10 * pi * 400e-6f64.powi(4) / 4.0 / t).sqrt();
+    let low = (t / (mass / l)).sqrt() / (2.0 * l);
+    let high =
+        (t / (2200.0 * pi * 205e-6f64.powi(2))).sqrt() / (2.0 * l) * (1.0 + 2.0 * lambda / l);
+    let r = run("quad-aligo", &["n_beads=20"], Stage::S2);
+    let violin: Vec<f64> = r
+        .modes
+        .modes
+        .iter()
+        .filter(|m| r.mode_family(m) == "violin")
+        .map(|m| m.hz)
+        .collect();
+    let first = violin.first().copied().expect("violin modes");
+    assert!(first > low && first < high, "{low} < {first} < {high} Hz");
+}
