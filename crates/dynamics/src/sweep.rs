@@ -71,6 +71,14 @@ impl Coefficient {
             Coefficient::OfFrequency(e) => e.eval(&[f_hz]),
         }
     }
+
+    /// The values at every frequency of `freqs` (Hz) into `out`, in one pass.
+    fn over(&self, freqs: &[f64], out: &mut [f64]) {
+        match self {
+            Coefficient::Constant(x) => out.fill(*x),
+            Coefficient::OfFrequency(e) => e.eval_points(&[freqs], out),
+        }
+    }
 }
 
 /// The complex multiplier ε' + i ε'' of one tag over a sweep.
@@ -278,6 +286,48 @@ impl<'m> Sweep<'m> {
                 self.now_varying[k] = self.now[t];
             }
         }
+        self.solve(f_hz)
+    }
+
+    /// Solves at every frequency of `freqs` (Hz) in turn, calling `visit(k, output, sweep)`
+    /// after the k-th (the sweep gives [`Sweep::response`] and [`Sweep::multiplier`] there).
+    /// The same numbers as [`Sweep::at`] point by point, but the multipliers of the
+    /// frequency-dependent tags are evaluated for a block of frequencies at a time, one walk
+    /// of each expression per block instead of one per point. Stops at the first frequency
+    /// where the dynamic stiffness is singular and says which.
+    pub fn for_each(
+        &mut self,
+        freqs: &[f64],
+        mut visit: impl FnMut(usize, c64, &Sweep<'m>),
+    ) -> Result<(), DynamicsError> {
+        const BLOCK: usize = 256;
+        let nv = self.varying.len();
+        // ε' then ε'' of each varying tag over the block: 2 nv rows of BLOCK values
+        let mut table = vec![0.0; 2 * nv * BLOCK];
+        for (b, block) in freqs.chunks(BLOCK).enumerate() {
+            let n = block.len();
+            for (k, &t) in self.varying.iter().enumerate() {
+                if let Multiplier::Varying(re, im) = &self.multipliers[t] {
+                    let (rows_re, rows_im) = table.split_at_mut(nv * BLOCK);
+                    re.over(block, &mut rows_re[k * BLOCK..k * BLOCK + n]);
+                    im.over(block, &mut rows_im[k * BLOCK..k * BLOCK + n]);
+                }
+            }
+            for (i, &f_hz) in block.iter().enumerate() {
+                for (k, &t) in self.varying.iter().enumerate() {
+                    let m = c64::new(table[k * BLOCK + i], table[(nv + k) * BLOCK + i]);
+                    self.now[t] = m;
+                    self.now_varying[k] = m;
+                }
+                let y = self.solve(f_hz)?;
+                visit(b * BLOCK + i, y, self);
+            }
+        }
+        Ok(())
+    }
+
+    /// Solves at `f_hz` with the multipliers already set for it.
+    fn solve(&mut self, f_hz: f64) -> Result<c64, DynamicsError> {
         let w2 = (TWO_PI * f_hz).powi(2);
         let solved = match &mut self.engine {
             Engine::Fast(fast) => fast.solve(&self.now_varying, w2, &mut self.z),
