@@ -8,8 +8,8 @@
 
 use std::process::Command;
 
+use pendkit::energy::Stage;
 use pendkit::{Case, log_grid, run_stage};
-use pendkit_energy::Stage;
 
 #[test]
 fn scipy_state_space_matches_pendkit_transfer_functions() {
