@@ -183,20 +183,25 @@ impl Pattern {
     }
 }
 
-/// Connected components of a symmetric matrix given by `nonzero(i, j)` over `0..n`: a label
-/// per node (numbered from 0 in order of lowest node) and the number of components. O(n²):
-/// for dense matrices (the eigenproblem's K_eff and M).
-pub(crate) fn dense_components(
-    n: usize,
-    nonzero: impl Fn(usize, usize) -> bool,
-) -> (Vec<usize>, usize) {
-    let pattern = Pattern::from_positions(
-        n,
-        (0..n)
-            .flat_map(|i| (0..=i).map(move |j| (i, j)))
-            .filter(|&(i, j)| nonzero(i, j)),
-    );
-    pattern.components(n)
+/// Connected components of the graph over `0..n` joining i and j wherever any of
+/// `matrices` (each n × n, column-major) has a non-zero (i, j) or (j, i): a label per node
+/// (numbered from 0 in order of lowest node) and the number of components. One pass over
+/// the stored values, O(n²): for dense storage (the eigenproblem's K_eff and M).
+pub(crate) fn dense_components(n: usize, matrices: &[&[f64]]) -> (Vec<usize>, usize) {
+    let mut positions = Vec::new();
+    for values in matrices {
+        for (j, column) in values.chunks_exact(n.max(1)).enumerate().take(n) {
+            // (i, j) joins both rows: from_positions adds the transpose
+            positions.extend(
+                column
+                    .iter()
+                    .enumerate()
+                    .filter(|&(_, &v)| v != 0.0)
+                    .map(|(i, _)| (i, j)),
+            );
+        }
+    }
+    Pattern::from_positions(n, positions).components(n)
 }
 
 #[cfg(test)]

@@ -189,7 +189,17 @@ impl StageModel {
             .collect();
         let rows = RowEntries::new(dim, &positions);
         let mass = &assembled.mass;
-        let has_mass = |i: usize, j: usize| mass[(i, j)] != 0.0 || mass[(j, i)] != 0.0;
+        // the columns of each row's mass entries (and of their transposes), from one pass
+        // over the stored values: the mass matrix is dense storage but block-sparse
+        let mut mass_columns: Vec<Vec<usize>> = vec![Vec::new(); nx];
+        for (j, column) in mass.as_slice().chunks_exact(nx.max(1)).enumerate().take(nx) {
+            for (i, &m) in column.iter().enumerate() {
+                if m != 0.0 {
+                    mass_columns[i].push(j);
+                    mass_columns[j].push(i);
+                }
+            }
+        }
 
         // candidate pattern: every position pair of every term, and the mass entries
         let mut mark = vec![NONE; dim];
@@ -206,12 +216,10 @@ impl StageModel {
                     }
                 }
             }
-            if i < nx {
-                for j in 0..nx {
-                    if mark[j] != i && has_mass(i, j) {
-                        mark[j] = i;
-                        cols.push(j);
-                    }
+            for &j in mass_columns.get(i).map_or(&[][..], Vec::as_slice) {
+                if mark[j] != i {
+                    mark[j] = i;
+                    cols.push(j);
                 }
             }
             cols[first..].sort_unstable();
