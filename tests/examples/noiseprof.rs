@@ -22,5 +22,10 @@ fn main() {
         best[2] = best[2].min(t.elapsed().as_secs_f64());
         std::hint::black_box(h);
     }
-    println!("noise {:.3} us/pt  tf x00 {:.3} us/pt  tf force {:.3} us/pt", best[0] * 1e3, best[1] * 1e3, best[2] * 1e3);
+    println!(
+        "noise {:.3} us/pt  tf x00 {:.3} us/pt  tf force {:.3} us/pt",
+        best[0] * 1e3,
+        best[1] * 1e3,
+        best[2] * 1e3
+    );
 }

@@ -433,7 +433,9 @@ mod tests {
         llt.L().solve_lower_triangular_in_place(y.as_mut());
         let (mut u, mut v) = (b.clone(), b.clone());
         envelope.solve_upper_transposed(&mut u);
-        llt.L().transpose().solve_upper_triangular_in_place(v.as_mut());
+        llt.L()
+            .transpose()
+            .solve_upper_triangular_in_place(v.as_mut());
         for j in 0..5 {
             for i in 0..n {
                 assert!((x[(i, j)] - y[(i, j)]).abs() <= 1e-13 * (1.0 + y[(i, j)].abs()));

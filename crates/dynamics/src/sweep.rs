@@ -146,8 +146,12 @@ enum Part {
 
 /// The factorisation of E(f) over the solved unknowns.
 enum Factor {
-    /// Dense column-major n × n (the values array is the matrix).
-    Dense { n: usize, pivots: Vec<usize> },
+    /// Dense column-major n × n (the values array is the matrix), eliminated by the
+    /// pattern's schedule while no row exchange is needed, by the pivoting LU otherwise.
+    Dense {
+        schedule: lu::Schedule,
+        pivots: Vec<usize>,
+    },
     /// Compressed columns with a symbolic analysis done once.
     Sparse(Box<SparseLu<c64>>),
 }
@@ -353,9 +357,10 @@ impl Fast {
         let n = unknowns.len();
         let (nx, nq, _) = model.sizes;
         let n_all = nx + nq;
-        let factor = if n <= DENSE_LIMIT {
+        let mut factor = if n <= DENSE_LIMIT {
+            // the schedule is made below, once the stored entries are known
             Factor::Dense {
-                n,
+                schedule: lu::Schedule::new(0, &[]),
                 pivots: vec![0; n],
             }
         } else {
@@ -363,11 +368,11 @@ impl Fast {
             Factor::Sparse(Box::new(SparseLu::new(col_ptr, row_idx)?))
         };
         let len = match &factor {
-            Factor::Dense { n, .. } => n * n,
+            Factor::Dense { .. } => n * n,
             Factor::Sparse(s) => s.len(),
         };
         let index = |i: usize, j: usize| match &factor {
-            Factor::Dense { n, .. } => Some(i + j * n),
+            Factor::Dense { .. } => Some(i + j * n),
             Factor::Sparse(s) => s.index(i, j),
         };
         let nv = varying.len();
@@ -459,6 +464,18 @@ impl Fast {
                 mass.push((k, m));
             }
         }
+        if let Factor::Dense { schedule, .. } = &mut factor {
+            // every entry the assembly can make non-zero
+            let mut stored: Vec<bool> = matrix
+                .constant
+                .iter()
+                .map(|x| *x != c64::new(0.0, 0.0))
+                .collect();
+            for &(k, _) in matrix.parts.iter().flatten().chain(&mass) {
+                stored[k] = true;
+            }
+            *schedule = lu::Schedule::new(n, &stored);
+        }
         Ok(Fast {
             values: vec![c64::new(0.0, 0.0); len],
             scalar: vec![c64::new(0.0, 0.0); 1],
@@ -479,12 +496,23 @@ impl Fast {
         }
         self.rhs.evaluate(varying, z);
         let solved = match &mut self.factor {
-            Factor::Dense { n, pivots } => {
-                let ok = lu::factor(&mut self.values, *n, pivots);
-                if ok {
-                    lu::solve(&self.values, *n, pivots, z);
+            Factor::Dense { schedule, pivots } => {
+                let n = schedule.len();
+                if !schedule.factor(&mut self.values) {
+                    // a row exchange is needed: the general LU on the matrix afresh
+                    self.matrix.evaluate(varying, &mut self.values);
+                    for &(k, m) in &self.mass {
+                        self.values[k].re -= w2 * m;
+                    }
+                    let ok = lu::factor(&mut self.values, n, pivots);
+                    if ok {
+                        lu::solve(&self.values, n, pivots, z);
+                    }
+                    ok
+                } else {
+                    schedule.solve(&self.values, z);
+                    true
                 }
-                ok
             }
             Factor::Sparse(s) => s.factor(&self.values) && s.solve(z),
         };
