@@ -34,7 +34,7 @@ fn main() {
             .k_eff;
             let n = k.nrows();
             let mut label: Vec<usize> = (0..n).collect();
-            fn find(l: &mut Vec<usize>, i: usize) -> usize {
+            fn find(l: &[usize], i: usize) -> usize {
                 let mut i = i;
                 while l[i] != i {
                     i = l[i];
@@ -44,14 +44,14 @@ fn main() {
             for i in 0..n {
                 for j in 0..n {
                     if k[(i, j)] != 0.0 || r.assembled.mass[(i, j)] != 0.0 {
-                        let (a, b) = (find(&mut label, i), find(&mut label, j));
+                        let (a, b) = (find(&label, i), find(&label, j));
                         label[a.max(b)] = a.min(b);
                     }
                 }
             }
             let mut sizes = std::collections::BTreeMap::new();
             for i in 0..n {
-                *sizes.entry(find(&mut label, i)).or_insert(0) += 1;
+                *sizes.entry(find(&label, i)).or_insert(0) += 1;
             }
             println!("blocks {:?}", sizes.values().collect::<Vec<_>>());
             println!("iterations {}", r.assembled.equilibrium.iterations);

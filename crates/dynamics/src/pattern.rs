@@ -226,9 +226,9 @@ mod tests {
     fn transposes_and_retains_symmetrically() {
         let p = Pattern::from_positions(4, [(0, 2), (3, 1), (1, 1), (2, 3), (0, 0)]);
         let t = p.transposed_slots();
-        for s in 0..p.len() {
+        for (s, &transposed) in t.iter().enumerate() {
             let (i, j) = p.position(s);
-            assert_eq!(p.position(t[s]), (j, i));
+            assert_eq!(p.position(transposed), (j, i));
         }
         // keep only (2, 0) and (1, 1): (0, 2) stays as its transpose, nothing else
         let keep = [p.slot(2, 0).unwrap(), p.slot(1, 1).unwrap()];
