@@ -124,6 +124,21 @@ fn blocked_modes_equal_the_whole_matrix_solve() {
 }
 
 #[test]
+fn banded_chain_blocks_equal_the_whole_matrix_solve() {
+    // A 30-stage chain: blocks x–pitch and y–roll of 60 variables with bandwidth 3, z and
+    // yaw of 30 (bandwidth 1), so K_eff's Cholesky factors are narrow and the reduction
+    // takes the envelope solves (modes.rs) instead of faer's dense ones; the reference is
+    // still the whole 180-variable pencil by nalgebra, with the same tolerance.
+    for stage in [Stage::S0A, Stage::S2] {
+        let r = run("chain", &["n_stages=30"], stage);
+        let k = k_eff(&r);
+        let m = &r.assembled.mass;
+        let reference = whole_matrix_modes(&k, m);
+        assert_same_modes(&format!("chain-30 {stage}"), &r.modes.modes, &reference, m);
+    }
+}
+
+#[test]
 fn blocks_follow_the_exact_zeros() {
     // the quad's stage-0A modes come from three blocks of K_eff and M (x–pitch, y–z–roll
     // coupled through the vertical blade tips' left/right pairs, yaw): each mode's vector

@@ -3,7 +3,8 @@
 //! (`pendkit_noise::thermal_noise_with`, default options: only the blocks the output
 //! couples to) over log grids from 0.1 to 100 Hz, the state-space matrices of the quad, and
 //! the normal modes of a large (bead) model, dense and below a frequency. Building the
-//! model and `run_stage` happen outside the timed loop.
+//! model and `run_stage` happen outside the timed loop, except in `pipeline-noise`, which
+//! times the whole way from a model name to a noise curve.
 
 use std::hint::black_box;
 use std::time::Duration;
@@ -157,7 +158,32 @@ fn beads(c: &mut Criterion) {
         let name = format!("quad-beads{beads}");
         let r = stage2("quad", &[&format!("n_beads={beads}")]);
         bench_noise(c, &name, &r, "x3", points);
+        bench_tf(c, &name, &r, "x3", points);
     }
+}
+
+/// The 100-stage `chain` (600 variables): noise and transfer function x00 → x100 at the
+/// lowest body over 1000 points. Its x–pitch block (200 unknowns) is solved by the sparse
+/// LU; the other blocks are decoupled from x100.
+fn long_chain(c: &mut Criterion) {
+    let name = "chain-100";
+    let r = stage2("chain", &["n_stages=100"]);
+    bench_noise(c, name, &r, "x100", 1000);
+    bench_tf(c, name, &r, "x100", 1000);
+}
+
+/// `pipeline-noise/quad/1000`: the whole way from the model's name to its test-mass noise
+/// curve, as a user calls it: build (defaults parsed once, during warm-up), equilibrium,
+/// stage-2 assembly, modes, and the noise at x3 over 1000 points (the pipeline that
+/// benches/vs_pygwinc.py compares with pygwinc's quad suspension thermal noise).
+fn pipeline(c: &mut Criterion) {
+    let freqs = grid(1000);
+    c.bench_function("pipeline-noise/quad/1000", |b| {
+        b.iter(|| {
+            let r = stage2(black_box("quad"), &[]);
+            r.noise("x3", black_box(&freqs)).expect("noise")
+        })
+    });
 }
 
 /// Normal modes of the quad with 48 beads per fibre (600 variables in one block): every
@@ -209,6 +235,6 @@ criterion_group! {
         .sample_size(10)
         .warm_up_time(Duration::from_secs(1))
         .measurement_time(Duration::from_secs(2));
-    targets = chains, beads, modes
+    targets = chains, beads, long_chain, pipeline, modes
 }
 criterion_main!(small_models, chain_models);

@@ -6,6 +6,7 @@
 //! evaluation to the assembly instead of repeating it. Buffers are reused, so repeated
 //! evaluations do not allocate (except on the reference path).
 
+use std::collections::HashMap;
 use std::time::{Duration, Instant};
 
 use pendkit_energy::{
@@ -90,6 +91,9 @@ pub(crate) struct Evaluator<'s> {
     path: DerivativePath,
     terms: Vec<Term>,
     groups: Vec<Group>,
+    /// The groups of each shared energy body (by its address, the first value of
+    /// `Term::body_parts`), so that a part finds its group without a search over all groups.
+    shared_groups: HashMap<usize, Vec<usize>>,
     /// Group of each term.
     group_of: Vec<usize>,
     /// The configuration the kept results belong to.
@@ -115,6 +119,7 @@ impl<'s> Evaluator<'s> {
             path,
             terms: Vec::new(),
             groups: Vec::new(),
+            shared_groups: HashMap::new(),
             group_of: Vec::new(),
             point: Vec::new(),
             jets: (0..system.bodies.len()).map(|_| FrameJet::new()).collect(),
@@ -137,9 +142,10 @@ impl<'s> Evaluator<'s> {
             let n = term.coords.len();
             let joined = (parts > 1)
                 .then(|| {
-                    self.groups.iter().position(|g| {
-                        let first = &self.terms[g.members.first.0];
-                        first.body_parts().0 == body && first.coords == term.coords
+                    self.shared_groups.get(&body).and_then(|groups| {
+                        groups.iter().copied().find(|&g| {
+                            self.terms[self.groups[g].members.first.0].coords == term.coords
+                        })
                     })
                 })
                 .flatten();
@@ -179,7 +185,11 @@ impl<'s> Evaluator<'s> {
                     self.values.resize(self.values.len() + parts, 0.0);
                     self.gradients.resize(self.gradients.len() + parts * n, 0.0);
                     self.force_scales.resize(self.gradients.len(), 0.0);
-                    self.groups.len() - 1
+                    let g = self.groups.len() - 1;
+                    if parts > 1 {
+                        self.shared_groups.entry(body).or_default().push(g);
+                    }
+                    g
                 }
             };
             self.group_of.push(g);
@@ -198,6 +208,10 @@ impl<'s> Evaluator<'s> {
             .position(|g| g.members.iter().any(|&(t, _)| t >= len))
             .unwrap_or(self.groups.len());
         self.groups.truncate(first_removed);
+        self.shared_groups.retain(|_, groups| {
+            groups.retain(|&g| g < first_removed);
+            !groups.is_empty()
+        });
         self.terms.truncate(len);
         self.group_of.truncate(len);
         self.reference_off.truncate(len);

@@ -145,7 +145,9 @@ impl StageModel {
         solver: Solver,
     ) -> Result<Vec<c64>, DynamicsError> {
         let mut sweep = Sweep::new(self, damping, input, output, solver)?;
-        freqs.iter().map(|&f| sweep.at(f)).collect()
+        let mut values = Vec::with_capacity(freqs.len());
+        sweep.for_each(freqs, |_, y, _| values.push(y))?;
+        Ok(values)
     }
 
     /// [`StageModel::transfer_with`] over the restricted blocks. An input or output of the
@@ -160,7 +162,14 @@ impl StageModel {
     ) -> Vec<c64> {
         let nan = c64::new(f64::NAN, f64::NAN);
         match Sweep::new(self, damping, input, output, Solver::Restricted) {
-            Ok(mut sweep) => freqs.iter().map(|&f| sweep.at(f).unwrap_or(nan)).collect(),
+            Ok(mut sweep) => {
+                let mut values = Vec::with_capacity(freqs.len());
+                match sweep.for_each(freqs, |_, y, _| values.push(y)) {
+                    Ok(()) => values,
+                    // a singular point: NaN there, the others solved one by one
+                    Err(_) => freqs.iter().map(|&f| sweep.at(f).unwrap_or(nan)).collect(),
+                }
+            }
             Err(_) => vec![nan; freqs.len()],
         }
     }

@@ -83,28 +83,56 @@ impl Pattern {
             .map(|k| range.start + k)
     }
 
+    /// Builds a pattern from rows already in compressed form (columns ascending in each
+    /// row, no duplicates, and symmetric: the caller guarantees it).
+    pub(crate) fn from_sorted_rows(dim: usize, row_start: Vec<usize>, cols: Vec<usize>) -> Self {
+        debug_assert_eq!(row_start.len(), dim + 1);
+        let mut row_of = Vec::with_capacity(cols.len());
+        for i in 0..dim {
+            row_of.extend(std::iter::repeat_n(i, row_start[i + 1] - row_start[i]));
+        }
+        Pattern {
+            dim,
+            row_start,
+            row_of,
+            cols,
+        }
+    }
+
+    /// The slot of the transposed position of every slot: (j, i) for the slot of (i, j).
+    /// Linear in the stored positions: visiting the rows in order, the positions (i, j) of
+    /// column j come in ascending i, which is the order of row j's columns.
+    pub fn transposed_slots(&self) -> Vec<usize> {
+        let mut next: Vec<usize> = self.row_start[..self.dim].to_vec();
+        self.cols
+            .iter()
+            .map(|&j| {
+                let s = next[j];
+                next[j] += 1;
+                s
+            })
+            .collect()
+    }
+
     /// The sub-pattern of the slots `keep` accepts, kept symmetric (a slot stays when it or
     /// its transpose is accepted), and for each of its slots the slot it had here.
     pub fn retain(&self, keep: impl Fn(usize) -> bool) -> (Pattern, Vec<usize>) {
-        let kept: Vec<bool> = (0..self.len())
-            .map(|s| {
-                let (i, j) = self.position(s);
-                keep(s) || self.slot(j, i).is_some_and(&keep)
-            })
-            .collect();
-        let pattern = Pattern::from_positions(
-            self.dim,
-            (0..self.len())
-                .filter(|&s| kept[s])
-                .map(|s| self.position(s)),
-        );
-        let old = (0..pattern.len())
-            .map(|s| {
-                let (i, j) = pattern.position(s);
-                self.slot(i, j).unwrap_or(usize::MAX)
-            })
-            .collect();
-        (pattern, old)
+        let accepted: Vec<bool> = (0..self.len()).map(&keep).collect();
+        let transposed = self.transposed_slots();
+        let mut row_start = Vec::with_capacity(self.dim + 1);
+        let mut cols = Vec::new();
+        let mut old = Vec::new();
+        row_start.push(0);
+        for i in 0..self.dim {
+            for s in self.row_slots(i) {
+                if accepted[s] || accepted[transposed[s]] {
+                    cols.push(self.cols[s]);
+                    old.push(s);
+                }
+            }
+            row_start.push(cols.len());
+        }
+        (Pattern::from_sorted_rows(self.dim, row_start, cols), old)
     }
 
     /// The compressed columns (column pointers, row indices) of the square sub-pattern over
@@ -155,20 +183,25 @@ impl Pattern {
     }
 }
 
-/// Connected components of a symmetric matrix given by `nonzero(i, j)` over `0..n`: a label
-/// per node (numbered from 0 in order of lowest node) and the number of components. O(n²):
-/// for dense matrices (the eigenproblem's K_eff and M).
-pub(crate) fn dense_components(
-    n: usize,
-    nonzero: impl Fn(usize, usize) -> bool,
-) -> (Vec<usize>, usize) {
-    let pattern = Pattern::from_positions(
-        n,
-        (0..n)
-            .flat_map(|i| (0..=i).map(move |j| (i, j)))
-            .filter(|&(i, j)| nonzero(i, j)),
-    );
-    pattern.components(n)
+/// Connected components of the graph over `0..n` joining i and j wherever any of
+/// `matrices` (each n × n, column-major) has a non-zero (i, j) or (j, i): a label per node
+/// (numbered from 0 in order of lowest node) and the number of components. One pass over
+/// the stored values, O(n²): for dense storage (the eigenproblem's K_eff and M).
+pub(crate) fn dense_components(n: usize, matrices: &[&[f64]]) -> (Vec<usize>, usize) {
+    let mut positions = Vec::new();
+    for values in matrices {
+        for (j, column) in values.chunks_exact(n.max(1)).enumerate().take(n) {
+            // (i, j) joins both rows: from_positions adds the transpose
+            positions.extend(
+                column
+                    .iter()
+                    .enumerate()
+                    .filter(|&(_, &v)| v != 0.0)
+                    .map(|(i, _)| (i, j)),
+            );
+        }
+    }
+    Pattern::from_positions(n, positions).components(n)
 }
 
 #[cfg(test)]
@@ -187,5 +220,22 @@ mod tests {
         let (rows, cols): (Vec<_>, Vec<_>) = (0..p.len()).map(|s| p.position(s)).unzip();
         assert_eq!(rows, [0, 1, 2, 2, 3, 4]);
         assert_eq!(cols, [2, 3, 0, 2, 1, 4]);
+    }
+
+    #[test]
+    fn transposes_and_retains_symmetrically() {
+        let p = Pattern::from_positions(4, [(0, 2), (3, 1), (1, 1), (2, 3), (0, 0)]);
+        let t = p.transposed_slots();
+        for (s, &transposed) in t.iter().enumerate() {
+            let (i, j) = p.position(s);
+            assert_eq!(p.position(transposed), (j, i));
+        }
+        // keep only (2, 0) and (1, 1): (0, 2) stays as its transpose, nothing else
+        let keep = [p.slot(2, 0).unwrap(), p.slot(1, 1).unwrap()];
+        let (q, old) = p.retain(|s| keep.contains(&s));
+        let kept: Vec<_> = (0..q.len()).map(|s| q.position(s)).collect();
+        assert_eq!(kept, [(0, 2), (1, 1), (2, 0)]);
+        let before: Vec<_> = old.iter().map(|&s| p.position(s)).collect();
+        assert_eq!(before, kept);
     }
 }

@@ -6,8 +6,6 @@
 //! The matrices are assembled once; damping enters only through the multipliers passed to
 //! each call, so trying other damping never re-assembles anything.
 
-use std::collections::BTreeMap;
-
 use faer::{Mat, c64};
 use nalgebra::{DMatrix, DVector};
 use pendkit_assembly::{Assembled, OffHessian};
@@ -116,134 +114,242 @@ pub struct ReducedComplex {
     pub s_eff: Mat<c64>,
 }
 
-/// Accumulates local Hessians on a pattern in term order (the order of a dense scatter,
-/// so the sums are the same numbers a dense assembly gives).
-struct Scatter<'p> {
-    pattern: &'p Pattern,
-    slots: Vec<usize>,
+/// For every master row, the (term, local index) pairs that put a row of their local
+/// Hessian there, in term order: compressed rows over the terms' positions.
+struct RowEntries {
+    start: Vec<usize>,
+    entries: Vec<(usize, usize)>,
 }
 
-impl<'p> Scatter<'p> {
-    fn new(pattern: &'p Pattern) -> Self {
-        Scatter {
-            pattern,
-            slots: Vec::new(),
-        }
-    }
-
-    /// Slots of a term's local matrix (row-major over its positions).
-    fn locate(&mut self, positions: &[usize]) {
-        self.slots.clear();
-        for &a in positions {
-            for &b in positions {
-                // every term position pair is in the pattern by construction
-                self.slots
-                    .push(self.pattern.slot(a, b).unwrap_or(usize::MAX));
+impl RowEntries {
+    fn new(dim: usize, positions: &[&[usize]]) -> Self {
+        let mut start = vec![0; dim + 1];
+        for p in positions {
+            for &r in p.iter() {
+                start[r + 1] += 1;
             }
         }
-    }
-
-    fn add(&self, into: &mut [f64], local: &[f64]) {
-        for (&slot, &v) in self.slots.iter().zip(local) {
-            if let Some(x) = into.get_mut(slot) {
-                *x += v;
+        for i in 0..dim {
+            start[i + 1] += start[i];
+        }
+        let mut next = start.clone();
+        let mut entries = vec![(0, 0); start[dim]];
+        for (t, p) in positions.iter().enumerate() {
+            for (a, &r) in p.iter().enumerate() {
+                entries[next[r]] = (t, a);
+                next[r] += 1;
             }
         }
+        RowEntries { start, entries }
     }
+
+    fn row(&self, i: usize) -> &[(usize, usize)] {
+        &self.entries[self.start[i]..self.start[i + 1]]
+    }
+}
+
+/// The parts of the master matrix a term's Hessians go to.
+#[derive(Clone, Copy)]
+enum Destination {
+    /// Lossless entirely: P_on into the lossless sum.
+    Lossless,
+    /// Entirely lossy: P_on into its tag.
+    Tag(usize),
+    /// P_on − P_off lossless, P_off into its tag.
+    Split(usize),
 }
 
 impl StageModel {
     /// Collects the stage's matrices from an assembly: one pattern for every part, the
     /// lossless part Σ(P_on − P_off), each damping tag's Σ P_off and the mass matrix on it.
+    ///
+    /// Linear in the terms' entries: the candidate pattern is built row by row from the
+    /// terms that touch each row (a marker per column instead of sorting duplicates), and
+    /// each row's local Hessian rows are added through a column-to-slot map of that row
+    /// (no search per entry). Each slot still receives its terms in term order, the order of
+    /// a dense scatter, so the sums are the same numbers a dense assembly gives.
     pub fn new(system: &System, assembled: &Assembled) -> Self {
+        const NONE: usize = usize::MAX;
         let layout = &assembled.layout;
         let (nx, nq, ns) = layout.sizes();
         let dim = nx + nq + ns;
         let names = |ids: &[usize]| ids.iter().map(|&i| system.coords[i].name.clone()).collect();
-        let positions: Vec<Vec<usize>> = assembled
-            .terms
-            .iter()
-            .map(|t| t.coords.iter().map(|&g| layout.position[g]).collect())
+        let terms = &assembled.terms;
+        // master rows of every term's coordinates, one flat array
+        let mut first_position = Vec::with_capacity(terms.len() + 1);
+        first_position.push(0);
+        let mut flat_positions = Vec::new();
+        for t in terms {
+            flat_positions.extend(t.coords.iter().map(|&g| layout.position[g]));
+            first_position.push(flat_positions.len());
+        }
+        let positions: Vec<&[usize]> = first_position
+            .windows(2)
+            .map(|w| &flat_positions[w[0]..w[1]])
             .collect();
+        let rows = RowEntries::new(dim, &positions);
         let mass = &assembled.mass;
-        let mass_entries = (0..nx)
-            .flat_map(|i| (0..nx).map(move |j| (i, j)))
-            .filter(|&(i, j)| mass[(i, j)] != 0.0);
-        let candidates = Pattern::from_positions(
-            dim,
-            positions
-                .iter()
-                .flat_map(|p| p.iter().flat_map(move |&a| p.iter().map(move |&b| (a, b))))
-                .chain(mass_entries),
-        );
+        // the columns of each row's mass entries (and of their transposes), from one pass
+        // over the stored values: the mass matrix is dense storage but block-sparse
+        let mut mass_columns: Vec<Vec<usize>> = vec![Vec::new(); nx];
+        for (j, column) in mass.as_slice().chunks_exact(nx.max(1)).enumerate().take(nx) {
+            for (i, &m) in column.iter().enumerate() {
+                if m != 0.0 {
+                    mass_columns[i].push(j);
+                    mass_columns[j].push(i);
+                }
+            }
+        }
+
+        // candidate pattern: every position pair of every term, and the mass entries
+        let mut mark = vec![NONE; dim];
+        let mut row_start = Vec::with_capacity(dim + 1);
+        let mut cols = Vec::new();
+        row_start.push(0);
+        for i in 0..dim {
+            let first = cols.len();
+            for &(t, _) in rows.row(i) {
+                for &j in positions[t] {
+                    if mark[j] != i {
+                        mark[j] = i;
+                        cols.push(j);
+                    }
+                }
+            }
+            for &j in mass_columns.get(i).map_or(&[][..], Vec::as_slice) {
+                if mark[j] != i {
+                    mark[j] = i;
+                    cols.push(j);
+                }
+            }
+            cols[first..].sort_unstable();
+            row_start.push(cols.len());
+        }
+        let candidates = Pattern::from_sorted_rows(dim, row_start, cols);
+        let nnz = candidates.len();
+
+        // tags with lossy terms, in name order, and where each term's Hessians go
+        let mut tag_names: Vec<&str> = terms
+            .iter()
+            .filter(|t| t.off != OffHessian::Zero)
+            .map(|t| t.tag.as_str())
+            .collect();
+        tag_names.sort_unstable();
+        tag_names.dedup();
+        let tag_of = |tag: &str| tag_names.binary_search(&tag).unwrap_or(0);
+        let destinations: Vec<Destination> = terms
+            .iter()
+            .map(|t| match &t.off {
+                OffHessian::Zero => Destination::Lossless,
+                OffHessian::Same => Destination::Tag(tag_of(&t.tag)),
+                OffHessian::Matrix(_) => Destination::Split(tag_of(&t.tag)),
+            })
+            .collect();
+
         // lossless = Σ_zero P_on + (Σ_replaced P_on − Σ_replaced P_off), as the dense
         // dilution split adds them
-        let nnz = candidates.len();
         let (mut zero_on, mut replaced_on, mut replaced_off) =
             (vec![0.0; nnz], vec![0.0; nnz], vec![0.0; nnz]);
-        let mut by_tag: BTreeMap<String, Vec<f64>> = BTreeMap::new();
-        let mut terms = Vec::new();
-        let mut scatter = Scatter::new(&candidates);
-        for (t, pos) in assembled.terms.iter().zip(&positions) {
-            scatter.locate(pos);
-            let off = match &t.off {
-                OffHessian::Zero => {
-                    scatter.add(&mut zero_on, &t.on);
-                    continue;
+        let mut by_tag: Vec<Vec<f64>> = vec![vec![0.0; nnz]; tag_names.len()];
+        let mut mass_on_candidates = vec![0.0; nnz];
+        let mut slot_of_column = vec![NONE; dim];
+        for i in 0..dim {
+            let slots = candidates.row_slots(i);
+            for s in slots.clone() {
+                slot_of_column[candidates.row(i)[s - slots.start]] = s;
+                if i < nx {
+                    let j = candidates.position(s).1;
+                    if j < nx {
+                        mass_on_candidates[s] = mass[(i, j)];
+                    }
                 }
-                OffHessian::Same => &t.on,
-                OffHessian::Matrix(m) => {
-                    scatter.add(&mut replaced_on, &t.on);
-                    scatter.add(&mut replaced_off, m);
-                    m
+            }
+            for &(t, a) in rows.row(i) {
+                let term = &terms[t];
+                let pos = positions[t];
+                let m = pos.len();
+                // row a of the local matrices (row-major, m × m)
+                let local_row = a * m..(a + 1) * m;
+                let on = &term.on[local_row.clone()];
+                let slot = |b: usize| slot_of_column[b];
+                match (destinations[t], &term.off) {
+                    (Destination::Lossless, _) => {
+                        for (&b, &v) in pos.iter().zip(on) {
+                            zero_on[slot(b)] += v;
+                        }
+                    }
+                    (Destination::Tag(k), _) => {
+                        let tag = &mut by_tag[k];
+                        for (&b, &v) in pos.iter().zip(on) {
+                            tag[slot(b)] += v;
+                        }
+                    }
+                    (Destination::Split(k), off) => {
+                        let off = match off {
+                            OffHessian::Matrix(off) => &off[local_row],
+                            _ => on,
+                        };
+                        let tag = &mut by_tag[k];
+                        for ((&b, &v_on), &v_off) in pos.iter().zip(on).zip(off) {
+                            let s = slot(b);
+                            replaced_on[s] += v_on;
+                            replaced_off[s] += v_off;
+                            tag[s] += v_off;
+                        }
+                    }
                 }
-            };
-            let tag = by_tag
-                .entry(t.tag.clone())
-                .or_insert_with(|| vec![0.0; nnz]);
-            scatter.add(tag, off);
-            terms.push(TermLoss {
-                label: t.label.clone(),
-                tag: t.tag.clone(),
-                positions: pos.clone(),
-                off: off.clone(),
-            });
+            }
         }
         let lossless: Vec<f64> = (0..nnz)
             .map(|s| zero_on[s] + (replaced_on[s] - replaced_off[s]))
             .collect();
-        let mass_on_candidates: Vec<f64> = (0..nnz)
-            .map(|s| {
-                let (i, j) = candidates.position(s);
-                if i < nx && j < nx { mass[(i, j)] } else { 0.0 }
-            })
-            .collect();
         // the pattern holds what is non-zero after the sums: a term's local Hessian has
         // exact zeros (a vertical wire does not couple x to y), and those decouple blocks
-        let (pattern, old) = candidates.retain(|s| {
-            lossless[s] != 0.0
-                || mass_on_candidates[s] != 0.0
-                || by_tag.values().any(|p| p[s] != 0.0)
-        });
-        let on_pattern = |values: &[f64]| old.iter().map(|&s| values[s]).collect::<Vec<f64>>();
-        let lossless = on_pattern(&lossless);
-        let mass_on_pattern = on_pattern(&mass_on_candidates);
-        let by_tag: BTreeMap<String, Vec<f64>> = by_tag
-            .into_iter()
-            .map(|(t, p)| (t, on_pattern(&p)))
+        let mut nonzero: Vec<bool> = lossless
+            .iter()
+            .zip(&mass_on_candidates)
+            .map(|(&p, &m)| p != 0.0 || m != 0.0)
             .collect();
+        for values in &by_tag {
+            for (nz, &v) in nonzero.iter_mut().zip(values) {
+                *nz |= v != 0.0;
+            }
+        }
+        let (pattern, old) = candidates.retain(|s| nonzero[s]);
+        let on_pattern = |values: &[f64]| old.iter().map(|&s| values[s]).collect::<Vec<f64>>();
         let (blocks, _) = pattern.components(nx + nq);
+        let lossy_terms = terms
+            .iter()
+            .zip(&positions)
+            .filter_map(|(t, positions)| {
+                let off = match &t.off {
+                    OffHessian::Zero => return None,
+                    OffHessian::Same => t.on.clone(),
+                    OffHessian::Matrix(m) => m.clone(),
+                };
+                Some(TermLoss {
+                    label: t.label.clone(),
+                    tag: t.tag.clone(),
+                    positions: positions.to_vec(),
+                    off,
+                })
+            })
+            .collect();
         StageModel {
             sizes: (nx, nq, ns),
             variables: names(&layout.variables),
             floats: names(&layout.floats),
             parameters: names(&layout.parameters),
+            lossless: on_pattern(&lossless),
+            mass_on_pattern: on_pattern(&mass_on_candidates),
+            by_tag: tag_names
+                .iter()
+                .zip(&by_tag)
+                .map(|(name, values)| (name.to_string(), on_pattern(values)))
+                .collect(),
             pattern,
-            lossless,
-            by_tag: by_tag.into_iter().collect(),
-            terms,
+            terms: lossy_terms,
             mass: mass.clone(),
-            mass_on_pattern,
             blocks,
         }
     }

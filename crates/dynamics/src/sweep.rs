@@ -71,6 +71,14 @@ impl Coefficient {
             Coefficient::OfFrequency(e) => e.eval(&[f_hz]),
         }
     }
+
+    /// The values at every frequency of `freqs` (Hz) into `out`, in one pass.
+    fn over(&self, freqs: &[f64], out: &mut [f64]) {
+        match self {
+            Coefficient::Constant(x) => out.fill(*x),
+            Coefficient::OfFrequency(e) => e.eval_points(&[freqs], out),
+        }
+    }
 }
 
 /// The complex multiplier ε' + i ε'' of one tag over a sweep.
@@ -138,8 +146,12 @@ enum Part {
 
 /// The factorisation of E(f) over the solved unknowns.
 enum Factor {
-    /// Dense column-major n × n (the values array is the matrix).
-    Dense { n: usize, pivots: Vec<usize> },
+    /// Dense column-major n × n (the values array is the matrix), eliminated by the
+    /// pattern's schedule while no row exchange is needed, by the pivoting LU otherwise.
+    Dense {
+        schedule: lu::Schedule,
+        pivots: Vec<usize>,
+    },
     /// Compressed columns with a symbolic analysis done once.
     Sparse(Box<SparseLu<c64>>),
 }
@@ -278,6 +290,48 @@ impl<'m> Sweep<'m> {
                 self.now_varying[k] = self.now[t];
             }
         }
+        self.solve(f_hz)
+    }
+
+    /// Solves at every frequency of `freqs` (Hz) in turn, calling `visit(k, output, sweep)`
+    /// after the k-th (the sweep gives [`Sweep::response`] and [`Sweep::multiplier`] there).
+    /// The same numbers as [`Sweep::at`] point by point, but the multipliers of the
+    /// frequency-dependent tags are evaluated for a block of frequencies at a time, one walk
+    /// of each expression per block instead of one per point. Stops at the first frequency
+    /// where the dynamic stiffness is singular and says which.
+    pub fn for_each(
+        &mut self,
+        freqs: &[f64],
+        mut visit: impl FnMut(usize, c64, &Sweep<'m>),
+    ) -> Result<(), DynamicsError> {
+        const BLOCK: usize = 256;
+        let nv = self.varying.len();
+        // ε' then ε'' of each varying tag over the block: 2 nv rows of BLOCK values
+        let mut table = vec![0.0; 2 * nv * BLOCK];
+        for (b, block) in freqs.chunks(BLOCK).enumerate() {
+            let n = block.len();
+            for (k, &t) in self.varying.iter().enumerate() {
+                if let Multiplier::Varying(re, im) = &self.multipliers[t] {
+                    let (rows_re, rows_im) = table.split_at_mut(nv * BLOCK);
+                    re.over(block, &mut rows_re[k * BLOCK..k * BLOCK + n]);
+                    im.over(block, &mut rows_im[k * BLOCK..k * BLOCK + n]);
+                }
+            }
+            for (i, &f_hz) in block.iter().enumerate() {
+                for (k, &t) in self.varying.iter().enumerate() {
+                    let m = c64::new(table[k * BLOCK + i], table[(nv + k) * BLOCK + i]);
+                    self.now[t] = m;
+                    self.now_varying[k] = m;
+                }
+                let y = self.solve(f_hz)?;
+                visit(b * BLOCK + i, y, self);
+            }
+        }
+        Ok(())
+    }
+
+    /// Solves at `f_hz` with the multipliers already set for it.
+    fn solve(&mut self, f_hz: f64) -> Result<c64, DynamicsError> {
         let w2 = (TWO_PI * f_hz).powi(2);
         let solved = match &mut self.engine {
             Engine::Fast(fast) => fast.solve(&self.now_varying, w2, &mut self.z),
@@ -303,9 +357,10 @@ impl Fast {
         let n = unknowns.len();
         let (nx, nq, _) = model.sizes;
         let n_all = nx + nq;
-        let factor = if n <= DENSE_LIMIT {
+        let mut factor = if n <= DENSE_LIMIT {
+            // the schedule is made below, once the stored entries are known
             Factor::Dense {
-                n,
+                schedule: lu::Schedule::new(0, &[]),
                 pivots: vec![0; n],
             }
         } else {
@@ -313,11 +368,11 @@ impl Fast {
             Factor::Sparse(Box::new(SparseLu::new(col_ptr, row_idx)?))
         };
         let len = match &factor {
-            Factor::Dense { n, .. } => n * n,
+            Factor::Dense { .. } => n * n,
             Factor::Sparse(s) => s.len(),
         };
         let index = |i: usize, j: usize| match &factor {
-            Factor::Dense { n, .. } => Some(i + j * n),
+            Factor::Dense { .. } => Some(i + j * n),
             Factor::Sparse(s) => s.index(i, j),
         };
         let nv = varying.len();
@@ -409,6 +464,18 @@ impl Fast {
                 mass.push((k, m));
             }
         }
+        if let Factor::Dense { schedule, .. } = &mut factor {
+            // every entry the assembly can make non-zero
+            let mut stored: Vec<bool> = matrix
+                .constant
+                .iter()
+                .map(|x| *x != c64::new(0.0, 0.0))
+                .collect();
+            for &(k, _) in matrix.parts.iter().flatten().chain(&mass) {
+                stored[k] = true;
+            }
+            *schedule = lu::Schedule::new(n, &stored);
+        }
         Ok(Fast {
             values: vec![c64::new(0.0, 0.0); len],
             scalar: vec![c64::new(0.0, 0.0); 1],
@@ -429,12 +496,23 @@ impl Fast {
         }
         self.rhs.evaluate(varying, z);
         let solved = match &mut self.factor {
-            Factor::Dense { n, pivots } => {
-                let ok = lu::factor(&mut self.values, *n, pivots);
-                if ok {
-                    lu::solve(&self.values, *n, pivots, z);
+            Factor::Dense { schedule, pivots } => {
+                let n = schedule.len();
+                if !schedule.factor(&mut self.values) {
+                    // a row exchange is needed: the general LU on the matrix afresh
+                    self.matrix.evaluate(varying, &mut self.values);
+                    for &(k, m) in &self.mass {
+                        self.values[k].re -= w2 * m;
+                    }
+                    let ok = lu::factor(&mut self.values, n, pivots);
+                    if ok {
+                        lu::solve(&self.values, n, pivots, z);
+                    }
+                    ok
+                } else {
+                    schedule.solve(&self.values, z);
+                    true
                 }
-                ok
             }
             Factor::Sparse(s) => s.factor(&self.values) && s.solve(z),
         };

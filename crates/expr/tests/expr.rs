@@ -418,3 +418,34 @@ fn substitute_replaces_and_folds() {
     assert_eq!(s.to_string(), "-2*f");
     assert_eq!(s.eval::<f64>(&|_| Some(3.0)), Ok(-6.0));
 }
+
+proptest! {
+    /// Evaluating over many points at once gives exactly the numbers of one evaluation per
+    /// point (same operations, same order), for random expressions over two variables.
+    #[test]
+    fn points_match_one_evaluation_per_point(e in arb_expr()) {
+        let slots = |s: &str| match s {
+            "a" => Some(Slot::Var(0)),
+            "b" => Some(Slot::Var(1)),
+            "damping.fibre" => Some(Slot::Const(1e-7)),
+            "x_1" => Some(Slot::Const(-2.5)),
+            _ => None,
+        };
+        let c = e.compile(&slots).unwrap();
+        let a = [0.1, 1.0, 7.5, 1e3, 0.0, -3.0];
+        let b = [2.0, 0.5, -1.0, 1e-9, 4.0, 3.0];
+        let mut out = [0.0; 6];
+        c.eval_points(&[&a, &b], &mut out);
+        for k in 0..a.len() {
+            let one = c.eval(&[a[k], b[k]]);
+            prop_assert!(out[k] == one || (out[k].is_nan() && one.is_nan()), "{} at {}: {} vs {}", e, k, out[k], one);
+        }
+        // a missing column is NaN, as a missing variable is
+        if !c.vars().is_empty() {
+            let mut short = [0.0; 6];
+            c.eval_points(&[], &mut short);
+            let one = c.eval::<f64>(&[]);
+            prop_assert!(short[0] == one || (short[0].is_nan() && one.is_nan()));
+        }
+    }
+}

@@ -10,6 +10,9 @@
 //! are solved (see [`pendkit_dynamics::Solver`]), and the per-tag shares cost one sparse
 //! quadratic form per tag over them.
 
+use std::collections::HashMap;
+
+use faer::c64;
 use nalgebra::DVector;
 use pendkit_dynamics::{DynamicsError, Input, Output, Solver, StageModel, Sweep};
 use pendkit_energy::Damping;
@@ -109,26 +112,60 @@ pub fn thermal_noise(
     })
 }
 
-/// One quadratic form Σ w_ij Re(z̄_i z_j) over the solved unknowns (upper triangle, the
-/// off-diagonal weights doubled).
+/// Quadratic forms Σ w_ij Re(z̄_i z_j) over the solved unknowns, evaluated together: each
+/// product Re(z̄_i z_j) (i ≤ j) that some form needs is computed once per frequency, and each
+/// form is a list of (product, weight), the off-diagonal weights doubled. The per-tag forms
+/// of the quad's x–pitch block share most of their products.
 #[derive(Default)]
-struct Form {
-    entries: Vec<(usize, usize, f64)>,
+struct Forms {
+    /// The (i, j) of each product, i ≤ j.
+    pairs: Vec<(usize, usize)>,
+    /// Index of each pair in `pairs`.
+    index: HashMap<(usize, usize), usize>,
+    /// Each form: (product index, weight).
+    forms: Vec<Vec<(usize, f64)>>,
+    /// The products at the current frequency.
+    products: Vec<f64>,
 }
 
-impl Form {
-    fn push(&mut self, i: usize, j: usize, value: f64) {
-        if i == j {
-            self.entries.push((i, j, value));
-        } else if i < j {
-            self.entries.push((i, j, 2.0 * value));
+impl Forms {
+    /// Starts a new form.
+    fn begin(&mut self) {
+        self.forms.push(Vec::new());
+    }
+
+    /// Adds w Re(z̄_i z_j) to the form begun last (entries below the diagonal are skipped:
+    /// give each unordered pair once through its upper entry, doubled by this call).
+    fn push(&mut self, i: usize, j: usize, w: f64) {
+        if i > j {
+            return;
+        }
+        let next = self.pairs.len();
+        let k = *self.index.entry((i, j)).or_insert(next);
+        if k == next {
+            self.pairs.push((i, j));
+        }
+        let weight = if i == j { w } else { 2.0 * w };
+        if let Some(form) = self.forms.last_mut() {
+            form.push((k, weight));
         }
     }
 
-    fn energy(&self, z: &[faer::c64]) -> f64 {
-        self.entries
+    /// Computes the products at the response `z`.
+    fn update(&mut self, z: &[c64]) {
+        self.products.clear();
+        self.products.extend(
+            self.pairs
+                .iter()
+                .map(|&(i, j)| z[i].re * z[j].re + z[i].im * z[j].im),
+        );
+    }
+
+    /// The value of form `f` at the last [`Forms::update`].
+    fn energy(&self, f: usize) -> f64 {
+        self.forms[f]
             .iter()
-            .map(|&(i, j, w)| w * (z[i].re * z[j].re + z[i].im * z[j].im))
+            .map(|&(k, w)| w * self.products[k])
             .sum()
     }
 }
@@ -145,99 +182,100 @@ pub fn thermal_noise_with(
     let input = Input::Force(v.clone());
     let output = Output::Displacement(v.clone());
     let mut sweep = Sweep::new(model, damping, &input, &output, options.solver)?;
-    // per-tag forms over the solved unknowns
-    let tag_forms: Vec<Form> = model
-        .by_tag
-        .iter()
-        .map(|(_, values)| {
-            let mut form = Form::default();
-            for (slot, &p) in values.iter().enumerate() {
-                let (r, c) = model.pattern.position(slot);
-                if let (Some(i), Some(j), true) = (sweep.local(r), sweep.local(c), p != 0.0) {
-                    form.push(i, j, p);
-                }
+    // per-tag forms over the solved unknowns, from the tags' values on the pattern
+    let mut tag_forms = Forms::default();
+    for (_, values) in &model.by_tag {
+        tag_forms.begin();
+        for (slot, &p) in values.iter().enumerate() {
+            let (r, c) = model.pattern.position(slot);
+            if let (Some(i), Some(j), true) = (sweep.local(r), sweep.local(c), p != 0.0) {
+                tag_forms.push(i, j, p);
             }
-            form
-        })
-        .collect();
-    // per-term forms, each with its tag's index
-    let term_forms: Vec<(usize, Form)> =
-        if options.per_term || options.solver == Solver::DenseReference {
-            model
-                .terms
-                .iter()
-                .map(|t| {
-                    let tag = model
-                        .by_tag
-                        .iter()
-                        .position(|(name, _)| *name == t.tag)
-                        .unwrap_or(0);
-                    let m = t.positions.len();
-                    let mut form = Form::default();
-                    for (a, &pa) in t.positions.iter().enumerate() {
-                        for (b, &pb) in t.positions.iter().enumerate() {
-                            if let (Some(i), Some(j)) = (sweep.local(pa), sweep.local(pb)) {
-                                // the full local matrix, each ordered pair once
-                                form.entries.push((i, j, t.off[a * m + b]));
-                            }
+        }
+    }
+    // per-term forms (each with its tag's index), from the terms' full local matrices: a
+    // pair (i, j) and its transpose each contribute once, so the upper entry carries
+    // w_ij + w_ji (pushed halved, since push doubles off-diagonal weights)
+    let per_term = options.per_term || options.solver == Solver::DenseReference;
+    let mut term_forms = Forms::default();
+    let mut term_tags = Vec::new();
+    if per_term {
+        for t in &model.terms {
+            term_tags.push(
+                model
+                    .by_tag
+                    .iter()
+                    .position(|(name, _)| *name == t.tag)
+                    .unwrap_or(0),
+            );
+            term_forms.begin();
+            let m = t.positions.len();
+            for (a, &pa) in t.positions.iter().enumerate() {
+                for (b, &pb) in t.positions.iter().enumerate() {
+                    if let (Some(i), Some(j)) = (sweep.local(pa), sweep.local(pb)) {
+                        let w = t.off[a * m + b];
+                        match i.cmp(&j) {
+                            std::cmp::Ordering::Equal => term_forms.push(i, j, w),
+                            std::cmp::Ordering::Less => term_forms.push(i, j, 0.5 * w),
+                            std::cmp::Ordering::Greater => term_forms.push(j, i, 0.5 * w),
                         }
                     }
-                    (tag, form)
-                })
-                .collect()
-        } else {
-            Vec::new()
-        };
+                }
+            }
+        }
+    }
+    let n_tags = model.by_tag.len();
     // each tag's terms at their own temperature (K) when the damping gives one: the
     // fluctuation–dissipation theorem per dissipating term, S = Σ 4 k_B T_tag ε''_tag
     // z̄ᵀ P_tag z / ω; with one temperature this is the total below
-    let tag_temperature: Vec<f64> = model
+    let tag_ratio: Vec<f64> = model
         .by_tag
         .iter()
-        .map(|(name, _)| damping.temperature(name).unwrap_or(temperature))
+        .map(|(name, _)| damping.temperature(name).unwrap_or(temperature) / temperature)
         .collect();
-    let uniform = tag_temperature.iter().all(|&t| t == temperature);
+    let uniform = tag_ratio.iter().all(|&r| r == 1.0);
     let mut total = Vec::with_capacity(freqs.len());
-    let mut tags: Vec<Vec<f64>> = vec![Vec::with_capacity(freqs.len()); model.by_tag.len()];
-    let mut terms: Vec<Vec<f64>> = vec![Vec::with_capacity(freqs.len()); term_forms.len()];
-    for &f in freqs {
-        let response = sweep.at(f)?;
+    let mut tags: Vec<Vec<f64>> = vec![Vec::with_capacity(freqs.len()); n_tags];
+    let mut terms: Vec<Vec<f64>> = vec![Vec::with_capacity(freqs.len()); term_tags.len()];
+    sweep.for_each(freqs, |_, response, sweep| {
+        let f = freqs[total.len()];
         let scale = 4.0 * BOLTZMANN * temperature / (2.0 * std::f64::consts::PI * f);
         total.push(scale * response.im.abs());
         let z = sweep.response();
-        let tag_scale = |t: usize| scale * tag_temperature.get(t).map_or(1.0, |k| k / temperature);
-        for ((tag, form), series) in term_forms.iter().zip(terms.iter_mut()) {
-            let loss = sweep.multiplier(*tag).im;
-            series.push(if loss != 0.0 {
-                tag_scale(*tag) * loss * form.energy(z)
+        let share = |forms: &Forms, form: usize, tag: usize| {
+            let loss = sweep.multiplier(tag).im;
+            if loss != 0.0 {
+                scale * tag_ratio[tag] * loss * forms.energy(form)
             } else {
                 0.0
-            });
+            }
+        };
+        if per_term {
+            term_forms.update(z);
+            for (k, (&tag, series)) in term_tags.iter().zip(terms.iter_mut()).enumerate() {
+                series.push(share(&term_forms, k, tag));
+            }
         }
         if options.solver == Solver::DenseReference {
             // the reference adds the per-term shares up per tag
             for series in tags.iter_mut() {
                 series.push(0.0);
             }
-            for ((tag, _), series) in term_forms.iter().zip(&terms) {
-                if let (Some(sum), Some(last)) = (tags[*tag].last_mut(), series.last()) {
+            for (&tag, series) in term_tags.iter().zip(&terms) {
+                if let (Some(sum), Some(last)) = (tags[tag].last_mut(), series.last()) {
                     *sum += last;
                 }
             }
         } else {
-            for (t, (form, series)) in tag_forms.iter().zip(tags.iter_mut()).enumerate() {
-                let loss = sweep.multiplier(t).im;
-                series.push(if loss != 0.0 {
-                    tag_scale(t) * loss * form.energy(z)
-                } else {
-                    0.0
-                });
+            tag_forms.update(z);
+            for (t, series) in tags.iter_mut().enumerate() {
+                series.push(share(&tag_forms, t, t));
             }
         }
         if !uniform && let Some(last) = total.last_mut() {
             *last = tags.iter().filter_map(|s| s.last()).sum();
         }
-    }
+    })?;
     Ok(ThermalNoise {
         total,
         tags: model
