@@ -17,6 +17,11 @@ pub struct ModelArgs {
     /// damping.<tag>.<field>=EXPR (repeatable).
     #[arg(long = "set", value_name = "NAME=EXPR")]
     pub sets: Vec<String>,
+    /// Go on when the equilibrium is unstable (a warning on stderr instead of an error):
+    /// unstable modes are listed with minus their growth rate; responses of an unstable
+    /// plant are those of its linearisation.
+    #[arg(long)]
+    pub allow_unstable: bool,
 }
 
 impl ModelArgs {
@@ -37,12 +42,24 @@ impl ModelArgs {
         Ok((case, stage, run_stage_with(system, stage, &options, None)?))
     }
 
-    /// As [`ModelArgs::run`], for results that need losses (stage 0B or later).
+    /// As [`ModelArgs::run`], for results that need losses (stage 0B or later) and answer
+    /// with the linearised model: an unstable equilibrium is refused unless
+    /// `--allow-unstable`.
     pub fn run_lossy(&self) -> Result<(Case, Stage, StageResult), Error> {
         if self.stage == Some(Stage::S0A) {
             return Err(Error::StageTooEarly);
         }
-        self.run(Stage::S2, ModeSelection::All)
+        let (case, stage, result) = self.run(Stage::S2, ModeSelection::All)?;
+        self.stability_gate(&result)?;
+        Ok((case, stage, result))
+    }
+
+    /// Refuses an unstable equilibrium, or with `--allow-unstable` warns on stderr.
+    pub fn stability_gate(&self, result: &StageResult) -> Result<(), Error> {
+        if let Some(warning) = result.require_stable(self.allow_unstable)? {
+            eprintln!("warning: {warning}");
+        }
+        Ok(())
     }
 }
 

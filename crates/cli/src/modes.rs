@@ -20,9 +20,6 @@ pub struct Args {
     /// Also print each mode's lab-frame body motions (table output).
     #[arg(long)]
     lab: bool,
-    /// Print the modes even if the equilibrium is unstable (exit status stays 0).
-    #[arg(long)]
-    allow_unstable: bool,
     /// Only the modes below this frequency (Hz); large models find them by shift-invert
     /// on a sparse factorisation instead of the dense eigensolver.
     #[arg(long, value_name = "HZ")]
@@ -33,10 +30,7 @@ pub struct Args {
 pub fn run(a: Args) -> Result<String, Error> {
     let selection = a.below.map_or(ModeSelection::All, ModeSelection::Below);
     let (case, stage, result) = a.args.run(Stage::S0A, selection)?;
-    let stable = result.modes.check_stable();
-    if let (Err(e), false) = (&stable, a.allow_unstable) {
-        return Err(Error::Dynamics(e.clone()));
-    }
+    a.args.stability_gate(&result)?;
     Ok(if a.json {
         modes_json(&case, stage, &result)
     } else {
@@ -59,6 +53,8 @@ fn modes_json(case: &Case, stage: Stage, r: &StageResult) -> String {
                 "hz": m.hz,
                 "omega_squared": m.omega_squared,
                 "stable": m.is_stable(),
+                "accuracy": finite_or_null(m.accuracy()),
+                "vector_accuracy": m.vector_error,
                 "label": m.label,
                 "vector": m.vector,
                 "energy_fractions": m.energy_fractions,
@@ -83,6 +79,14 @@ fn modes_json(case: &Case, stage: Stage, r: &StageResult) -> String {
     });
     serde_json::to_string_pretty(&out).unwrap_or_default() + "\n"
 }
+
+/// A JSON number, or null for infinity (the relative accuracy of a neutral mode).
+fn finite_or_null(x: f64) -> serde_json::Value {
+    if x.is_finite() { json!(x) } else { serde_json::Value::Null }
+}
+
+/// Relative accuracy worse than this is printed next to the frequency.
+const PRINT_ACCURACY_ABOVE: f64 = 1e-6;
 
 fn modes_table(case: &Case, stage: Stage, r: &StageResult, lab: bool) -> String {
     let mut out = String::new();
@@ -112,11 +116,19 @@ fn modes_table(case: &Case, stage: Stage, r: &StageResult, lab: bool) -> String 
             .filter(|(_, f)| *f >= 0.01)
             .map(|(k, f)| format!("{} {:.0}%", r.modes.coordinates[*k], 100.0 * f))
             .collect();
-        let flag = if m.is_stable() {
-            ""
+        let mut flag = if m.is_stable() {
+            String::new()
         } else {
-            "  UNSTABLE (growth rate)"
+            "  UNSTABLE (growth rate)".to_string()
         };
+        if m.omega_squared == 0.0 {
+            flag += &format!(
+                "  neutral (|omega^2| below its error {:.1e} rad^2/s^2)",
+                m.omega_squared_error
+            );
+        } else if m.accuracy() > PRINT_ACCURACY_ABOVE {
+            flag += &format!("  (accuracy {:.1e} relative)", m.accuracy());
+        }
         let _ = writeln!(
             out,
             "{:>4}  {:>14.7}  {:<10} {}{}",

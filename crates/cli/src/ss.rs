@@ -18,6 +18,9 @@ pub struct Args {
     /// Frequency (Hz) at which damping is represented as viscous.
     #[arg(long, default_value_t = 1.0)]
     damping_frequency: f64,
+    /// Replace the output file if it exists.
+    #[arg(long)]
+    force: bool,
 }
 
 /// Runs the command and returns what it prints.
@@ -55,7 +58,10 @@ pub fn run(a: Args) -> Result<String, Error> {
             items: &ss.outputs,
         },
     ];
-    pendkit_export::write(&a.out, &matrices, &names).map_err(Error::Export)?;
+    let options = pendkit_export::WriteOptions {
+        overwrite: a.force,
+    };
+    pendkit_export::write_with(&a.out, &matrices, &names, &options).map_err(Error::Export)?;
     let mut out = String::new();
     let _ = writeln!(
         out,

@@ -62,7 +62,8 @@ fn scipy_state_space_matches_pendkit_transfer_functions() {
             &r.input(input).unwrap(),
             &r.output(output).unwrap(),
             &freqs,
-        );
+        )
+        .unwrap();
         expected.push(serde_json::json!({
             "input": input,
             "output": output,

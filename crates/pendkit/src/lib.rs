@@ -13,7 +13,8 @@ use pendkit_assembly::{
     Assembled, AssemblyError, AssemblyOptions, PhaseTimes, assemble_with, timed,
 };
 use pendkit_dynamics::{
-    DynamicsError, Input, Modes, Output, Solver, StageModel, eliminate_floats, normal_modes,
+    DynamicsError, Input, Modes, Output, Solver, Stability, StageModel, TermRounding,
+    eliminate_floats, inverted_bodies, normal_modes_with_rounding, runaway_floats,
 };
 use pendkit_energy::{Stage, System};
 use pendkit_model::{BuildError, DampingSpec, Model, Overrides};
@@ -70,7 +71,7 @@ pub enum Error {
     },
     /// A frequency grid that cannot be made.
     #[error(
-        "frequency grid from {from} Hz to {to} Hz with {n} points: need 0 < from <= to and at least one point"
+        "frequency grid from {from} Hz to {to} Hz with {n} points: need 1e-9 <= from <= to <= 1e9 (Hz, finite) and 1 to 1000000 points"
     )]
     Grid {
         /// Start (Hz).
@@ -91,10 +92,21 @@ pub enum Error {
     /// Modes or eliminations failed.
     #[error(transparent)]
     Dynamics(#[from] DynamicsError),
-    /// A benchmark asked to repeat nothing.
-    #[error("--repeat must be at least 1")]
+    /// A benchmark asked to repeat nothing, or too often.
+    #[error("--repeat must be from 1 to {MAX_REPEAT}")]
     ZeroRepeat,
+    /// A result that came out NaN or infinite (never returned as a success).
+    #[error("{what} is not finite at {f_hz} Hz")]
+    NotFinite {
+        /// What was computed.
+        what: String,
+        /// Where (Hz).
+        f_hz: f64,
+    },
 }
+
+/// Most repetitions `pendkit bench` makes.
+pub const MAX_REPEAT: usize = 100_000;
 
 /// Every bundled model.
 pub fn models() -> Vec<&'static dyn Model> {
@@ -283,8 +295,12 @@ pub struct StageResult {
     pub assembled: Assembled,
     /// The stage's frequency-independent matrices for responses and noise.
     pub model: StageModel,
-    /// Normal modes (possibly with unstable ones: check [`Modes::check_stable`]).
+    /// Normal modes (possibly with unstable ones: see `stability`). Each carries its
+    /// estimated error ([`pendkit_dynamics::Mode::omega_squared_error`]).
     pub modes: Modes,
+    /// The stability verdict of the equilibrium: growing modes, floats without a stable
+    /// position, bodies upside down. [`StageResult::check_stable`] turns it into an error.
+    pub stability: Stability,
 }
 
 /// Which normal modes a stage run computes.
@@ -328,17 +344,21 @@ pub fn run_stage_with(
     options: &RunOptions,
     mut times: Option<&mut PhaseTimes>,
 ) -> Result<StageResult, Error> {
+    if let ModeSelection::Below(hz) = options.modes
+        && !(hz > 0.0 && hz.is_finite())
+    {
+        return Err(DynamicsError::BelowFrequency(hz).into());
+    }
     let assembled = assemble_with(&system, stage, &options.assembly, times.as_deref_mut())?;
     let model = timed(&mut times, "stage-model", 1, || {
         StageModel::new(&system, &assembled)
     });
+    model.check_damping_at_dc(&system.damping)?;
+    let rounding = TermRounding::new(&model, &assembled, &system.damping);
     let modes = match options.modes {
-        ModeSelection::Below(hz) if !(hz > 0.0 && hz.is_finite()) => {
-            return Err(DynamicsError::BelowFrequency(hz).into());
-        }
         ModeSelection::Below(hz) if model.sizes.0 > DENSE_MODES_LIMIT => {
             timed(&mut times, "modes", 1, || {
-                model.modes_below(&system.damping, hz)
+                model.modes_below_with_rounding(&system.damping, hz, &rounding)
             })?
         }
         selection => {
@@ -350,7 +370,12 @@ pub fn run_stage_with(
                 )
             })?;
             let mut modes = timed(&mut times, "modes", 1, || {
-                normal_modes(&reduced.k_eff, &assembled.mass, &model.variables)
+                normal_modes_with_rounding(
+                    &reduced.k_eff,
+                    &assembled.mass,
+                    &model.variables,
+                    &rounding,
+                )
             })?;
             if let ModeSelection::Below(hz) = selection {
                 modes.modes.retain(|m| m.hz < hz);
@@ -358,59 +383,119 @@ pub fn run_stage_with(
             modes
         }
     };
+    let floats = runaway_floats(&model, &system.damping, Some(&rounding))?;
+    let inverted = inverted_bodies(&system, &assembled.equilibrium.coords);
+    let stability = Stability::assess(&modes, floats, model.sizes.1, inverted);
     Ok(StageResult {
         system,
         assembled,
         model,
         modes,
+        stability,
     })
+}
+
+/// A point on a body as the linearised geometry at equilibrium sees it: how far it moves
+/// along a lab direction per unit of each unknown (variables, then floats) and of each
+/// parameter.
+struct PointWeights {
+    unknowns: DVector<f64>,
+    parameters: DVector<f64>,
+}
+
+impl StageResult {
+    /// One line saying what grows, as an error, unless the equilibrium is stable (or
+    /// neutral). Every calculation that answers with a linearised model checks this first.
+    pub fn check_stable(&self) -> Result<(), Error> {
+        Ok(self.stability.check()?)
+    }
+
+    /// The check every command answering with a linearised model (transfer functions,
+    /// noise, state space, ...) makes before it answers: `Ok(None)` when nothing grows;
+    /// when something does, the error, or with `allow_unstable` `Ok(Some(warning))`, the
+    /// one line to show the user before going on (control design needs unstable plants).
+    pub fn require_stable(&self, allow_unstable: bool) -> Result<Option<String>, Error> {
+        match (self.check_stable(), allow_unstable) {
+            (Ok(()), _) => Ok(None),
+            (Err(e), true) => Ok(Some(format!("{e} (going on: --allow-unstable)"))),
+            (Err(e), false) => Err(e),
+        }
+    }
 }
 
 impl StageResult {
     /// A point on a body and a direction, written `<body>@x,y,z/dx,dy,dz` (m, body
-    /// coordinates; direction in lab axes, normalised): the generalised-force vector over
-    /// the variables of a unit force there, equal to the displacement-output vector of that
-    /// point along that direction (the linearised geometry at equilibrium).
-    fn point_vector(&self, spec: &str) -> Option<Result<DVector<f64>, Error>> {
+    /// coordinates; direction in lab axes, normalised): how far the point moves along the
+    /// direction per unit of every unknown and parameter (the linearised geometry at
+    /// equilibrium). The same weights are the generalised force of a unit force there.
+    fn point_weights(&self, spec: &str) -> Option<Result<PointWeights, Error>> {
         let (body, rest) = spec.split_once('@')?;
         Some((|| {
-            let bad = || Error::Name {
+            let bad = |why: &str| Error::Name {
                 name: spec.to_string(),
-                message: "expected <body>@x,y,z/dx,dy,dz".into(),
+                message: format!("expected <body>@x,y,z/dx,dy,dz ({why})"),
             };
-            let (point, dir) = rest.split_once('/').ok_or_else(bad)?;
-            let nums = |t: &str| -> Result<Vector3<f64>, Error> {
+            let (point, dir) = rest
+                .split_once('/')
+                .ok_or_else(|| bad("no '/' before the direction"))?;
+            let nums = |t: &str, what: &str| -> Result<Vector3<f64>, Error> {
                 let v: Vec<f64> = t
                     .split(',')
                     .map(|x| x.trim().parse::<f64>())
                     .collect::<Result<_, _>>()
-                    .map_err(|_| bad())?;
+                    .map_err(|_| bad(&format!("the {what} is not three numbers")))?;
                 if v.len() == 3 && v.iter().all(|x| x.is_finite()) {
                     Ok(Vector3::new(v[0], v[1], v[2]))
                 } else {
-                    Err(bad())
+                    Err(bad(&format!("the {what} must be three finite numbers")))
                 }
             };
-            let (p, d) = (nums(point)?, nums(dir)?);
-            if d.norm() == 0.0 {
-                return Err(bad());
+            let (p, d) = (nums(point, "point")?, nums(dir, "direction")?);
+            if !(d.norm() > 0.0 && d.norm().is_finite()) {
+                return Err(bad("the direction is zero"));
             }
             let b = self.system.body(body).ok_or_else(|| Error::Name {
                 name: spec.to_string(),
-                message: format!("unknown body '{body}'"),
+                message: format!(
+                    "unknown body '{body}' (bodies: {})",
+                    self.system
+                        .bodies
+                        .iter()
+                        .map(|b| b.name.as_str())
+                        .collect::<Vec<_>>()
+                        .join(" ")
+                ),
             })?;
             let jac = self.system.bodies[b]
                 .frame
                 .jacobian(&self.assembled.equilibrium.coords, &p);
             let d = d.normalize();
-            Ok(DVector::from_iterator(
-                self.assembled.layout.variables.len(),
-                self.assembled
-                    .layout
-                    .variables
-                    .iter()
-                    .map(|&g| jac.position.column(g).dot(&d)),
-            ))
+            let layout = &self.assembled.layout;
+            let along = |ids: &[usize]| {
+                DVector::from_iterator(
+                    ids.len(),
+                    ids.iter().map(|&g| jac.position.column(g).dot(&d)),
+                )
+            };
+            let unknowns: Vec<usize> = layout
+                .variables
+                .iter()
+                .chain(&layout.floats)
+                .copied()
+                .collect();
+            let weights = PointWeights {
+                unknowns: along(&unknowns),
+                parameters: along(&layout.parameters),
+            };
+            if weights
+                .unknowns
+                .iter()
+                .chain(weights.parameters.iter())
+                .any(|x| !x.is_finite())
+            {
+                return Err(bad("its motion is not finite at the equilibrium"));
+            }
+            Ok(weights)
         })())
     }
 
@@ -427,31 +512,60 @@ impl StageResult {
         }
     }
 
-    /// Parses an input: a parameter (support displacement, e.g. `x00`), `force:<variable>`
-    /// or `force:<body>@x,y,z/dx,dy,dz`.
+    /// Parses an input: a parameter (support displacement, e.g. `x00`), a point on a body
+    /// the support alone moves (`support@x,y,z/dx,dy,dz`: the smallest change of the
+    /// parameters, metres and radians alike, that moves the point by one unit along the
+    /// direction), `force:<variable>` or `force:<body>@x,y,z/dx,dy,dz` (a force at a point,
+    /// also on a body a float poses, such as a blade tip).
     pub fn input(&self, name: &str) -> Result<Input, Error> {
         let m = &self.model;
+        let err = |message: &str| Error::Name {
+            name: name.to_string(),
+            message: message.to_string(),
+        };
         if let Some(target) = name.strip_prefix("force:") {
-            if let Some(v) = self.point_vector(target) {
-                return Ok(Input::Force(v?));
+            if let Some(w) = self.point_weights(target) {
+                let w = w?;
+                if w.unknowns.iter().all(|&x| x == 0.0) {
+                    return Err(err(if w.parameters.iter().any(|&x| x != 0.0) {
+                        "a force on a point the support alone moves does nothing (the support is driven): use the point as a displacement input"
+                    } else {
+                        "the point does not move with any coordinate"
+                    }));
+                }
+                return Ok(Input::Force(w.unknowns));
             }
             return match m.variables.iter().position(|v| v == target) {
                 Some(k) => Ok(Input::Force(Self::unit(m.variables.len(), k))),
                 None => Err(self.names_error(target, "a variable to push on", &m.variables)),
             };
         }
+        if let Some(w) = self.point_weights(name) {
+            let w = w?;
+            if w.unknowns.iter().any(|&x| x != 0.0) {
+                return Err(err(
+                    "a displacement input must be a point that only the support moves: push on a moving body with force:<body>@x,y,z/dx,dy,dz",
+                ));
+            }
+            let norm2 = w.parameters.norm_squared();
+            if !(norm2 > 0.0) {
+                return Err(err("the point does not move with any parameter"));
+            }
+            return Ok(Input::Displacement(w.parameters / norm2));
+        }
         match m.parameters.iter().position(|v| v == name) {
             Some(k) => Ok(Input::Displacement(Self::unit(m.parameters.len(), k))),
             None => Err(self.names_error(
                 name,
-                "a parameter to drive (or force:<variable>)",
+                "a parameter to drive (or <support body>@x,y,z/dx,dy,dz, force:<variable>, force:<body>@x,y,z/dx,dy,dz)",
                 &m.parameters,
             )),
         }
     }
 
-    /// Parses an output: a variable, `<body>@x,y,z/dx,dy,dz`, or `force:<parameter>` (the
-    /// force on the support).
+    /// Parses an output: a variable, `<body>@x,y,z/dx,dy,dz` (the point's whole motion:
+    /// through the variables, the floats that pose its body and the support), or
+    /// `force:<parameter>` (the force on the support).
     pub fn output(&self, name: &str) -> Result<Output, Error> {
         let m = &self.model;
         if let Some(target) = name.strip_prefix("force:") {
@@ -460,8 +574,15 @@ impl StageResult {
                 None => Err(self.names_error(target, "a parameter", &m.parameters)),
             };
         }
-        if let Some(v) = self.point_vector(name) {
-            return Ok(Output::Displacement(v?));
+        if let Some(w) = self.point_weights(name) {
+            let w = w?;
+            let all: Vec<f64> = w
+                .unknowns
+                .iter()
+                .chain(w.parameters.iter())
+                .copied()
+                .collect();
+            return Ok(Output::Displacement(DVector::from_vec(all)));
         }
         match m.variables.iter().position(|v| v == name) {
             Some(k) => Ok(Output::Displacement(Self::unit(m.variables.len(), k))),
@@ -471,6 +592,23 @@ impl StageResult {
                 &m.variables,
             )),
         }
+    }
+}
+
+/// Every value finite, or an error naming the first frequency where one is not.
+fn check_finite<'a>(
+    what: &str,
+    freqs: &[f64],
+    values: impl IntoIterator<Item = &'a f64>,
+    per_frequency: usize,
+) -> Result<(), Error> {
+    let per = per_frequency.max(1);
+    match values.into_iter().position(|v| !v.is_finite()) {
+        None => Ok(()),
+        Some(k) => Err(Error::NotFinite {
+            what: what.to_string(),
+            f_hz: freqs.get(k / per).copied().unwrap_or(f64::NAN),
+        }),
     }
 }
 
@@ -497,9 +635,16 @@ impl StageResult {
         solver: Solver,
     ) -> Result<Vec<faer::c64>, Error> {
         let (i, o) = (self.input(input)?, self.output(output)?);
-        Ok(self
+        let h = self
             .model
-            .transfer_with(&self.system.damping, &i, &o, freqs, solver)?)
+            .transfer_with(&self.system.damping, &i, &o, freqs, solver)?;
+        check_finite(
+            &format!("transfer function {output}/{input}"),
+            freqs,
+            h.iter().flat_map(|z| [&z.re, &z.im]),
+            2,
+        )?;
+        Ok(h)
     }
 
     /// Thermal noise (PSD, m²/Hz or rad²/Hz) of the named displacement output at `freqs`
@@ -517,14 +662,25 @@ impl StageResult {
         options: &NoiseOptions,
     ) -> Result<ThermalNoise, Error> {
         match self.output(output)? {
-            Output::Displacement(v) => Ok(thermal_noise_with(
-                &self.model,
-                &self.system.damping,
-                &v,
-                self.system.temperature,
-                freqs,
-                options,
-            )?),
+            Output::Displacement(v) => {
+                // thermal motion of the unknowns only: the support does not fluctuate
+                let unknowns = self.model.unknowns().min(v.len());
+                let v = v.rows(0, unknowns).into_owned();
+                let noise = thermal_noise_with(
+                    &self.model,
+                    &self.system.damping,
+                    &v,
+                    self.system.temperature,
+                    freqs,
+                    options,
+                )?;
+                let what = format!("thermal noise of {output}");
+                check_finite(&what, freqs, &noise.total, 1)?;
+                for (_, series) in &noise.tags {
+                    check_finite(&what, freqs, series, 1)?;
+                }
+                Ok(noise)
+            }
             Output::SupportForce(_) => Err(Error::Name {
                 name: output.to_string(),
                 message: "thermal noise needs a displacement output".into(),
@@ -573,7 +729,7 @@ pub fn bench(
     repeat: usize,
     noise: Option<(&str, usize)>,
 ) -> Result<BenchReport, Error> {
-    if repeat == 0 {
+    if repeat == 0 || repeat > MAX_REPEAT {
         return Err(Error::ZeroRepeat);
     }
     if noise.is_some() && stage == Stage::S0A {
@@ -648,9 +804,12 @@ pub fn bench(
     })
 }
 
-/// `n` log-spaced frequencies from `from` to `to` (Hz).
+/// `n` log-spaced frequencies from `from` to `to` (Hz): finite, 1e-9 Hz ≤ from ≤ to ≤
+/// 1e9 Hz ([`pendkit_dynamics::validate`]), 1 ≤ n ≤ 1 000 000.
 pub fn log_grid(from: f64, to: f64, n: usize) -> Result<Vec<f64>, Error> {
-    if from.is_nan() || to.is_nan() || from <= 0.0 || to < from || n == 0 {
+    use pendkit_dynamics::validate::{MAX_FREQUENCY, MAX_POINTS, MIN_FREQUENCY};
+    let in_range = |f: f64| f.is_finite() && (MIN_FREQUENCY..=MAX_FREQUENCY).contains(&f);
+    if !in_range(from) || !in_range(to) || to < from || n == 0 || n > MAX_POINTS {
         return Err(Error::Grid { from, to, n });
     }
     if n == 1 {
