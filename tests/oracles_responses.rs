@@ -259,8 +259,12 @@ fn changing_damping_reuses_the_matrices() {
             .unwrap(),
     );
     let v = DVector::from_element(1, 1.0);
-    let s1 = pendkit_noise::thermal_noise(&model, &damping, &v, t, &[0.1]).unwrap().total;
-    let s2 = pendkit_noise::thermal_noise(&model, &doubled, &v, t, &[0.1]).unwrap().total;
+    let s1 = pendkit_noise::thermal_noise(&model, &damping, &v, t, &[0.1])
+        .unwrap()
+        .total;
+    let s2 = pendkit_noise::thermal_noise(&model, &doubled, &v, t, &[0.1])
+        .unwrap()
+        .total;
     assert_eq!(model.lossless, before.lossless);
     assert_eq!(model.by_tag[0].1, before.by_tag[0].1);
     let w = TWO_PI * 0.1;
@@ -291,7 +295,9 @@ fn viscous_oscillator_satisfies_equipartition() {
     let (a, b, n) = ((1e-4f64).ln(), (1e3f64).ln(), 400_000usize);
     let h = (b - a) / n as f64;
     let freqs: Vec<f64> = (0..=n).map(|i| (a + h * i as f64).exp()).collect();
-    let s = pendkit_noise::thermal_noise(&model, &damping, &v, t, &freqs).unwrap().total;
+    let s = pendkit_noise::thermal_noise(&model, &damping, &v, t, &freqs)
+        .unwrap()
+        .total;
     let mut integral = 0.0;
     for i in 0..=n {
         let w = if i == 0 || i == n {

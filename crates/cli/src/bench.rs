@@ -3,7 +3,7 @@
 use std::fmt::Write as _;
 
 use pendkit::Error;
-use pendkit_energy::Stage;
+use pendkit::energy::Stage;
 
 /// Arguments of `pendkit bench`.
 #[derive(clap::Args)]

@@ -3,9 +3,14 @@
 
 mod bench;
 mod common;
+mod error;
+mod format;
 mod modes;
 mod noise;
+mod plotting;
+mod progress;
 mod ss;
+mod sweep;
 mod tf;
 
 use std::fmt::Write as _;
@@ -13,8 +18,9 @@ use std::io::Write as _;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
-use pendkit::Error;
-use pendkit_energy::registry;
+use pendkit::energy::registrations;
+
+use crate::error::CliError;
 
 #[derive(Parser)]
 #[command(
@@ -38,11 +44,15 @@ enum Command {
     Noise(noise::Args),
     /// State-space matrices A, B, C, D with names, to .mat, .npz or .json.
     Ss(ss::Args),
+    /// Modes (tracked by shape), thermal noise or a transfer function over a grid of
+    /// parameter values, as CSV against the swept values.
+    Sweep(sweep::Args),
     /// Time each phase of a calculation in this process (build, equilibrium, Hessians per
     /// element kind, mass matrix, modes, and optionally noise): median and minimum over
     /// repetitions.
     Bench(bench::Args),
-    /// List the registered element kinds and the stage each joins at.
+    /// List the registered element kinds, the stage each joins at and the crate that
+    /// registered it.
     Elements,
     /// List the bundled models.
     Models,
@@ -63,21 +73,25 @@ fn main() -> ExitCode {
 }
 
 /// Runs one command and returns what it prints.
-fn run(cli: Cli) -> Result<String, Error> {
+fn run(cli: Cli) -> Result<String, CliError> {
     match cli.command {
         Command::Modes(a) => modes::run(a),
         Command::Tf(a) => tf::run(a),
         Command::Noise(a) => noise::run(a),
         Command::Ss(a) => ss::run(a),
-        Command::Bench(a) => bench::run(a),
+        Command::Sweep(a) => sweep::run(a),
+        Command::Bench(a) => Ok(bench::run(a)?),
         Command::Elements => {
             let mut out = String::new();
-            for kind in registry() {
+            let _ = writeln!(out, "{:<20} {:<5} {:<32} what", "kind", "stage", "crate");
+            for r in registrations() {
+                let kind = r.element;
                 let _ = writeln!(
                     out,
-                    "{:<16} stage {:<3} {}",
+                    "{:<20} {:<5} {:<32} {}",
                     kind.kind(),
-                    kind.stage(),
+                    kind.stage().name(),
+                    r.crate_name,
                     kind.summary()
                 );
             }

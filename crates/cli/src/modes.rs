@@ -1,13 +1,17 @@
-//! `pendkit modes`: equilibrium and normal modes, as a table or JSON.
+//! `pendkit modes`: equilibrium and normal modes, as a table or JSON, with a mode chart or
+//! one mode's shape as a figure.
 
 use std::fmt::Write as _;
+use std::path::PathBuf;
 
-use pendkit::{Case, Error, ModeSelection, StageResult};
-use pendkit_dynamics::lab_motion;
-use pendkit_energy::Stage;
+use pendkit::ModeSelection;
+use pendkit::dynamics::lab_motion;
 use serde_json::json;
 
-use crate::common::ModelArgs;
+use crate::common::{ModelArgs, Run, check_plot_path};
+use crate::error::CliError;
+use crate::format::{fixed, sci};
+use crate::plotting;
 
 /// Arguments of `pendkit modes`.
 #[derive(clap::Args)]
@@ -24,21 +28,37 @@ pub struct Args {
     /// on a sparse factorisation instead of the dense eigensolver.
     #[arg(long, value_name = "HZ")]
     below: Option<f64>,
+    /// Write a figure (.svg or .png): the mode chart (frequencies by degree-of-freedom
+    /// family), or with --shape the shape of one mode.
+    #[arg(long, value_name = "FILE")]
+    plot: Option<PathBuf>,
+    /// With --plot: draw the shape of mode N (numbered from 1 as in the table) instead of
+    /// the chart.
+    #[arg(long, value_name = "N", requires = "plot")]
+    shape: Option<usize>,
 }
 
 /// Runs the command and returns what it prints.
-pub fn run(a: Args) -> Result<String, Error> {
+pub fn run(a: Args) -> Result<String, CliError> {
+    check_plot_path(&a.plot)?;
     let selection = a.below.map_or(ModeSelection::All, ModeSelection::Below);
-    let (case, stage, result) = a.args.run(Stage::S0A, selection)?;
-    a.args.stability_gate(&result)?;
+    let run = a.args.run(selection)?;
+    run.check_stable(a.args.allow_unstable)?;
+    if let Some(path) = &a.plot {
+        match a.shape {
+            Some(n) => plotting::save(&plotting::mode_shape(&run, n)?, path)?,
+            None => plotting::save(&plotting::mode_chart(&run), path)?,
+        }
+    }
     Ok(if a.json {
-        modes_json(&case, stage, &result)
+        modes_json(&run)
     } else {
-        modes_table(&case, stage, &result, a.lab)
+        modes_table(&run, a.lab)
     })
 }
 
-fn modes_json(case: &Case, stage: Stage, r: &StageResult) -> String {
+fn modes_json(run: &Run) -> String {
+    let r = &run.result;
     let x = &r.assembled.equilibrium.coords;
     let modes: Vec<_> = r
         .modes
@@ -47,15 +67,16 @@ fn modes_json(case: &Case, stage: Stage, r: &StageResult) -> String {
         .map(|m| {
             let lab: Vec<_> = lab_motion(&r.system, &r.assembled.layout, x, m)
                 .into_iter()
-                .map(|b| json!({"body": b.body, "translation": b.translation, "rotation": b.rotation}))
+                .map(|b| json!({"body": run.body(&b.body), "translation": b.translation, "rotation": b.rotation}))
                 .collect();
             json!({
                 "hz": m.hz,
                 "omega_squared": m.omega_squared,
                 "stable": m.is_stable(),
+                "label": run.coord(&m.label),
+                "family": r.mode_family(m),
                 "accuracy": finite_or_null(m.accuracy()),
                 "vector_accuracy": m.vector_error,
-                "label": m.label,
                 "vector": m.vector,
                 "energy_fractions": m.energy_fractions,
                 "lab": lab,
@@ -67,13 +88,15 @@ fn modes_json(case: &Case, stage: Stage, r: &StageResult) -> String {
         .coords
         .iter()
         .zip(x)
-        .map(|(c, v)| (c.name.clone(), json!(v)))
+        .map(|(c, v)| (run.coord(&c.name), json!(v)))
         .collect();
     let out = json!({
-        "model": case.model.name(),
-        "case": case.name,
-        "stage": stage.name(),
-        "coordinates": r.modes.coordinates,
+        "model": run.case.model.name(),
+        "case": run.case.name,
+        "stage": run.stage.name(),
+        "naming": run.scheme.as_deref().unwrap_or("model"),
+        "coordinates": r.modes.coordinates.iter().map(|c| run.coord(c)).collect::<Vec<_>>(),
+        "coordinate_units": r.modes.coordinates.iter().map(|c| r.coordinate_unit(c).unwrap_or_default()).collect::<Vec<_>>(),
         "equilibrium": equilibrium,
         "modes": modes,
     });
@@ -82,29 +105,32 @@ fn modes_json(case: &Case, stage: Stage, r: &StageResult) -> String {
 
 /// A JSON number, or null for infinity (the relative accuracy of a neutral mode).
 fn finite_or_null(x: f64) -> serde_json::Value {
-    if x.is_finite() { json!(x) } else { serde_json::Value::Null }
+    if x.is_finite() {
+        json!(x)
+    } else {
+        serde_json::Value::Null
+    }
 }
 
 /// Relative accuracy worse than this is printed next to the frequency.
 const PRINT_ACCURACY_ABOVE: f64 = 1e-6;
 
-fn modes_table(case: &Case, stage: Stage, r: &StageResult, lab: bool) -> String {
+fn modes_table(run: &Run, lab: bool) -> String {
+    let r = &run.result;
     let mut out = String::new();
     let eq = &r.assembled.equilibrium;
     let _ = writeln!(
         out,
-        "{} ({}), stage {}: {} modes; equilibrium in {} Newton steps, residual {:.2e}",
-        case.name,
-        case.model.name(),
-        stage,
+        "{}: {} modes; equilibrium in {} Newton steps, residual {}",
+        run.heading(),
         r.modes.modes.len(),
         eq.iterations,
-        eq.max_residual
+        sci(eq.max_residual, 2, 0)
     );
     let _ = writeln!(
         out,
-        "{:>4}  {:>14}  {:<10} kinetic energy",
-        "mode", "frequency Hz", "label"
+        "{:>4}  {:>14}  {:<6}  {:<10}  kinetic energy share",
+        "mode", "frequency_hz", "family", "label"
     );
     for (i, m) in r.modes.modes.iter().enumerate() {
         let mut shares: Vec<(usize, f64)> =
@@ -114,7 +140,13 @@ fn modes_table(case: &Case, stage: Stage, r: &StageResult, lab: bool) -> String 
             .iter()
             .take(3)
             .filter(|(_, f)| *f >= 0.01)
-            .map(|(k, f)| format!("{} {:.0}%", r.modes.coordinates[*k], 100.0 * f))
+            .map(|(k, f)| {
+                format!(
+                    "{} {}%",
+                    run.coord(&r.modes.coordinates[*k]),
+                    fixed(100.0 * f, 0, 0)
+                )
+            })
             .collect();
         let mut flag = if m.is_stable() {
             String::new()
@@ -131,25 +163,28 @@ fn modes_table(case: &Case, stage: Stage, r: &StageResult, lab: bool) -> String 
         }
         let _ = writeln!(
             out,
-            "{:>4}  {:>14.7}  {:<10} {}{}",
+            "{:>4}  {}  {:<6}  {:<10}  {}{}",
             i + 1,
-            m.hz,
-            m.label,
+            fixed(m.hz, 7, 14),
+            r.mode_family(m),
+            run.coord(&m.label),
             top.join(", "),
             flag
         );
         if lab {
             for b in lab_motion(&r.system, &r.assembled.layout, &eq.coords, m) {
+                let t = b.translation.map(|v| sci(v, 3, 10));
+                let w = b.rotation.map(|v| sci(v, 3, 10));
                 let _ = writeln!(
                     out,
-                    "        {:<10} x {:>10.3e} y {:>10.3e} z {:>10.3e}  yaw {:>10.3e} pitch {:>10.3e} roll {:>10.3e}",
-                    b.body,
-                    b.translation[0],
-                    b.translation[1],
-                    b.translation[2],
-                    b.rotation[0],
-                    b.rotation[1],
-                    b.rotation[2]
+                    "        {:<10} x_m {} y_m {} z_m {}  yaw_rad {} pitch_rad {} roll_rad {}",
+                    run.body(&b.body),
+                    t[0],
+                    t[1],
+                    t[2],
+                    w[0],
+                    w[1],
+                    w[2]
                 );
             }
         }

@@ -1,24 +1,27 @@
 //! `pendkit noise`: thermal noise at an output, with the dominant damping tag (or term) at
-//! each frequency, as a table or CSV.
+//! each frequency, as a table or CSV, and as a noise budget figure.
 
 use std::fmt::Write as _;
+use std::path::PathBuf;
 
-use pendkit::{Error, log_grid};
-use pendkit_noise::NoiseOptions;
+use pendkit::{NoiseOptions, unit_slug};
 
-use crate::common::{GridArgs, ModelArgs, solver};
+use crate::common::{GridArgs, ModelArgs, check_plot_path, solver};
+use crate::error::CliError;
+use crate::format::{csv, sci};
+use crate::plotting;
 
 /// Arguments of `pendkit noise`.
 #[derive(clap::Args)]
 pub struct Args {
     #[command(flatten)]
     args: ModelArgs,
-    /// A variable or <body>@x,y,z/dx,dy,dz.
+    /// A variable or <body>@x,y,z/dx,dy,dz; declared names too (L3_L).
     #[arg(long)]
     output: String,
     #[command(flatten)]
     grid: GridArgs,
-    /// Print f_hz,asd rows.
+    /// Print CSV: f_hz,asd_<unit> (e.g. asd_m_per_rthz).
     #[arg(long)]
     csv: bool,
     /// Add one ASD column per damping tag (CSV) or name the dominant term instead of the
@@ -29,61 +32,83 @@ pub struct Args {
     /// (the same numbers, for checking).
     #[arg(long)]
     full: bool,
+    /// Write a noise budget (total and each damping tag, ASD, log-log) to this file (.svg
+    /// or .png).
+    #[arg(long, value_name = "FILE")]
+    plot: Option<PathBuf>,
 }
 
 /// Runs the command and returns what it prints.
-pub fn run(a: Args) -> Result<String, Error> {
-    let (case, stage, r) = a.args.run_lossy()?;
-    let freqs = log_grid(a.grid.from, a.grid.to, a.grid.points)?;
+pub fn run(a: Args) -> Result<String, CliError> {
+    check_plot_path(&a.plot)?;
+    let run = a.args.run_lossy()?;
+    let freqs = a.grid.frequencies()?;
     let options = NoiseOptions {
         solver: solver(a.full),
         // the table names the dominant term; the CSV adds per-tag columns only
         per_term: a.breakdown && !a.csv,
     };
-    let noise = r.noise_with(&a.output, &freqs, &options)?;
-    let tags = noise.by_tag();
+    let noise = run.result.noise_with(&a.output, &freqs, &options)?;
+    if let Some(path) = &a.plot {
+        plotting::save(
+            &plotting::noise_budget(&run, &a.output, &freqs, &noise),
+            path,
+        )?;
+    }
+    let unit = format!(
+        "{}/√Hz",
+        run.result.output_unit(&a.output).unwrap_or_default()
+    );
+    let slug = unit_slug(&unit);
+    let asd = noise.asd();
+    let tags = noise.asd_by_tag();
     let mut out = String::new();
     if a.csv {
-        out.push_str("f_hz,asd");
+        let _ = write!(out, "f_hz,asd_{slug}");
         if a.breakdown {
-            for (tag, _) in tags {
-                let _ = write!(out, ",{tag}");
+            for (tag, _) in &tags {
+                let _ = write!(out, ",asd_{tag}_{slug}");
             }
         }
         out.push('\n');
-    } else {
-        let _ = writeln!(
-            out,
-            "{} ({}), stage {stage}: thermal noise of {} at {} K (ASD per sqrt(Hz))",
-            case.name,
-            case.model.name(),
-            a.output,
-            r.system.temperature
-        );
-        let _ = writeln!(out, "{:>12}  {:>12}  dominant", "f_hz", "asd");
-    }
-    for (i, f) in freqs.iter().enumerate() {
-        let asd = noise.total[i].sqrt();
-        if a.csv {
-            let _ = write!(out, "{f:e},{asd:e}");
+        for (i, f) in freqs.iter().enumerate() {
+            let _ = write!(out, "{},{}", csv(*f), csv(asd[i]));
             if a.breakdown {
-                for (_, series) in tags {
-                    let _ = write!(out, ",{:e}", series[i].max(0.0).sqrt());
+                for (_, series) in &tags {
+                    let _ = write!(out, ",{}", csv(series[i]));
                 }
             }
             out.push('\n');
-        } else {
-            let total = noise.total[i];
-            let top = if a.breakdown {
-                dominant(
-                    noise.by_term.iter().map(|(n, _, s)| (n.as_str(), s[i])),
-                    total,
-                )
-            } else {
-                dominant(tags.iter().map(|(t, s)| (t.as_str(), s[i])), total)
-            };
-            let _ = writeln!(out, "{f:>12.6e}  {asd:>12.6e}  {top}");
         }
+        return Ok(out);
+    }
+    let _ = writeln!(
+        out,
+        "{}: thermal noise of {} at {} K (ASD, {unit})",
+        run.heading(),
+        run.port(&a.output),
+        run.result.system.temperature
+    );
+    let _ = writeln!(
+        out,
+        "{:>12}  {:>16}  dominant (share of the PSD)",
+        "f_hz",
+        format!("asd_{slug}")
+    );
+    let psd = noise.psd();
+    for (i, f) in freqs.iter().enumerate() {
+        let top = if a.breakdown {
+            dominant(
+                noise.by_term.iter().map(|(n, _, s)| (n.as_str(), s[i])),
+                psd[i],
+            )
+        } else {
+            dominant(
+                noise.psd_by_tag().iter().map(|(t, s)| (t.as_str(), s[i])),
+                psd[i],
+            )
+        };
+        let _ = writeln!(out, "{}  {}  {top}", sci(*f, 6, 12), sci(asd[i], 6, 16));
     }
     Ok(out)
 }
@@ -94,8 +119,8 @@ fn dominant<'a>(shares: impl Iterator<Item = (&'a str, f64)>, total: f64) -> Str
         .max_by(|a, b| a.1.total_cmp(&b.1))
         .map(|(name, share)| {
             format!(
-                "{name} {:.0}%",
-                100.0 * share / total.max(f64::MIN_POSITIVE)
+                "{name} {}%",
+                crate::format::fixed(100.0 * share / total.max(f64::MIN_POSITIVE), 0, 0)
             )
         })
         .unwrap_or_default()

@@ -1,4 +1,4 @@
-//! The command line as DESIGN.md §8 specifies it.
+//! The command line as docs/cli.md specifies it.
 
 use std::process::Command;
 
@@ -31,7 +31,7 @@ fn frequencies(v: &serde_json::Value) -> Vec<f64> {
 
 #[test]
 fn toy_json_has_the_contract_fields_and_the_oracle_frequency() {
-    let v = modes_json(&["modes", "toy", "--json"]);
+    let v = modes_json(&["modes", "toy", "--stage", "0a", "--json"]);
     assert_eq!(v["model"], "toy");
     assert_eq!(v["stage"], "0A");
     assert_eq!(v["coordinates"], serde_json::json!(["x"]));
@@ -44,7 +44,7 @@ fn toy_json_has_the_contract_fields_and_the_oracle_frequency() {
 
 #[test]
 fn pendulum_json_prints_the_pendulum_and_bounce_modes() {
-    let v = modes_json(&["modes", "pendulum", "--json"]);
+    let v = modes_json(&["modes", "pendulum", "--stage", "0a", "--json"]);
     let hz = frequencies(&v);
     // sqrt(g/l)/2π = 0.6435451 Hz twice, bounce 6.180387 Hz (oracles §1, §3)
     assert_eq!(hz.len(), 3);
@@ -59,10 +59,12 @@ fn set_overrides_and_case_files_agree() {
         env!("CARGO_MANIFEST_DIR"),
         "/../../models/basic/cases/rigid-body/d2mm.toml"
     );
-    let from_file = frequencies(&modes_json(&["modes", case, "--json"]));
+    let from_file = frequencies(&modes_json(&["modes", case, "--stage", "0a", "--json"]));
     let from_set = frequencies(&modes_json(&[
         "modes",
         "rigid-body",
+        "--stage",
+        "0a",
         "--set",
         "d_fibre=0.002",
         "--json",
@@ -73,6 +75,8 @@ fn set_overrides_and_case_files_agree() {
     let scaled = frequencies(&modes_json(&[
         "modes",
         "rigid-body",
+        "--stage",
+        "0a",
         "--set",
         "d_fibre=scale(0.2)",
         "--json",
@@ -81,15 +85,25 @@ fn set_overrides_and_case_files_agree() {
 }
 
 #[test]
-fn elements_lists_kinds_with_stages() {
+fn elements_lists_kinds_with_stages_and_crates() {
     let (ok, stdout, _) = pendkit(&["elements"]);
     assert!(ok);
-    for kind in ["gravity", "spring", "wire-stretch"] {
+    // the registered set and where each kind comes from: the core kinds from the energy
+    // crate, the plug-ins from their own crates (recorded at registration)
+    for (kind, stage, krate) in [
+        ("gravity", "0A", "pendkit-energy"),
+        ("spring", "0A", "pendkit-energy"),
+        ("wire-stretch", "0A", "pendkit-energy"),
+        ("wire-torsion", "1A", "pendkit-element-torsion"),
+        ("wire-bending", "1B", "pendkit-element-bending"),
+        ("wire-extra-stretch", "2", "pendkit-element-extra-stretch"),
+    ] {
         let line = stdout
             .lines()
-            .find(|l| l.starts_with(kind))
+            .find(|l| l.split_whitespace().next() == Some(kind))
             .unwrap_or_else(|| panic!("{kind} missing"));
-        assert!(line.contains("stage 0A"), "{line}");
+        let columns: Vec<&str> = line.split_whitespace().collect();
+        assert_eq!(columns[1..3], [stage, krate], "{line}");
     }
 }
 
@@ -135,13 +149,17 @@ fn quad_modes_and_transfer_functions() {
     let v = modes_json(&["modes", "quad", "--stage", "0a", "--json"]);
     assert_eq!(frequencies(&v).len(), 24);
     assert_eq!(v["coordinates"].as_array().unwrap().len(), 24);
-    for input in ["x00", "force:x3"] {
+    // headers name their units: x3/x00 in m/m, x3 per newton on x3 in m/N
+    for (input, header) in [
+        ("x00", "f_hz,re_m_per_m,im_m_per_m"),
+        ("force:x3", "f_hz,re_m_per_N,im_m_per_N"),
+    ] {
         let (ok, stdout, stderr) = pendkit(&[
             "tf", "quad", "--input", input, "--output", "x3", "--points", "5", "--csv",
         ]);
         assert!(ok, "{stderr}");
         let rows: Vec<&str> = stdout.lines().collect();
-        assert_eq!(rows[0], "f_hz,re,im");
+        assert_eq!(rows[0], header);
         assert_eq!(rows.len(), 6);
         let first: Vec<f64> = rows[1].split(',').map(|x| x.parse().unwrap()).collect();
         assert_eq!(first[0], 0.1);
@@ -158,7 +176,13 @@ fn quad_modes_and_transfer_functions() {
         "--breakdown",
     ]);
     assert!(ok);
-    assert!(stdout.lines().next().unwrap().starts_with("f_hz,asd,"));
+    assert!(
+        stdout
+            .lines()
+            .next()
+            .unwrap()
+            .starts_with("f_hz,asd_m_per_rthz,asd_")
+    );
 }
 
 #[test]

@@ -19,11 +19,11 @@ pub use modes::{
     BodyMotion, EntryRounding, Mode, Modes, StiffnessRounding, lab_motion, normal_modes,
     normal_modes_with_rounding,
 };
+pub use pattern::Pattern;
 pub use stability::{
     FloatMap, GrowingMode, InvertedBody, RunawayFloat, Stability, TermRounding, Verdict,
     inverted_bodies, runaway_floats,
 };
-pub use pattern::Pattern;
 pub use stage::{Input, Output, ReducedComplex, StageModel, StateSpace, TermLoss};
 pub use sweep::{DENSE_LIMIT, Solver, Sweep, coupled_unknowns};
 
@@ -69,9 +69,7 @@ pub enum DynamicsError {
         column: usize,
     },
     /// A frequency outside the documented limits.
-    #[error(
-        "{what} {f_hz} Hz is out of range: frequencies must be finite, from 1e-9 Hz to 1e9 Hz"
-    )]
+    #[error("{what} {f_hz} Hz is out of range: frequencies must be finite, from 1e-9 Hz to 1e9 Hz")]
     Frequency {
         /// What the frequency is for.
         what: &'static str,

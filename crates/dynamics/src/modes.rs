@@ -123,7 +123,8 @@ impl Mode {
 
     fn set_omega_squared(&mut self, omega_squared: f64) {
         self.omega_squared = omega_squared;
-        self.hz = omega_squared.signum() * omega_squared.abs().sqrt() / (2.0 * std::f64::consts::PI);
+        self.hz =
+            omega_squared.signum() * omega_squared.abs().sqrt() / (2.0 * std::f64::consts::PI);
         if omega_squared == 0.0 {
             self.hz = 0.0;
         }
@@ -330,9 +331,8 @@ fn block_modes(
         omega_squared: lambdas,
         vectors: v,
     };
-    let shift_pd = |sigma: f64| {
-        positive_definite(&Mat::from_fn(n, n, |i, j| k[(i, j)] + sigma * m[(i, j)]))
-    };
+    let shift_pd =
+        |sigma: f64| positive_definite(&Mat::from_fn(n, n, |i, j| k[(i, j)] + sigma * m[(i, j)]));
     // K + σM positive definite already for a shift at the level of rounding of M's own
     // solve: nothing lies measurably below zero, and M's factor has every ω² as well as
     // any method (ω² near zero are then neutral)

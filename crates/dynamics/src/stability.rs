@@ -352,7 +352,11 @@ impl TermRounding {
                     off,
                     geometric,
                     amplification,
-                    storage: if storage.is_finite() { storage.max(1.0) } else { 1.0 },
+                    storage: if storage.is_finite() {
+                        storage.max(1.0)
+                    } else {
+                        1.0
+                    },
                 }
             })
             .collect();

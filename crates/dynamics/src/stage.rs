@@ -438,7 +438,12 @@ impl StageModel {
                 .map(|n| format!("force:{n}"))
                 .collect::<Vec<_>>()
         };
-        for (what, m) in [("state matrix A", &a), ("input matrix B", &b), ("output matrix C", &c), ("feedthrough D", &d)] {
+        for (what, m) in [
+            ("state matrix A", &a),
+            ("input matrix B", &b),
+            ("output matrix C", &c),
+            ("feedthrough D", &d),
+        ] {
             if let Some(k) = m.iter().position(|x| !x.is_finite()) {
                 return Err(DynamicsError::NotFinite {
                     what,

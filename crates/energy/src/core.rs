@@ -10,7 +10,7 @@ use pendkit_rotations::{ANGLE_ENTRIES, Real, angle_derivatives, angles, c, rotat
 
 use crate::{
     Attached, Derivatives, Element, EnergyError, JetPoint, LocalFrames, OffForm, Potential,
-    Reference, Registration, SpringEnd, Stage, TensionOff, Term, add_curvature, add_jacobian,
+    Reference, SpringEnd, Stage, TensionOff, Term, add_curvature, add_jacobian,
 };
 
 /// Tag of gravity terms (lossless whatever multipliers the tag is given).
@@ -480,9 +480,9 @@ impl Element for SpringKind {
     }
 }
 
-inventory::submit! { Registration(&Gravity) }
-inventory::submit! { Registration(&WireStretch) }
-inventory::submit! { Registration(&SpringKind) }
+crate::register_element!(Gravity);
+crate::register_element!(WireStretch);
+crate::register_element!(SpringKind);
 
 #[cfg(test)]
 mod tests {
@@ -523,6 +523,9 @@ mod tests {
             mass,
             inertia: Matrix3::identity(),
             centre_of_mass: Vector3::new(0.01, -0.02, 0.03),
+            shape: None,
+            pose_coords: std::array::from_fn(|m| Some(6 * k + m)),
+            mode_family: None,
         };
         System {
             coords,

@@ -151,19 +151,42 @@ impl SharedBodies {
     }
 }
 
-/// A registry entry; submit one per element kind with `inventory::submit!`.
-pub struct Registration(pub &'static dyn Element);
+/// A registry entry: an element kind and the crate that registered it. Submit one per kind
+/// with [`register_element!`](crate::register_element), which fills in the crate's name.
+pub struct Registration {
+    /// The element kind.
+    pub element: &'static dyn Element,
+    /// The package name of the crate that registered it (`CARGO_PKG_NAME`).
+    pub crate_name: &'static str,
+}
 
 inventory::collect!(Registration);
 
+/// Registers an element kind (a `static` or constant implementing [`Element`]) in the
+/// link-time registry, recording the registering crate's package name:
+/// `pendkit_energy::register_element!(MyKind);`.
+#[macro_export]
+macro_rules! register_element {
+    ($kind:expr) => {
+        $crate::inventory::submit! {
+            $crate::Registration {
+                element: &$kind,
+                crate_name: env!("CARGO_PKG_NAME"),
+            }
+        }
+    };
+}
+
+/// Every registration linked into this program, ordered by stage, kind name, then crate.
+pub fn registrations() -> Vec<&'static Registration> {
+    let mut all: Vec<&'static Registration> = inventory::iter::<Registration>.into_iter().collect();
+    all.sort_by_key(|r| (r.element.stage(), r.element.kind(), r.crate_name));
+    all
+}
+
 /// All linked element kinds, ordered by stage then kind name.
 pub fn registry() -> Vec<&'static dyn Element> {
-    let mut kinds: Vec<&'static dyn Element> = inventory::iter::<Registration>
-        .into_iter()
-        .map(|r| r.0)
-        .collect();
-    kinds.sort_by_key(|k| (k.stage(), k.kind()));
-    kinds
+    registrations().into_iter().map(|r| r.element).collect()
 }
 
 /// The registered kind called `name`.

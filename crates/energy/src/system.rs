@@ -52,6 +52,52 @@ pub struct Body {
     pub inertia: Matrix3<f64>,
     /// Centre of mass in body coordinates (m); the origin unless the body says otherwise.
     pub centre_of_mass: Vector3<f64>,
+    /// The shape the body is drawn as (figures only: the physics uses mass and inertia).
+    pub shape: Option<Shape>,
+    /// For each pose entry (x, y, z, yaw, pitch, roll), the coordinate it is exactly equal
+    /// to, if any: the body's own degrees of freedom, which give a coordinate its unit (m
+    /// or rad) and its degree-of-freedom family.
+    pub pose_coords: [Option<CoordId>; 6],
+    /// A family that modes dominated by this body's coordinates belong to, instead of their
+    /// degree of freedom (e.g. `violin` for the beads of a fibre).
+    pub mode_family: Option<String>,
+}
+
+/// The drawing shape of a body, in body coordinates centred on the body origin (m).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Shape {
+    /// A box with these half-sizes along body x, y, z (m).
+    Box {
+        /// Half-sizes (m).
+        half_sizes: Vector3<f64>,
+    },
+    /// A cylinder of `radius` (m) and half-length `half_length` (m) along body axis `axis`
+    /// (0 = x, 1 = y, 2 = z).
+    Cylinder {
+        /// Radius (m).
+        radius: f64,
+        /// Half of the length (m).
+        half_length: f64,
+        /// The body axis the cylinder lies along (0, 1 or 2).
+        axis: usize,
+    },
+}
+
+impl Shape {
+    /// The uniform box with this mass (kg) and principal moments (kg m²): half-sizes
+    /// a_i = sqrt(3 (I_j + I_k − I_i) / (2 m)), from I_x = m (b² + c²) / 3 and its
+    /// permutations. `None` for a massless body or one without rotational inertia (a point
+    /// mass); a moment that no box can have (I_j + I_k < I_i) gives a zero half-size.
+    pub fn equivalent_box(mass: f64, principal_moments: [f64; 3]) -> Option<Shape> {
+        let [ix, iy, iz] = principal_moments;
+        if !(mass > 0.0) || !(ix > 0.0 && iy > 0.0 && iz > 0.0) {
+            return None;
+        }
+        let half = |i: f64, j: f64, k: f64| (1.5 * (j + k - i) / mass).max(0.0).sqrt();
+        Some(Shape::Box {
+            half_sizes: Vector3::new(half(ix, iy, iz), half(iy, iz, ix), half(iz, ix, iy)),
+        })
+    }
 }
 
 /// How a wire leaves the body at one end.
@@ -281,6 +327,47 @@ pub struct System {
     pub damping: Damping,
     /// Temperature for thermal noise (K).
     pub temperature: f64,
+    /// Other names for the model's bodies and coordinates, by scheme (e.g. `ligo`).
+    pub name_schemes: BTreeMap<String, NameScheme>,
+}
+
+/// Another set of names for some of a model's bodies and coordinates, declared by the model
+/// (e.g. LIGO's: the test mass `L3`, its pitch `L3_P`). Names not in the scheme stay as
+/// they are.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct NameScheme {
+    /// Body name to its name in the scheme.
+    pub bodies: BTreeMap<String, String>,
+    /// Coordinate name to its name in the scheme.
+    pub coords: BTreeMap<String, String>,
+}
+
+impl NameScheme {
+    /// The scheme's name of coordinate `name`, or `name` itself.
+    pub fn coord<'a>(&'a self, name: &'a str) -> &'a str {
+        self.coords.get(name).map_or(name, String::as_str)
+    }
+
+    /// The scheme's name of body `name`, or `name` itself.
+    pub fn body<'a>(&'a self, name: &'a str) -> &'a str {
+        self.bodies.get(name).map_or(name, String::as_str)
+    }
+
+    /// The coordinate that the scheme calls `alias`, if any.
+    pub fn coord_called(&self, alias: &str) -> Option<&str> {
+        self.coords
+            .iter()
+            .find(|(_, a)| *a == alias)
+            .map(|(name, _)| name.as_str())
+    }
+
+    /// The body that the scheme calls `alias`, if any.
+    pub fn body_called(&self, alias: &str) -> Option<&str> {
+        self.bodies
+            .iter()
+            .find(|(_, a)| *a == alias)
+            .map(|(name, _)| name.as_str())
+    }
 }
 
 impl System {

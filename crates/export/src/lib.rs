@@ -17,6 +17,7 @@
 //! Files are written to a temporary file in the same directory and renamed into place, so
 //! a failed write never leaves a truncated file under the name asked for; an existing file
 //! is refused unless [`WriteOptions::overwrite`] says otherwise.
+//! Units and provenance travel as more variables ([`Metadata`], [`write_with_metadata`]).
 
 use std::collections::HashSet;
 use std::fs::OpenOptions;
@@ -318,6 +319,75 @@ fn place(temporary: &Path, path: &Path, overwrite: bool) -> Result<(), ExportErr
             path: path.to_path_buf(),
         }),
     }
+}
+
+/// Units and provenance stored beside the matrices of an export, as more variables of the
+/// same file (so every format carries them and every loader reads them as it reads the
+/// rest): lists of strings (e.g. `state_units`, `model`, `pendkit_version`) and columns of
+/// numbers (e.g. `parameter_values`). Variable names follow the rules of [`validate`].
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Metadata {
+    /// Lists of strings, by variable name.
+    pub texts: Vec<(String, Vec<String>)>,
+    /// Columns of numbers, by variable name.
+    pub numbers: Vec<(String, Vec<f64>)>,
+}
+
+impl Metadata {
+    /// An empty set.
+    pub fn new() -> Self {
+        Metadata::default()
+    }
+
+    /// Adds a list of strings (a one-item list for a single value such as a version).
+    pub fn text(&mut self, name: &str, items: Vec<String>) -> &mut Self {
+        self.texts.push((name.to_string(), items));
+        self
+    }
+
+    /// Adds a column of numbers (an `n x 1` matrix).
+    pub fn numbers(&mut self, name: &str, values: Vec<f64>) -> &mut Self {
+        self.numbers.push((name.to_string(), values));
+        self
+    }
+
+    /// The string lists as [`Names`] variables.
+    pub fn names(&self) -> Vec<Names<'_>> {
+        self.texts
+            .iter()
+            .map(|(name, items)| Names { name, items })
+            .collect()
+    }
+
+    /// The number columns as [`Matrix`] variables.
+    pub fn matrices(&self) -> Vec<Matrix<'_>> {
+        self.numbers
+            .iter()
+            .map(|(name, data)| Matrix {
+                name,
+                rows: data.len(),
+                cols: 1,
+                data,
+            })
+            .collect()
+    }
+}
+
+/// [`write_with`] with `metadata`'s variables after the others.
+pub fn write_with_metadata(
+    path: &Path,
+    matrices: &[Matrix],
+    names: &[Names],
+    metadata: &Metadata,
+    options: &WriteOptions,
+) -> Result<(), ExportError> {
+    let matrices: Vec<Matrix> = matrices
+        .iter()
+        .copied()
+        .chain(metadata.matrices())
+        .collect();
+    let names: Vec<Names> = names.iter().copied().chain(metadata.names()).collect();
+    write_with(path, &matrices, &names, options)
 }
 
 /// Writes a level-5 MAT-file: a 128-byte header, then one variable per matrix and name list.

@@ -20,6 +20,7 @@ use pendkit_geometry::{FrameMap, PoseMap};
 use pendkit_params::{ParamError, ParamSet, Resolved};
 
 pub use damping::{DampingSpec, ParsedDamping};
+pub use pendkit_energy::Shape;
 
 /// Errors in a model definition; each names the item and what is wrong with it.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -72,7 +73,13 @@ pub struct BodySpec {
     mass: f64,
     inertia: Matrix3<f64>,
     centre_of_mass: Vector3<f64>,
+    shape: Option<Shape>,
+    mode_family: Option<String>,
 }
+
+/// LIGO's names of the six pose entries (x, y, z, yaw, pitch, roll): length L, transverse
+/// T, vertical V, yaw Y, pitch P, roll R; for [`SystemBuilder::name_scheme`].
+pub const LIGO_DOF_NAMES: [&str; 6] = ["L", "T", "V", "Y", "P", "R"];
 
 impl BodySpec {
     /// A massless body fixed at the lab origin; set its pose and mass properties next.
@@ -84,7 +91,24 @@ impl BodySpec {
             mass: 0.0,
             inertia: Matrix3::zeros(),
             centre_of_mass: Vector3::zeros(),
+            shape: None,
+            mode_family: None,
         }
+    }
+
+    /// The shape the body is drawn as in figures (it does not enter the physics). Without
+    /// one, a body with mass and inertia is drawn as the uniform box of the same mass and
+    /// principal moments ([`Shape::equivalent_box`]).
+    pub fn shape(mut self, shape: Shape) -> Self {
+        self.shape = Some(shape);
+        self
+    }
+
+    /// Modes dominated by this body's coordinates belong to `family` (e.g. `violin` for a
+    /// fibre's beads) rather than to their degree of freedom.
+    pub fn mode_family(mut self, family: impl Into<String>) -> Self {
+        self.mode_family = Some(family.into());
+        self
     }
 
     /// Pose (x, y, z in m; yaw, pitch, roll in rad) as expressions of coordinate names.
@@ -276,6 +300,17 @@ impl SystemBuilder {
             });
         }
         check_inertia(&item, &spec.inertia)?;
+        if let Some(shape) = &spec.shape {
+            check_shape(&item, shape)?;
+        }
+        let shape = spec.shape.or_else(|| {
+            let moments = spec.inertia.symmetric_eigenvalues();
+            Shape::equivalent_box(spec.mass, [moments[0], moments[1], moments[2]])
+        });
+        let pose_coords = spec
+            .pose
+            .each_ref()
+            .map(|text| self.coord_ids.get(text.trim()).copied());
         let labels = ["x", "y", "z", "yaw", "pitch", "roll"];
         let mut entries = Vec::with_capacity(6);
         for (text, label) in spec.pose.iter().zip(labels) {
@@ -325,6 +360,9 @@ impl SystemBuilder {
             mass: spec.mass,
             inertia: spec.inertia,
             centre_of_mass: spec.centre_of_mass,
+            shape,
+            pose_coords,
+            mode_family: spec.mode_family,
         });
         Ok(self.system.bodies.len() - 1)
     }
@@ -494,6 +532,48 @@ impl SystemBuilder {
         Ok(())
     }
 
+    /// Declares names of the scheme `scheme` (e.g. `ligo`): each `(body, alias)` pair names
+    /// a body, and each of its own pose coordinates becomes `<alias>_<dof>` with `dof` taken
+    /// from `dof_names` in pose order (x, y, z, yaw, pitch, roll); e.g. [`LIGO_DOF_NAMES`]
+    /// gives the test mass's pitch `L3_P`. Declaring a scheme again adds to it.
+    pub fn name_scheme(
+        &mut self,
+        scheme: &str,
+        dof_names: [&str; 6],
+        bodies: &[(&str, &str)],
+    ) -> Result<(), BuildError> {
+        let mut names = self.system.name_schemes.remove(scheme).unwrap_or_default();
+        for &(body, alias) in bodies {
+            let id = self
+                .body_ids
+                .get(body)
+                .copied()
+                .ok_or_else(|| BuildError::Unknown {
+                    context: format!("name scheme '{scheme}'"),
+                    what: "body",
+                    name: body.to_string(),
+                })?;
+            names.bodies.insert(body.to_string(), alias.to_string());
+            for (coord, dof) in self.system.bodies[id].pose_coords.iter().zip(dof_names) {
+                if let Some(c) = coord {
+                    let name = self.system.coords[*c].name.clone();
+                    names.coords.insert(name, format!("{alias}_{dof}"));
+                }
+            }
+        }
+        let mut seen = HashSet::new();
+        for alias in names.coords.values().chain(names.bodies.values()) {
+            if !seen.insert(alias.as_str()) {
+                return Err(BuildError::Duplicate {
+                    what: "name-scheme",
+                    name: alias.clone(),
+                });
+            }
+        }
+        self.system.name_schemes.insert(scheme.to_string(), names);
+        Ok(())
+    }
+
     /// The finished model.
     pub fn build(self) -> Result<System, BuildError> {
         check_finite("model", "gravity", self.system.gravity, "m/s^2")?;
@@ -518,6 +598,27 @@ pub fn whole_number(
             message: format!("must be a whole number from {low} to {high}, got {value}"),
         })
     }
+}
+
+/// A drawing shape must have finite, non-negative sizes and a cylinder axis 0, 1 or 2.
+fn check_shape(item: &str, shape: &Shape) -> Result<(), BuildError> {
+    let (sizes, axis_ok) = match shape {
+        Shape::Box { half_sizes } => (vec![half_sizes.x, half_sizes.y, half_sizes.z], true),
+        Shape::Cylinder {
+            radius,
+            half_length,
+            axis,
+        } => (vec![*radius, *half_length], *axis < 3),
+    };
+    if sizes.iter().any(|v| !(v.is_finite() && *v >= 0.0)) || !axis_ok {
+        return Err(BuildError::Invalid {
+            item: item.to_string(),
+            message: format!(
+                "drawing shape needs finite sizes >= 0 m and a cylinder axis 0, 1 or 2 ({shape:?})"
+            ),
+        });
+    }
+    Ok(())
 }
 
 /// Inertia must be symmetric and either zero (a point mass) or positive definite.
@@ -611,9 +712,11 @@ impl Defaults {
         let mut params = model.parameters()?;
         if !params.contains("temperature") {
             params.define_value("temperature", DEFAULT_TEMPERATURE)?;
+            params.set_unit("temperature", "K")?;
         }
         if !params.contains("wire_terms_early") {
             params.define_value("wire_terms_early", 0.0)?;
+            params.set_unit("wire_terms_early", "")?;
         }
         let damping = model
             .damping()

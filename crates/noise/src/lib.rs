@@ -41,9 +41,37 @@ pub struct ThermalNoise {
 }
 
 impl ThermalNoise {
-    /// The breakdown per damping tag, in tag order.
+    /// The breakdown per damping tag, in tag order: PSD (m²/Hz or rad²/Hz), as
+    /// [`ThermalNoise::psd_by_tag`].
     pub fn by_tag(&self) -> &[(String, Vec<f64>)] {
         &self.tags
+    }
+
+    /// One-sided power spectral density per frequency (m²/Hz for a displacement output,
+    /// rad²/Hz for an angle): the `total` field.
+    pub fn psd(&self) -> &[f64] {
+        &self.total
+    }
+
+    /// Amplitude spectral density per frequency, √PSD (m/√Hz or rad/√Hz): what the
+    /// command line prints.
+    pub fn asd(&self) -> Vec<f64> {
+        self.total.iter().map(|p| p.max(0.0).sqrt()).collect()
+    }
+
+    /// Each damping tag's share of the PSD (m²/Hz or rad²/Hz), in tag order; the shares add
+    /// up to [`ThermalNoise::psd`].
+    pub fn psd_by_tag(&self) -> &[(String, Vec<f64>)] {
+        &self.tags
+    }
+
+    /// Each damping tag's noise as an ASD, √(its PSD share) (m/√Hz or rad/√Hz), in tag
+    /// order: the curve that tag alone would give. ASDs add in quadrature, not linearly.
+    pub fn asd_by_tag(&self) -> Vec<(String, Vec<f64>)> {
+        self.tags
+            .iter()
+            .map(|(tag, psd)| (tag.clone(), psd.iter().map(|p| p.max(0.0).sqrt()).collect()))
+            .collect()
     }
 }
 
@@ -91,7 +119,9 @@ impl Form {
     }
 }
 
-/// Thermal noise as [`thermal_noise`], solved and broken down as `options` says.
+/// Thermal noise as [`thermal_noise`], solved and broken down as `options` says. `v` may
+/// also be a displacement output over the variables, floats and parameters (a point's
+/// whole motion): the parameters' part is left out, the support does not fluctuate.
 pub fn thermal_noise_with(
     model: &StageModel,
     damping: &Damping,
@@ -104,6 +134,7 @@ pub fn thermal_noise_with(
         return Err(DynamicsError::Temperature(temperature));
     }
     pendkit_dynamics::validate::check_frequencies(freqs)?;
+    let v = &v.rows(0, v.len().min(model.unknowns())).into_owned();
     let input = Input::Force(v.clone());
     let output = Output::Displacement(v.clone());
     let mut sweep = Sweep::new(model, damping, &input, &output, options.solver)?;

@@ -183,6 +183,8 @@ impl Entry {
 pub struct ParamSet {
     entries: Vec<Arc<Entry>>,
     index: Arc<HashMap<Arc<str>, usize>>,
+    /// Units of the parameters that declare one (for reports; not checked).
+    units: Arc<HashMap<Arc<str>, Arc<str>>>,
 }
 
 impl ParamSet {
@@ -226,6 +228,21 @@ impl ParamSet {
         Arc::make_mut(&mut self.index).insert(name.clone(), self.entries.len());
         self.entries
             .push(Arc::new(Entry::new(name, Definition { expr, source })));
+    }
+
+    /// Declares the unit of an existing parameter, as text (`kg`, `m`, `kg m^2`, `Pa`,
+    /// `1/K`; empty for a pure number). Units are for people: reports print them, nothing
+    /// checks them. Overrides keep the unit.
+    pub fn set_unit(&mut self, name: &str, unit: &str) -> Result<(), ParamError> {
+        let i = self.position(name)?;
+        let name = self.entries[i].name.clone();
+        Arc::make_mut(&mut self.units).insert(name, unit.trim().into());
+        Ok(())
+    }
+
+    /// The unit declared for `name`, if any.
+    pub fn unit(&self, name: &str) -> Option<&str> {
+        self.units.get(name).map(|u| &**u)
     }
 
     /// Whether `name` is defined.

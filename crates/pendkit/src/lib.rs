@@ -1,37 +1,89 @@
-//! pendkit's facade: the catalogue of bundled models, case files, and the whole pipeline
-//! from a model or case to equilibrium, normal modes, transfer functions and thermal noise,
-//! for the command line and for downstream tools that want one call.
+//! pendkit's library facade: the catalogue of bundled models, case files, and the whole
+//! pipeline from a model or case to equilibrium, normal modes, transfer functions, thermal
+//! noise and state space, for downstream tools that want one call.
 //!
-//! This crate names every bundled element and model crate so that the linker keeps their
-//! `inventory` registrations (inventory issue #50); link against it, not the parts, to get
-//! the full registry.
+//! ```
+//! use pendkit::{Case, energy::Stage, log_grid, run_stage};
+//!
+//! let case = Case::model("pendulum")?.with_sets(&["m1=20".into()])?;
+//! let (system, _parameters) = case.build()?;
+//! let result = run_stage(system, Stage::S2)?;
+//! let lowest = &result.modes.modes[0];
+//! assert!((lowest.hz - 0.644).abs() < 1e-3); // sqrt(g/l)/2π with l = 0.6 m, plus flexure
+//! let freqs = log_grid(1.0, 100.0, 3)?;
+//! let noise = result.noise("x1", &freqs)?;
+//! assert_eq!(noise.asd().len(), 3); // m/√Hz; noise.psd() is the PSD in m²/Hz
+//! # Ok::<(), pendkit::Error>(())
+//! ```
+//!
+//! # Features
+//!
+//! | feature | adds | pulls in |
+//! |---|---|---|
+//! | `files` | [`Case::from_file`], and [`Case::open`] taking a case-file path | `pendkit-files` (a TOML parser) |
+//! | `export` | [`StageResult::write_state_space`]: the state space to `.mat`, `.npz` or JSON, with units and provenance | `pendkit-export` (zip) |
+//!
+//! Neither is on by default, so the library alone has no command-line or file-format
+//! dependencies; the `pendkit` command-line program enables both.
+//!
+//! # What it links
+//!
+//! This crate names every bundled element crate (wire torsion, bending, extra stretch) so
+//! that the linker keeps their `inventory` registrations (inventory issue #50): a program
+//! that depends on `pendkit` alone sees all of them in [`energy::registry`]. It also
+//! re-exports the crates whose types its functions take and return ([`nalgebra`], [`faer`],
+//! [`geometry`], [`energy`], [`assembly`], [`dynamics`], [`noise`], [`model`], [`params`],
+//! [`expr`], and with the features [`files`] and [`export`]), so downstream code needs no
+//! version-matched dependencies of its own.
+
+mod describe;
+mod state_space;
 
 use std::path::{Path, PathBuf};
 
 use nalgebra::{DVector, Vector3};
-use pendkit_assembly::{
-    Assembled, AssemblyError, AssemblyOptions, PhaseTimes, assemble_with, timed,
-};
+use pendkit_assembly::{Assembled, AssemblyError, assemble_with, timed};
 use pendkit_dynamics::{
-    DynamicsError, Input, Modes, Output, Solver, Stability, StageModel, TermRounding,
-    eliminate_floats, inverted_bodies, normal_modes_with_rounding, runaway_floats,
+    DynamicsError, TermRounding, eliminate_floats, inverted_bodies, normal_modes_with_rounding,
+    runaway_floats,
 };
-use pendkit_energy::{Stage, System};
-use pendkit_model::{BuildError, DampingSpec, Model, Overrides};
-use pendkit_noise::{NoiseOptions, ThermalNoise, thermal_noise_with};
-use pendkit_params::Resolved;
+use pendkit_model::BuildError;
+use pendkit_noise::thermal_noise_with;
 
 // Name every bundled element crate so the linker keeps its registration.
 use pendkit_element_bending as _;
 use pendkit_element_extra_stretch as _;
 use pendkit_element_torsion as _;
 
+pub use faer;
+pub use nalgebra;
 pub use pendkit_assembly as assembly;
 pub use pendkit_dynamics as dynamics;
 pub use pendkit_energy as energy;
+#[cfg(feature = "export")]
+pub use pendkit_export as export;
+pub use pendkit_expr as expr;
+#[cfg(feature = "files")]
+pub use pendkit_files as files;
+pub use pendkit_geometry as geometry;
 pub use pendkit_model as model;
 pub use pendkit_noise as noise;
 pub use pendkit_params as params;
+
+pub use pendkit_assembly::{AssemblyOptions, PhaseTimes};
+pub use pendkit_dynamics::{
+    Input, Modes, Output, Solver, Stability, StageModel, StateSpace, Verdict,
+};
+pub use pendkit_energy::{Stage, System};
+pub use pendkit_model::{Model, Overrides};
+pub use pendkit_noise::{NoiseOptions, ThermalNoise};
+pub use pendkit_params::Resolved;
+
+pub use describe::{DOF_FAMILIES, OTHER_FAMILY, unit_ratio, unit_slug};
+pub use state_space::NamedStateSpace;
+
+/// pendkit's version, recorded in exports and reports.
+pub const VERSION: &str = env!("CARGO_PKG_VERSION");
 
 /// Errors of the whole pipeline, one line each.
 #[derive(Debug, thiserror::Error)]
@@ -87,6 +139,7 @@ pub enum Error {
     )]
     StageTooEarly,
     /// Writing an export file failed.
+    #[cfg(feature = "export")]
     #[error(transparent)]
     Export(pendkit_export::ExportError),
     /// Modes or eliminations failed.
@@ -143,46 +196,6 @@ pub struct Case {
     pub overrides: Overrides,
 }
 
-/// Parsed form of a case file (TOML): `model = "name"`, a `[parameters]` table whose
-/// values are numbers or expression strings (including `scale(x)` and `increment(x)`), and
-/// `[damping.<tag>]` tables with `real`, `structural`, `viscous`, `imag` (expressions, `f` in
-/// Hz allowed in `real` and `imag`) and `thermoelastic = [delta, tau]`.
-#[derive(serde::Deserialize)]
-#[serde(deny_unknown_fields)]
-struct CaseFile {
-    model: String,
-    #[serde(default)]
-    description: Option<String>,
-    #[serde(default)]
-    parameters: toml::Table,
-    #[serde(default)]
-    damping: std::collections::BTreeMap<String, DampingFile>,
-}
-
-/// A `[damping.<tag>]` table of a case file.
-#[derive(serde::Deserialize)]
-#[serde(deny_unknown_fields)]
-struct DampingFile {
-    real: Option<toml::Value>,
-    structural: Option<toml::Value>,
-    viscous: Option<toml::Value>,
-    imag: Option<toml::Value>,
-    thermoelastic: Option<[toml::Value; 2]>,
-}
-
-/// A TOML number or string as expression text.
-fn expression_text(what: &str, value: &toml::Value) -> Result<String, String> {
-    match value {
-        toml::Value::String(s) => Ok(s.clone()),
-        toml::Value::Integer(i) => Ok(i.to_string()),
-        toml::Value::Float(f) => Ok(format!("{f:e}")),
-        other => Err(format!(
-            "{what}: expected a number or an expression string, got {}",
-            other.type_str()
-        )),
-    }
-}
-
 impl Case {
     /// A bundled model with its defaults.
     pub fn model(name: &str) -> Result<Case, Error> {
@@ -194,45 +207,17 @@ impl Case {
         })
     }
 
-    /// Reads a case file.
+    /// Reads a case file (TOML; see [`files`]).
+    #[cfg(feature = "files")]
     pub fn from_file(path: &Path) -> Result<Case, Error> {
         let err = |message: String| Error::Case {
             path: path.to_path_buf(),
             message,
         };
-        let text = std::fs::read_to_string(path).map_err(|e| err(e.to_string()))?;
-        let file: CaseFile = toml::from_str(&text).map_err(|e| {
-            let line = e.span().map(|s| text[..s.start].lines().count().max(1));
-            let at = line.map(|l| format!("line {l}: ")).unwrap_or_default();
-            err(format!("{at}{}", e.message().trim()))
+        let file = pendkit_files::read_case(path).map_err(|e| match e {
+            pendkit_files::FileError::Read { source, .. } => err(source.to_string()),
+            pendkit_files::FileError::Parse { message } => err(message),
         })?;
-        let mut overrides = Overrides::default();
-        for (name, value) in &file.parameters {
-            let text = expression_text(&format!("parameter '{name}'"), value).map_err(err)?;
-            overrides.parameters.push((name.clone(), text));
-        }
-        for (tag, d) in &file.damping {
-            let field = |name: &str, v: &Option<toml::Value>| {
-                v.as_ref()
-                    .map(|v| expression_text(&format!("damping.{tag}.{name}"), v))
-                    .transpose()
-            };
-            let thermoelastic = match &d.thermoelastic {
-                None => None,
-                Some([delta, tau]) => Some((
-                    expression_text(&format!("damping.{tag}.thermoelastic"), delta).map_err(err)?,
-                    expression_text(&format!("damping.{tag}.thermoelastic"), tau).map_err(err)?,
-                )),
-            };
-            let spec = DampingSpec {
-                real: field("real", &d.real).map_err(err)?,
-                structural: field("structural", &d.structural).map_err(err)?,
-                viscous: field("viscous", &d.viscous).map_err(err)?,
-                imag: field("imag", &d.imag).map_err(err)?,
-                thermoelastic,
-            };
-            overrides.damping.insert(tag.clone(), spec);
-        }
         Ok(Case {
             name: path
                 .file_stem()
@@ -240,19 +225,26 @@ impl Case {
                 .unwrap_or_default(),
             description: file.description,
             model: find_model(&file.model).map_err(|e| err(e.to_string()))?,
-            overrides,
+            overrides: file.overrides,
         })
     }
 
     /// A bundled model name, or a path to a case file (anything ending in `.toml` or naming
     /// an existing file).
+    ///
+    /// Without the `files` feature a path is an error saying so.
     pub fn open(spec: &str) -> Result<Case, Error> {
         let path = Path::new(spec);
         if spec.ends_with(".toml") || path.is_file() {
-            Case::from_file(path)
-        } else {
-            Case::model(spec)
+            #[cfg(feature = "files")]
+            return Case::from_file(path);
+            #[cfg(not(feature = "files"))]
+            return Err(Error::Case {
+                path: path.to_path_buf(),
+                message: "reading case files needs pendkit's `files` feature".into(),
+            });
         }
+        Case::model(spec)
     }
 
     /// Adds `NAME=EXPR` overrides (applied after the case's own); `damping.<tag>.<field>=EXPR`
@@ -284,6 +276,76 @@ impl Case {
     /// Resolves the parameters and builds the numeric model.
     pub fn build(&self) -> Result<(System, Resolved), Error> {
         Ok(pendkit_model::build_with(self.model, &self.overrides)?)
+    }
+}
+
+/// One parameter of a case as resolved for a run.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct ParameterValue {
+    /// Name.
+    pub name: String,
+    /// Resolved value, in its unit.
+    pub value: f64,
+    /// Unit, where the model declares one (empty for a pure number).
+    pub unit: Option<String>,
+    /// The definition as written: the model's default, or the case's override.
+    pub definition: String,
+    /// Whether the case (or a `--set`) overrides the model's default.
+    pub overridden: bool,
+}
+
+/// Where a result comes from: the model, the case and every resolved parameter.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct Provenance {
+    /// Model name.
+    pub model: String,
+    /// Case name (the model name, or the case file's stem).
+    pub case: String,
+    /// The case's description, if it has one.
+    pub description: Option<String>,
+    /// The numeric parameters in definition order.
+    pub parameters: Vec<ParameterValue>,
+    /// pendkit's version.
+    pub version: String,
+}
+
+impl Case {
+    /// The provenance of a build of this case that resolved to `resolved`: each parameter
+    /// with its value, its unit where the model declares one, and its definition.
+    pub fn provenance(&self, resolved: &Resolved) -> Result<Provenance, Error> {
+        let defaults = pendkit_model::Defaults::of(self.model)?;
+        let parameters = resolved
+            .iter()
+            .map(|(name, value)| {
+                let overridden = self
+                    .overrides
+                    .parameters
+                    .iter()
+                    .rev()
+                    .find(|(n, _)| n == name);
+                ParameterValue {
+                    name: name.to_string(),
+                    value,
+                    unit: defaults.params.unit(name).map(str::to_string),
+                    definition: match overridden {
+                        Some((_, text)) => text.clone(),
+                        None => defaults
+                            .params
+                            .get(name)
+                            .map(|d| d.source.clone())
+                            .unwrap_or_default(),
+                    },
+                    overridden: overridden.is_some(),
+                }
+            })
+            .collect();
+        Ok(Provenance {
+            model: self.model.name().to_string(),
+            case: self.name.clone(),
+            description: self.description.clone(),
+            parameters,
+            version: VERSION.to_string(),
+        })
     }
 }
 
@@ -517,7 +579,9 @@ impl StageResult {
     /// parameters, metres and radians alike, that moves the point by one unit along the
     /// direction), `force:<variable>` or `force:<body>@x,y,z/dx,dy,dz` (a force at a point,
     /// also on a body a float poses, such as a blade tip).
+    /// Names of a scheme the model declares are accepted too (`GND_L`, `force:L3_P`).
     pub fn input(&self, name: &str) -> Result<Input, Error> {
+        let name = &self.unalias(name);
         let m = &self.model;
         let err = |message: &str| Error::Name {
             name: name.to_string(),
@@ -566,7 +630,9 @@ impl StageResult {
     /// Parses an output: a variable, `<body>@x,y,z/dx,dy,dz` (the point's whole motion:
     /// through the variables, the floats that pose its body and the support), or
     /// `force:<parameter>` (the force on the support).
+    /// Names of a scheme the model declares are accepted too (`L3_L`, `L3@0,0,0/1,0,0`).
     pub fn output(&self, name: &str) -> Result<Output, Error> {
+        let name = &self.unalias(name);
         let m = &self.model;
         if let Some(target) = name.strip_prefix("force:") {
             return match m.parameters.iter().position(|v| v == target) {
@@ -663,9 +729,6 @@ impl StageResult {
     ) -> Result<ThermalNoise, Error> {
         match self.output(output)? {
             Output::Displacement(v) => {
-                // thermal motion of the unknowns only: the support does not fluctuate
-                let unknowns = self.model.unknowns().min(v.len());
-                let v = v.rows(0, unknowns).into_owned();
                 let noise = thermal_noise_with(
                     &self.model,
                     &self.system.damping,

@@ -29,8 +29,8 @@ use std::sync::Arc;
 use nalgebra::Vector3;
 use pendkit_energy::{
     Attached, Derivatives, Element, EndDirection, EnergyError, JetPoint, LocalFrames, PartOff,
-    Reference, Registration, SharedBodies, SharedPotential, Stage, Term, Wire, add_jacobian,
-    hyper_dual_over_frames, inventory,
+    Reference, SharedBodies, SharedPotential, Stage, Term, Wire, add_jacobian,
+    hyper_dual_over_frames,
 };
 use pendkit_geometry::{Frame, FrameMap};
 use pendkit_rotations::{Real, c, dot};
@@ -405,4 +405,4 @@ impl Element for WireBending {
     }
 }
 
-inventory::submit! { Registration(&WireBending) }
+pendkit_energy::register_element!(WireBending);

@@ -4,9 +4,7 @@
 //! tension off) and carries the wire's stretch tag. The beam itself is the bending crate's.
 
 use pendkit_element_bending::{EXTRA_STRETCH_PART, beam_terms};
-use pendkit_energy::{
-    Element, EnergyError, Reference, Registration, SharedBodies, Stage, Term, inventory,
-};
+use pendkit_energy::{Element, EnergyError, Reference, SharedBodies, Stage, Term};
 
 /// The wire-extra-stretch element kind (stage 2): part [`EXTRA_STRETCH_PART`] of each
 /// wire's beam, shared with the bending kind (so one evaluation gives both).
@@ -35,4 +33,4 @@ impl Element for WireExtraStretch {
     }
 }
 
-inventory::submit! { Registration(&WireExtraStretch) }
+pendkit_energy::register_element!(WireExtraStretch);

@@ -10,8 +10,8 @@
 
 use nalgebra::{Matrix3, Vector3};
 use pendkit_energy::{
-    Derivatives, Element, EnergyError, JetPoint, OffForm, Potential, Reference, Registration,
-    SharedBodies, Stage, TensionOff, Term, hyper_dual_over_frames, inventory,
+    Derivatives, Element, EnergyError, JetPoint, OffForm, Potential, Reference, SharedBodies,
+    Stage, TensionOff, Term, hyper_dual_over_frames,
 };
 use pendkit_geometry::{Frame, FrameMap};
 use pendkit_rotations::{Real, dot, mul_tr_const, small_rotation, tr_mul, tr_mul_vec, vee};
@@ -192,4 +192,4 @@ impl Element for WireTorsion {
     }
 }
 
-inventory::submit! { Registration(&WireTorsion) }
+pendkit_energy::register_element!(WireTorsion);

@@ -6,9 +6,7 @@
 //! (any `use pendkit_example_point_spring as _;`) registers the kind.
 
 use nalgebra::Vector3;
-use pendkit_energy::{
-    Element, EnergyError, LocalFrames, Potential, Reference, Registration, Stage, Term, inventory,
-};
+use pendkit_energy::{Element, EnergyError, LocalFrames, Potential, Reference, Stage, Term};
 use pendkit_geometry::FrameMap;
 use pendkit_rotations::Real;
 
@@ -88,4 +86,4 @@ impl Element for PointSpring {
     }
 }
 
-inventory::submit! { Registration(&PointSpring) }
+pendkit_energy::register_element!(PointSpring);

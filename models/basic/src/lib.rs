@@ -21,9 +21,51 @@ fn params(defs: &[(&str, &str)]) -> Result<ParamSet, ParamError> {
     let mut set = ParamSet::new();
     for (name, text) in defs {
         set.define(name, text)?;
+        if let Some((_, unit)) = UNITS.iter().find(|(n, _)| n == name) {
+            set.set_unit(name, unit)?;
+        }
     }
     Ok(set)
 }
+
+/// Units of the parameters of this crate's models (for reports and exports).
+const UNITS: [(&str, &str); 35] = [
+    ("g", "m/s^2"),
+    ("m", "kg"),
+    ("m1", "kg"),
+    ("m2", "kg"),
+    ("k1", "N/m"),
+    ("k2", "N/m"),
+    ("I1x", "kg m^2"),
+    ("I1y", "kg m^2"),
+    ("I1z", "kg m^2"),
+    ("Ix", "kg m^2"),
+    ("Iy", "kg m^2"),
+    ("Iz", "kg m^2"),
+    ("a_fibre", "m"),
+    ("b_fibre", "m"),
+    ("d_fibre", "m"),
+    ("a_wire", "m"),
+    ("b_wire", "m"),
+    ("d_top", "m"),
+    ("d_bottom", "m"),
+    ("l1", "m"),
+    ("l2", "m"),
+    ("l_fibre", "m"),
+    ("l_wire", "m"),
+    ("r_fibre", "m"),
+    ("r_wire", "m"),
+    ("E_fibre", "Pa"),
+    ("E_wire", "Pa"),
+    ("nu_fibre", ""),
+    ("nu_wire", ""),
+    ("rho_fibre", "kg/m^3"),
+    ("rho_wire", "kg/m^3"),
+    ("phi_fibre", "rad"),
+    ("phi_wire", "rad"),
+    ("hinged_bottom", ""),
+    ("n_stages", ""),
+];
 
 /// The material parameters of the REF fused-silica fibre (physics_oracles.md §0).
 const SILICA_FIBRE: [(&str, &str); 7] = [

@@ -5,7 +5,7 @@ use std::collections::BTreeMap;
 
 use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
 use pendkit_energy::{BodyId, EndDirection, SpringEnd, Wire, WireEnd, WireSection, WireTags};
-use pendkit_model::{BodySpec, BuildError, DampingSpec, SystemBuilder};
+use pendkit_model::{BodySpec, BuildError, DampingSpec, Shape, SystemBuilder};
 use pendkit_params::Resolved;
 
 /// How blade tips are modelled (source §6.3–§6.4).
@@ -275,7 +275,8 @@ pub fn beaded_fibre(
             let bead = b.body(
                 BodySpec::new(format!("{}b{}", f.name, k + 1))
                     .pose([&names[0], &names[1], &names[2], "0", "0", "0"])
-                    .mass(bead_mass),
+                    .mass(bead_mass)
+                    .mode_family("violin"),
             )?;
             (bead, Vector3::zeros(), EndDirection::Hinged)
         } else {
@@ -361,6 +362,16 @@ pub fn lowest_wires(
         )?;
     }
     Ok(())
+}
+
+/// The drawing shape of a cylinder of `radius` and `length` (m) with its axis along body x
+/// (an optic or a mass of the same form).
+pub fn cylinder_along_x(radius: f64, length: f64) -> Shape {
+    Shape::Cylinder {
+        radius,
+        half_length: length / 2.0,
+        axis: 0,
+    }
 }
 
 /// Mass (kg) of the beads of one fibre.

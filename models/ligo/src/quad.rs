@@ -10,7 +10,9 @@ use std::collections::BTreeMap;
 
 use nalgebra::Vector3;
 use pendkit_energy::System;
-use pendkit_model::{BodySpec, BuildError, DampingSpec, DefaultsCache, Model, SystemBuilder};
+use pendkit_model::{
+    BodySpec, BuildError, DampingSpec, DefaultsCache, LIGO_DOF_NAMES, Model, SystemBuilder,
+};
 use pendkit_params::{ParamError, ParamSet, Resolved};
 
 use crate::chain::{self, Blade, Blades, vertical};
@@ -100,6 +102,17 @@ impl Model for Quad {
         ] {
             set.define(name, &value)?;
         }
+        for (name, unit) in [
+            ("nu_steel", ""),
+            ("nu_silica", ""),
+            ("n_beads", ""),
+            ("Tn", "N"),
+            ("T1", "N"),
+            ("T2", "N"),
+            ("T3", "N"),
+        ] {
+            set.set_unit(name, unit)?;
+        }
         for (name, value) in self.blades.parameters() {
             set.define(name, value)?;
         }
@@ -171,16 +184,32 @@ impl Model for Quad {
             {
                 b.variable(&format!("{c}{k}"), start)?;
             }
-            bodies.push(
-                b.body(
-                    BodySpec::new(name)
-                        .pose_suffix(&k.to_string())
-                        .mass(m)
-                        .inertia_diag(v(inertia[0])?, v(inertia[1])?, v(inertia[2])?),
-                )?,
-            );
+            let mut spec = BodySpec::new(name)
+                .pose_suffix(&k.to_string())
+                .mass(m)
+                .inertia_diag(v(inertia[0])?, v(inertia[1])?, v(inertia[2])?);
+            // the PUM and the test mass are cylinders along x (r = 0.17 m, h = 0.2 m); the
+            // top mass and the UIM keep the box of their inertias (the default)
+            match k {
+                2 => spec = spec.shape(chain::cylinder_along_x(v("ir")?, v("ix")?)),
+                3 => spec = spec.shape(chain::cylinder_along_x(v("tr")?, v("tx")?)),
+                _ => {}
+            }
+            bodies.push(b.body(spec)?);
         }
         let [top, uim, pum, tm] = [bodies[0], bodies[1], bodies[2], bodies[3]];
+        // LIGO's names: M0 (top), L1 (UIM), L2 (PUM), L3 (test mass), the support GND
+        b.name_scheme(
+            "ligo",
+            LIGO_DOF_NAMES,
+            &[
+                ("support", "GND"),
+                ("top", "M0"),
+                ("uim", "L1"),
+                ("pum", "L2"),
+                ("testmass", "L3"),
+            ],
+        )?;
 
         // vertical loads (N) on each blade tip: everything hung below it, shared by 2 blades;
         // the tips of the lite and full forms weigh on the body their blade is mounted on

@@ -28,15 +28,45 @@ pub fn rows(table: &str) -> impl Iterator<Item = (&str, &str)> {
         })
 }
 
-/// Defines every non-derived row of quad2005.csv.
+/// Defines every non-derived row of quad2005.csv, with the unit of its `unit` column (`-`,
+/// a count or a pure number, becomes no unit).
 pub fn define_quad(set: &mut ParamSet) -> Result<(), ParamError> {
     for (name, value) in rows(QUAD2005) {
         if !QUAD_DERIVED.contains(&name) {
             set.define(name, value)?;
         }
     }
+    for (name, unit) in units(QUAD2005) {
+        if set.contains(name) {
+            set.set_unit(name, if unit == "-" { "" } else { unit })?;
+        }
+    }
     Ok(())
 }
+
+/// (name, unit) rows of a `name,value,unit,...` table.
+fn units(table: &str) -> impl Iterator<Item = (&str, &str)> {
+    table
+        .lines()
+        .filter(|l| !l.starts_with('#') && !l.trim().is_empty())
+        .skip(1)
+        .filter_map(|l| {
+            let mut fields = l.split(',');
+            let name = fields.next()?.trim();
+            Some((name, fields.nth(1)?.trim()))
+        })
+}
+
+/// Units of the materials table's columns (its header spells them `rho_kg_m3`, ...).
+const MATERIAL_UNITS: [(&str, &str); 7] = [
+    ("rho", "kg/m^3"),
+    ("C", "J/(kg K)"),
+    ("K", "W/(m K)"),
+    ("alpha", "1/K"),
+    ("dlnE_dT", "1/K"),
+    ("phi", "rad"),
+    ("Y", "Pa"),
+];
 
 /// Short prefix of each material's parameters.
 const MATERIAL_PREFIX: [(&str, &str); 3] = [
@@ -55,7 +85,11 @@ pub fn define_materials(set: &mut ParamSet) -> Result<(), ParamError> {
             continue;
         };
         for (column, value) in columns.iter().zip(&fields[1..]) {
-            set.define(&format!("{prefix}_{column}"), value)?;
+            let name = format!("{prefix}_{column}");
+            set.define(&name, value)?;
+            if let Some((_, unit)) = MATERIAL_UNITS.iter().find(|(c, _)| c == column) {
+                set.set_unit(&name, unit)?;
+            }
         }
     }
     Ok(())
@@ -89,5 +123,10 @@ mod tests {
         assert_eq!(r.get("silica_phi").unwrap(), 4.1e-10);
         assert_eq!(r.get("maraging_Y").unwrap(), 1.87e11);
         assert!(r.get("tln").is_err());
+        // units from the tables' unit column and header
+        assert_eq!(set.unit("m3"), Some("kg"));
+        assert_eq!(set.unit("I3x"), Some("kg m^2"));
+        assert_eq!(set.unit("nwn"), Some(""));
+        assert_eq!(set.unit("silica_Y"), Some("Pa"));
     }
 }

@@ -15,7 +15,9 @@ use std::collections::BTreeMap;
 
 use nalgebra::Vector3;
 use pendkit_energy::System;
-use pendkit_model::{BodySpec, BuildError, DampingSpec, DefaultsCache, Model, SystemBuilder};
+use pendkit_model::{
+    BodySpec, BuildError, DampingSpec, DefaultsCache, LIGO_DOF_NAMES, Model, Shape, SystemBuilder,
+};
 use pendkit_params::{ParamError, ParamSet, Resolved};
 
 use crate::chain::{self, Blade, Blades, vertical};
@@ -276,16 +278,37 @@ impl Model for Triple {
                 b.variable(&format!("{c}{stage}"), start)?;
             }
             let inertia = |axis: &str| p.get(&format!("I{stage}{axis}"));
+            // drawn as what their inertias are computed from: the upper mass a box of
+            // ux x uy x uz, the intermediate mass and the optic cylinders along x
+            let shape = match k {
+                0 => Shape::Box {
+                    half_sizes: Vector3::new(v("ux")?, v("uy")?, v("uz")?) / 2.0,
+                },
+                1 => chain::cylinder_along_x(v("ir")?, v("ix")?),
+                _ => chain::cylinder_along_x(v("tr")?, v("tx")?),
+            };
             bodies.push(
                 b.body(
                     BodySpec::new(name)
                         .pose_suffix(&stage)
                         .mass(m)
-                        .inertia_diag(inertia("x")?, inertia("y")?, inertia("z")?),
+                        .inertia_diag(inertia("x")?, inertia("y")?, inertia("z")?)
+                        .shape(shape),
                 )?,
             );
         }
         let [upper, intermediate, optic] = [bodies[0], bodies[1], bodies[2]];
+        // LIGO's names: M1 (top) to M3 (optic), the support GND
+        b.name_scheme(
+            "ligo",
+            LIGO_DOF_NAMES,
+            &[
+                ("support", "GND"),
+                ("upper", "M1"),
+                ("intermediate", "M2"),
+                ("optic", "M3"),
+            ],
+        )?;
 
         // vertical load (N) on each blade tip: everything hung below it, shared by the
         // blades of its set; the tips of the lite and full forms weigh on the body their
