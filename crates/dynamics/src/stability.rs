@@ -40,6 +40,10 @@ pub enum Verdict {
     Neutral,
     /// Some mode grows (ω² below minus its error) or some float has no stable position.
     Unstable,
+    /// Nothing grows, but a body with mass hangs upside down (its z axis below the
+    /// horizontal): a minimum other than the hanging equilibrium, reached from a bad start.
+    /// Not reported as stable: it is not the suspension asked about.
+    Inverted,
 }
 
 /// A mode that grows exponentially: e^{2π rate t}.
@@ -128,6 +132,8 @@ impl Stability {
             .count();
         let verdict = if !growing.is_empty() || !runaway_floats.is_empty() {
             Verdict::Unstable
+        } else if !inverted.is_empty() {
+            Verdict::Inverted
         } else if neutral > 0 {
             Verdict::Neutral
         } else {
@@ -143,17 +149,20 @@ impl Stability {
         }
     }
 
-    /// `Err(DynamicsError::Unstable)` (one line naming what grows) unless nothing grows.
+    /// `Err(DynamicsError::Unstable)` (one line naming what grows, or which bodies hang
+    /// upside down) unless the equilibrium is stable or neutral.
     pub fn check(&self) -> Result<(), DynamicsError> {
         match self.verdict {
-            Verdict::Unstable => Err(DynamicsError::Unstable(Box::new(self.clone()))),
+            Verdict::Unstable | Verdict::Inverted => {
+                Err(DynamicsError::Unstable(Box::new(self.clone())))
+            }
             Verdict::Stable | Verdict::Neutral => Ok(()),
         }
     }
 
-    /// Whether nothing grows (stable or neutral).
+    /// Whether the equilibrium is the hanging one and nothing grows (stable or neutral).
     pub fn is_stable(&self) -> bool {
-        self.verdict != Verdict::Unstable
+        matches!(self.verdict, Verdict::Stable | Verdict::Neutral)
     }
 }
 
@@ -175,6 +184,18 @@ impl fmt::Display for Stability {
                     f,
                     "neutral equilibrium: {} mode(s) with zero stiffness within rounding, nothing grows",
                     self.neutral
+                );
+            }
+            Verdict::Inverted => {
+                let bodies: Vec<String> = self
+                    .inverted
+                    .iter()
+                    .map(|b| format!("'{}' ({:.0}°)", b.body, b.tilt_deg))
+                    .collect();
+                return write!(
+                    f,
+                    "inverted equilibrium: nothing grows, but {} hang(s) upside down (tilted past 90°): a minimum other than the hanging one, reached from a bad start",
+                    bodies.join(", ")
                 );
             }
             Verdict::Unstable => {}
