@@ -107,6 +107,18 @@ pub enum Error {
     /// A `--set NAME=EXPR` argument without '='.
     #[error("--set '{0}': expected NAME=EXPR or damping.<tag>.<field>=EXPR")]
     SetSyntax(String),
+    /// An override of a parameter that nothing the model builds reads.
+    #[error(
+        "parameter '{name}' is read by nothing in model '{model}': overriding it would change nothing (parameters read: {read})"
+    )]
+    Unread {
+        /// The parameter overridden.
+        name: String,
+        /// The model.
+        model: String,
+        /// The parameters the model does read, directly or through other definitions.
+        read: String,
+    },
     /// Building the model failed.
     #[error(transparent)]
     Build(#[from] BuildError),
@@ -273,9 +285,55 @@ impl Case {
         Ok(self)
     }
 
-    /// Resolves the parameters and builds the numeric model.
+    /// Resolves the parameters and builds the numeric model. An override of a parameter
+    /// that nothing reads (neither the model's build, nor its damping, nor the definition
+    /// of a parameter read) is an error: it would change nothing, silently.
     pub fn build(&self) -> Result<(System, Resolved), Error> {
-        Ok(pendkit_model::build_with(self.model, &self.overrides)?)
+        let (system, resolved) = pendkit_model::build_with(self.model, &self.overrides)?;
+        let read = self.parameters_read(&resolved)?;
+        if let Some((name, _)) = self
+            .overrides
+            .parameters
+            .iter()
+            .find(|(name, _)| !read.contains(name.as_str()))
+        {
+            return Err(Error::Unread {
+                name: name.clone(),
+                model: self.model.name().to_string(),
+                read: read.iter().cloned().collect::<Vec<_>>().join(" "),
+            });
+        }
+        Ok((system, resolved))
+    }
+
+    /// The parameters a build that gave `resolved` depends on: those it read, and what
+    /// their definitions (with this case's overrides) refer to, transitively.
+    pub fn parameters_read(
+        &self,
+        resolved: &Resolved,
+    ) -> Result<std::collections::BTreeSet<String>, Error> {
+        let mut params = pendkit_model::Defaults::of(self.model)?.params.clone();
+        for (name, text) in &self.overrides.parameters {
+            params
+                .apply_text(name, text)
+                .map_err(pendkit_model::BuildError::from)?;
+        }
+        let mut read: std::collections::BTreeSet<String> = resolved
+            .read_names()
+            .into_iter()
+            .map(String::from)
+            .collect();
+        let mut pending: Vec<String> = read.iter().cloned().collect();
+        while let Some(name) = pending.pop() {
+            if let Some(definition) = params.get(&name) {
+                for symbol in definition.expr.symbols() {
+                    if read.insert(symbol.clone()) {
+                        pending.push(symbol);
+                    }
+                }
+            }
+        }
+        Ok(read)
     }
 }
 
