@@ -144,7 +144,11 @@ fn frequency_grids_outside_the_documented_limits_are_refused() {
         &[&tf[..], &["--points", "100000000000000"]].concat(),
         &["1000000"],
     );
-    refused(&[&tf[..], &["--freqs", "1,nan"]].concat(), &["nan"]);
+    refused(&[&tf[..], &["--freqs", "1,nan"]].concat(), &["NaN"]);
+    refused(
+        &[&tf[..], &["--freqs", "1,1e300"]].concat(),
+        &["1e300", "1e9"],
+    );
     refused(
         &[
             "ss",

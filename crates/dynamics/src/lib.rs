@@ -69,7 +69,9 @@ pub enum DynamicsError {
         column: usize,
     },
     /// A frequency outside the documented limits.
-    #[error("{what} {f_hz} Hz is out of range: frequencies must be finite, from 1e-9 Hz to 1e9 Hz")]
+    #[error(
+        "{what} {f_hz:e} Hz is out of range: frequencies must be finite, from 1e-9 Hz to 1e9 Hz"
+    )]
     Frequency {
         /// What the frequency is for.
         what: &'static str,
