@@ -125,6 +125,9 @@ pub enum Error {
     /// Equilibrium or assembly failed.
     #[error(transparent)]
     Assembly(#[from] AssemblyError),
+    /// Two element crates registered the same kind name.
+    #[error(transparent)]
+    Registry(#[from] pendkit_energy::DuplicateKind),
     /// An input or output name that means nothing in this model.
     #[error("'{name}': {message}")]
     Name {
@@ -469,6 +472,7 @@ pub fn run_stage_with(
     {
         return Err(DynamicsError::BelowFrequency(hz).into());
     }
+    pendkit_energy::check_registrations()?;
     let assembled = assemble_with(&system, stage, &options.assembly, times.as_deref_mut())?;
     let model = timed(&mut times, "stage-model", 1, || {
         StageModel::new(&system, &assembled)
