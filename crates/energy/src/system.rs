@@ -90,7 +90,9 @@ impl Shape {
     /// mass); a moment that no box can have (I_j + I_k < I_i) gives a zero half-size.
     pub fn equivalent_box(mass: f64, principal_moments: [f64; 3]) -> Option<Shape> {
         let [ix, iy, iz] = principal_moments;
-        if !(mass > 0.0) || !(ix > 0.0 && iy > 0.0 && iz > 0.0) {
+        // NaN counts as not positive
+        let positive = |x: f64| x > 0.0;
+        if ![mass, ix, iy, iz].into_iter().all(positive) {
             return None;
         }
         let half = |i: f64, j: f64, k: f64| (1.5 * (j + k - i) / mass).max(0.0).sqrt();

@@ -674,7 +674,7 @@ impl StageResult {
                 ));
             }
             let norm2 = w.parameters.norm_squared();
-            if !(norm2 > 0.0) {
+            if norm2.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
                 return Err(err("the point does not move with any parameter"));
             }
             return Ok(Input::Displacement(w.parameters / norm2));
