@@ -1,6 +1,6 @@
 //! The `chain` model (N identical 40 kg bodies, each on four vertical steel wires from the
 //! one above) against references computed here: its nominal geometry, the closed forms of
-//! one stage (physics_oracles.md §2, §3, §4), the bounce modes of a fixed–free chain of
+//! one stage (docs/reference-values.md §2, §3, §4), the bounce modes of a fixed–free chain of
 //! equal masses and springs, the longitudinal modes of a hanging chain of point masses,
 //! and the exact separation of its four blocks.
 //!
@@ -202,7 +202,7 @@ fn longitudinal_modes_with_centred_attachments_are_a_hanging_chain() {
     // only vertically, along wires that are vertical. The x modes are then those of point
     // masses on strings of length l_wire.
     let centred = ["d_top=0", "d_bottom=0"];
-    // N = 2 against the double-pendulum closed form (physics_oracles.md §2) with equal
+    // N = 2 against the double-pendulum closed form (docs/reference-values.md §2) with equal
     // masses and lengths: ω² = (g/l)(2 ∓ √2).
     let r = run_chain(2, &centred, Stage::S0A);
     let found = block_modes(&r, "x");

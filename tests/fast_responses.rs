@@ -316,7 +316,7 @@ fn the_restriction_is_the_coupled_blocks_of_the_suspension() {
 
 #[test]
 fn state_space_matches_an_independent_float_elimination() {
-    // DESIGN.md §5 with K_eff, C_XS,eff, S_eff from a Schur complement done here with
+    // docs/physics.md §3 with K_eff, C_XS,eff, S_eff from a Schur complement done here with
     // nalgebra's complex LU on the dense master matrix (the code under test uses its own
     // elimination, shared with the modes).
     for model in ["quad", "quad-lateral", "triple", "double-pendulum"] {

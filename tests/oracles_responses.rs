@@ -1,5 +1,5 @@
-//! Stages 0B–2 responses against closed forms (../shared/reference/physics_oracles.md §2,
-//! §6, §8 and DESIGN.md §5): state space, transfer functions, complex float elimination,
+//! Stages 0B–2 responses against closed forms (docs/reference-values.md §2,
+//! §6, §8 and docs/physics.md §3): state space, transfer functions, complex float elimination,
 //! dissipation dilution and thermal noise.
 //!
 //! Tolerances: every reference is a closed form evaluated in the test; the responses are
@@ -28,7 +28,7 @@ fn cdiv(a: C, b: C) -> C {
 
 #[test]
 fn toy_state_space_matches_design() {
-    // DESIGN.md §5 with inputs (s, F), outputs (x, f_s): A = [[0,1],[-750,0]],
+    // docs/physics.md §3 with inputs (s, F), outputs (x, f_s): A = [[0,1],[-750,0]],
     // B = [[0,0],[750,1]], C = [[1,0],[750,0]], D = [[0,0],[-750,0]].
     let r = run("toy", &[], Stage::S0B);
     let ss = r.model.state_space(&r.system.damping, 1.0).unwrap();

@@ -1,4 +1,4 @@
-//! Stage 0A against closed forms (../shared/reference/physics_oracles.md §2, §3, §4, §8).
+//! Stage 0A against closed forms (docs/reference-values.md §2, §3, §4, §8).
 //!
 //! Each test computes its reference from the closed-form expression of the oracle file and
 //! also checks that the result rounds to the value printed there. Tolerances: the closed

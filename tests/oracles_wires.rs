@@ -1,4 +1,4 @@
-//! The plug-in wire elements against closed forms (../shared/reference/physics_oracles.md
+//! The plug-in wire elements against closed forms (docs/reference-values.md
 //! §1, §2, §4, §6, §9): flexure, exact dissipation dilution (never the naive ×2), pitch with
 //! bending, yaw with twist and flexure, isolated torsion, and wire terms joining the
 //! equilibrium early.

@@ -127,7 +127,7 @@ fn variants_converge_to_the_xtra_lite_quad() {
 
 #[test]
 fn violin_modes_of_v5_follow_the_loaded_string() {
-    // physics_oracles.md: for the quad's 39.6 kg test mass (T = 97.119 N) the V5 loaded
+    // docs/reference-values.md: for the quad's 39.6 kg test mass (T = 97.119 N) the V5 loaded
     // string (beads of one segment's mass) gives 488.2949, 943.3133, 1334.046 Hz.
     // Stage 0B (no bending, as the loaded string). Tolerance 2e-5: the segments above carry
     // the weight of the beads below (a 1e-5 tension gradient) and the fibre ends sit on

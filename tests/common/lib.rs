@@ -159,7 +159,7 @@ pub fn assert_blocks(r: &StageResult, counts: [usize; 4]) {
 /// `t` (N), bending stiffness `ei` (N m²), linear density `mu` (kg/m), length `l` (m): the
 /// root of 2 k kₑ (1 − cos kL cosh kₑL) + (kₑ² − k²) sin kL sinh kₑL = 0 (divided by
 /// cosh kₑL), k² = (−T + s)/2EI, kₑ² = (T + s)/2EI, s = sqrt(T² + 4 EI μ ω²)
-/// (physics_oracles.md §5), by bisection next to the ideal string's f₁.
+/// (docs/reference-values.md §5), by bisection next to the ideal string's f₁.
 pub fn stiff_string_f1(t: f64, ei: f64, mu: f64, l: f64) -> f64 {
     let residual = |f: f64| {
         let w = TWO_PI * f;

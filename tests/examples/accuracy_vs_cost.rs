@@ -3,7 +3,7 @@
 //! Run with `cargo run --release -p pendkit-tests --example accuracy_vs_cost`. Prints three
 //! tables (times are the median of several runs on this machine):
 //! 1. stages of the `pendulum`: the x-mode frequency against the exact flexure result
-//!    (physics_oracles.md §1), and the time of build + equilibrium + modes;
+//!    (docs/reference-values.md §1), and the time of build + equilibrium + modes;
 //! 2. violin beads on the quad's fibres: the first violin mode against the clamped stiff
 //!    string (continuum with bending, §5), and the time;
 //! 3. quad variants: the largest deviation of the 24 suspension modes from the xtra-lite

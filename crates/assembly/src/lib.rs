@@ -248,7 +248,7 @@ pub struct AssemblyOptions {
     pub derivatives: DerivativePath,
 }
 
-/// Terms of every registered kind whose stage passes `include`, built around `x`, with
+/// Terms of every registered kind whose stage in `system` passes `include`, built around `x`, with
 /// bodies shared between kinds taken from `shared`.
 fn kind_terms(
     system: &System,
@@ -258,7 +258,11 @@ fn kind_terms(
 ) -> Result<Vec<Term>, EnergyError> {
     let reference = Reference { system, coords: x };
     let mut terms = Vec::new();
-    for kind in registry().into_iter().filter(|k| include(k.stage())) {
+    // a model may move a kind to another stage or switch it off (System::element_stages)
+    for kind in registry()
+        .into_iter()
+        .filter(|k| system.element_stage(*k).is_some_and(&include))
+    {
         terms.extend(kind.terms_shared(&reference, shared)?);
     }
     Ok(terms)
@@ -471,7 +475,7 @@ fn finish(
 }
 
 /// M = Σ_b J_bᵀ diag(m, m, m, I_b) J_b over the variables, with J_b the Jacobian of the
-/// body's centre-of-mass velocity and body-axis angular velocity (DESIGN.md §4).
+/// body's centre-of-mass velocity and body-axis angular velocity (docs/physics.md §2).
 pub fn mass_matrix(
     system: &System,
     layout: &Layout,

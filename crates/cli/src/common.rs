@@ -22,7 +22,7 @@ pub const DEFAULT_STAGE: Stage = Stage::S2;
 /// The model or case, stage, parameter overrides and names every calculation takes.
 #[derive(clap::Args, Clone)]
 pub struct ModelArgs {
-    /// Bundled model name or path to a case file (.toml).
+    /// Bundled model name, or path to a case file or a suspension file (.toml).
     pub model: String,
     /// Calculation stage: 0a, 0b, 1a, 1b or 2 (default 2, the complete model).
     #[arg(long)]

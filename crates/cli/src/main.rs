@@ -7,11 +7,14 @@ mod error;
 mod format;
 mod modes;
 mod noise;
+mod params;
 mod plotting;
 mod progress;
+mod report;
 mod ss;
 mod sweep;
 mod tf;
+mod tradeoff;
 
 use std::fmt::Write as _;
 use std::io::Write as _;
@@ -44,6 +47,9 @@ enum Command {
     Noise(noise::Args),
     /// State-space matrices A, B, C, D with names, to .mat, .npz or .json.
     Ss(ss::Args),
+    /// A self-contained HTML report (DIR/index.html): parameters, equilibrium, stability,
+    /// modes, standard transfer functions, thermal noise and timing, with inline figures.
+    Report(report::Args),
     /// Modes (tracked by shape), thermal noise or a transfer function over a grid of
     /// parameter values, as CSV against the swept values.
     Sweep(sweep::Args),
@@ -51,11 +57,21 @@ enum Command {
     /// element kind, mass matrix, modes, and optionally noise): median and minimum over
     /// repetitions.
     Bench(bench::Args),
+    /// Speed against accuracy: a ladder of variants of one suspension (stages, violin
+    /// beads, blade-tip variants, restricted or full solve), each timed from the model's
+    /// name to the answer and measured against the richest; tradeoff.csv and tradeoff.svg,
+    /// and the cheapest variant within a tolerance.
+    Tradeoff(tradeoff::Args),
     /// List the registered element kinds, the stage each joins at and the crate that
     /// registered it.
     Elements,
     /// List the bundled models.
     Models,
+    /// List every parameter of a model, case or suspension file: value, unit,
+    /// description, and the parts that read it.
+    Params(params::Args),
+    /// Write an N-stage chain suspension file to standard output.
+    ChainFile(params::ChainArgs),
 }
 
 fn main() -> ExitCode {
@@ -80,7 +96,11 @@ fn run(cli: Cli) -> Result<String, CliError> {
         Command::Noise(a) => noise::run(a),
         Command::Ss(a) => ss::run(a),
         Command::Sweep(a) => sweep::run(a),
+        Command::Report(a) => report::run(a),
         Command::Bench(a) => Ok(bench::run(a)?),
+        Command::Tradeoff(a) => tradeoff::run(a),
+        Command::Params(a) => params::run(a),
+        Command::ChainFile(a) => params::chain_file(a),
         Command::Elements => {
             let mut out = String::new();
             let _ = writeln!(out, "{:<20} {:<5} {:<32} what", "kind", "stage", "crate");

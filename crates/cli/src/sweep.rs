@@ -87,7 +87,8 @@ pub fn parse_vary(text: &str) -> Result<Vary, CliError> {
             } else {
                 k as f64 / (n - 1) as f64
             };
-            if k + 1 == n && n > 1 {
+            if n > 1 && k + 1 == n {
+                // the last value exactly STOP (no rounding); one value is START
                 stop
             } else if log {
                 (start.ln() + (stop.ln() - start.ln()) * t).exp()

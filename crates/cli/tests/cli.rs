@@ -38,7 +38,7 @@ fn toy_json_has_the_contract_fields_and_the_oracle_frequency() {
     let m = &v["modes"][0];
     assert_eq!(m["label"], "x");
     assert_eq!(m["vector"].as_array().unwrap().len(), 1);
-    // physics_oracles.md §8: f0 = 4.358638 Hz (7 significant digits)
+    // docs/reference-values.md §8: f0 = 4.358638 Hz (7 significant digits)
     assert!((m["hz"].as_f64().unwrap() - 4.358638).abs() < 5e-7);
 }
 

@@ -1,10 +1,12 @@
 //! The exported state space, loaded by scipy, reproduces pendkit's own transfer functions
 //! at ten frequencies to 1e-9. The model is the double pendulum with viscous loss on its
-//! wires and no floats, where DESIGN.md §5's form is exact for force inputs and for support
+//! wires and no floats, where docs/physics.md §3's form is exact for force inputs and for support
 //! inputs whose coupling is lossless (horizontal: the wires' loss is diluted away). Lossy
 //! support coupling (vertical) is not exact: B and D keep only Re(C_XS,eff) and S_eff, so
 //! the damping force of the support's velocity is dropped (the README says so).
-//! Needs `python3 -m pip install scipy numpy`.
+//! The file also carries its provenance: model, case, stage, pendkit version and the
+//! parameter values used (one set on the command line here, so its expected value is the
+//! test's own input). Needs `python3 -m pip install scipy numpy`.
 
 use std::process::Command;
 
@@ -13,7 +15,7 @@ use pendkit::{Case, log_grid, run_stage};
 
 #[test]
 fn scipy_state_space_matches_pendkit_transfer_functions() {
-    let sets: Vec<String> = ["wire_stretch", "wire_bending", "wire_torsion"]
+    let mut sets: Vec<String> = ["wire_stretch", "wire_bending", "wire_torsion"]
         .iter()
         .flat_map(|t| {
             [
@@ -22,6 +24,7 @@ fn scipy_state_space_matches_pendkit_transfer_functions() {
             ]
         })
         .collect();
+    sets.push("m2=35".into());
     let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR"));
     let mat = dir.join("double-pendulum-ss.mat");
     // a file left by an earlier run: ss refuses to overwrite without --force
@@ -78,7 +81,19 @@ fn scipy_state_space_matches_pendkit_transfer_functions() {
     let json = dir.join("double-pendulum-expected.json");
     std::fs::write(
         &json,
-        serde_json::json!({"freqs": freqs, "pairs": expected}).to_string(),
+        serde_json::json!({
+            "freqs": freqs,
+            "pairs": expected,
+            "provenance": {
+                "model": "double-pendulum",
+                "case_name": "double-pendulum",
+                "stage": "2",
+                "pendkit_version": env!("CARGO_PKG_VERSION"),
+                "parameters": {"m2": [35.0, "kg"]},
+                "damping_frequency_hz": 3.0,
+            },
+        })
+        .to_string(),
     )
     .unwrap();
     let script = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/python/ss_check.py");

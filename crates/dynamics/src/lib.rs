@@ -134,7 +134,7 @@ pub enum DynamicsError {
     Solver(String),
 }
 
-/// Real stiffness with floats eliminated: K_eff, C_XS,eff and S_eff (DESIGN.md §5).
+/// Real stiffness with floats eliminated: K_eff, C_XS,eff and S_eff (docs/physics.md §3).
 #[derive(Clone, Debug)]
 pub struct Reduced {
     /// K_eff over the variables (N/m, N/rad, N m/rad).
@@ -183,7 +183,7 @@ pub fn eliminate_floats(
 impl StageModel {
     /// Transfer function from `input` to `output` at each frequency (Hz): output per unit
     /// input, complex (m/m, m/N, N/m, N/N ...), solved as `solver` says. Sign conventions
-    /// of DESIGN.md §5: a pendulum's displacement transfer function tends to +1 at DC.
+    /// of docs/physics.md §3: a pendulum's displacement transfer function tends to +1 at DC.
     pub fn transfer_with(
         &self,
         damping: &Damping,

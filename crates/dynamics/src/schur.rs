@@ -1,4 +1,4 @@
-//! The one elimination of the massless floats (DESIGN.md §5), for real matrices (K_eff at
+//! The one elimination of the massless floats (docs/physics.md §3), for real matrices (K_eff at
 //! f = 0, the modes) and complex ones (K_eff(f), C_XS,eff(f), S_eff(f), the state space)
 //! alike: the Schur complement A_kk − A_kq Q⁻¹ A_qk of the float block Q.
 
@@ -68,7 +68,7 @@ mod tests {
 
     #[test]
     fn toy_float_elimination_real_and_complex() {
-        // two springs in series through a float: k1 k2/(k1 + k2) (physics_oracles.md §8),
+        // two springs in series through a float: k1 k2/(k1 + k2) (docs/reference-values.md §8),
         // ordering x, q: [[k2, −k2], [−k2, k1 + k2]]
         let (k1, k2) = (1000.0, 3000.0);
         let p = [[k2, -k2], [-k2, k1 + k2]];

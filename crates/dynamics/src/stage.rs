@@ -1,5 +1,5 @@
-//! The frequency-independent matrices of one stage on one fixed sparsity pattern (DESIGN.md
-//! §4–§5): P(f) = lossless + Σ_tag (ε'_tag(f) + i ε''_tag(f)) P_tag, the mass matrix, and
+//! The frequency-independent matrices of one stage on one fixed sparsity pattern (docs/physics.md
+//! §2–§3): P(f) = lossless + Σ_tag (ε'_tag(f) + i ε''_tag(f)) P_tag, the mass matrix, and
 //! the per-term tension-off Hessians for the noise breakdown; with the dense views, the
 //! complex float elimination and the state-space form built on them.
 //!
@@ -89,7 +89,7 @@ pub enum Output {
     SupportForce(DVector<f64>),
 }
 
-/// Real state-space matrices with names (DESIGN.md §5), damping as viscous at `f_d`.
+/// Real state-space matrices with names (docs/physics.md §3), damping as viscous at `f_d`.
 #[derive(Clone, Debug)]
 pub struct StateSpace {
     /// State matrix (2n × 2n).
@@ -330,7 +330,7 @@ impl StageModel {
     }
 
     /// Complex reduced matrices K_eff(f), C_XS,eff(f), S_eff(f): the Schur complement of
-    /// the floats done on the complex matrices, per frequency (DESIGN.md §5); an error when
+    /// the floats done on the complex matrices, per frequency (docs/physics.md §3); an error when
     /// the float block is singular there or a damping multiplier is out of range.
     pub fn reduced(&self, damping: &Damping, f_hz: f64) -> Result<ReducedComplex, DynamicsError> {
         if f_hz != 0.0 {

@@ -1,4 +1,4 @@
-//! Responses frequency by frequency on the stage's fixed pattern (DESIGN.md §5): the
+//! Responses frequency by frequency on the stage's fixed pattern (docs/physics.md §3): the
 //! dynamic stiffness E(f) = P(f) − ω² diag(M, 0) over the unknowns (variables and floats)
 //! is assembled from parts prepared once per sweep, then factorised and solved.
 //!

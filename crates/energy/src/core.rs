@@ -1,4 +1,4 @@
-//! The core element kinds of stage 0A: gravity, springs and wire stretch (DESIGN.md §3).
+//! The core element kinds of stage 0A: gravity, springs and wire stretch (docs/physics.md §1).
 //!
 //! Each has a fast derivative path shaped like its physics: gravity and wire stretch in
 //! closed form from the attachment points' jets, springs by the chain rule through the
@@ -123,7 +123,7 @@ impl Potential for WireStretchEnergy {
     }
 
     /// With the tension off the wire is unstretched at its equilibrium length, so only
-    /// first-order length changes store energy (DESIGN.md §4).
+    /// first-order length changes store energy (docs/physics.md §2).
     fn tension_off(&self, x_eq: &[f64]) -> TensionOff<Self> {
         TensionOff::Replaced(WireStretchEnergy {
             unstretched_length: self.length(x_eq),

@@ -1,4 +1,4 @@
-//! Damping tags (DESIGN.md §4): each term carries a tag, and each tag a complex multiplier
+//! Damping tags (docs/physics.md §2): each term carries a tag, and each tag a complex multiplier
 //! ε'(f) + i ε''(f) of its tension-off stiffness, a function of frequency f in Hz.
 
 use std::collections::BTreeMap;

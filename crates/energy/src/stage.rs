@@ -1,4 +1,4 @@
-//! Calculation stages (DESIGN.md §4): each adds terms or processing to the one before.
+//! Calculation stages (docs/physics.md §2): each adds terms or processing to the one before.
 
 use std::fmt;
 use std::str::FromStr;

@@ -7,7 +7,7 @@ use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
 use pendkit_expr::Expr;
 use pendkit_geometry::FrameMap;
 
-use crate::Damping;
+use crate::{Damping, Element, Stage};
 
 /// Index of a coordinate in [`System::coords`].
 pub type CoordId = usize;
@@ -90,9 +90,8 @@ impl Shape {
     /// mass); a moment that no box can have (I_j + I_k < I_i) gives a zero half-size.
     pub fn equivalent_box(mass: f64, principal_moments: [f64; 3]) -> Option<Shape> {
         let [ix, iy, iz] = principal_moments;
-        // NaN counts as not positive
-        let positive = |x: f64| x > 0.0;
-        if ![mass, ix, iy, iz].into_iter().all(positive) {
+        // written so that a NaN mass or moment also gives `None`
+        if ![mass, ix, iy, iz].into_iter().all(|v| v > 0.0) {
             return None;
         }
         let half = |i: f64, j: f64, k: f64| (1.5 * (j + k - i) / mass).max(0.0).sqrt();
@@ -307,6 +306,37 @@ pub enum EarlyWireTerms {
     EquilibriumOnly,
 }
 
+/// One term of a [`NamedSignal`]: a coordinate, or a point on a body along a lab direction.
+#[derive(Clone, Debug, PartialEq)]
+pub enum SignalTerm {
+    /// A coordinate (m or rad).
+    Coordinate(CoordId),
+    /// A point on a body (m, body coordinates) and a lab direction (unit vector): the
+    /// point's displacement along it, or a force there along it, through the linearised
+    /// geometry at the equilibrium.
+    Point {
+        /// The body.
+        body: BodyId,
+        /// The point (m, body coordinates).
+        point: Vector3<f64>,
+        /// The direction (lab axes, normalised).
+        direction: Vector3<f64>,
+    },
+}
+
+/// A named input or output of a model: a linear combination of coordinates and points (an
+/// interferometer's beam spot, a sensor, an actuator), e.g. `0.999 x3 + 0.045 z3`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct NamedSignal {
+    /// The name used on the command line (`--input`, `--output`).
+    pub name: String,
+    /// A force (on variables or points for an input; on the support parameters for an
+    /// output) rather than a displacement.
+    pub force: bool,
+    /// Coefficient (dimensionless) and term.
+    pub terms: Vec<(f64, SignalTerm)>,
+}
+
 /// A complete numeric model.
 #[derive(Clone, Debug, Default)]
 pub struct System {
@@ -333,6 +363,13 @@ pub struct System {
     pub damping: Damping,
     /// Temperature for thermal noise (K).
     pub temperature: f64,
+    /// Element kinds moved to another stage (`Some`) or switched off (`None`); a kind not
+    /// listed joins at its own [`Element::stage`].
+    pub element_stages: BTreeMap<String, Option<Stage>>,
+    /// Named inputs (displacements of parameters, forces on variables or points).
+    pub inputs: Vec<NamedSignal>,
+    /// Named outputs (displacements of variables or points, forces on the support).
+    pub outputs: Vec<NamedSignal>,
     /// Other names for the model's bodies and coordinates, by scheme (e.g. `ligo`).
     pub name_schemes: BTreeMap<String, NameScheme>,
 }
@@ -406,6 +443,14 @@ impl System {
         tags.insert(crate::GRAVITY_TAG.to_string());
         tags.insert(crate::CONSTRAINT_TAG.to_string());
         tags
+    }
+
+    /// The stage at which `kind`'s terms join this model, or `None` if it is switched off.
+    pub fn element_stage(&self, kind: &dyn Element) -> Option<Stage> {
+        match self.element_stages.get(kind.kind()) {
+            Some(choice) => *choice,
+            None => Some(kind.stage()),
+        }
     }
 
     /// Indices of the coordinates of one kind, in definition order.

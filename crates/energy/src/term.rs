@@ -24,7 +24,7 @@ pub trait Potential: Send + Sync + 'static {
     /// Potential energy (J) at local coordinates `x` (m or rad).
     fn energy<D: Real>(&self, x: &[D]) -> D;
 
-    /// The term with static tensions and preloads switched off (stage 0B, DESIGN.md §4),
+    /// The term with static tensions and preloads switched off (stage 0B, docs/physics.md §2),
     /// given the equilibrium local coordinates. The default keeps the term as it is: all of
     /// its stiffness comes from first-order deformation and so carries its loss.
     fn tension_off(&self, _x_eq: &[f64]) -> TensionOff<Self>
@@ -186,7 +186,7 @@ pub struct LocalDerivatives {
     pub hessian: Vec<f64>,
 }
 
-/// The tension-off part of one term's Hessian (DESIGN.md §4).
+/// The tension-off part of one term's Hessian (docs/physics.md §2).
 #[derive(Clone, Debug, PartialEq)]
 pub enum OffHessian {
     /// Equal to the tension-on Hessian: all of the term's stiffness is lossy.
@@ -223,7 +223,7 @@ pub struct Term {
     pub label: String,
     /// Kind of element that produced it, e.g. `wire-stretch`.
     pub kind: &'static str,
-    /// Damping tag (DESIGN.md §4).
+    /// Damping tag (docs/physics.md §2).
     pub tag: String,
     /// Global coordinate indices, in the order of the body's local vector.
     pub coords: Vec<usize>,

@@ -1,3 +1,6 @@
+//! The expression language: parsing, precedence, functions against std, exact derivatives
+//! by dual numbers, and error messages.
+
 use std::collections::BTreeSet;
 use std::f64::consts::PI;
 

@@ -28,7 +28,8 @@ use pendkit_model::{DampingSpec, Overrides};
 /// A parsed case file.
 #[derive(Clone, Debug, Default)]
 pub struct CaseFile {
-    /// The model the case refines (a bundled model name).
+    /// The model the case refines: a bundled model name, or a suspension file's path
+    /// (ending in `.toml`, relative to the case file's folder).
     pub model: String,
     /// What the case is for.
     pub description: Option<String>,
@@ -142,6 +143,14 @@ pub fn parse_case(text: &str) -> Result<CaseFile, FileError> {
     })
 }
 
+/// Whether `text` is a case file (a TOML table with a top-level `model`) rather than a
+/// suspension file (which describes the model itself and has no `model` key). Text that is
+/// not TOML is not a case file: the suspension reader then reports where it breaks.
+pub fn is_case_file(text: &str) -> bool {
+    text.parse::<toml::Table>()
+        .is_ok_and(|table| table.contains_key("model"))
+}
+
 /// Reads and parses a case file.
 pub fn read_case(path: &Path) -> Result<CaseFile, FileError> {
     let text = std::fs::read_to_string(path).map_err(|source| FileError::Read {
@@ -166,9 +175,15 @@ mod tests {
         );
         let e = parse_case("model = \"toy\"\nextra = 1\n").unwrap_err();
         assert!(e.to_string().contains("unknown field"), "{e}");
-        for text in [&e.to_string()] {
-            assert!(!text.contains('\n'));
-        }
+        assert!(!e.to_string().contains('\n'), "{e}");
+    }
+
+    #[test]
+    fn case_files_name_a_model_suspension_files_do_not() {
+        assert!(is_case_file("model = \"quad\"\n[parameters]\nm3 = 50\n"));
+        assert!(is_case_file("model = \"my-susp.toml\"\n"));
+        assert!(!is_case_file("[bodies.top]\nmass = 1\n"));
+        assert!(!is_case_file("model = \n"));
     }
 
     #[test]

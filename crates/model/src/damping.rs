@@ -213,7 +213,7 @@ mod tests {
 
     #[test]
     fn thermoelastic_peak_matches_the_oracle_table() {
-        // physics_oracles.md §7, silica fibre with the stress term: Δ = 1.945745e-5,
+        // docs/reference-values.md §7, silica fibre with the stress term: Δ = 1.945745e-5,
         // τ = 1.450933e-2 s; φ_TE(1, 10, 100, 500 Hz) printed to 7 digits.
         let spec = DampingSpec {
             thermoelastic: Some(("delta".into(), "tau".into())),

@@ -13,7 +13,7 @@ use std::sync::{Arc, OnceLock};
 use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
 use pendkit_energy::{
     Body, BodyId, CoordId, CoordKind, Coordinate, EarlyWireTerms, EndDirection, ExtraPhase,
-    ExtraTerm, PluginElement, Spring, SpringEnd, System, Wire,
+    ExtraTerm, NamedSignal, PluginElement, SignalTerm, Spring, SpringEnd, Stage, System, Wire,
 };
 use pendkit_expr::{ExprError, Slot};
 use pendkit_geometry::{FrameMap, PoseMap};
@@ -251,6 +251,12 @@ impl SystemBuilder {
                 what: "coordinate",
                 name: name.to_string(),
             })
+    }
+
+    /// The index and class of the coordinate called `name`, if it is defined.
+    pub fn find_coordinate(&self, name: &str) -> Option<(CoordId, CoordKind)> {
+        let id = *self.coord_ids.get(name)?;
+        Some((id, self.system.coords[id].kind))
     }
 
     /// Holds a variable or float at its start value during the equilibrium search.
@@ -540,6 +546,94 @@ impl SystemBuilder {
         Ok(())
     }
 
+    /// Moves the element kind `kind` to `stage`, or switches it off (`None`); whether the
+    /// kind is registered is checked at assembly.
+    pub fn element_stage(&mut self, kind: &str, stage: Option<Stage>) {
+        self.system.element_stages.insert(kind.to_string(), stage);
+    }
+
+    /// Adds a named input (`output = false`) or output, checking that its terms fit: a
+    /// displacement input combines parameters, a force input variables and points, a
+    /// displacement output variables and points, a force output (on the support) parameters.
+    pub fn named_signal(&mut self, signal: NamedSignal, output: bool) -> Result<(), BuildError> {
+        let what = if output { "output" } else { "input" };
+        let item = format!("{what} '{}'", signal.name);
+        let list = if output {
+            &self.system.outputs
+        } else {
+            &self.system.inputs
+        };
+        if list.iter().any(|s| s.name == signal.name) {
+            return Err(BuildError::Duplicate {
+                what,
+                name: signal.name,
+            });
+        }
+        if signal.terms.is_empty() {
+            return Err(BuildError::Invalid {
+                item,
+                message: "combines nothing".into(),
+            });
+        }
+        // parameters are driven (displacement inputs, support forces), variables respond
+        let wanted = if output == signal.force {
+            CoordKind::Parameter
+        } else {
+            CoordKind::Variable
+        };
+        for (coefficient, term) in &signal.terms {
+            check_finite(&item, "coefficient", *coefficient, "")?;
+            match term {
+                SignalTerm::Coordinate(c) => {
+                    let coordinate =
+                        self.system
+                            .coords
+                            .get(*c)
+                            .ok_or_else(|| BuildError::Invalid {
+                                item: item.clone(),
+                                message: format!("coordinate index {c} does not exist"),
+                            })?;
+                    if coordinate.kind != wanted {
+                        return Err(BuildError::Invalid {
+                            item,
+                            message: format!(
+                                "'{}' is a {:?}; this {what} combines {}s",
+                                coordinate.name,
+                                coordinate.kind,
+                                format!("{wanted:?}").to_lowercase()
+                            ),
+                        });
+                    }
+                }
+                SignalTerm::Point {
+                    body, direction, ..
+                } => {
+                    self.check_end_body(&item, *body)?;
+                    if wanted == CoordKind::Parameter {
+                        return Err(BuildError::Invalid {
+                            item,
+                            message:
+                                "a point on a body cannot be driven or carry the support force"
+                                    .into(),
+                        });
+                    }
+                    if !(direction.norm() > 0.0 && direction.norm().is_finite()) {
+                        return Err(BuildError::Invalid {
+                            item,
+                            message: "direction is a zero or non-finite vector".into(),
+                        });
+                    }
+                }
+            }
+        }
+        if output {
+            self.system.outputs.push(signal);
+        } else {
+            self.system.inputs.push(signal);
+        }
+        Ok(())
+    }
+
     /// Declares names of the scheme `scheme` (e.g. `ligo`): each `(body, alias)` pair names
     /// a body, and each of its own pose coordinates becomes `<alias>_<dof>` with `dof` taken
     /// from `dof_names` in pose order (x, y, z, yaw, pitch, roll); e.g. [`LIGO_DOF_NAMES`]
@@ -664,9 +758,9 @@ fn check_inertia(item: &str, inertia: &Matrix3<f64>) -> Result<(), BuildError> {
 /// parameter values. Bundled models implement it; so can a downstream tool.
 pub trait Model: Sync {
     /// Name used on the command line, e.g. `pendulum`.
-    fn name(&self) -> &'static str;
+    fn name(&self) -> &str;
     /// One line describing the model.
-    fn summary(&self) -> &'static str;
+    fn summary(&self) -> &str;
     /// Default parameter definitions.
     fn parameters(&self) -> Result<ParamSet, ParamError>;
     /// Default damping per tag (expressions over the parameters).
@@ -682,6 +776,32 @@ pub trait Model: Sync {
     fn defaults_cache(&self) -> Option<&DefaultsCache> {
         None
     }
+    /// Unit, description and readers of each parameter at the values `params` (what
+    /// `pendkit params` lists). The default knows only the names; a model that records which
+    /// of its parts read which parameter (suspension files do) says more.
+    fn parameter_info(&self, params: &Resolved) -> Result<Vec<ParameterInfo>, BuildError> {
+        Ok(params
+            .iter()
+            .map(|(name, _)| ParameterInfo {
+                name: name.to_string(),
+                ..ParameterInfo::default()
+            })
+            .collect())
+    }
+}
+
+/// What a model says about one of its parameters.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ParameterInfo {
+    /// The parameter's name.
+    pub name: String,
+    /// Its unit as the model writes it (`kg`, `m`, `N/m`, `-`), empty if not given.
+    pub unit: String,
+    /// What it is, empty if not given.
+    pub description: String,
+    /// The fields of the model that read it (`bodies.top.mass`,
+    /// `stages.uim.wires.length`, `damping.fibre_bending`), in the order first read.
+    pub read_by: Vec<String>,
 }
 
 /// Inside an `impl Model for T`, defines [`Model::defaults_cache`] to return a
@@ -707,7 +827,7 @@ pub const DEFAULT_TEMPERATURE: f64 = 290.0;
 #[derive(Debug)]
 pub struct Defaults {
     /// The model's name.
-    pub model: &'static str,
+    pub model: String,
     /// Default parameters; cloning them is cheap (see [`ParamSet`]).
     pub params: ParamSet,
     /// Default damping per tag.
@@ -732,7 +852,7 @@ impl Defaults {
             .map(|(tag, spec)| Ok((tag.clone(), spec.parse(&tag)?)))
             .collect::<Result<_, BuildError>>()?;
         Ok(Defaults {
-            model: model.name(),
+            model: model.name().to_string(),
             params,
             damping,
         })
@@ -783,6 +903,19 @@ pub struct Overrides {
     pub damping: BTreeMap<String, DampingSpec>,
 }
 
+/// `defaults`' parameters with the overrides applied, and their values.
+pub fn parameters_with(
+    defaults: &Defaults,
+    overrides: &Overrides,
+) -> Result<(ParamSet, Resolved), BuildError> {
+    let mut params = defaults.params.clone();
+    for (name, text) in &overrides.parameters {
+        params.apply_text(name, text)?;
+    }
+    let resolved = params.resolve()?;
+    Ok((params, resolved))
+}
+
 /// Resolves `model`'s defaults with `overrides` applied, builds the system and attaches
 /// its damping multipliers, temperature (parameter `temperature`, K, default 290) and the
 /// "wire terms early" switch (parameter `wire_terms_early`: 0 no, 1 yes, 2 equilibrium
@@ -792,11 +925,7 @@ pub fn build_with(
     overrides: &Overrides,
 ) -> Result<(System, Resolved), BuildError> {
     let defaults = Defaults::of(model)?;
-    let mut params = defaults.params.clone();
-    for (name, text) in &overrides.parameters {
-        params.apply_text(name, text)?;
-    }
-    let resolved = params.resolve()?;
+    let (_, resolved) = parameters_with(&defaults, overrides)?;
     let mut system = model.build(&resolved)?;
     if !overrides.damping.is_empty() {
         let used = system.tags();

@@ -154,7 +154,7 @@ fn a_cache_holding_another_models_defaults_is_bypassed() {
         fn name(&self) -> &'static str {
             self.0.name
         }
-        fn summary(&self) -> &'static str {
+        fn summary(&self) -> &str {
             self.0.summary()
         }
         fn parameters(&self) -> Result<ParamSet, ParamError> {
@@ -185,7 +185,7 @@ fn a_cache_holding_another_models_defaults_is_bypassed() {
     let defaults = Defaults::of(&second).expect("second");
     assert_eq!(
         (
-            defaults.model,
+            defaults.model.as_str(),
             defaults.params.get("k").expect("k").source.as_str()
         ),
         ("second", "400")

@@ -1,4 +1,4 @@
-//! Thermal noise by the fluctuation–dissipation theorem (DESIGN.md §5) at any output
+//! Thermal noise by the fluctuation–dissipation theorem (docs/physics.md §3) at any output
 //! combination of the coordinates, with the share of every damping tag (and, when asked,
 //! of every lossy term).
 //!

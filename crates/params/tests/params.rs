@@ -1,3 +1,6 @@
+//! Parameter sets: order-independent resolution, cycles and undefined names in errors,
+//! scale and increment overrides, suggestions for unknown names.
+
 use pendkit_expr::{Expr, Slot, parse};
 use pendkit_params::{Override, ParamError, ParamSet};
 

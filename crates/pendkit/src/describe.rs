@@ -120,6 +120,9 @@ impl StageResult {
     /// Unit of an input (see [`StageResult::input`]): a support displacement in m or rad,
     /// a force on a translation or at a point in N, a torque on a rotation in N m.
     pub fn input_unit(&self, input: &str) -> Option<String> {
+        if let Some(signal) = self.system.inputs.iter().find(|s| s.name == input) {
+            return self.signal_unit(signal);
+        }
         let input = self.unalias(input);
         match input.strip_prefix("force:") {
             Some(target) if target.contains('@') => Some("N".into()),
@@ -133,6 +136,9 @@ impl StageResult {
     /// Unit of an output (see [`StageResult::output`]): a displacement in m or rad, a point's
     /// displacement in m, a force (N) or torque (N m) on the support.
     pub fn output_unit(&self, output: &str) -> Option<String> {
+        if let Some(signal) = self.system.outputs.iter().find(|s| s.name == output) {
+            return self.signal_unit(signal);
+        }
         let output = self.unalias(output);
         if output.contains('@') {
             return Some("m".into());
@@ -143,6 +149,29 @@ impl StageResult {
                 .map(|u| if u == "m" { "N" } else { "N m" }.to_string()),
             None => self.coordinate_unit(&output).map(str::to_string),
         }
+    }
+
+    /// Unit of a model's named input or output: its terms' common unit (a point's
+    /// displacement m, a force there N; a coordinate's m or rad, a force on it N or N m),
+    /// `None` when they differ.
+    fn signal_unit(&self, signal: &pendkit_energy::NamedSignal) -> Option<String> {
+        let mut units = signal.terms.iter().map(|(_, term)| match term {
+            pendkit_energy::SignalTerm::Point { .. } => {
+                Some(if signal.force { "N" } else { "m" }.to_string())
+            }
+            pendkit_energy::SignalTerm::Coordinate(c) => {
+                let unit = self.coordinate_unit(&self.system.coords.get(*c)?.name)?;
+                Some(match (signal.force, unit) {
+                    (false, u) => u.to_string(),
+                    (true, "m") => "N".to_string(),
+                    (true, _) => "N m".to_string(),
+                })
+            }
+        });
+        let first = units.next()??;
+        units
+            .all(|u| u.as_deref() == Some(first.as_str()))
+            .then_some(first)
     }
 
     /// Unit of the transfer function from `input` to `output`, e.g. `m/m`, `rad/(N m)`.

@@ -2,17 +2,36 @@
 //! pipeline from a model or case to equilibrium, normal modes, transfer functions, thermal
 //! noise and state space, for downstream tools that want one call.
 //!
-//! ```
-//! use pendkit::{Case, energy::Stage, log_grid, run_stage};
+//! The example in the README (`crates/pendkit/tests/readme.rs` checks that the two agree):
 //!
-//! let case = Case::model("pendulum")?.with_sets(&["m1=20".into()])?;
+//! ```
+//! use pendkit::{Case, NoiseOptions, Solver, Stage, log_grid, run_stage};
+//!
+//! // the aLIGO quad with a heavier test mass, at stage 2 (the complete model)
+//! let case = Case::model("quad")?.with_sets(&["m3=50".into()])?;
 //! let (system, _parameters) = case.build()?;
-//! let result = run_stage(system, Stage::S2)?;
-//! let lowest = &result.modes.modes[0];
-//! assert!((lowest.hz - 0.644).abs() < 1e-3); // sqrt(g/l)/2π with l = 0.6 m, plus flexure
-//! let freqs = log_grid(1.0, 100.0, 3)?;
-//! let noise = result.noise("x1", &freqs)?;
-//! assert_eq!(noise.asd().len(), 3); // m/√Hz; noise.psd() is the PSD in m²/Hz
+//! let r = run_stage(system, Stage::S2)?;
+//! assert_eq!(r.modes.modes.len(), 24); // four bodies, six degrees of freedom each
+//! for mode in &r.modes.modes {
+//!     println!("{:9.4} Hz  {:8}  {}", mode.hz, mode.label, r.mode_family(mode));
+//! }
+//! let freqs = log_grid(0.1, 100.0, 1000)?;
+//! let h = r.transfer("x00", "x3", &freqs)?; // complex, m/m: support to test mass
+//! assert!((h[0].re - 1.0).abs() < 0.1); // the test mass follows the support at 0.1 Hz
+//! let noise = r.noise("x3", &freqs)?; // thermal noise of the test mass along x
+//! println!("{:.3e} m/√Hz at {} Hz", noise.asd()[666], freqs[666]); // psd() in m²/Hz
+//! for (tag, asd) in noise.asd_by_tag() {
+//!     println!("{tag:>16}: {:.3e} m/√Hz", asd[666]);
+//! }
+//! // every unknown solved, and the share of every lossy term too
+//! let h_full = r.transfer_with("x00", "x3", &freqs, Solver::Full)?;
+//! assert!((h_full[500] - h[500]).norm() <= 1e-9 * h[500].norm());
+//! let options = NoiseOptions { solver: Solver::Full, per_term: true };
+//! let detailed = r.noise_with("x3", &freqs, &options)?; // .by_term: (term, tag, PSD)
+//! assert!(!detailed.by_term.is_empty());
+//! // the modes below 1 Hz, by shift-invert on the sparse factorisation
+//! let low = r.model.modes_below(&r.system.damping, 1.0)?;
+//! assert!(low.modes.iter().all(|m| m.hz < 1.0));
 //! # Ok::<(), pendkit::Error>(())
 //! ```
 //!
@@ -37,7 +56,11 @@
 //! version-matched dependencies of its own.
 
 mod describe;
+mod parameters;
 mod state_space;
+#[cfg(feature = "files")]
+mod suspension_files;
+pub mod tradeoff;
 
 use std::path::{Path, PathBuf};
 
@@ -47,6 +70,7 @@ use pendkit_dynamics::{
     DynamicsError, TermRounding, eliminate_floats, inverted_bodies, normal_modes_with_rounding,
     runaway_floats,
 };
+use pendkit_energy::{NamedSignal, SignalTerm};
 use pendkit_model::BuildError;
 use pendkit_noise::thermal_noise_with;
 
@@ -67,8 +91,12 @@ pub use pendkit_expr as expr;
 pub use pendkit_files as files;
 pub use pendkit_geometry as geometry;
 pub use pendkit_model as model;
+#[cfg(feature = "files")]
+pub use pendkit_models as bundled_files;
 pub use pendkit_noise as noise;
 pub use pendkit_params as params;
+#[cfg(feature = "files")]
+pub use pendkit_suspension as suspension;
 
 pub use pendkit_assembly::{AssemblyOptions, PhaseTimes};
 pub use pendkit_dynamics::{
@@ -80,7 +108,10 @@ pub use pendkit_noise::{NoiseOptions, ThermalNoise};
 pub use pendkit_params::Resolved;
 
 pub use describe::{DOF_FAMILIES, OTHER_FAMILY, unit_ratio, unit_slug};
+pub use parameters::{ParameterRow, parameter_table};
 pub use state_space::NamedStateSpace;
+#[cfg(feature = "files")]
+pub use suspension_files::load_suspension;
 
 /// pendkit's version, recorded in exports and reports.
 pub const VERSION: &str = env!("CARGO_PKG_VERSION");
@@ -104,6 +135,11 @@ pub enum Error {
         /// What is wrong.
         message: String,
     },
+    /// A suspension file that cannot be read or describes no valid suspension: its file,
+    /// line and field.
+    #[cfg(feature = "files")]
+    #[error(transparent)]
+    SuspensionFile(#[from] pendkit_suspension::FileError),
     /// A `--set NAME=EXPR` argument without '='.
     #[error("--set '{0}': expected NAME=EXPR or damping.<tag>.<field>=EXPR")]
     SetSyntax(String),
@@ -160,6 +196,14 @@ pub enum Error {
     /// Modes or eliminations failed.
     #[error(transparent)]
     Dynamics(#[from] DynamicsError),
+    /// The reference variant of a trade-off ladder cannot answer the question.
+    #[error("reference variant '{variant}' cannot answer: {message}")]
+    Reference {
+        /// The reference variant's name.
+        variant: String,
+        /// Why.
+        message: String,
+    },
     /// A benchmark asked to repeat nothing, or too often.
     #[error("--repeat must be from 1 to {MAX_REPEAT}")]
     ZeroRepeat,
@@ -222,30 +266,49 @@ impl Case {
         })
     }
 
-    /// Reads a case file (TOML; see [`files`]).
+    /// Reads a case file (TOML; see [`files`]), or a suspension file (a `.toml` without a
+    /// top-level `model`; see [`suspension`]) as a case of that model with its defaults. A
+    /// case file's `model` may itself be a suspension file's path, relative to the case
+    /// file's folder.
     #[cfg(feature = "files")]
     pub fn from_file(path: &Path) -> Result<Case, Error> {
         let err = |message: String| Error::Case {
             path: path.to_path_buf(),
             message,
         };
-        let file = pendkit_files::read_case(path).map_err(|e| match e {
+        let name = path
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        let text = std::fs::read_to_string(path).map_err(|e| err(e.to_string()))?;
+        if !pendkit_files::is_case_file(&text) {
+            return Ok(Case {
+                name,
+                description: None,
+                model: load_suspension(path)?,
+                overrides: Overrides::default(),
+            });
+        }
+        let file = pendkit_files::parse_case(&text).map_err(|e| match e {
             pendkit_files::FileError::Read { source, .. } => err(source.to_string()),
             pendkit_files::FileError::Parse { message } => err(message),
         })?;
+        let model = if file.model.ends_with(".toml") {
+            let folder = path.parent().unwrap_or_else(|| Path::new(""));
+            load_suspension(&folder.join(&file.model))?
+        } else {
+            find_model(&file.model).map_err(|e| err(e.to_string()))?
+        };
         Ok(Case {
-            name: path
-                .file_stem()
-                .map(|s| s.to_string_lossy().into_owned())
-                .unwrap_or_default(),
+            name,
             description: file.description,
-            model: find_model(&file.model).map_err(|e| err(e.to_string()))?,
+            model,
             overrides: file.overrides,
         })
     }
 
-    /// A bundled model name, or a path to a case file (anything ending in `.toml` or naming
-    /// an existing file).
+    /// A bundled model name, or a path to a case file or a suspension file (anything ending
+    /// in `.toml` or naming an existing file).
     ///
     /// Without the `files` feature a path is an error saying so.
     pub fn open(spec: &str) -> Result<Case, Error> {
@@ -256,7 +319,7 @@ impl Case {
             #[cfg(not(feature = "files"))]
             return Err(Error::Case {
                 path: path.to_path_buf(),
-                message: "reading case files needs pendkit's `files` feature".into(),
+                message: "reading case and suspension files needs pendkit's `files` feature".into(),
             });
         }
         Case::model(spec)
@@ -623,6 +686,72 @@ impl StageResult {
         })())
     }
 
+    /// The displacement along `direction` (lab axes, normalised here) of `point` (m, body
+    /// coordinates) on body `body`, per unit of each variable: the linearised geometry at
+    /// the equilibrium (also the generalised force of a unit force there).
+    fn point_row(
+        &self,
+        body: usize,
+        point: &Vector3<f64>,
+        direction: &Vector3<f64>,
+    ) -> DVector<f64> {
+        let jac = self.system.bodies[body]
+            .frame
+            .jacobian(&self.assembled.equilibrium.coords, point);
+        let d = direction.normalize();
+        DVector::from_iterator(
+            self.assembled.layout.variables.len(),
+            self.assembled
+                .layout
+                .variables
+                .iter()
+                .map(|&g| jac.position.column(g).dot(&d)),
+        )
+    }
+
+    /// The vector of a model's named input or output (`[inputs]`/`[outputs]` of a
+    /// suspension file): its terms' coefficients on the parameters (`parameters = true`:
+    /// displacement inputs, support-force outputs) or on the variables (forces on them,
+    /// displacements of them), points through [`StageResult::point_row`].
+    fn named_vector(&self, signal: &NamedSignal, parameters: bool) -> Result<DVector<f64>, Error> {
+        let m = &self.model;
+        let names = if parameters {
+            &m.parameters
+        } else {
+            &m.variables
+        };
+        let mut v = DVector::zeros(names.len());
+        for (coefficient, term) in &signal.terms {
+            match term {
+                SignalTerm::Coordinate(c) => {
+                    let coordinate = &self.system.coords[*c].name;
+                    let k = names.iter().position(|n| n == coordinate).ok_or_else(|| {
+                        Error::Name {
+                            name: signal.name.clone(),
+                            message: format!(
+                                "combines '{coordinate}', which this stage does not keep as a {}",
+                                if parameters { "parameter" } else { "variable" }
+                            ),
+                        }
+                    })?;
+                    v[k] += coefficient;
+                }
+                SignalTerm::Point {
+                    body,
+                    point,
+                    direction,
+                } if !parameters => v += self.point_row(*body, point, direction) * *coefficient,
+                SignalTerm::Point { .. } => {
+                    return Err(Error::Name {
+                        name: signal.name.clone(),
+                        message: "a point cannot be driven or carry the support force".into(),
+                    });
+                }
+            }
+        }
+        Ok(v)
+    }
+
     fn unit(n: usize, k: usize) -> DVector<f64> {
         let mut v = DVector::zeros(n);
         v[k] = 1.0;
@@ -636,13 +765,22 @@ impl StageResult {
         }
     }
 
-    /// Parses an input: a parameter (support displacement, e.g. `x00`), a point on a body
-    /// the support alone moves (`support@x,y,z/dx,dy,dz`: the smallest change of the
-    /// parameters, metres and radians alike, that moves the point by one unit along the
-    /// direction), `force:<variable>` or `force:<body>@x,y,z/dx,dy,dz` (a force at a point,
-    /// also on a body a float poses, such as a blade tip).
-    /// Names of a scheme the model declares are accepted too (`GND_L`, `force:L3_P`).
+    /// Parses an input: a named input the model declares, a parameter (support
+    /// displacement, e.g. `x00`), a point on a body the support alone moves
+    /// (`support@x,y,z/dx,dy,dz`: the smallest change of the parameters, metres and radians
+    /// alike, that moves the point by one unit along the direction), `force:<variable>` or
+    /// `force:<body>@x,y,z/dx,dy,dz` (a force at a point, also on a body a float poses, such
+    /// as a blade tip). Names of a scheme the model declares are accepted too (`GND_L`,
+    /// `force:L3_P`).
     pub fn input(&self, name: &str) -> Result<Input, Error> {
+        if let Some(signal) = self.system.inputs.iter().find(|s| s.name == name) {
+            let v = self.named_vector(signal, !signal.force)?;
+            return Ok(if signal.force {
+                Input::Force(v)
+            } else {
+                Input::Displacement(v)
+            });
+        }
         let name = &self.unalias(name);
         let m = &self.model;
         let err = |message: &str| Error::Name {
@@ -689,11 +827,20 @@ impl StageResult {
         }
     }
 
-    /// Parses an output: a variable, `<body>@x,y,z/dx,dy,dz` (the point's whole motion:
-    /// through the variables, the floats that pose its body and the support), or
-    /// `force:<parameter>` (the force on the support).
-    /// Names of a scheme the model declares are accepted too (`L3_L`, `L3@0,0,0/1,0,0`).
+    /// Parses an output: a named output the model declares, a variable,
+    /// `<body>@x,y,z/dx,dy,dz` (the point's whole motion: through the variables, the floats
+    /// that pose its body and the support), or `force:<parameter>` (the force on the
+    /// support). Names of a scheme the model declares are accepted too (`L3_L`,
+    /// `L3@0,0,0/1,0,0`).
     pub fn output(&self, name: &str) -> Result<Output, Error> {
+        if let Some(signal) = self.system.outputs.iter().find(|s| s.name == name) {
+            let v = self.named_vector(signal, signal.force)?;
+            return Ok(if signal.force {
+                Output::SupportForce(v)
+            } else {
+                Output::Displacement(v)
+            });
+        }
         let name = &self.unalias(name);
         let m = &self.model;
         if let Some(target) = name.strip_prefix("force:") {

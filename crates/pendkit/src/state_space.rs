@@ -143,7 +143,7 @@ impl StageResult {
 
 #[cfg(feature = "export")]
 impl Provenance {
-    /// Adds `model`, `case_name`, `stage`, `naming`, `pendkit_version` and the parameters to an
+    /// Adds `model`, `case_name` (`case` is a MATLAB keyword), `stage`, `naming`, `pendkit_version` and the parameters to an
     /// export's metadata.
     pub fn add_to(&self, meta: &mut pendkit_export::Metadata, stage: &str, scheme: Option<&str>) {
         meta.text("model", vec![self.model.clone()])

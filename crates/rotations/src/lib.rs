@@ -1,7 +1,7 @@
 //! Rotation matrices and angular-velocity maps for (yaw, pitch, roll) angles, generic over
 //! the dual-number scalar so that the same code gives values, gradients and Hessians.
 //!
-//! Convention (DESIGN.md §2): R = Rz(yaw) · Ry(pitch) · Rx(roll); a point p given in body
+//! Convention (docs/conventions.md): R = Rz(yaw) · Ry(pitch) · Rx(roll); a point p given in body
 //! coordinates sits at X + R p in space. Angles are in radians.
 
 use nalgebra::{Matrix3, Vector3};

@@ -1,4 +1,4 @@
-//! The tensioned beam in closed form (DESIGN.md §3, physics_oracles.md §9).
+//! The tensioned beam in closed form (docs/physics.md §1, docs/reference-values.md §9).
 //!
 //! A wire of length l under tension T with bending stiffness EI, whose end slopes relative
 //! to the chord are θ1 and θ2, stores (bending plus work against tension)
@@ -162,7 +162,7 @@ mod tests {
 
     #[test]
     fn oracle_table_values() {
-        // physics_oracles.md §9, printed to 7 significant digits.
+        // docs/reference-values.md §9, printed to 7 significant digits.
         let s = stability(1.0f64);
         assert!((s.s_ii - 4.131623).abs() < 5e-7 && (s.s_ij - 1.967670).abs() < 5e-7);
         let s = stability(10.0f64);

@@ -18,10 +18,10 @@
 //! forms.
 //!
 //! Checked, for u = 1, 10, 624.76195 (EI = 1, T = u², l = 1) and the REF fibre of
-//! physics_oracles.md §0 (EI = 9.0477868e-5 N m², T = 98.1 N, l = 0.6 m):
+//! docs/reference-values.md §0 (EI = 9.0477868e-5 N m², T = 98.1 N, l = 0.6 m):
 //! - total energy and bending part with both ends clamped, for several (θ1, θ2);
 //! - the same with one end hinged (the condensed coefficient c11 or c22);
-//! - the printed values of physics_oracles.md §9 (s_ii, s_ij at u = 1 and 10, their bending
+//! - the printed values of docs/reference-values.md §9 (s_ii, s_ij at u = 1 and 10, their bending
 //!   parts at u = 10, the REF row), to their printed digits;
 //! - that the discrete minimum bounds the closed form from above and converges to it as h⁴
 //!   when every element is halved, so the agreement is convergence, not coincidence.
@@ -66,7 +66,7 @@ impl Wire {
         }
     }
 
-    /// The REF fibre of physics_oracles.md §0 (u = 624.76195).
+    /// The REF fibre of docs/reference-values.md §0 (u = 624.76195).
     fn reference_fibre() -> Self {
         Wire {
             ei: 9.0477868e-5,
@@ -407,7 +407,7 @@ fn hinged_end_matches_the_condensed_coefficient() {
 
 #[test]
 fn printed_oracle_values_are_reproduced() {
-    // physics_oracles.md §9: s_ii, s_ij at u = 1
+    // docs/reference-values.md §9: s_ii, s_ij at u = 1
     let ([s_ii, s_jj, s_ij], _) = numerical_coefficients(Wire::unit(1.0));
     assert!(agrees_to_printed_digits(s_ii, 4.131623, 6), "{s_ii}");
     assert!(agrees_to_printed_digits(s_jj, 4.131623, 6), "{s_jj}");

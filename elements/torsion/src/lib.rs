@@ -1,5 +1,5 @@
 //! Plug-in element: torsion of wires (stage 1A). E = ½ κ Δθ², κ = (G J_e + T J/A)/l
-//! (DESIGN.md §3; the source prints the bracket without the 1/l), with Δθ the twist of the
+//! (docs/physics.md §1; the source prints the bracket without the 1/l), with Δθ the twist of the
 //! end frames about the wire relative to the reference configuration. With the tension off
 //! only G J_e / l remains: the T J/A part is tension stiffening and so lossless. A hinged
 //! end frees bending, not twist, so every wire twists.

@@ -1,4 +1,4 @@
-//! The small bundled models whose answers are known in closed form (physics_oracles.md):
+//! The small bundled models whose answers are known in closed form (docs/reference-values.md):
 //! `toy` (two springs in series with a float), `pendulum` (point mass on four fibres),
 //! `double-pendulum` (two point masses on steel wires) and `rigid-body` (one body on four
 //! vertical fibres); and `chain`, any number of such bodies one below the other, for
@@ -67,7 +67,7 @@ const UNITS: [(&str, &str); 35] = [
     ("n_stages", ""),
 ];
 
-/// The material parameters of the REF fused-silica fibre (physics_oracles.md §0).
+/// The material parameters of the REF fused-silica fibre (docs/reference-values.md §0).
 const SILICA_FIBRE: [(&str, &str); 7] = [
     ("phi_fibre", "1e-7"),
     ("r_fibre", "0.2e-3"),
@@ -216,7 +216,7 @@ impl Model for Toy {
         "toy"
     }
     fn summary(&self) -> &'static str {
-        "mass on two springs in series with a massless junction (source §4)"
+        "mass on two springs in series with a massless junction (T020205 §4)"
     }
     fn parameters(&self) -> Result<ParamSet, ParamError> {
         params(&[("m", "1"), ("k1", "1000"), ("k2", "3000")])

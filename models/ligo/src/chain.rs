@@ -8,7 +8,7 @@ use pendkit_energy::{BodyId, EndDirection, SpringEnd, Wire, WireEnd, WireSection
 use pendkit_model::{BodySpec, BuildError, DampingSpec, Shape, SystemBuilder};
 use pendkit_params::Resolved;
 
-/// How blade tips are modelled (source §6.3–§6.4).
+/// How blade tips are modelled (T020205 §6.3–§6.4).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Blades {
     /// Massless tip moving along the mounting body's z axis: a float ("xtra-lite").
@@ -384,7 +384,7 @@ pub fn beads_mass(section: &WireSection, length: f64, beads: usize) -> f64 {
 }
 
 /// Damping of a wire set from its material: structural φ on stretch, bending and torsion,
-/// plus the thermoelastic peak on bending (physics_oracles.md §7, with the stress term):
+/// plus the thermoelastic peak on bending (docs/reference-values.md §7, with the stress term):
 /// Δ = (Y T/ρC)(α − σβ/Y)², τ = ρ C d² / (2.16 · 2π · κ), σ = tension / area.
 /// `material` prefixes the material parameters (`<m>_phi`, `<m>_rho`, ...); `tension` and
 /// `radius`, `youngs` name the wire set's parameters.

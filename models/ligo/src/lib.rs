@@ -1,4 +1,4 @@
-//! The LIGO suspension models (source §6): the aLIGO quadruple test-mass suspension with
+//! The LIGO suspension models (T020205 §6): the aLIGO quadruple test-mass suspension with
 //! the public 2005 parameter set, and a GEO-style triple, each in the source's variants —
 //! xtra-lite (blade tips as floats), lite (blade tips with mass, 1 DOF), full (blade tips
 //! as 6-DOF bodies), lateral (blade tips with lateral compliance) and violin versions with

@@ -1,4 +1,4 @@
-//! The aLIGO quadruple test-mass suspension (source §6.2), parameters and topology from
+//! The aLIGO quadruple test-mass suspension (T020205 §6.2), parameters and topology from
 //! `params/quad2005.csv` and its README: support, 2 structure blades, 2 top wires, top mass
 //! (stage 0), 2 blades, 4 wires, UIM (1), 2 blades, 4 wires, PUM (2), 4 silica fibres, test
 //! mass (3). Wire lengths are equilibrium lengths between attachment points; each wire's
@@ -86,7 +86,7 @@ impl Model for Quad {
         tables::define_quad(&mut set)?;
         tables::define_materials(&mut set)?;
         for (name, value) in [
-            // Poisson's ratios (not in the tables): silica as physics_oracles.md §0, steel typical
+            // Poisson's ratios (not in the tables): silica as docs/reference-values.md §0, steel typical
             ("nu_steel", "0.29".to_string()),
             ("nu_silica", "0.17".to_string()),
             ("n_beads", self.beads.to_string()),

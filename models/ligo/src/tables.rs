@@ -1,4 +1,4 @@
-//! The public parameter tables (copies of `../shared/params/`): the aLIGO quad's 2005 set
+//! The public parameter tables (in `models/ligo/params/`, kept as published): the aLIGO quad's 2005 set
 //! and the materials' loss and thermal constants, read into parameter definitions.
 
 use pendkit_params::{ParamError, ParamSet};
@@ -98,19 +98,6 @@ pub fn define_materials(set: &mut ParamSet) -> Result<(), ParamError> {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn tables_match_the_shared_copies() {
-        // the crate carries copies; when the shared folder is beside the checkout, they must
-        // be identical
-        for (name, ours) in [("quad2005.csv", QUAD2005), ("materials.csv", MATERIALS)] {
-            let path =
-                concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/params/").to_string() + name;
-            if let Ok(shared) = std::fs::read_to_string(&path) {
-                assert_eq!(shared, ours, "{name} differs from {path}");
-            }
-        }
-    }
 
     #[test]
     fn all_rows_become_parameters() {

@@ -1,4 +1,4 @@
-//! A GEO-style triple suspension (source §6.1) with an HSTS-like parameter set (aLIGO HAM
+//! A GEO-style triple suspension (T020205 §6.1) with an HSTS-like parameter set (aLIGO HAM
 //! small triple scale): support, 2 upper blades, 2 upper wires (one per blade), upper mass
 //! (stage 1), 4 lower blades, 4 intermediate wires (one per blade), intermediate mass
 //! (stage 2), 4 lower wires (or fibres), optic (stage 3). One wire per blade tip throughout.
@@ -160,7 +160,7 @@ const PARAMETERS: &[(&str, &str)] = &[
     ("Y1", "steel_Y"),
     ("Y2", "steel_Y"),
     ("Y3", "lower_Y"),
-    // Poisson's ratios (not in the tables): silica as physics_oracles.md §0, steel typical
+    // Poisson's ratios (not in the tables): silica as docs/reference-values.md §0, steel typical
     ("nu_steel", "0.29"),
     ("nu_silica", "0.17"),
     (

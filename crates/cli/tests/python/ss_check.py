@@ -6,8 +6,11 @@ complex solve (scipy.linalg) rather than scipy.signal.freqresp, whose conversion
 polynomial form loses about 1e-8 on a 12-state model ("badly conditioned coefficients").
 
 Usage: python3 ss_check.py MODEL.mat EXPECTED.json
-EXPECTED.json: {"freqs": [...], "pairs": [{"input": name, "output": name, "re": [...], "im": [...]}]}
-Exit status 0 when every pair agrees to 1e-9 relative (of the largest magnitude of that pair).
+EXPECTED.json: {"freqs": [...], "pairs": [{"input": name, "output": name, "re": [...], "im": [...]}],
+                "provenance": {"model": ..., "case_name": ..., "stage": ..., "pendkit_version": ...,
+                               "parameters": {name: [value, unit]}, "damping_frequency_hz": ...}}
+Exit status 0 when every pair agrees to 1e-9 relative (of the largest magnitude of that pair)
+and the file's provenance is the expected one.
 """
 
 import json
@@ -25,6 +28,23 @@ mat = scipy.io.loadmat(sys.argv[1], simplify_cells=True)
 expected = json.load(open(sys.argv[2]))
 inputs = list(mat["inputs"])
 outputs = list(mat["outputs"])
+provenance = expected.get("provenance", {})
+for key in ["model", "case_name", "stage", "pendkit_version"]:
+    if key in provenance and str(mat[key]) != provenance[key]:
+        sys.exit(f"{key}: {mat[key]!r} in the file, expected {provenance[key]!r}")
+names = list(mat["parameter_names"])
+for name, (value, unit) in provenance.get("parameters", {}).items():
+    if name not in names:
+        sys.exit(f"parameter {name} missing from parameter_names")
+    k = names.index(name)
+    got = np.ravel(mat["parameter_values"])[k]
+    if got != value or list(mat["parameter_units"])[k] != unit:
+        sys.exit(f"parameter {name}: {got} {list(mat['parameter_units'])[k]!r}, expected {value} {unit!r}")
+if "damping_frequency_hz" in provenance:
+    got = float(np.ravel(mat["damping_frequency_hz"])[0])
+    if got != provenance["damping_frequency_hz"]:
+        sys.exit(f"damping_frequency_hz: {got}, expected {provenance['damping_frequency_hz']}")
+
 w = 2 * np.pi * np.asarray(expected["freqs"])
 worst = 0.0
 for pair in expected["pairs"]:

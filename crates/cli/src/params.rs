@@ -1,0 +1,85 @@
+//! `pendkit params`: every parameter of a model, case or suspension file, with its value,
+//! unit, description and the parts that read it; and `pendkit chain-file`, which writes an
+//! N-stage chain suspension file.
+
+use std::fmt::Write as _;
+
+use pendkit::{Case, parameter_table};
+
+use crate::error::CliError;
+use crate::format::sci;
+
+/// Arguments of `pendkit params`.
+#[derive(clap::Args)]
+pub struct Args {
+    /// Bundled model name, or path to a case file or a suspension file (.toml).
+    model: String,
+    /// Override a parameter first: NAME=EXPR, scale(x) or increment(x) (repeatable).
+    #[arg(long = "set", value_name = "NAME=EXPR")]
+    sets: Vec<String>,
+    /// Print JSON instead of a table.
+    #[arg(long)]
+    json: bool,
+}
+
+/// Runs the command and returns what it prints: one row per parameter, then (indented) the
+/// parts that read it.
+pub fn run(a: Args) -> Result<String, CliError> {
+    let case = Case::open(&a.model)?.with_sets(&a.sets)?;
+    let rows = parameter_table(&case)?;
+    if a.json {
+        let value = serde_json::to_value(&rows).map_err(|e| CliError::usage(e.to_string()))?;
+        return Ok(format!("{value:#}\n"));
+    }
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "# {} ({}): {} parameters",
+        case.name,
+        case.model.name(),
+        rows.len()
+    );
+    let _ = writeln!(
+        out,
+        "{:<24} {:>14} {:<10} description",
+        "name", "value", "unit"
+    );
+    for r in &rows {
+        let unit = if r.unit.is_empty() { "-" } else { &r.unit };
+        let _ = writeln!(
+            out,
+            "{:<24} {} {:<10} {}",
+            r.name,
+            sci(r.value, 6, 14),
+            unit,
+            r.description
+        );
+        // an expression's definition, under its value
+        if r.definition.trim().parse::<f64>().is_err() {
+            let _ = writeln!(out, "    = {}", r.definition);
+        }
+        if !r.read_by.is_empty() {
+            let _ = writeln!(out, "    read by: {}", r.read_by.join(", "));
+        }
+    }
+    Ok(out)
+}
+
+/// Arguments of `pendkit chain-file`.
+#[derive(clap::Args)]
+pub struct ChainArgs {
+    /// Number of stages (bodies), 1 to 200.
+    stages: usize,
+}
+
+/// The text of an N-stage chain suspension file.
+pub fn chain_file(a: ChainArgs) -> Result<String, CliError> {
+    let max = pendkit::suspension::generate::MAX_CHAIN_STAGES;
+    if !(1..=max).contains(&a.stages) {
+        return Err(CliError::usage(format!(
+            "chain-file: {} stages; give 1 to {max}",
+            a.stages
+        )));
+    }
+    Ok(pendkit::suspension::generate::chain(a.stages))
+}

@@ -1,0 +1,83 @@
+//! What `pendkit params` lists: every parameter of a case with its value, unit, description
+//! and the parts of the model that read it.
+
+use pendkit_model::{Defaults, ParameterInfo, parameters_with};
+
+use crate::{Case, Error};
+
+/// One parameter of a case.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct ParameterRow {
+    /// Name.
+    pub name: String,
+    /// Value at the case's settings, in `unit`.
+    pub value: f64,
+    /// Unit (empty for a pure number or when the model declares none).
+    pub unit: String,
+    /// The definition: a number or an expression of other parameters.
+    pub definition: String,
+    /// What it is (empty when the model says nothing).
+    pub description: String,
+    /// The parts of the model that read it (`bodies.top.mass`, `stages.uim.wires.length`,
+    /// `damping.fibre_bending`), in the order first read.
+    pub read_by: Vec<String>,
+}
+
+/// Every parameter of `case`, in definition order: value with the case's overrides, unit,
+/// definition, and what the model says about it ([`pendkit_model::Model::parameter_info`]).
+/// A bundled model written in Rust says only its units; with the `files` feature its
+/// descriptions and readers come from the bundled suspension file of the same name (the
+/// same model: tests/files_vs_rust.rs), for the parameters the file has.
+pub fn parameter_table(case: &Case) -> Result<Vec<ParameterRow>, Error> {
+    let defaults = Defaults::of(case.model)?;
+    let (params, resolved) = parameters_with(&defaults, &case.overrides)?;
+    let info = case.model.parameter_info(&resolved)?;
+    let twin = twin_info(case);
+    let about = |name: &str| -> Option<&ParameterInfo> {
+        info.iter()
+            .find(|i| i.name == name && !(i.description.is_empty() && i.read_by.is_empty()))
+            .or_else(|| twin.iter().find(|i| i.name == name))
+    };
+    Ok(resolved
+        .iter()
+        .map(|(name, value)| {
+            let known = about(name);
+            ParameterRow {
+                name: name.to_string(),
+                value,
+                unit: params
+                    .unit(name)
+                    .map(str::to_string)
+                    .or_else(|| known.map(|i| i.unit.clone()))
+                    .unwrap_or_default(),
+                definition: params
+                    .get(name)
+                    .map(|d| d.source.clone())
+                    .unwrap_or_default(),
+                description: known.map(|i| i.description.clone()).unwrap_or_default(),
+                read_by: known.map(|i| i.read_by.clone()).unwrap_or_default(),
+            }
+        })
+        .collect())
+}
+
+/// What the bundled suspension file of the same name as `case`'s bundled Rust model says
+/// about its parameters at the case's overrides (nothing without the `files` feature, for
+/// other models, or if the file does not take the overrides).
+fn twin_info(case: &Case) -> Vec<ParameterInfo> {
+    #[cfg(feature = "files")]
+    {
+        let bundled = crate::models()
+            .into_iter()
+            .any(|m| std::ptr::addr_eq(m, case.model));
+        if let (true, Some(file)) = (bundled, pendkit_models::find(case.model.name())) {
+            let file: &dyn pendkit_model::Model = &*file;
+            return Defaults::of(file)
+                .and_then(|d| parameters_with(&d, &case.overrides))
+                .and_then(|(_, resolved)| file.parameter_info(&resolved))
+                .unwrap_or_default();
+        }
+    }
+    let _ = case;
+    Vec::new()
+}

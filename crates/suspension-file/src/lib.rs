@@ -1,0 +1,498 @@
+//! Suspension files: a whole suspension described in TOML (parameters with units and
+//! descriptions, materials, bodies, stages of blades, wires, fibres, springs and rigid links,
+//! damping, element stages, named inputs and outputs), read with errors that name the file,
+//! the line and the field, and interpreted into a `pendkit_model::Model`.
+//!
+//! The format's reference is `docs/suspension-files.md`. A file is read in four steps:
+//! its TOML becomes a tree of nodes that remember their place ([`tree`]), the files it
+//! `extends` are merged under it, the merged tree is read into a typed description
+//! ([`spec`]), and each build evaluates that description against the resolved parameters
+//! ([`build`]), deriving the nominal geometry, tensions and preloads as the source's models
+//! do.
+//!
+//! ```
+//! use pendkit_model::{Model, Overrides, build_with};
+//! use pendkit_suspension::{NoLibrary, Suspension};
+//! let text = r#"
+//!     [parameters]
+//!     m = { value = 40, unit = "kg", description = "the bob" }
+//!     [materials.silica]
+//!     youngs_modulus = 72e9
+//!     poisson_ratio = 0.17
+//!     density = 2200
+//!     loss_angle = 1e-7
+//!     [bodies.support]
+//!     coordinates = "00"
+//!     driven = true
+//!     [bodies.bob]
+//!     coordinates = "1"
+//!     dof = "xyz"
+//!     mass = "m"
+//!     [stages.bob]
+//!     from = "support"
+//!     [stages.bob.fibres]
+//!     upper = { at = [0.005, 0.17, 0], mirror = ["y", "x"] }
+//!     lower = { at = [0.005, 0.17, 0], mirror = ["y", "x"], hinged = 1 }
+//!     length = 0.6
+//!     radius = 0.2e-3
+//!     material = "silica"
+//! "#;
+//! let pendulum = Suspension::from_text("pendulum.toml", text, &NoLibrary)?;
+//! let (system, _) = build_with(&pendulum, &Overrides::default())?;
+//! assert_eq!(system.wires.len(), 4);
+//! assert_eq!(system.coords.iter().find(|c| c.name == "z1").map(|c| c.start), Some(-0.6));
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+
+pub mod build;
+pub mod damping;
+pub mod generate;
+pub mod read;
+pub mod signals;
+pub mod source;
+pub mod spec;
+pub mod tree;
+
+use std::cell::RefCell;
+use std::collections::BTreeMap;
+use std::path::Path;
+use std::sync::Arc;
+
+use pendkit_energy::System;
+use pendkit_model::{BuildError, DampingSpec, DefaultsCache, Model, ParameterInfo, whole_number};
+use pendkit_params::{ParamError, ParamSet, Resolved};
+
+pub use build::Reads;
+pub use pendkit_model::Shape;
+pub use source::{At, FileError, Located, Origin, Source};
+pub use spec::Spec;
+
+use crate::build::{Ctx, evaluate_shape};
+use crate::tree::{Node, Value};
+
+/// Where `extends` finds files that are not on disk: the bundled ones.
+pub trait Library: Sync {
+    /// The bundled file called `name` (a model name such as `quad`, or a file name such as
+    /// `ligo-materials.toml`): how errors name it, and its text.
+    fn file(&self, name: &str) -> Option<(String, &'static str)>;
+}
+
+/// A library with no files: `extends` can only name files on disk.
+pub struct NoLibrary;
+
+impl Library for NoLibrary {
+    fn file(&self, _: &str) -> Option<(String, &'static str)> {
+        None
+    }
+}
+
+/// Parameters every model has; a file that does not define them gets them with these units
+/// and descriptions (the model builder reads them).
+const BUILT_IN: [(&str, f64, &str, &str, &str); 2] = [
+    (
+        "temperature",
+        pendkit_model::DEFAULT_TEMPERATURE,
+        "K",
+        "temperature of the thermal noise",
+        "thermal noise (system temperature)",
+    ),
+    (
+        "wire_terms_early",
+        0.0,
+        "-",
+        "wire terms in the equilibrium: 0 no, 1 yes, 2 equilibrium only",
+        "equilibrium (which terms join it)",
+    ),
+];
+
+/// A suspension whose topology is written by a program from a count parameter (the bundled
+/// `chain`): each build with another count writes and reads the file again.
+#[derive(Clone, Copy)]
+pub struct Generator {
+    /// The count parameter, e.g. `n_stages`.
+    pub parameter: &'static str,
+    /// Its description.
+    pub description: &'static str,
+    /// Allowed counts.
+    pub range: (usize, usize),
+    /// The count the file was written for.
+    pub default: usize,
+    /// Writes the file for a count.
+    pub write: fn(usize) -> String,
+    /// The bundled model's one-line summary (the written file's says how many).
+    pub summary: &'static str,
+}
+
+/// A suspension read from a file: a [`Model`].
+pub struct Suspension {
+    name: String,
+    summary: String,
+    source_name: String,
+    spec: Spec,
+    damping: BTreeMap<String, DampingSpec>,
+    generator: Option<Generator>,
+    cache: DefaultsCache,
+}
+
+impl std::fmt::Debug for Suspension {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Suspension")
+            .field("name", &self.name)
+            .field("source", &self.source_name)
+            .finish_non_exhaustive()
+    }
+}
+
+impl Suspension {
+    /// Reads the suspension file at `path`; `extends` names files relative to it, or
+    /// bundled models by name through `library`.
+    pub fn load(path: &Path, library: &dyn Library) -> Result<Suspension, FileError> {
+        let name = path.display().to_string();
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| FileError::file(&name, format!("cannot read: {e}")))?;
+        Suspension::from_source(Source::new(name, Some(path), text), library)
+    }
+
+    /// Reads a suspension from `text`, called `name` in errors (its stem is the default
+    /// model name); `extends` can only name bundled files through `library`.
+    pub fn from_text(
+        name: &str,
+        text: &str,
+        library: &dyn Library,
+    ) -> Result<Suspension, FileError> {
+        Suspension::from_source(Source::new(name, None, text), library)
+    }
+
+    /// A bundled suspension whose file is written by `generator` (for its default count).
+    pub fn generated(
+        name: &str,
+        generator: Generator,
+        library: &dyn Library,
+    ) -> Result<Suspension, FileError> {
+        let text = (generator.write)(generator.default);
+        let mut s = Suspension::from_text(name, &text, library)?;
+        s.summary = generator.summary.to_string();
+        s.generator = Some(generator);
+        Ok(s)
+    }
+
+    /// Reads a suspension from a source.
+    pub fn from_source(
+        source: Arc<Source>,
+        library: &dyn Library,
+    ) -> Result<Suspension, FileError> {
+        let mut chain = Vec::new();
+        let root = load_tree(source.clone(), library, &mut chain)?;
+        let at = At {
+            origin: root.origin.clone(),
+            path: String::new(),
+        };
+        let spec = spec::read(&root, at)?;
+        let stem = Path::new(&source.name)
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        let name = spec.name.as_ref().map_or(stem, |n| n.value.clone());
+        let summary = spec.summary.as_ref().map_or_else(
+            || format!("suspension file {}", source.name),
+            |s| s.value.clone(),
+        );
+        check_parameters(&spec)?;
+        let damping = damping::damping(&spec)?;
+        for (tag, d) in &damping {
+            d.parse(tag).map_err(|e| {
+                spec.damping.iter().find(|x| &x.tag == tag).map_or_else(
+                    || FileError::file(&source.name, e.to_string()),
+                    |x| x.at.error(e.to_string()),
+                )
+            })?;
+        }
+        Ok(Suspension {
+            name,
+            summary,
+            source_name: source.name.clone(),
+            spec,
+            damping,
+            generator: None,
+            cache: DefaultsCache::new(),
+        })
+    }
+
+    /// The description as read.
+    pub fn spec(&self) -> &Spec {
+        &self.spec
+    }
+
+    /// How errors name the file.
+    pub fn source_name(&self) -> &str {
+        &self.source_name
+    }
+
+    /// The description to build at `params`: the file's, or for a generated suspension the
+    /// one written for the count `params` asks for.
+    fn spec_for(&self, params: &Resolved) -> Result<std::borrow::Cow<'_, Spec>, BuildError> {
+        let Some(g) = &self.generator else {
+            return Ok(std::borrow::Cow::Borrowed(&self.spec));
+        };
+        let n = whole_number(params, g.parameter, g.range.0..=g.range.1)?;
+        if n == g.default {
+            return Ok(std::borrow::Cow::Borrowed(&self.spec));
+        }
+        let text = (g.write)(n);
+        let other = Suspension::from_text(&self.source_name, &text, &NoLibrary).map_err(|e| {
+            BuildError::Invalid {
+                item: format!("generated {} with {n} {}", self.name, g.parameter),
+                message: e.to_string(),
+            }
+        })?;
+        Ok(std::borrow::Cow::Owned(other.spec))
+    }
+
+    /// The drawing shape of each body that gives one, at `params` (sizes in m).
+    pub fn shapes(&self, params: &Resolved) -> Result<Vec<(String, Shape)>, BuildError> {
+        let ctx = Ctx {
+            params,
+            reads: None,
+        };
+        self.spec
+            .bodies
+            .iter()
+            .filter_map(|b| b.shape.as_ref().map(|s| (b, s)))
+            .map(|(b, s)| Ok((b.name.clone(), evaluate_shape(&ctx, s)?)))
+            .collect()
+    }
+
+    /// Builds at `params`, recording which field read which parameter.
+    pub fn build_recorded(&self, params: &Resolved) -> Result<(System, Reads), BuildError> {
+        let reads = RefCell::new(Reads::default());
+        let spec = self.spec_for(params)?;
+        let ctx = Ctx {
+            params,
+            reads: Some(&reads),
+        };
+        let system = build::build(&spec, &ctx)?;
+        if let Some(g) = &self.generator {
+            reads
+                .borrow_mut()
+                .add(g.parameter, "the generator (the stages it writes)");
+        }
+        Ok((system, reads.into_inner()))
+    }
+}
+
+/// Defines the file's parameters and resolves them, reporting a problem at the parameter it
+/// concerns.
+fn check_parameters(spec: &Spec) -> Result<(), FileError> {
+    let mut set = ParamSet::new();
+    let at_param = |name: &str| spec.parameters.iter().find(|p| p.name == name);
+    let fail = |name: &str, e: ParamError| match at_param(name) {
+        Some(p) => p.at.error(e.to_string()),
+        None => FileError::file("parameters", e.to_string()),
+    };
+    for p in &spec.parameters {
+        set.define(&p.name, &p.value.text)
+            .map_err(|e| p.at.error(e.to_string()))?;
+    }
+    match set.resolve() {
+        Ok(_) => Ok(()),
+        Err(e) => Err(match &e {
+            ParamError::Cycle { chain } => fail(&chain[0], e.clone()),
+            ParamError::Undefined { used_in, .. } => fail(used_in, e.clone()),
+            ParamError::NotFinite { name, .. } | ParamError::Syntax { name, .. } => {
+                fail(name, e.clone())
+            }
+            _ => FileError::file("parameters", e.to_string()),
+        }),
+    }
+}
+
+/// Reads `source` and the files it extends, merged (the extending file's values win).
+fn load_tree(
+    source: Arc<Source>,
+    library: &dyn Library,
+    chain: &mut Vec<String>,
+) -> Result<Node, FileError> {
+    if chain.contains(&source.name) {
+        chain.push(source.name.clone());
+        return Err(FileError::file(
+            &source.name,
+            format!("`extends` goes round in a circle: {}", chain.join(" -> ")),
+        ));
+    }
+    chain.push(source.name.clone());
+    let mut node = tree::parse(&source)?;
+    let Value::Table(table) = &mut node.value else {
+        return Ok(node);
+    };
+    let Some(extends) = table.remove("extends") else {
+        return Ok(node);
+    };
+    let at = At {
+        origin: extends.origin.clone(),
+        path: "extends".into(),
+    };
+    let Value::Str(target) = &extends.value else {
+        return Err(at.error("expected the name of a file or of a bundled model"));
+    };
+    let base_source = if target.ends_with(".toml") && source.path.is_some() {
+        let dir = source
+            .path
+            .as_ref()
+            .and_then(|p| p.parent())
+            .unwrap_or_else(|| Path::new(""));
+        let path = dir.join(target);
+        let text = std::fs::read_to_string(&path)
+            .map_err(|e| at.error(format!("cannot read {}: {e}", path.display())))?;
+        Source::new(path.display().to_string(), Some(&path), text)
+    } else {
+        let (name, text) = library.file(target).ok_or_else(|| {
+            at.error(format!(
+                "no file '{target}'{}",
+                if target.ends_with(".toml") {
+                    " among the bundled files"
+                } else {
+                    " (a bundled model name, or a path ending in .toml)"
+                }
+            ))
+        })?;
+        Source::new(name, None, text)
+    };
+    let mut base = load_tree(base_source, library, chain)?;
+    let Value::Table(base_table) = &mut base.value else {
+        return Ok(node);
+    };
+    // a file's name and summary are its own
+    base_table.remove("name");
+    base_table.remove("summary");
+    keep_parameter_documentation(base_table, &mut node);
+    if let Value::Table(child) = std::mem::replace(&mut node.value, Value::Bool(false)) {
+        base_table.merge(child);
+    }
+    Ok(Node {
+        value: base.value,
+        origin: node.origin,
+    })
+}
+
+/// A parameter that an extending file gives in the short form (`n_beads = 5`) keeps the
+/// unit and description of the extended file's long form: the short form becomes
+/// `{ value = 5 }`, which the merge folds into the long one.
+fn keep_parameter_documentation(base: &tree::Table, child: &mut Node) {
+    let Some(Value::Table(base_parameters)) = base.get("parameters").map(|n| &n.value) else {
+        return;
+    };
+    let Value::Table(child) = &mut child.value else {
+        return;
+    };
+    let Some((_, _, parameters)) = child.entries.iter_mut().find(|(k, _, _)| k == "parameters")
+    else {
+        return;
+    };
+    let Value::Table(parameters) = &mut parameters.value else {
+        return;
+    };
+    for (name, key_origin, value) in &mut parameters.entries {
+        let documented = matches!(
+            base_parameters.get(name).map(|n| &n.value),
+            Some(Value::Table(_))
+        );
+        if documented && !matches!(value.value, Value::Table(_)) {
+            let short = value.clone();
+            *value = Node {
+                value: Value::Table(tree::Table {
+                    entries: vec![("value".to_string(), key_origin.clone(), short)],
+                }),
+                origin: value.origin.clone(),
+            };
+        }
+    }
+}
+
+/// A unit as reports print it: the file's `-` (a pure number or a count) is no unit.
+fn unit_of(written: &str) -> &str {
+    if written.trim() == "-" { "" } else { written }
+}
+
+impl Model for Suspension {
+    fn name(&self) -> &str {
+        &self.name
+    }
+
+    fn summary(&self) -> &str {
+        &self.summary
+    }
+
+    fn parameters(&self) -> Result<ParamSet, ParamError> {
+        let mut set = ParamSet::new();
+        for p in &self.spec.parameters {
+            set.define(&p.name, &p.value.text)?;
+            if !p.unit.is_empty() {
+                set.set_unit(&p.name, unit_of(&p.unit))?;
+            }
+        }
+        if let Some(g) = &self.generator {
+            set.define_value(g.parameter, g.default as f64)?;
+            set.set_unit(g.parameter, "")?;
+        }
+        for (name, value, unit, ..) in BUILT_IN {
+            if !set.contains(name) {
+                set.define_value(name, value)?;
+                set.set_unit(name, unit_of(unit))?;
+            }
+        }
+        Ok(set)
+    }
+
+    fn damping(&self) -> BTreeMap<String, DampingSpec> {
+        self.damping.clone()
+    }
+
+    fn build(&self, params: &Resolved) -> Result<System, BuildError> {
+        let spec = self.spec_for(params)?;
+        build::build(
+            &spec,
+            &Ctx {
+                params,
+                reads: None,
+            },
+        )
+    }
+
+    fn defaults_cache(&self) -> Option<&DefaultsCache> {
+        Some(&self.cache)
+    }
+
+    fn parameter_info(&self, params: &Resolved) -> Result<Vec<ParameterInfo>, BuildError> {
+        let (_, mut reads) = self.build_recorded(params)?;
+        for (tag, symbols) in build::damping_reads(&self.damping) {
+            for s in symbols {
+                if params.get(&s).is_ok() {
+                    reads.add(&s, &format!("damping.{tag}"));
+                }
+            }
+        }
+        for (name, _, _, _, reader) in BUILT_IN {
+            reads.add(name, reader);
+        }
+        Ok(params
+            .iter()
+            .map(|(name, _)| {
+                let file = self.spec.parameters.iter().find(|p| p.name == name);
+                let built_in = BUILT_IN.iter().find(|b| b.0 == name);
+                let generated = self.generator.filter(|g| g.parameter == name);
+                let (unit, description) = match (file, built_in, generated) {
+                    (Some(p), _, _) => (p.unit.clone(), p.description.clone()),
+                    (None, Some(b), _) => (b.2.to_string(), b.3.to_string()),
+                    (None, None, Some(g)) => ("-".to_string(), g.description.to_string()),
+                    _ => (String::new(), String::new()),
+                };
+                ParameterInfo {
+                    name: name.to_string(),
+                    unit,
+                    description,
+                    read_by: reads.of(name).to_vec(),
+                }
+            })
+            .collect())
+    }
+}

@@ -1,0 +1,221 @@
+//! The bundled suspensions: the suspension files under `models/` embedded in the program and
+//! listed by name, each a `pendkit_model::Model` read from its file on first use; and the
+//! library through which a file's `extends` finds them.
+
+use std::collections::BTreeMap;
+use std::sync::{Arc, LazyLock, OnceLock};
+
+use pendkit_energy::System;
+use pendkit_model::{BuildError, DampingSpec, DefaultsCache, Model, ParameterInfo};
+use pendkit_params::{ParamError, ParamSet, Resolved};
+use pendkit_suspension::generate::{MAX_CHAIN_STAGES, chain};
+use pendkit_suspension::{FileError, Generator, Library, Suspension};
+
+/// A bundled file: its name (what `extends` says), its path in the repository (what errors
+/// say), and its text.
+struct File {
+    name: &'static str,
+    path: &'static str,
+    text: &'static str,
+}
+
+macro_rules! file {
+    ($dir:literal, $name:literal) => {
+        File {
+            name: $name,
+            path: concat!("models/", $dir, "/", $name),
+            text: include_str!(concat!("../../", $dir, "/", $name)),
+        }
+    };
+}
+
+/// Every bundled file.
+static FILES: [File; 16] = [
+    file!("basic", "toy.toml"),
+    file!("basic", "pendulum.toml"),
+    file!("basic", "double-pendulum.toml"),
+    file!("basic", "rigid-body.toml"),
+    file!("basic", "chain.toml"),
+    file!("ligo", "ligo-materials.toml"),
+    file!("ligo", "quad.toml"),
+    file!("ligo", "quad-lite.toml"),
+    file!("ligo", "quad-full.toml"),
+    file!("ligo", "quad-lateral.toml"),
+    file!("ligo", "quad-v5.toml"),
+    file!("ligo", "triple.toml"),
+    file!("ligo", "triple-lite.toml"),
+    file!("ligo", "triple-full.toml"),
+    file!("ligo", "triple-lateral.toml"),
+    file!("ligo", "triple-v5.toml"),
+];
+
+/// The bundled models, in the order `pendkit models` lists them: each is the file of its
+/// name (`chain` is written by its generator for its parameter `n_stages`).
+const MODELS: [&str; 15] = [
+    "toy",
+    "pendulum",
+    "double-pendulum",
+    "rigid-body",
+    "chain",
+    "quad",
+    "quad-lite",
+    "quad-full",
+    "quad-lateral",
+    "quad-v5",
+    "triple",
+    "triple-lite",
+    "triple-full",
+    "triple-lateral",
+    "triple-v5",
+];
+
+/// The chain's generator: `n_stages` bodies (the bundled file is its text for 4).
+pub const CHAIN: Generator = Generator {
+    parameter: "n_stages",
+    description: "number of bodies in the chain (1 to 200): the stages are written for it",
+    range: (1, MAX_CHAIN_STAGES),
+    default: 4,
+    write: chain,
+    summary: "n_stages (default 4) 40 kg bodies in a vertical chain, each on 4 vertical steel wires",
+};
+
+/// The bundled files, for `extends`.
+pub struct Bundled;
+
+impl Library for Bundled {
+    fn file(&self, name: &str) -> Option<(String, &'static str)> {
+        let file_name = if name.ends_with(".toml") {
+            name.to_string()
+        } else {
+            format!("{name}.toml")
+        };
+        FILES
+            .iter()
+            .find(|f| f.name == file_name)
+            .map(|f| (f.path.to_string(), f.text))
+    }
+}
+
+/// A bundled model: its name, and its file read on first use (a file that does not read
+/// makes every use of the model fail with the file's error).
+pub struct BundledModel {
+    name: &'static str,
+    loaded: OnceLock<Result<Suspension, FileError>>,
+}
+
+impl BundledModel {
+    /// The model read from its file.
+    pub fn suspension(&self) -> Result<&Suspension, FileError> {
+        self.loaded
+            .get_or_init(|| {
+                if self.name == "chain" {
+                    return Suspension::generated("models/basic/chain.toml", CHAIN, &Bundled);
+                }
+                let (path, text) = Bundled
+                    .file(self.name)
+                    .ok_or_else(|| FileError::file(self.name, "no bundled file for this model"))?;
+                Suspension::from_text(&path, text, &Bundled)
+            })
+            .as_ref()
+            .map_err(Clone::clone)
+    }
+
+    fn broken(&self, e: FileError) -> BuildError {
+        BuildError::Invalid {
+            item: format!("bundled model '{}'", self.name),
+            message: e.to_string(),
+        }
+    }
+}
+
+impl Model for BundledModel {
+    fn name(&self) -> &str {
+        self.name
+    }
+
+    fn summary(&self) -> &str {
+        match self.suspension() {
+            Ok(s) => s.summary(),
+            Err(_) => "(its file does not read: building it says why)",
+        }
+    }
+
+    fn parameters(&self) -> Result<ParamSet, ParamError> {
+        // a file that does not read has no parameters; its build reports the file's error
+        self.suspension()
+            .map_or_else(|_| Ok(ParamSet::new()), |s| s.parameters())
+    }
+
+    fn damping(&self) -> BTreeMap<String, DampingSpec> {
+        self.suspension().map(|s| s.damping()).unwrap_or_default()
+    }
+
+    fn build(&self, params: &Resolved) -> Result<System, BuildError> {
+        self.suspension().map_err(|e| self.broken(e))?.build(params)
+    }
+
+    fn defaults_cache(&self) -> Option<&DefaultsCache> {
+        self.suspension().ok().and_then(|s| s.defaults_cache())
+    }
+
+    fn parameter_info(&self, params: &Resolved) -> Result<Vec<ParameterInfo>, BuildError> {
+        self.suspension()
+            .map_err(|e| self.broken(e))?
+            .parameter_info(params)
+    }
+}
+
+static CATALOGUE: LazyLock<Vec<Arc<BundledModel>>> = LazyLock::new(|| {
+    MODELS
+        .iter()
+        .map(|&name| {
+            Arc::new(BundledModel {
+                name,
+                loaded: OnceLock::new(),
+            })
+        })
+        .collect()
+});
+
+/// Every bundled model.
+pub fn models() -> Vec<&'static dyn Model> {
+    CATALOGUE.iter().map(|m| &**m as &dyn Model).collect()
+}
+
+/// The bundled model called `name`.
+pub fn find(name: &str) -> Option<Arc<BundledModel>> {
+    CATALOGUE.iter().find(|m| m.name == name).cloned()
+}
+
+/// The names of the bundled models.
+pub fn names() -> &'static [&'static str] {
+    &MODELS
+}
+
+/// The bundled files (name, repository path, text), for tests and tools.
+pub fn files() -> impl Iterator<Item = (&'static str, &'static str, &'static str)> {
+    FILES.iter().map(|f| (f.name, f.path, f.text))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The bundled chain file is the generator's text for its default count, so that reading
+    /// the file and generating it agree.
+    #[test]
+    fn chain_file_is_the_generators() {
+        let (_, text) = Bundled.file("chain").unwrap();
+        assert_eq!(text, chain(CHAIN.default));
+    }
+
+    /// Every bundled file reads (a broken file would only show when its model is built).
+    #[test]
+    fn every_bundled_model_reads() {
+        for name in names() {
+            let model = find(name).unwrap();
+            let s = model.suspension().unwrap_or_else(|e| panic!("{e}"));
+            assert_eq!(s.name(), *name);
+        }
+    }
+}
