@@ -47,7 +47,7 @@ fn lateral(t: f64, ei: f64, clamped_bottom: bool) -> f64 {
 
 /// Loss angle of x1 from the stage's complex K_eff at 1 Hz.
 fn loss_angle(r: &StageResult, name: &str) -> f64 {
-    let k = r.model.reduced(&r.system.damping, 1.0).k_eff;
+    let k = r.model.reduced(&r.system.damping, 1.0).unwrap().k_eff;
     let i = r.model.variables.iter().position(|v| v == name).unwrap();
     k[(i, i)].im / k[(i, i)].re
 }
@@ -105,7 +105,8 @@ fn pendulum_thermal_noise_at_10_hz() {
         &v,
         r.system.temperature,
         &[10.0],
-    );
+    )
+    .unwrap();
     assert_rel(noise.total[0], s, 1e-6);
     assert_printed(noise.total[0].sqrt(), 2.326369e-20, 7);
     // all of it is bending loss; the breakdown names the four fibres' bending terms

@@ -1,3 +1,4 @@
+//! Profiling driver: times the quad's noise sweep in a loop (for callgrind / perf), `cargo run --release -p pendkit-tests --example noiseprof -- [MODEL]`.
 use std::time::Instant;
 fn main() {
     let args: Vec<String> = std::env::args().collect();

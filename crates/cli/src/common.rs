@@ -31,6 +31,11 @@ pub struct ModelArgs {
     /// damping.<tag>.<field>=EXPR (repeatable).
     #[arg(long = "set", value_name = "NAME=EXPR")]
     pub sets: Vec<String>,
+    /// Go on when the equilibrium is unstable (a warning on stderr instead of an error):
+    /// unstable modes are listed with minus their growth rate; responses of an unstable
+    /// plant are those of its linearisation.
+    #[arg(long)]
+    pub allow_unstable: bool,
     /// Names in tables and exports: `model` (the model's own, default) or a scheme the
     /// model declares, e.g. `ligo` (L, T, V, R, P, Y; M0, L1, L2, L3; GND).
     #[arg(long, value_name = "SCHEME")]
@@ -105,12 +110,14 @@ impl Run {
         )
     }
 
-    /// The stability verdict, in one place for every command (issue 11 refines it).
+    /// The stability gate, in one place for every command: an unstable equilibrium is
+    /// refused with one line naming the growing mode, or with `allow_unstable` the same
+    /// line goes to stderr as a warning and the command goes on.
     pub fn check_stable(&self, allow_unstable: bool) -> Result<(), CliError> {
-        match (self.result.stability(), allow_unstable) {
-            (Err(e), false) => Err(e.into()),
-            _ => Ok(()),
+        if let Some(warning) = self.result.require_stable(allow_unstable)? {
+            eprintln!("warning: {warning}");
         }
+        Ok(())
     }
 }
 
@@ -156,12 +163,16 @@ impl ModelArgs {
         })
     }
 
-    /// As [`ModelArgs::run`], for results that need losses (stage 0B or later).
+    /// As [`ModelArgs::run`], for results that need losses (stage 0B or later) and answer
+    /// with the linearised model: an unstable equilibrium is refused unless
+    /// `--allow-unstable`.
     pub fn run_lossy(&self) -> Result<Run, CliError> {
         if self.stage == Some(Stage::S0A) {
             return Err(Error::StageTooEarly.into());
         }
-        self.run(ModeSelection::All)
+        let run = self.run(ModeSelection::All)?;
+        run.check_stable(self.allow_unstable)?;
+        Ok(run)
     }
 }
 

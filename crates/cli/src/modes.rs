@@ -24,9 +24,6 @@ pub struct Args {
     /// Also print each mode's lab-frame body motions (table output).
     #[arg(long)]
     lab: bool,
-    /// Print the modes even if the equilibrium is unstable (exit status stays 0).
-    #[arg(long)]
-    allow_unstable: bool,
     /// Only the modes below this frequency (Hz); large models find them by shift-invert
     /// on a sparse factorisation instead of the dense eigensolver.
     #[arg(long, value_name = "HZ")]
@@ -46,7 +43,7 @@ pub fn run(a: Args) -> Result<String, CliError> {
     check_plot_path(&a.plot)?;
     let selection = a.below.map_or(ModeSelection::All, ModeSelection::Below);
     let run = a.args.run(selection)?;
-    run.check_stable(a.allow_unstable)?;
+    run.check_stable(a.args.allow_unstable)?;
     if let Some(path) = &a.plot {
         match a.shape {
             Some(n) => plotting::save(&plotting::mode_shape(&run, n)?, path)?,
@@ -78,6 +75,8 @@ fn modes_json(run: &Run) -> String {
                 "stable": m.is_stable(),
                 "label": run.coord(&m.label),
                 "family": r.mode_family(m),
+                "accuracy": finite_or_null(m.accuracy()),
+                "vector_accuracy": m.vector_error,
                 "vector": m.vector,
                 "energy_fractions": m.energy_fractions,
                 "lab": lab,
@@ -103,6 +102,18 @@ fn modes_json(run: &Run) -> String {
     });
     serde_json::to_string_pretty(&out).unwrap_or_default() + "\n"
 }
+
+/// A JSON number, or null for infinity (the relative accuracy of a neutral mode).
+fn finite_or_null(x: f64) -> serde_json::Value {
+    if x.is_finite() {
+        json!(x)
+    } else {
+        serde_json::Value::Null
+    }
+}
+
+/// Relative accuracy worse than this is printed next to the frequency.
+const PRINT_ACCURACY_ABOVE: f64 = 1e-6;
 
 fn modes_table(run: &Run, lab: bool) -> String {
     let r = &run.result;
@@ -137,11 +148,19 @@ fn modes_table(run: &Run, lab: bool) -> String {
                 )
             })
             .collect();
-        let flag = if m.is_stable() {
-            ""
+        let mut flag = if m.is_stable() {
+            String::new()
         } else {
-            "  UNSTABLE (growth rate)"
+            "  UNSTABLE (growth rate)".to_string()
         };
+        if m.omega_squared == 0.0 {
+            flag += &format!(
+                "  neutral (|omega^2| below its error {:.1e} rad^2/s^2)",
+                m.omega_squared_error
+            );
+        } else if m.accuracy() > PRINT_ACCURACY_ABOVE {
+            flag += &format!("  (accuracy {:.1e} relative)", m.accuracy());
+        }
         let _ = writeln!(
             out,
             "{:>4}  {}  {:<6}  {:<10}  {}{}",

@@ -17,6 +17,9 @@ pub struct Args {
     /// Frequency (Hz) at which damping is represented as viscous.
     #[arg(long, default_value_t = 1.0)]
     damping_frequency: f64,
+    /// Replace the output file if it exists.
+    #[arg(long)]
+    force: bool,
 }
 
 /// Runs the command and returns what it prints.
@@ -29,6 +32,7 @@ pub fn run(a: Args) -> Result<String, CliError> {
         damping_frequency,
         run.scheme.as_deref(),
         &provenance,
+        &pendkit::export::WriteOptions { overwrite: a.force },
     )?;
     let ss = &named.state_space;
     let mut out = String::new();

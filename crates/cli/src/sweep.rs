@@ -40,10 +40,6 @@ pub struct Args {
     /// (one --vary), or the noise or transfer function of every step.
     #[arg(long, value_name = "FILE")]
     plot: Option<PathBuf>,
-    /// Carry on through steps whose equilibrium is unstable (their unstable modes are
-    /// listed at minus their growth rate).
-    #[arg(long)]
-    allow_unstable: bool,
 }
 
 /// One swept parameter.
@@ -311,7 +307,7 @@ pub fn run(a: Args) -> Result<String, CliError> {
             sets.push(format!("{}={value:e}", v.name));
         }
         let run = a.args.run_with(ModeSelection::All, &sets, false)?;
-        run.check_stable(a.allow_unstable)?;
+        run.check_stable(a.args.allow_unstable)?;
         let step_name = varies
             .iter()
             .zip(&values)

@@ -27,6 +27,8 @@ fn scipy_state_space_matches_pendkit_transfer_functions() {
     sets.push("m2=35".into());
     let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR"));
     let mat = dir.join("double-pendulum-ss.mat");
+    // a file left by an earlier run: ss refuses to overwrite without --force
+    let _ = std::fs::remove_file(&mat);
     let mut args: Vec<String> = vec!["ss".into(), "double-pendulum".into(), "--out".into()];
     args.push(mat.to_string_lossy().into_owned());
     args.extend(["--damping-frequency".into(), "3".into()]);
@@ -60,12 +62,15 @@ fn scipy_state_space_matches_pendkit_transfer_functions() {
     ];
     let mut expected = Vec::new();
     for (input, output) in pairs {
-        let h = r.model.transfer(
-            &r.system.damping,
-            &r.input(input).unwrap(),
-            &r.output(output).unwrap(),
-            &freqs,
-        );
+        let h = r
+            .model
+            .transfer(
+                &r.system.damping,
+                &r.input(input).unwrap(),
+                &r.output(output).unwrap(),
+                &freqs,
+            )
+            .unwrap();
         expected.push(serde_json::json!({
             "input": input,
             "output": output,

@@ -20,7 +20,7 @@ use faer::{Mat, Par, Side};
 use pendkit_energy::Damping;
 
 use crate::DynamicsError;
-use crate::modes::{Mode, Modes, SparseColumns};
+use crate::modes::{Modes, ROUNDING, RawMode, SparseColumns, StiffnessRounding, finish};
 use crate::sparse_lu::SparseLu;
 use crate::stage::{StageModel, TWO_PI};
 
@@ -139,6 +139,32 @@ impl<'a> Inertia<'a> {
     }
 }
 
+/// [`crate::EntryRounding`] for the variables' block of a matrix on the stage's pattern.
+struct PatternEntries<'a> {
+    model: &'a StageModel,
+    values: Vec<f64>,
+}
+
+impl StiffnessRounding for PatternEntries<'_> {
+    fn error(&self, v: &[f64]) -> f64 {
+        let sum: f64 = self
+            .values
+            .iter()
+            .enumerate()
+            .map(|(s, k)| {
+                let (i, j) = self.model.pattern.position(s);
+                match (v.get(i), v.get(j)) {
+                    (Some(a), Some(b)) if i < self.model.sizes.0 && j < self.model.sizes.0 => {
+                        a.abs() * k.abs() * b.abs()
+                    }
+                    _ => 0.0,
+                }
+            })
+            .sum();
+        ROUNDING * f64::EPSILON * sum
+    }
+}
+
 /// Deterministic pseudo-random start vectors (xorshift), uniform in (−1, 1).
 fn start_block(n: usize, count: usize, seed: u64) -> Vec<Vec<f64>> {
     let mut state = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1;
@@ -164,6 +190,21 @@ impl StageModel {
     /// modes are those [`crate::normal_modes`] gives below `hz` (mass-normalised vectors,
     /// kinetic-energy fractions, labels; unstable modes with minus their growth rate).
     pub fn modes_below(&self, damping: &Damping, hz: f64) -> Result<Modes, DynamicsError> {
+        let rounding = PatternEntries {
+            model: self,
+            values: self.master_values(damping, 0.0).0,
+        };
+        self.modes_below_with_rounding(damping, hz, &rounding)
+    }
+
+    /// [`StageModel::modes_below`] with the rounding of the stiffness given by `rounding`
+    /// (each mode's estimated error, and which modes are neutral).
+    pub fn modes_below_with_rounding(
+        &self,
+        damping: &Damping,
+        hz: f64,
+        rounding: &dyn StiffnessRounding,
+    ) -> Result<Modes, DynamicsError> {
         if !(hz > 0.0 && hz.is_finite()) {
             return Err(DynamicsError::BelowFrequency(hz));
         }
@@ -304,14 +345,20 @@ impl StageModel {
             }
             block = w[dim - added..].to_vec();
         }
-        found.sort_by(|a, b| a.0.total_cmp(&b.0));
-        let modes = found
+        // a converged Ritz value θ is within TOLERANCE |θ| of an eigenvalue of the operator,
+        // so λ = σ + 1/θ within TOLERANCE |λ − σ|
+        let raw = found
             .into_iter()
-            .map(|(lambda, u)| Mode::from_vector(lambda, &u, &mass.times(&u), &self.variables))
+            .map(|(lambda, u)| RawMode {
+                omega_squared: lambda,
+                error: TOLERANCE * (lambda - sigma).abs(),
+                vector: u,
+                block: 0,
+            })
             .collect();
         Ok(Modes {
             coordinates: self.variables.clone(),
-            modes,
+            modes: finish(raw, &mass, &self.variables, rounding),
         })
     }
 }

@@ -10,11 +10,20 @@ mod modes;
 mod pattern;
 mod schur;
 mod sparse_lu;
+mod stability;
 mod stage;
 mod sweep;
+pub mod validate;
 
-pub use modes::{BodyMotion, Mode, Modes, lab_motion, normal_modes};
+pub use modes::{
+    BodyMotion, EntryRounding, Mode, Modes, StiffnessRounding, lab_motion, normal_modes,
+    normal_modes_with_rounding,
+};
 pub use pattern::Pattern;
+pub use stability::{
+    FloatMap, GrowingMode, InvertedBody, RunawayFloat, Stability, TermRounding, Verdict,
+    inverted_bodies, runaway_floats,
+};
 pub use stage::{Input, Output, ReducedComplex, StageModel, StateSpace, TermLoss};
 pub use sweep::{DENSE_LIMIT, Solver, Sweep, coupled_unknowns};
 
@@ -46,19 +55,58 @@ pub enum DynamicsError {
     /// The eigen solver failed.
     #[error("eigen solver failed: {0}")]
     Eigen(String),
-    /// A negative eigenvalue: the equilibrium is unstable.
+    /// The equilibrium is unstable: the report says what grows (one line).
+    #[error("{0}")]
+    Unstable(Box<Stability>),
+    /// A matrix given to a calculation holds NaN or infinity.
+    #[error("{what} has a non-finite entry at row {row}, column {column}")]
+    NotFinite {
+        /// Which matrix.
+        what: &'static str,
+        /// Row (from 0).
+        row: usize,
+        /// Column (from 0).
+        column: usize,
+    },
+    /// A frequency outside the documented limits.
     #[error(
-        "unstable equilibrium: mode {index} has negative stiffness (growth rate {rate_hz:.6} Hz), mostly {label} ({fraction:.0} % of its kinetic energy)"
+        "{what} {f_hz:e} Hz is out of range: frequencies must be finite, from 1e-9 Hz to 1e9 Hz"
     )]
-    Unstable {
-        /// 1-based mode number in ascending order.
+    Frequency {
+        /// What the frequency is for.
+        what: &'static str,
+        /// The value given (Hz).
+        f_hz: f64,
+    },
+    /// A frequency grid with more points than allowed.
+    #[error("{0} frequencies: at most 1000000 points per grid")]
+    TooManyPoints(usize),
+    /// A damping multiplier that is not finite or has the wrong sign somewhere.
+    #[error("damping tag '{tag}' at {f_hz} Hz: multiplier {real} + {imag}i {problem}")]
+    Damping {
+        /// The tag.
+        tag: String,
+        /// Where (Hz).
+        f_hz: f64,
+        /// ε' there.
+        real: f64,
+        /// ε'' there.
+        imag: f64,
+        /// What is wrong with it.
+        problem: &'static str,
+    },
+    /// A temperature that is not positive and finite.
+    #[error("temperature must be positive and finite (got {0} K)")]
+    Temperature(f64),
+    /// An index (of a variable, float or parameter) beyond the model's.
+    #[error("{what} index {index} is out of range (the model has {len})")]
+    Index {
+        /// What the index is of.
+        what: &'static str,
+        /// The index given.
         index: usize,
-        /// sqrt(-ω²)/2π (Hz).
-        rate_hz: f64,
-        /// Dominant coordinate.
-        label: String,
-        /// Its kinetic-energy share (%).
-        fraction: f64,
+        /// How many there are.
+        len: usize,
     },
     /// An input, output or matrix with the wrong number of entries.
     #[error("{what} has {got} entries, expected {expected}")]
@@ -144,34 +192,22 @@ impl StageModel {
         freqs: &[f64],
         solver: Solver,
     ) -> Result<Vec<c64>, DynamicsError> {
+        validate::check_frequencies(freqs)?;
         let mut sweep = Sweep::new(self, damping, input, output, solver)?;
         let mut values = Vec::with_capacity(freqs.len());
         sweep.for_each(freqs, |_, y, _| values.push(y))?;
         Ok(values)
     }
 
-    /// [`StageModel::transfer_with`] over the restricted blocks. An input or output of the
-    /// wrong length, or a frequency where the dynamic stiffness is exactly singular, gives
-    /// NaN values; [`StageModel::transfer_with`] says which it was.
+    /// [`StageModel::transfer_with`] over the restricted blocks.
     pub fn transfer(
         &self,
         damping: &Damping,
         input: &Input,
         output: &Output,
         freqs: &[f64],
-    ) -> Vec<c64> {
-        let nan = c64::new(f64::NAN, f64::NAN);
-        match Sweep::new(self, damping, input, output, Solver::Restricted) {
-            Ok(mut sweep) => {
-                let mut values = Vec::with_capacity(freqs.len());
-                match sweep.for_each(freqs, |_, y, _| values.push(y)) {
-                    Ok(()) => values,
-                    // a singular point: NaN there, the others solved one by one
-                    Err(_) => freqs.iter().map(|&f| sweep.at(f).unwrap_or(nan)).collect(),
-                }
-            }
-            Err(_) => vec![nan; freqs.len()],
-        }
+    ) -> Result<Vec<c64>, DynamicsError> {
+        self.transfer_with(damping, input, output, freqs, Solver::Restricted)
     }
 
     /// Response z over every variable and float (master order) to the generalised force
@@ -182,6 +218,7 @@ impl StageModel {
         force: &nalgebra::DVector<f64>,
         f_hz: f64,
     ) -> Result<Vec<c64>, DynamicsError> {
+        validate::check_frequency("frequency", f_hz)?;
         let mut sweep = Sweep::new(
             self,
             damping,

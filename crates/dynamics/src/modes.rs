@@ -13,9 +13,10 @@ use crate::DynamicsError;
 use crate::pattern::dense_components;
 
 /// One normal mode.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Mode {
-    /// Eigenvalue ω² (rad²/s²); negative for an unstable mode.
+    /// Eigenvalue ω² (rad²/s²); negative for an unstable mode, exactly zero for a neutral
+    /// one (|ω²| within its estimated error, [`Mode::omega_squared_error`]).
     pub omega_squared: f64,
     /// Frequency (Hz); for an unstable mode, minus the growth rate sqrt(-ω²)/2π.
     pub hz: f64,
@@ -25,7 +26,51 @@ pub struct Mode {
     pub vector: Vec<f64>,
     /// Kinetic-energy fraction per variable, v_i (M v)_i (sums to 1).
     pub energy_fractions: Vec<f64>,
+    /// Estimated error of `omega_squared` (rad²/s², absolute): the eigensolver's own
+    /// resolution of this mode (set by the ratio of this mode's ω² to the ones its method
+    /// resolves best) plus the first-order effect of rounding the stiffness and mass
+    /// matrices' entries (set by the stiffness and mass ratios of the parts this mode moves).
+    /// See [`Mode::accuracy`].
+    pub omega_squared_error: f64,
+    /// Estimated error of the mode shape (radians of rotation in the mass metric, at most
+    /// 1): `omega_squared_error` over the gap to the nearest other mode of the same block
+    /// (modes closer than their errors mix, and only their span is determined).
+    pub vector_error: f64,
 }
+
+/// What a stiffness matrix's entries are known to: the first-order change of vᵀ K v
+/// (rad²/s² for a mass-normalised v) that rounding them can cause. The modes use it for
+/// each mode's estimated accuracy and to tell a neutral mode from a growing one.
+pub trait StiffnessRounding {
+    /// Upper estimate of |δ(vᵀ K v)| for the vector `v` over the variables (vᵀ M v = 1).
+    fn error(&self, v: &[f64]) -> f64;
+}
+
+/// Rounding of a matrix given entry by entry: each entry known to a few ulps of itself,
+/// ε Σ |v_i| |K_ij| |v_j| (for matrices built by the caller; the stage runs use the
+/// rounding of every term that makes up the entries instead).
+pub struct EntryRounding<'a>(pub &'a DMatrix<f64>);
+
+impl StiffnessRounding for EntryRounding<'_> {
+    fn error(&self, v: &[f64]) -> f64 {
+        let k = self.0;
+        let n = v.len().min(k.nrows()).min(k.ncols());
+        let mut sum = 0.0;
+        for j in 0..n {
+            if v[j] == 0.0 {
+                continue;
+            }
+            for i in 0..n {
+                sum += v[i].abs() * k[(i, j)].abs() * v[j].abs();
+            }
+        }
+        ROUNDING * f64::EPSILON * sum
+    }
+}
+
+/// Ulps of an entry (or of a term's largest entry) its rounding is estimated at: each
+/// entry is a sum of a few terms and a product of a few roundings.
+pub(crate) const ROUNDING: f64 = 4.0;
 
 impl Mode {
     /// Whether ω² ≥ 0 (zero-frequency neutral modes count as stable).
@@ -33,9 +78,19 @@ impl Mode {
         self.omega_squared >= 0.0
     }
 
+    /// Estimated relative error of `hz` (a frequency or growth rate): half that of ω².
+    /// Infinite for a neutral mode (ω² = 0, known only to ± `omega_squared_error`).
+    pub fn accuracy(&self) -> f64 {
+        if self.omega_squared == 0.0 {
+            f64::INFINITY
+        } else {
+            (0.5 * self.omega_squared_error / self.omega_squared.abs()).min(1.0)
+        }
+    }
+
     /// A mode from its eigenvalue ω² (rad²/s²) and an eigenvector `u` (any scale) over the
     /// variables: normalised to uᵀ M u = 1 with `mass_times` = M u, labelled by the largest
-    /// kinetic-energy fraction.
+    /// kinetic-energy fraction. Its errors are set to zero; [`finish`] estimates them.
     pub(crate) fn from_vector(
         omega_squared: f64,
         u: &[f64],
@@ -53,19 +108,45 @@ impl Mode {
         let dominant = (0..u.len())
             .max_by(|&i, &j| energy_fractions[i].total_cmp(&energy_fractions[j]))
             .unwrap_or(0);
-        let hz = omega_squared.signum() * omega_squared.abs().sqrt() / (2.0 * std::f64::consts::PI);
-        Mode {
+        let mut mode = Mode {
             omega_squared,
-            hz,
+            hz: 0.0,
             label: names.get(dominant).cloned().unwrap_or_default(),
             vector,
             energy_fractions,
+            omega_squared_error: 0.0,
+            vector_error: 0.0,
+        };
+        mode.set_omega_squared(omega_squared);
+        mode
+    }
+
+    fn set_omega_squared(&mut self, omega_squared: f64) {
+        self.omega_squared = omega_squared;
+        self.hz =
+            omega_squared.signum() * omega_squared.abs().sqrt() / (2.0 * std::f64::consts::PI);
+        if omega_squared == 0.0 {
+            self.hz = 0.0;
         }
+    }
+
+    /// The `count` coordinates with the largest kinetic-energy fractions (at least 1 %),
+    /// largest first: (name, fraction).
+    pub fn dominant(&self, names: &[String], count: usize) -> Vec<(String, f64)> {
+        let mut shares: Vec<(usize, f64)> =
+            self.energy_fractions.iter().copied().enumerate().collect();
+        shares.sort_by(|a, b| b.1.total_cmp(&a.1));
+        shares
+            .into_iter()
+            .take(count)
+            .filter(|&(_, f)| f >= 0.01)
+            .filter_map(|(k, f)| Some((names.get(k)?.clone(), f)))
+            .collect()
     }
 }
 
 /// All normal modes of a stage (or those asked for), ascending in frequency.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Modes {
     /// Variable names, the order of every mode vector.
     pub coordinates: Vec<String>,
@@ -74,25 +155,10 @@ pub struct Modes {
 }
 
 impl Modes {
-    /// An error describing the first unstable mode, if any.
+    /// An error describing the growing modes, if any (the variables only: the stage run's
+    /// [`crate::Stability`] also checks the floats).
     pub fn check_stable(&self) -> Result<(), DynamicsError> {
-        match self.modes.iter().position(|m| !m.is_stable()) {
-            None => Ok(()),
-            Some(i) => {
-                let m = &self.modes[i];
-                let k = self
-                    .coordinates
-                    .iter()
-                    .position(|c| *c == m.label)
-                    .unwrap_or(0);
-                Err(DynamicsError::Unstable {
-                    index: i + 1,
-                    rate_hz: -m.hz,
-                    label: m.label.clone(),
-                    fraction: 100.0 * m.energy_fractions.get(k).copied().unwrap_or(0.0),
-                })
-            }
-        }
+        crate::Stability::of_modes(self).check()
     }
 }
 
@@ -129,6 +195,19 @@ impl SparseColumns {
             }
         }
         y
+    }
+
+    /// Σ |x_i| |A_ij| |x_j|.
+    pub(crate) fn abs_form(&self, x: &[f64]) -> f64 {
+        let mut sum = 0.0;
+        for (column, &xj) in self.entries.iter().zip(x) {
+            if xj != 0.0 {
+                for &(i, v) in column {
+                    sum += x.get(i).map_or(0.0, |xi| xi.abs()) * v.abs() * xj.abs();
+                }
+            }
+        }
+        sum
     }
 }
 
@@ -222,6 +301,11 @@ fn reduced_eigen(
     let mut c = x.transpose().to_owned();
     solve_lower(&mut c);
     let c = Mat::from_fn(n, n, |i, j| 0.5 * (c[(i, j)] + c[(j, i)]));
+    if c.col_iter().any(|col| col.iter().any(|x| !x.is_finite())) {
+        return Err(DynamicsError::Eigen(
+            "the reduced matrix is not finite (stiffness or mass out of range)".into(),
+        ));
+    }
     let evd = c
         .self_adjoint_eigen(Side::Lower)
         .map_err(|e| DynamicsError::Eigen(format!("{e:?}")))?;
@@ -234,51 +318,220 @@ fn reduced_eigen(
     Ok(((0..n).map(|i| evd.S().column_vector()[i]).collect(), v))
 }
 
-/// Eigenvalues (ω², ascending) and eigenvectors (columns, any scale) of one block, and
-/// whether they came from M's factor (so that rounding-level eigenvalues mean neutral).
+/// Backward error of the symmetric eigensolver on an n × n reduced matrix, in units of ε
+/// times its largest eigenvalue: a few ulps per step of a reduction of depth ~√n.
+fn solver_ulps(n: usize) -> f64 {
+    ROUNDING * (n as f64).sqrt().max(1.0)
+}
+
+/// Eigenvalues (ω², ascending) and eigenvectors (columns, any scale) of one block, with
+/// each eigenvalue's error from the method that found it (rad²/s²).
 struct BlockModes {
     omega_squared: Vec<f64>,
     vectors: Mat<f64>,
-    by_mass_factor: bool,
+    errors: Vec<f64>,
 }
 
-/// Solves one block: with K_eff's Cholesky factor and for 1/ω² when K_eff is positive
-/// definite there, so low modes keep full relative accuracy next to stiff, light parts;
-/// with M's factor otherwise.
+/// Whether A is numerically positive definite: its Cholesky factorisation succeeds.
+fn positive_definite(a: &Mat<f64>) -> bool {
+    a.llt(Side::Lower).is_ok()
+}
+
+/// The block's modes from the Cholesky factor of K + σM (positive definite, σ ≥ 0),
+/// solving M u = μ (K + σM) u: μ = 1/(ω² + σ), the largest μ (lowest ω², and the growing
+/// modes when σ > 0) resolved to ε relative, each ω² + σ to ε (ω² + σ)/(ω²_min + σ).
+/// Modes beyond double precision (μ below rounding of the largest) are reported at that
+/// bound, with an error of half their ω².
+fn shifted_modes(
+    k: &Mat<f64>,
+    m: &Mat<f64>,
+    sigma: f64,
+) -> Result<Option<BlockModes>, DynamicsError> {
+    let n = m.nrows();
+    let shifted = Mat::from_fn(n, n, |i, j| k[(i, j)] + sigma * m[(i, j)]);
+    let Ok(llt) = shifted.llt(Side::Lower) else {
+        return Ok(None);
+    };
+    let (mus, u) = reduced_eigen(m, &llt)?;
+    let mu_max = mus.last().copied().unwrap_or(0.0);
+    let ulps = solver_ulps(n);
+    let floor = 100.0 * f64::EPSILON * mu_max;
+    let order: Vec<usize> = (0..n).rev().collect();
+    let mut omega_squared = Vec::with_capacity(n);
+    let mut errors = Vec::with_capacity(n);
+    for &j in &order {
+        let mu = mus[j];
+        if mu > floor {
+            let w2 = 1.0 / mu - sigma;
+            omega_squared.push(w2);
+            // δμ = ulps ε μ_max, so δ(1/μ) = ulps ε μ_max / μ²
+            errors.push(ulps * f64::EPSILON * mu_max / (mu * mu));
+        } else {
+            // known only to lie above the bound: an error of its own order
+            let bound = 1.0 / floor - sigma;
+            omega_squared.push(bound);
+            errors.push(0.5 * bound.abs());
+        }
+    }
+    Ok(Some(BlockModes {
+        omega_squared,
+        vectors: Mat::from_fn(n, n, |i, c| u[(i, order[c])]),
+        errors,
+    }))
+}
+
+/// Solves one block: with K's Cholesky factor and for 1/ω² when K is positive definite
+/// there, so low modes keep full relative accuracy next to stiff, light parts. Otherwise
+/// with M's factor (every ω² to about ε ω²_max), and, unless K + σM is positive definite
+/// already for σ at the rounding of that solve, also with the factor of K + σM for a
+/// shift σ that makes it positive definite: by bisection on σ, the smallest such shift is
+/// bracketed within a factor 2 (σ_ok), and the solve uses σ = 2 σ_ok, so that
+/// ω²_min + σ ≥ σ_ok ≥ |ω²_min|/2 (when ω²_min < 0): the growing modes, the largest
+/// 1/(ω² + σ), are resolved relative to their own size, however stiff the rest of the
+/// block. Each ω² is taken from whichever of the two solves resolves it better.
 fn block_modes(
     k: &Mat<f64>,
     m: &Mat<f64>,
     weakest: impl Fn() -> String,
 ) -> Result<BlockModes, DynamicsError> {
-    let n = m.nrows();
     let m_llt = m
         .llt(Side::Lower)
         .map_err(|_| DynamicsError::SingularMass {
             variable: weakest(),
         })?;
-    match k.llt(Side::Lower) {
-        Ok(k_llt) => {
-            // M u = μ K u with μ = 1/ω², μ descending ⇔ ω² ascending. Every μ is positive in
-            // exact arithmetic; the smallest (the stiffest modes) are resolved only down to
-            // rounding of the largest, and are reported at that bound.
-            let (mus, u) = reduced_eigen(m, &k_llt)?;
-            let floor = 100.0 * f64::EPSILON * mus.last().copied().unwrap_or(0.0);
-            let order: Vec<usize> = (0..n).rev().collect();
-            Ok(BlockModes {
-                omega_squared: order.iter().map(|&j| 1.0 / mus[j].max(floor)).collect(),
-                vectors: Mat::from_fn(n, n, |i, k| u[(i, order[k])]),
-                by_mass_factor: false,
-            })
-        }
-        Err(_) => {
-            let (lambdas, v) = reduced_eigen(k, &m_llt)?;
-            Ok(BlockModes {
-                omega_squared: lambdas,
-                vectors: v,
-                by_mass_factor: true,
-            })
+    // K positive definite: M u = μ K u with μ = 1/ω², the shifted solve without a shift
+    if let Some(modes) = shifted_modes(k, m, 0.0)? {
+        return Ok(modes);
+    }
+    let n = m.nrows();
+    let (lambdas, v) = reduced_eigen(k, &m_llt)?;
+    let top = lambdas.iter().fold(0.0f64, |a, l| a.max(l.abs()));
+    let by_mass_error = solver_ulps(n) * f64::EPSILON * top;
+    let by_mass = BlockModes {
+        errors: vec![by_mass_error; n],
+        omega_squared: lambdas,
+        vectors: v,
+    };
+    let shift_pd =
+        |sigma: f64| positive_definite(&Mat::from_fn(n, n, |i, j| k[(i, j)] + sigma * m[(i, j)]));
+    // K + σM positive definite already for a shift at the level of rounding of M's own
+    // solve: nothing lies measurably below zero, and M's factor has every ω² as well as
+    // any method (ω² near zero are then neutral)
+    let floor = f64::EPSILON * by_mass_error;
+    if by_mass_error == 0.0 || shift_pd(floor) {
+        return Ok(by_mass);
+    }
+    // a shift that makes K + σM positive definite: above −ω²_min, which M's factor knows
+    // to within its error
+    let lowest = by_mass.omega_squared.first().copied().unwrap_or(0.0);
+    let mut high = 2.0 * (lowest.abs() + by_mass_error);
+    let mut tries = 0;
+    while !shift_pd(high) {
+        high *= 4.0;
+        tries += 1;
+        if tries > 60 || !high.is_finite() {
+            return Ok(by_mass);
         }
     }
+    let mut low = floor;
+    while high > 2.0 * low {
+        let mid = (low * high).sqrt();
+        if shift_pd(mid) {
+            high = mid;
+        } else {
+            low = mid;
+        }
+    }
+    // σ = 2 high: ω²_min + σ ≥ high, so the growing modes are the best-resolved ones
+    let Some(shifted) = shifted_modes(k, m, 2.0 * high)? else {
+        return Ok(by_mass);
+    };
+    // both lists ascending, each ω² within its error of the exact j-th eigenvalue: take
+    // each from the solve that resolves it better
+    let take_shifted: Vec<bool> = (0..n)
+        .map(|j| shifted.errors[j] < by_mass.errors[j])
+        .collect();
+    Ok(BlockModes {
+        omega_squared: (0..n)
+            .map(|j| {
+                if take_shifted[j] {
+                    shifted.omega_squared[j]
+                } else {
+                    by_mass.omega_squared[j]
+                }
+            })
+            .collect(),
+        vectors: Mat::from_fn(n, n, |i, j| {
+            if take_shifted[j] {
+                shifted.vectors[(i, j)]
+            } else {
+                by_mass.vectors[(i, j)]
+            }
+        }),
+        errors: (0..n)
+            .map(|j| shifted.errors[j].min(by_mass.errors[j]))
+            .collect(),
+    })
+}
+
+/// A mode as an eigensolver found it: ω², the method's error, a vector (any scale) over
+/// all variables, and the block it belongs to.
+pub(crate) struct RawMode {
+    pub(crate) omega_squared: f64,
+    pub(crate) error: f64,
+    pub(crate) vector: Vec<f64>,
+    pub(crate) block: usize,
+}
+
+/// Turns solver output into modes: normalised vectors, energy fractions and labels; each
+/// mode's ω² error (the method's plus the first-order effect of rounding K's entries,
+/// `rounding`, and M's, ε |ω²| Σ |v_i| |M_ij| |v_j|); ω² within that error of zero set to
+/// exactly zero (neutral: its sign is not determined); the vector error from the gap to the
+/// nearest mode of the same block; sorted ascending.
+pub(crate) fn finish(
+    raw: Vec<RawMode>,
+    mass: &SparseColumns,
+    names: &[String],
+    rounding: &dyn StiffnessRounding,
+) -> Vec<Mode> {
+    let mut modes: Vec<(Mode, usize)> = raw
+        .into_iter()
+        .map(|r| {
+            let mu = mass.times(&r.vector);
+            let mut mode = Mode::from_vector(r.omega_squared, &r.vector, &mu, names);
+            let w2 = mode.omega_squared;
+            let mass_part = ROUNDING * f64::EPSILON * w2.abs() * mass.abs_form(&mode.vector);
+            let error = r.error + rounding.error(&mode.vector) + mass_part;
+            mode.omega_squared_error = if error.is_finite() { error } else { f64::MAX };
+            if w2.abs() <= mode.omega_squared_error {
+                mode.set_omega_squared(0.0);
+            }
+            (mode, r.block)
+        })
+        .collect();
+    modes.sort_by(|a, b| a.0.omega_squared.total_cmp(&b.0.omega_squared));
+    let gaps: Vec<f64> = (0..modes.len())
+        .map(|i| {
+            modes
+                .iter()
+                .enumerate()
+                .filter(|&(j, (_, b))| j != i && *b == modes[i].1)
+                .map(|(_, (m, _))| (m.omega_squared - modes[i].0.omega_squared).abs())
+                .fold(f64::INFINITY, f64::min)
+        })
+        .collect();
+    modes
+        .into_iter()
+        .zip(gaps)
+        .map(|((mut mode, _), gap)| {
+            mode.vector_error = if gap > 0.0 {
+                (mode.omega_squared_error / gap).min(1.0)
+            } else {
+                1.0
+            };
+            mode
+        })
+        .collect()
 }
 
 /// Solves K_eff v = ω² M v. The variables are split into the blocks that K_eff and M couple
@@ -286,30 +539,66 @@ fn block_modes(
 /// its own: with K_eff's Cholesky factor and for 1/ω² when K_eff is positive definite on the
 /// block (the low modes, the ones suspensions are about, then keep full relative accuracy
 /// even when very stiff, very light parts put other modes many decades higher); otherwise
-/// with M's factor, and eigenvalues within rounding of zero (100 ε of the largest |ω²| of
-/// all blocks) are reported as exactly zero: neutral. Modes stiffer than the lowest of
-/// their block by more than 1/(100 ε) ≈ 4.5e13 in ω² cannot be resolved in double
-/// precision and are reported at that bound. Vectors are normalised and the energy
-/// fractions formed with one product by the (block-sparse) mass matrix. `names` are the
-/// variable names.
+/// with M's factor, and when the block has growing modes beyond M's resolution, with the
+/// factor of the shifted K_eff + σM as well (see [`block_modes`]), so that growth rates are
+/// resolved relative to themselves. Each mode carries its estimated error
+/// ([`Mode::omega_squared_error`]); ω² within it of zero is reported as exactly zero:
+/// neutral. Modes stiffer than the lowest of their block by more than 1/(100 ε) ≈ 4.5e13 in
+/// ω² cannot be resolved in double precision and are reported at that bound, with an error
+/// of half their ω². The entries of `k_eff` and `mass` are taken as exact to a few
+/// ulps ([`EntryRounding`]); [`normal_modes_with_rounding`] takes their rounding from how
+/// they were made. `names` are the variable names.
 pub fn normal_modes(
     k_eff: &DMatrix<f64>,
     mass: &DMatrix<f64>,
     names: &[String],
 ) -> Result<Modes, DynamicsError> {
+    normal_modes_with_rounding(k_eff, mass, names, &EntryRounding(k_eff))
+}
+
+/// [`normal_modes`] with the rounding of K_eff's entries given by `rounding` (the stage
+/// runs use the rounding of the terms that make up each entry).
+pub fn normal_modes_with_rounding(
+    k_eff: &DMatrix<f64>,
+    mass: &DMatrix<f64>,
+    names: &[String],
+    rounding: &dyn StiffnessRounding,
+) -> Result<Modes, DynamicsError> {
     let n = mass.nrows();
-    if k_eff.nrows() != n || k_eff.ncols() != n || mass.ncols() != n {
+    for (what, matrix) in [("stiffness matrix", k_eff), ("mass matrix", mass)] {
+        if matrix.nrows() != n || matrix.ncols() != n {
+            return Err(DynamicsError::Length {
+                what: if what == "mass matrix" {
+                    "mass matrix (square) for the modes"
+                } else {
+                    "stiffness matrix for the modes"
+                },
+                expected: n,
+                got: if matrix.nrows() != n {
+                    matrix.nrows()
+                } else {
+                    matrix.ncols()
+                },
+            });
+        }
+        if let Some(bad) = matrix.iter().position(|x| !x.is_finite()) {
+            return Err(DynamicsError::NotFinite {
+                what,
+                row: bad % n.max(1),
+                column: bad / n.max(1),
+            });
+        }
+    }
+    if names.len() != n {
         return Err(DynamicsError::Length {
-            what: "stiffness matrix for the modes",
+            what: "variable names for the modes",
             expected: n,
-            got: k_eff.nrows(),
+            got: names.len(),
         });
     }
     let (label, count) = dense_components(n, &[k_eff.as_slice(), mass.as_slice()]);
-    // (ω², from M's factor, block, vector over the block's variables); a block's modes are
-    // exactly zero on the other variables
-    let mut raw: Vec<(f64, bool, usize, Vec<f64>)> = Vec::with_capacity(n);
-    let mut blocks = Vec::with_capacity(count);
+    let mass_columns = SparseColumns::new(n, |i, j| mass[(i, j)]);
+    let mut raw: Vec<RawMode> = Vec::with_capacity(n);
     for b in 0..count {
         let idx: Vec<usize> = (0..n).filter(|&i| label[i] == b).collect();
         let kb = Mat::from_fn(idx.len(), idx.len(), |i, j| k_eff[(idx[i], idx[j])]);
@@ -323,43 +612,22 @@ pub fn normal_modes(
             names.get(w).cloned().unwrap_or_default()
         };
         let block = block_modes(&kb, &mb, weakest)?;
-        for (k, &w2) in block.omega_squared.iter().enumerate() {
-            let vector = (0..idx.len()).map(|i| block.vectors[(i, k)]).collect();
-            raw.push((w2, block.by_mass_factor, b, vector));
-        }
-        let mass_columns = SparseColumns::new(idx.len(), |i, j| mb[(i, j)]);
-        let block_names: Vec<String> = idx
-            .iter()
-            .map(|&i| names.get(i).cloned().unwrap_or_default())
-            .collect();
-        blocks.push((idx, mass_columns, block_names));
-    }
-    let largest = raw.iter().fold(0.0f64, |a, (l, _, _, _)| a.max(l.abs()));
-    let zero = 100.0 * f64::EPSILON * largest;
-    raw.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let modes = raw
-        .into_iter()
-        .map(|(w2, by_mass, b, u)| {
-            let w2 = if by_mass && w2.abs() <= zero { 0.0 } else { w2 };
-            let (idx, mass_columns, block_names) = &blocks[b];
-            let local = Mode::from_vector(w2, &u, &mass_columns.times(&u), block_names);
-            let spread = |values: &[f64]| {
-                let mut full = vec![0.0; n];
-                for (&i, &v) in idx.iter().zip(values) {
-                    full[i] = v;
-                }
-                full
-            };
-            Mode {
-                vector: spread(&local.vector),
-                energy_fractions: spread(&local.energy_fractions),
-                ..local
+        for (k, (&w2, &error)) in block.omega_squared.iter().zip(&block.errors).enumerate() {
+            let mut vector = vec![0.0; n];
+            for (i, &g) in idx.iter().enumerate() {
+                vector[g] = block.vectors[(i, k)];
             }
-        })
-        .collect();
+            raw.push(RawMode {
+                omega_squared: w2,
+                error,
+                vector,
+                block: b,
+            });
+        }
+    }
     Ok(Modes {
         coordinates: names.to_vec(),
-        modes,
+        modes: finish(raw, &mass_columns, names, rounding),
     })
 }
 

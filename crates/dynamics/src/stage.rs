@@ -69,14 +69,19 @@ pub struct StageModel {
 pub enum Input {
     /// Displacement of the parameters (m or rad per unit input), one entry per parameter.
     Displacement(DVector<f64>),
-    /// Generalised force on the variables (N or N m per unit input), one per variable.
+    /// Generalised force on the variables (N or N m per unit input), one per variable; or
+    /// on the variables and then the floats (a force on a body posed by a float, such as
+    /// a massless blade tip).
     Force(DVector<f64>),
 }
 
 /// A displacement or support-force output.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Output {
-    /// A linear combination of the variables (m or rad).
+    /// A linear combination of the variables (m or rad), one entry per variable; or of the
+    /// variables and the floats (a point on a body a float poses); or of the variables,
+    /// the floats and the parameters (a point whose motion includes the support's own,
+    /// which a displacement input passes straight to the output).
     Displacement(DVector<f64>),
     /// A linear combination of the generalised forces on the parameters (N or N m).
     SupportForce(DVector<f64>),
@@ -396,25 +401,34 @@ impl StageModel {
         (self.dense(&re), self.dense(&im))
     }
 
-    /// Checks that an input and an output have one entry per parameter or variable.
+    /// Checks that an input and an output have one entry per parameter or variable (or,
+    /// for a force, per variable and float; for a displacement output, per variable and
+    /// float, or per variable, float and parameter), all finite.
     pub fn check(&self, input: &Input, output: &Output) -> Result<(), DynamicsError> {
-        let (nx, _, ns) = self.sizes;
-        let sizes = [
+        let (nx, nq, ns) = self.sizes;
+        let checks: [(&'static str, &DVector<f64>, &[usize]); 2] = [
             match input {
-                Input::Displacement(s) => ("displacement input", s.len(), ns),
-                Input::Force(f) => ("force input", f.len(), nx),
+                Input::Displacement(s) => ("displacement input", s, &[ns]),
+                Input::Force(f) => ("force input", f, &[nx, nx + nq]),
             },
             match output {
-                Output::Displacement(o) => ("displacement output", o.len(), nx),
-                Output::SupportForce(o) => ("support-force output", o.len(), ns),
+                Output::Displacement(o) => ("displacement output", o, &[nx, nx + nq, nx + nq + ns]),
+                Output::SupportForce(o) => ("support-force output", o, &[ns]),
             },
         ];
-        for (what, got, expected) in sizes {
-            if got != expected {
+        for (what, vector, allowed) in checks {
+            if !allowed.contains(&vector.len()) {
                 return Err(DynamicsError::Length {
                     what,
-                    expected,
-                    got,
+                    expected: allowed[0],
+                    got: vector.len(),
+                });
+            }
+            if let Some(k) = vector.iter().position(|x| !x.is_finite()) {
+                return Err(DynamicsError::NotFinite {
+                    what,
+                    row: k,
+                    column: 0,
                 });
             }
         }
@@ -422,11 +436,39 @@ impl StageModel {
     }
 
     /// Complex reduced matrices K_eff(f), C_XS,eff(f), S_eff(f): the Schur complement of
-    /// the floats done on the complex matrices, per frequency (docs/physics.md §3). The float
-    /// block is not checked here (the stage's modes check it at f = 0); see
-    /// [`StageModel::state_space`] for a checked use.
-    pub fn reduced(&self, damping: &Damping, f_hz: f64) -> ReducedComplex {
-        self.reduced_checked(damping, f_hz).0
+    /// the floats done on the complex matrices, per frequency (docs/physics.md §3); an error when
+    /// the float block is singular there or a damping multiplier is out of range.
+    pub fn reduced(&self, damping: &Damping, f_hz: f64) -> Result<ReducedComplex, DynamicsError> {
+        if f_hz != 0.0 {
+            crate::validate::check_frequency("frequency", f_hz)?;
+        }
+        self.check_damping_at(damping, f_hz)?;
+        let (reduced, singular) = self.reduced_checked(damping, f_hz);
+        match singular {
+            Some(k) => Err(DynamicsError::SingularFloats {
+                float: self.floats.get(k).cloned().unwrap_or_default(),
+            }),
+            None => Ok(reduced),
+        }
+    }
+
+    /// Checks every lossy tag's multiplier at `f_hz` (see [`crate::validate`]).
+    pub fn check_damping_at(&self, damping: &Damping, f_hz: f64) -> Result<(), DynamicsError> {
+        crate::validate::check_damping(
+            damping,
+            self.by_tag.iter().map(|(t, _)| t.as_str()),
+            &[f_hz],
+        )
+    }
+
+    /// Checks the storage multiplier ε'(0) of every lossy tag (the real stiffness the modes
+    /// use): finite and not negative. The loss at f = 0 is not used there.
+    pub fn check_damping_at_dc(&self, damping: &Damping) -> Result<(), DynamicsError> {
+        for (tag, _) in &self.by_tag {
+            let (re, _) = damping.at(tag, 0.0);
+            crate::validate::check_multiplier(tag, 0.0, re, 0.0)?;
+        }
+        Ok(())
     }
 
     fn reduced_checked(&self, damping: &Damping, f_hz: f64) -> (ReducedComplex, Option<usize>) {
@@ -461,6 +503,8 @@ impl StageModel {
         if f_d.is_nan() || f_d <= 0.0 {
             return Err(DynamicsError::DampingFrequency(f_d));
         }
+        crate::validate::check_frequency("damping frequency", f_d)?;
+        self.check_damping_at(damping, f_d)?;
         let (nx, _, ns) = self.sizes;
         let (r, singular) = self.reduced_checked(damping, f_d);
         if let Some(k) = singular {
@@ -500,6 +544,20 @@ impl StageModel {
                 .map(|n| format!("force:{n}"))
                 .collect::<Vec<_>>()
         };
+        for (what, m) in [
+            ("state matrix A", &a),
+            ("input matrix B", &b),
+            ("output matrix C", &c),
+            ("feedthrough D", &d),
+        ] {
+            if let Some(k) = m.iter().position(|x| !x.is_finite()) {
+                return Err(DynamicsError::NotFinite {
+                    what,
+                    row: k % m.nrows().max(1),
+                    column: k / m.nrows().max(1),
+                });
+            }
+        }
         Ok(StateSpace {
             a,
             b,

@@ -224,13 +224,18 @@ impl<'m> Sweep<'m> {
         let varying: Vec<usize> = (0..multipliers.len())
             .filter(|&t| matches!(multipliers[t], Multiplier::Varying(..)))
             .collect();
-        let now = multipliers
+        let now: Vec<c64> = multipliers
             .iter()
             .map(|m| match m {
                 Multiplier::Constant(c) => *c,
                 Multiplier::Varying(..) => c64::new(f64::NAN, f64::NAN),
             })
             .collect();
+        for (t, m) in multipliers.iter().enumerate() {
+            if let (Multiplier::Constant(c), Some((tag, _))) = (m, model.by_tag.get(t)) {
+                crate::validate::check_multiplier(tag, 0.0, c.re, c.im)?;
+            }
+        }
         let engine = match solver {
             Solver::DenseReference => Engine::Reference(Box::new(Reference {
                 input: input.clone(),
@@ -284,9 +289,13 @@ impl<'m> Sweep<'m> {
 
     /// Solves at `f_hz` (Hz) and returns the output per unit input.
     pub fn at(&mut self, f_hz: f64) -> Result<c64, DynamicsError> {
+        crate::validate::check_frequency("frequency", f_hz)?;
         for (k, &t) in self.varying.iter().enumerate() {
             if let Multiplier::Varying(re, im) = &self.multipliers[t] {
-                self.now[t] = c64::new(re.at(f_hz), im.at(f_hz));
+                let (r, i) = (re.at(f_hz), im.at(f_hz));
+                let tag = self.model.by_tag.get(t).map_or("", |(tag, _)| tag.as_str());
+                crate::validate::check_multiplier(tag, f_hz, r, i)?;
+                self.now[t] = c64::new(r, i);
                 self.now_varying[k] = self.now[t];
             }
         }
@@ -381,11 +390,13 @@ impl Fast {
         let mut out = Linear::new(n, nv);
         let mut direct = Linear::new(1, nv);
         let loc = |u: usize| local.get(u).copied().filter(|&l| l != NONE);
+        // forces and output weights over the unknowns they have entries for (variables,
+        // or variables and floats)
         match input {
             Input::Force(force) => {
                 for (l, &u) in unknowns.iter().enumerate() {
-                    if u < nx {
-                        rhs.constant[l] = c64::new(force[u], 0.0);
+                    if let Some(&f) = force.as_slice().get(u) {
+                        rhs.constant[l] = c64::new(f, 0.0);
                     }
                 }
             }
@@ -394,9 +405,16 @@ impl Fast {
         match output {
             Output::Displacement(o) => {
                 for (l, &u) in unknowns.iter().enumerate() {
-                    if u < nx {
-                        out.constant[l] = c64::new(o[u], 0.0);
+                    if let Some(&w) = o.as_slice().get(u) {
+                        out.constant[l] = c64::new(w, 0.0);
                     }
+                }
+                // an output reading the parameters too: the input's displacement directly
+                if let Input::Displacement(s) = input {
+                    let through: f64 = (0..s.len())
+                        .filter_map(|k| Some(o.as_slice().get(n_all + k)? * s[k]))
+                        .sum();
+                    direct.constant[0] += c64::new(through, 0.0);
                 }
             }
             Output::SupportForce(_) => {}
@@ -557,7 +575,7 @@ impl Reference {
             pc(i, j) - c64::new(w2 * m, 0.0)
         });
         let rhs = Mat::<c64>::from_fn(n, 1, |i, _| match &self.input {
-            Input::Force(force) => c64::new(if i < nx { force[i] } else { 0.0 }, 0.0),
+            Input::Force(force) => c64::new(force.as_slice().get(i).copied().unwrap_or(0.0), 0.0),
             Input::Displacement(s) => -(0..ns).map(|k| pc(i, n + k) * s[k]).sum::<c64>(),
         });
         let x = a.partial_piv_lu().solve(&rhs);
@@ -565,7 +583,16 @@ impl Reference {
             *zi = x[(i, 0)];
         }
         Some(match &self.output {
-            Output::Displacement(o) => (0..nx).map(|i| z[i] * o[i]).sum(),
+            Output::Displacement(o) => {
+                let from_z: c64 = (0..n.min(o.len())).map(|i| z[i] * o[i]).sum();
+                let from_s: f64 = match &self.input {
+                    Input::Displacement(s) => (0..ns)
+                        .filter_map(|k| Some(o.as_slice().get(n + k)? * s[k]))
+                        .sum(),
+                    Input::Force(_) => 0.0,
+                };
+                from_z + c64::new(from_s, 0.0)
+            }
             Output::SupportForce(o) => (0..ns)
                 .map(|k| {
                     let row = n + k;
@@ -584,7 +611,6 @@ impl Reference {
 /// The unknowns (master indices, ascending) in the blocks of the pattern that both the
 /// input's right-hand side and the output's vector touch.
 pub fn coupled_unknowns(model: &StageModel, input: &Input, output: &Output) -> Vec<usize> {
-    let (nx, _, _) = model.sizes;
     let n_all = model.unknowns();
     let n_blocks = model.blocks.iter().map(|&b| b + 1).max().unwrap_or(0);
     let mark = |touched: &mut Vec<bool>, u: usize| {
@@ -605,7 +631,7 @@ pub fn coupled_unknowns(model: &StageModel, input: &Input, output: &Output) -> V
         }
     };
     let direct = |touched: &mut Vec<bool>, weights: &[f64]| {
-        for (u, &w) in weights.iter().enumerate().take(nx) {
+        for (u, &w) in weights.iter().enumerate().take(n_all) {
             if w != 0.0 {
                 mark(touched, u);
             }

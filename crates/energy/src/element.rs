@@ -184,6 +184,42 @@ pub fn registrations() -> Vec<&'static Registration> {
     all
 }
 
+/// Two registrations of one kind name: the second would be summed into every energy
+/// beside the first (or, looked up by name, shadow it), so it is refused.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error(
+    "element kind '{kind}' is registered twice, by crate {first} and by crate {second}: kind names must be unique (rename one)"
+)]
+pub struct DuplicateKind {
+    /// The kind name.
+    pub kind: &'static str,
+    /// The crate of the first registration (in registry order).
+    pub first: &'static str,
+    /// The crate of the second.
+    pub second: &'static str,
+}
+
+/// The first kind name that two of `registrations` share, if any.
+pub fn duplicate_kind(registrations: &[&Registration]) -> Option<DuplicateKind> {
+    let mut seen: std::collections::HashMap<&'static str, &'static str> =
+        std::collections::HashMap::new();
+    for r in registrations {
+        if let Some(first) = seen.insert(r.element.kind(), r.crate_name) {
+            return Some(DuplicateKind {
+                kind: r.element.kind(),
+                first,
+                second: r.crate_name,
+            });
+        }
+    }
+    None
+}
+
+/// Checks that every kind name linked into this program is registered once.
+pub fn check_registrations() -> Result<(), DuplicateKind> {
+    duplicate_kind(&registrations()).map_or(Ok(()), Err)
+}
+
 /// All linked element kinds, ordered by stage then kind name.
 pub fn registry() -> Vec<&'static dyn Element> {
     registrations().into_iter().map(|r| r.element).collect()

@@ -15,7 +15,8 @@ mod term;
 pub use crate::core::{GRAVITY_TAG, GravityEnergy, SpringEnergy, WireStretchEnergy};
 pub use damping::{Damping, TagDamping};
 pub use element::{
-    Element, LocalFrames, Reference, Registration, SharedBodies, find_kind, registrations, registry,
+    DuplicateKind, Element, LocalFrames, Reference, Registration, SharedBodies,
+    check_registrations, duplicate_kind, find_kind, registrations, registry,
 };
 pub use extra::{CONSTRAINT_TAG, constraint_terms, extra_terms};
 pub use fast::{

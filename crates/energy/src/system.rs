@@ -148,19 +148,23 @@ pub struct WireSection {
 
 impl WireSection {
     /// A round wire of radius `r` (m) with Young's modulus `e` and shear modulus `g` (Pa)
-    /// and density `rho` (kg/m^3): A = πr², I = πr⁴/4, J = J_e = πr⁴/2.
+    /// and density `rho` (kg/m^3): A = πr², I = πr⁴/4, J = J_e = πr⁴/2. A negative radius
+    /// gives negative areas and moments (r² and r⁴ taken with the sign of r), so that the
+    /// model builder refuses it instead of reading it as its absolute value.
     pub fn round(r: f64, e: f64, g: f64, rho: f64) -> Self {
         let pi = std::f64::consts::PI;
+        let square = r * r.abs();
+        let fourth = square * square.abs();
         WireSection {
             youngs_modulus: e,
             shear_modulus: g,
-            area: pi * r * r,
-            moment_1: pi * r.powi(4) / 4.0,
-            moment_2: pi * r.powi(4) / 4.0,
+            area: pi * square,
+            moment_1: pi * fourth / 4.0,
+            moment_2: pi * fourth / 4.0,
             principal_axis: Vector3::x(),
-            torsion_constant: pi * r.powi(4) / 2.0,
-            polar_moment: pi * r.powi(4) / 2.0,
-            linear_density: rho * pi * r * r,
+            torsion_constant: pi * fourth / 2.0,
+            polar_moment: pi * fourth / 2.0,
+            linear_density: rho * pi * square,
         }
     }
 }

@@ -11,13 +11,19 @@
 //!
 //! Variable names must be valid MATLAB names (a letter first, then letters, digits or
 //! underscores, at most 63 characters, not a keyword) and distinct; matrix data is row-major
-//! with `rows * cols` values. [`validate`] checks both, and every writer calls it first.
+//! with `rows * cols` values, all finite (NaN and infinity are never written). [`validate`]
+//! checks all three, and every writer calls it first. Units are the caller's business.
+//!
+//! Files are written to a temporary file in the same directory and renamed into place, so
+//! a failed write never leaves a truncated file under the name asked for; an existing file
+//! is refused unless [`WriteOptions::overwrite`] says otherwise.
 //! Units and provenance travel as more variables ([`Metadata`], [`write_with_metadata`]).
 
 use std::collections::HashSet;
-use std::fs::File;
+use std::fs::OpenOptions;
 use std::io::{self, BufWriter, Seek, Write};
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 use serde_json::Value;
 
@@ -130,9 +136,9 @@ pub enum ExportError {
         /// The variable.
         name: String,
     },
-    /// NaN or infinity, which JSON cannot represent.
+    /// NaN or infinity, which is never written.
     #[error(
-        "matrix '{name}' has a non-finite value at row {row}, column {col}, which JSON cannot hold"
+        "matrix '{name}' has a non-finite value (NaN or infinity) at row {row}, column {col}: nothing was written"
     )]
     NonFinite {
         /// The matrix.
@@ -142,6 +148,19 @@ pub enum ExportError {
         /// Column, counted from 1.
         col: usize,
     },
+    /// The file exists and overwriting was not asked for.
+    #[error("'{}' exists: not overwritten (use --force to replace it)", .path.display())]
+    Exists {
+        /// The file.
+        path: PathBuf,
+    },
+}
+
+/// How [`write_with`] writes a file.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct WriteOptions {
+    /// Replace an existing file (default: refuse it).
+    pub overwrite: bool,
 }
 
 /// MATLAB's reserved words, which `isvarname` rejects.
@@ -177,7 +196,8 @@ fn is_valid_name(name: &str) -> bool {
         && !MATLAB_KEYWORDS.contains(&name)
 }
 
-/// Checks variable names (valid, distinct) and matrix data lengths.
+/// Checks variable names (valid, distinct), matrix data lengths and that every value is
+/// finite.
 pub fn validate(matrices: &[Matrix], names: &[Names]) -> Result<(), ExportError> {
     let mut seen = HashSet::new();
     let all_names = matrices
@@ -202,36 +222,103 @@ pub fn validate(matrices: &[Matrix], names: &[Names]) -> Result<(), ExportError>
             });
         }
     }
-    Ok(())
+    check_finite(matrices)
 }
 
-/// Writes the variables to `path`, in the format its extension names ([`Format::from_path`]).
-///
-/// Input is validated before the file is created. JSON output refuses NaN and infinity.
+/// Writes the variables to `path`, in the format its extension names ([`Format::from_path`]),
+/// refusing to replace an existing file: [`write_with`] with the default options.
 pub fn write(path: &Path, matrices: &[Matrix], names: &[Names]) -> Result<(), ExportError> {
+    write_with(path, matrices, names, &WriteOptions::default())
+}
+
+/// Distinguishes temporary files of one process.
+static TEMPORARY: AtomicUsize = AtomicUsize::new(0);
+
+/// Writes the variables to `path`, in the format its extension names.
+///
+/// Input is validated before anything is created (names, lengths, finite values). The file
+/// is written under a temporary name in the same directory and renamed to `path` when
+/// complete, so `path` holds either the whole new file or what it held before. Without
+/// `options.overwrite` an existing `path` is refused ([`ExportError::Exists`]).
+pub fn write_with(
+    path: &Path,
+    matrices: &[Matrix],
+    names: &[Names],
+    options: &WriteOptions,
+) -> Result<(), ExportError> {
     let format = Format::from_path(path)?;
     validate(matrices, names)?;
-    if format == Format::Json {
-        check_finite(matrices)?;
-    }
     let with_path = |source: io::Error| ExportError::Io {
         path: path.to_path_buf(),
         source,
     };
-    let mut w = BufWriter::new(File::create(path).map_err(with_path)?);
-    let result = match format {
-        Format::Mat => write_mat(&mut w, matrices, names),
-        Format::Npz => write_npz(&mut w, matrices, names),
-        Format::Json => serde_json::to_writer_pretty(&mut w, &to_json(matrices, names))
-            .map_err(io::Error::from)
-            .and_then(|()| w.write_all(b"\n"))
-            .map_err(ExportError::from),
+    if !options.overwrite && path.exists() {
+        return Err(ExportError::Exists {
+            path: path.to_path_buf(),
+        });
+    }
+    let file_name = path
+        .file_name()
+        .ok_or_else(|| with_path(io::Error::new(io::ErrorKind::InvalidInput, "no file name")))?;
+    let temporary = path.with_file_name(format!(
+        ".{}.{}-{}.tmp",
+        file_name.to_string_lossy(),
+        std::process::id(),
+        TEMPORARY.fetch_add(1, Ordering::Relaxed)
+    ));
+    let written = (|| {
+        let file = OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .open(&temporary)
+            .map_err(with_path)?;
+        let mut w = BufWriter::new(file);
+        let result = match format {
+            Format::Mat => mat::write(&mut w, matrices, names),
+            Format::Npz => npz::write(&mut w, matrices, names),
+            Format::Json => serde_json::to_writer_pretty(&mut w, &to_json(matrices, names))
+                .map_err(io::Error::from)
+                .and_then(|()| w.write_all(b"\n"))
+                .map_err(ExportError::from),
+        };
+        match result {
+            Err(ExportError::Write(source)) => Err(with_path(source)),
+            other => other,
+        }?;
+        let file = w.into_inner().map_err(|e| with_path(e.into_error()))?;
+        file.sync_all().map_err(with_path)?;
+        place(&temporary, path, options.overwrite)
+    })();
+    if written.is_err() {
+        let _ = std::fs::remove_file(&temporary);
+    }
+    written
+}
+
+/// Moves the complete `temporary` file to `path`: a rename (which replaces `path`) when
+/// overwriting; otherwise a hard link, which fails if `path` appeared meanwhile, falling
+/// back to a checked rename on file systems without hard links.
+fn place(temporary: &Path, path: &Path, overwrite: bool) -> Result<(), ExportError> {
+    let with_path = |source: io::Error| ExportError::Io {
+        path: path.to_path_buf(),
+        source,
     };
-    match result {
-        Err(ExportError::Write(source)) => Err(with_path(source)),
-        other => other,
-    }?;
-    w.flush().map_err(with_path)
+    if overwrite {
+        return std::fs::rename(temporary, path).map_err(with_path);
+    }
+    match std::fs::hard_link(temporary, path) {
+        Ok(()) => {
+            let _ = std::fs::remove_file(temporary);
+            Ok(())
+        }
+        Err(e) if e.kind() == io::ErrorKind::AlreadyExists => Err(ExportError::Exists {
+            path: path.to_path_buf(),
+        }),
+        Err(_) if !path.exists() => std::fs::rename(temporary, path).map_err(with_path),
+        Err(_) => Err(ExportError::Exists {
+            path: path.to_path_buf(),
+        }),
+    }
 }
 
 /// Units and provenance stored beside the matrices of an export, as more variables of the
@@ -286,12 +373,13 @@ impl Metadata {
     }
 }
 
-/// [`write()`] with `metadata`'s variables after the others.
+/// [`write_with`] with `metadata`'s variables after the others.
 pub fn write_with_metadata(
     path: &Path,
     matrices: &[Matrix],
     names: &[Names],
     metadata: &Metadata,
+    options: &WriteOptions,
 ) -> Result<(), ExportError> {
     let matrices: Vec<Matrix> = matrices
         .iter()
@@ -299,7 +387,7 @@ pub fn write_with_metadata(
         .chain(metadata.matrices())
         .collect();
     let names: Vec<Names> = names.iter().copied().chain(metadata.names()).collect();
-    write(path, &matrices, &names)
+    write_with(path, &matrices, &names, options)
 }
 
 /// Writes a level-5 MAT-file: a 128-byte header, then one variable per matrix and name list.
@@ -504,7 +592,7 @@ mod tests {
         let err = write(&path, &[a], &[]).unwrap_err();
         assert_eq!(
             err.to_string(),
-            "matrix 'A' has a non-finite value at row 2, column 2, which JSON cannot hold"
+            "matrix 'A' has a non-finite value (NaN or infinity) at row 2, column 2: nothing was written"
         );
         assert!(!path.exists(), "invalid input must not create the file");
         assert_eq!(to_json(&[a], &[])["A"][1][1], Value::Null);

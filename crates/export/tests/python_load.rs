@@ -52,6 +52,9 @@ fn scipy_and_numpy_load_what_we_write() {
     std::fs::create_dir_all(&dir).unwrap();
     let mat = dir.join("ss.mat");
     let npz = dir.join("ss.npz");
+    // files of an earlier run: write refuses to replace them
+    let _ = std::fs::remove_file(&mat);
+    let _ = std::fs::remove_file(&npz);
     write(&mat, &matrices, &names).unwrap();
     write(&npz, &matrices, &names).unwrap();
 

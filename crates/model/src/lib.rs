@@ -421,7 +421,10 @@ impl SystemBuilder {
         if spec.stiffness <= 0.0 {
             return Err(BuildError::Invalid {
                 item,
-                message: format!("stiffness {} N/m must be positive", spec.stiffness),
+                message: format!(
+                    "stiffness {} N/m must be positive (check the wire's radius, Young's modulus and length)",
+                    spec.stiffness
+                ),
             });
         }
         let s = &spec.section;
@@ -436,10 +439,15 @@ impl SystemBuilder {
             ("linear density", s.linear_density),
         ] {
             check_finite(&item, what, v, "")?;
-            if v < 0.0 {
+            // a wire needs material and a section; bending and torsion may be absent
+            let must_be_positive = matches!(what, "Young's modulus" | "area");
+            if v < 0.0 || (must_be_positive && v == 0.0) {
                 return Err(BuildError::Invalid {
                     item,
-                    message: format!("{what} is negative ({v})"),
+                    message: format!(
+                        "{what} is {} ({v}): wire sizes (radius, thickness) and material constants must be positive",
+                        if v < 0.0 { "negative" } else { "zero" }
+                    ),
                 });
             }
         }

@@ -78,38 +78,24 @@ impl ThermalNoise {
     }
 }
 
-/// Thermal-noise PSD of the output combination `v` of the variables (m²/Hz or rad²/Hz) at
-/// temperature `temperature` (K) and frequencies `freqs` (Hz), for the stage `model` with
-/// damping `damping`, with the share of every tag and every lossy term. An output of the
-/// wrong length, or a frequency where the dynamic stiffness is exactly singular, gives NaN;
-/// [`thermal_noise_with`] says which it was.
+/// Thermal-noise PSD of the output combination `v` of the variables (or of the variables
+/// and the floats) (m²/Hz or rad²/Hz) at temperature `temperature` (K, positive) and
+/// frequencies `freqs` (Hz), for the stage `model` with damping `damping`, with the share
+/// of every tag and every lossy term. An output of the wrong length, a frequency out of
+/// range, a damping multiplier that is not finite or has a negative loss, or a frequency
+/// where the dynamic stiffness is exactly singular is an error.
 pub fn thermal_noise(
     model: &StageModel,
     damping: &Damping,
     v: &DVector<f64>,
     temperature: f64,
     freqs: &[f64],
-) -> ThermalNoise {
+) -> Result<ThermalNoise, DynamicsError> {
     let options = NoiseOptions {
         per_term: true,
         ..Default::default()
     };
-    thermal_noise_with(model, damping, v, temperature, freqs, &options).unwrap_or_else(|_| {
-        let nan = vec![f64::NAN; freqs.len()];
-        ThermalNoise {
-            total: nan.clone(),
-            tags: model
-                .by_tag
-                .iter()
-                .map(|(t, _)| (t.clone(), nan.clone()))
-                .collect(),
-            by_term: model
-                .terms
-                .iter()
-                .map(|t| (t.label.clone(), t.tag.clone(), nan.clone()))
-                .collect(),
-        }
-    })
+    thermal_noise_with(model, damping, v, temperature, freqs, &options)
 }
 
 /// Quadratic forms Σ w_ij Re(z̄_i z_j) over the solved unknowns, evaluated together: each
@@ -170,7 +156,9 @@ impl Forms {
     }
 }
 
-/// Thermal noise as [`thermal_noise`], solved and broken down as `options` says.
+/// Thermal noise as [`thermal_noise`], solved and broken down as `options` says. `v` may
+/// also be a displacement output over the variables, floats and parameters (a point's
+/// whole motion): the parameters' part is left out, the support does not fluctuate.
 pub fn thermal_noise_with(
     model: &StageModel,
     damping: &Damping,
@@ -179,6 +167,11 @@ pub fn thermal_noise_with(
     freqs: &[f64],
     options: &NoiseOptions,
 ) -> Result<ThermalNoise, DynamicsError> {
+    if !(temperature.is_finite() && temperature > 0.0) {
+        return Err(DynamicsError::Temperature(temperature));
+    }
+    pendkit_dynamics::validate::check_frequencies(freqs)?;
+    let v = &v.rows(0, v.len().min(model.unknowns())).into_owned();
     let input = Input::Force(v.clone());
     let output = Output::Displacement(v.clone());
     let mut sweep = Sweep::new(model, damping, &input, &output, options.solver)?;

@@ -22,6 +22,40 @@ pub struct Resolved {
     /// Position of each name in `entries`; shared with the parameter set when no parameter
     /// is left out as free (the usual case), so resolving does not rebuild it.
     index: Arc<HashMap<Arc<str>, usize>>,
+    /// Which entries have been looked up (by [`Resolved::get`], [`Resolved::expression`],
+    /// [`Resolved::eval`], ...): what a model's build reads, so that an override of a
+    /// parameter nothing reads can be refused. Clones share it.
+    reads: Arc<ReadLog>,
+}
+
+/// One flag per entry of a [`Resolved`], set when it is looked up. Not part of the value:
+/// two resolutions are equal whatever has been read from them.
+#[derive(Debug, Default)]
+struct ReadLog(std::sync::Mutex<Vec<bool>>);
+
+impl PartialEq for ReadLog {
+    fn eq(&self, _: &Self) -> bool {
+        true
+    }
+}
+
+impl ReadLog {
+    fn mark(&self, i: usize) {
+        let mut flags = self
+            .0
+            .lock()
+            .unwrap_or_else(|poisoned| poisoned.into_inner());
+        if let Some(flag) = flags.get_mut(i) {
+            *flag = true;
+        }
+    }
+
+    fn flags(&self) -> Vec<bool> {
+        self.0
+            .lock()
+            .unwrap_or_else(|poisoned| poisoned.into_inner())
+            .clone()
+    }
 }
 
 #[derive(Clone, Copy, PartialEq)]
@@ -75,7 +109,12 @@ pub(crate) fn resolve(
                 .collect(),
         )
     };
-    Ok(Resolved { entries, index })
+    let reads = Arc::new(ReadLog(std::sync::Mutex::new(vec![false; entries.len()])));
+    Ok(Resolved {
+        entries,
+        index,
+        reads,
+    })
 }
 
 impl Resolver<'_> {
@@ -158,7 +197,10 @@ impl Resolver<'_> {
 impl Resolved {
     fn lookup(&self, name: &str) -> Result<&Value, ParamError> {
         match self.index.get(name) {
-            Some(&i) => Ok(&self.entries[i].1),
+            Some(&i) => {
+                self.reads.mark(i);
+                Ok(&self.entries[i].1)
+            }
             None => Err(unknown(name, self.entries.iter().map(|(n, _)| &**n))),
         }
     }
@@ -213,6 +255,19 @@ impl Resolved {
     /// Whether there are no numeric parameters.
     pub fn is_empty(&self) -> bool {
         self.len() == 0
+    }
+
+    /// The parameters looked up so far ([`Resolved::get`], [`Resolved::expression`],
+    /// [`Resolved::eval`] and the like), in definition order: after a model's build, those
+    /// it reads directly (add what their definitions refer to for all it depends on).
+    pub fn read_names(&self) -> Vec<&str> {
+        let flags = self.reads.flags();
+        self.entries
+            .iter()
+            .zip(flags)
+            .filter(|(_, read)| *read)
+            .map(|((name, _), _)| &**name)
+            .collect()
     }
 
     /// Evaluates an expression of the numeric parameters.

@@ -286,9 +286,10 @@ impl StageResult {
         pairs
     }
 
-    /// Whether the equilibrium is stable: an error naming the first growing mode if not.
-    /// Every command and report asks here, so the verdict has one source.
+    /// Whether the equilibrium is stable: an error naming the growing mode if not. The
+    /// verdict is the run's [`StageResult::stability`] (floats and upside-down bodies
+    /// included); this is [`StageResult::check_stable`] under its older name.
     pub fn stability(&self) -> Result<(), Error> {
-        self.modes.check_stable().map_err(Error::Dynamics)
+        self.check_stable()
     }
 }

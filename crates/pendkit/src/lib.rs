@@ -66,7 +66,10 @@ use std::path::{Path, PathBuf};
 
 use nalgebra::{DVector, Vector3};
 use pendkit_assembly::{Assembled, AssemblyError, assemble_with, timed};
-use pendkit_dynamics::{DynamicsError, eliminate_floats, normal_modes};
+use pendkit_dynamics::{
+    DynamicsError, TermRounding, eliminate_floats, inverted_bodies, normal_modes_with_rounding,
+    runaway_floats,
+};
 use pendkit_energy::{NamedSignal, SignalTerm};
 use pendkit_model::BuildError;
 use pendkit_noise::thermal_noise_with;
@@ -96,7 +99,9 @@ pub use pendkit_params as params;
 pub use pendkit_suspension as suspension;
 
 pub use pendkit_assembly::{AssemblyOptions, PhaseTimes};
-pub use pendkit_dynamics::{Input, Modes, Output, Solver, StageModel, StateSpace};
+pub use pendkit_dynamics::{
+    Input, Modes, Output, Solver, Stability, StageModel, StateSpace, Verdict,
+};
 pub use pendkit_energy::{Stage, System};
 pub use pendkit_model::{Model, Overrides};
 pub use pendkit_noise::{NoiseOptions, ThermalNoise};
@@ -138,12 +143,27 @@ pub enum Error {
     /// A `--set NAME=EXPR` argument without '='.
     #[error("--set '{0}': expected NAME=EXPR or damping.<tag>.<field>=EXPR")]
     SetSyntax(String),
+    /// An override of a parameter that nothing the model builds reads.
+    #[error(
+        "parameter '{name}' is read by nothing in model '{model}': overriding it would change nothing (parameters read: {read})"
+    )]
+    Unread {
+        /// The parameter overridden.
+        name: String,
+        /// The model.
+        model: String,
+        /// The parameters the model does read, directly or through other definitions.
+        read: String,
+    },
     /// Building the model failed.
     #[error(transparent)]
     Build(#[from] BuildError),
     /// Equilibrium or assembly failed.
     #[error(transparent)]
     Assembly(#[from] AssemblyError),
+    /// Two element crates registered the same kind name.
+    #[error(transparent)]
+    Registry(#[from] pendkit_energy::DuplicateKind),
     /// An input or output name that means nothing in this model.
     #[error("'{name}': {message}")]
     Name {
@@ -154,7 +174,7 @@ pub enum Error {
     },
     /// A frequency grid that cannot be made.
     #[error(
-        "frequency grid from {from} Hz to {to} Hz with {n} points: need 0 < from <= to and at least one point"
+        "frequency grid from {from} Hz to {to} Hz with {n} points: need 1e-9 <= from <= to <= 1e9 (Hz, finite) and 1 to 1000000 points"
     )]
     Grid {
         /// Start (Hz).
@@ -184,10 +204,21 @@ pub enum Error {
         /// Why.
         message: String,
     },
-    /// A benchmark asked to repeat nothing.
-    #[error("--repeat must be at least 1")]
+    /// A benchmark asked to repeat nothing, or too often.
+    #[error("--repeat must be from 1 to {MAX_REPEAT}")]
     ZeroRepeat,
+    /// A result that came out NaN or infinite (never returned as a success).
+    #[error("{what} is not finite at {f_hz} Hz")]
+    NotFinite {
+        /// What was computed.
+        what: String,
+        /// Where (Hz).
+        f_hz: f64,
+    },
 }
+
+/// Most repetitions `pendkit bench` makes.
+pub const MAX_REPEAT: usize = 100_000;
 
 /// Every bundled model.
 pub fn models() -> Vec<&'static dyn Model> {
@@ -320,9 +351,55 @@ impl Case {
         Ok(self)
     }
 
-    /// Resolves the parameters and builds the numeric model.
+    /// Resolves the parameters and builds the numeric model. An override of a parameter
+    /// that nothing reads (neither the model's build, nor its damping, nor the definition
+    /// of a parameter read) is an error: it would change nothing, silently.
     pub fn build(&self) -> Result<(System, Resolved), Error> {
-        Ok(pendkit_model::build_with(self.model, &self.overrides)?)
+        let (system, resolved) = pendkit_model::build_with(self.model, &self.overrides)?;
+        let read = self.parameters_read(&resolved)?;
+        if let Some((name, _)) = self
+            .overrides
+            .parameters
+            .iter()
+            .find(|(name, _)| !read.contains(name.as_str()))
+        {
+            return Err(Error::Unread {
+                name: name.clone(),
+                model: self.model.name().to_string(),
+                read: read.iter().cloned().collect::<Vec<_>>().join(" "),
+            });
+        }
+        Ok((system, resolved))
+    }
+
+    /// The parameters a build that gave `resolved` depends on: those it read, and what
+    /// their definitions (with this case's overrides) refer to, transitively.
+    pub fn parameters_read(
+        &self,
+        resolved: &Resolved,
+    ) -> Result<std::collections::BTreeSet<String>, Error> {
+        let mut params = pendkit_model::Defaults::of(self.model)?.params.clone();
+        for (name, text) in &self.overrides.parameters {
+            params
+                .apply_text(name, text)
+                .map_err(pendkit_model::BuildError::from)?;
+        }
+        let mut read: std::collections::BTreeSet<String> = resolved
+            .read_names()
+            .into_iter()
+            .map(String::from)
+            .collect();
+        let mut pending: Vec<String> = read.iter().cloned().collect();
+        while let Some(name) = pending.pop() {
+            if let Some(definition) = params.get(&name) {
+                for symbol in definition.expr.symbols() {
+                    if read.insert(symbol.clone()) {
+                        pending.push(symbol);
+                    }
+                }
+            }
+        }
+        Ok(read)
     }
 }
 
@@ -404,8 +481,12 @@ pub struct StageResult {
     pub assembled: Assembled,
     /// The stage's frequency-independent matrices for responses and noise.
     pub model: StageModel,
-    /// Normal modes (possibly with unstable ones: check [`Modes::check_stable`]).
+    /// Normal modes (possibly with unstable ones: see `stability`). Each carries its
+    /// estimated error ([`pendkit_dynamics::Mode::omega_squared_error`]).
     pub modes: Modes,
+    /// The stability verdict of the equilibrium: growing modes, floats without a stable
+    /// position, bodies upside down. [`StageResult::check_stable`] turns it into an error.
+    pub stability: Stability,
 }
 
 /// Which normal modes a stage run computes.
@@ -449,17 +530,22 @@ pub fn run_stage_with(
     options: &RunOptions,
     mut times: Option<&mut PhaseTimes>,
 ) -> Result<StageResult, Error> {
+    if let ModeSelection::Below(hz) = options.modes
+        && !(hz > 0.0 && hz.is_finite())
+    {
+        return Err(DynamicsError::BelowFrequency(hz).into());
+    }
+    pendkit_energy::check_registrations()?;
     let assembled = assemble_with(&system, stage, &options.assembly, times.as_deref_mut())?;
     let model = timed(&mut times, "stage-model", 1, || {
         StageModel::new(&system, &assembled)
     });
+    model.check_damping_at_dc(&system.damping)?;
+    let rounding = TermRounding::new(&model, &assembled, &system.damping);
     let modes = match options.modes {
-        ModeSelection::Below(hz) if !(hz > 0.0 && hz.is_finite()) => {
-            return Err(DynamicsError::BelowFrequency(hz).into());
-        }
         ModeSelection::Below(hz) if model.sizes.0 > DENSE_MODES_LIMIT => {
             timed(&mut times, "modes", 1, || {
-                model.modes_below(&system.damping, hz)
+                model.modes_below_with_rounding(&system.damping, hz, &rounding)
             })?
         }
         selection => {
@@ -471,7 +557,12 @@ pub fn run_stage_with(
                 )
             })?;
             let mut modes = timed(&mut times, "modes", 1, || {
-                normal_modes(&reduced.k_eff, &assembled.mass, &model.variables)
+                normal_modes_with_rounding(
+                    &reduced.k_eff,
+                    &assembled.mass,
+                    &model.variables,
+                    &rounding,
+                )
             })?;
             if let ModeSelection::Below(hz) = selection {
                 modes.modes.retain(|m| m.hz < hz);
@@ -479,48 +570,119 @@ pub fn run_stage_with(
             modes
         }
     };
+    let floats = runaway_floats(&model, &system.damping, Some(&rounding))?;
+    let inverted = inverted_bodies(&system, &assembled.equilibrium.coords);
+    let stability = Stability::assess(&modes, floats, model.sizes.1, inverted);
     Ok(StageResult {
         system,
         assembled,
         model,
         modes,
+        stability,
     })
+}
+
+/// A point on a body as the linearised geometry at equilibrium sees it: how far it moves
+/// along a lab direction per unit of each unknown (variables, then floats) and of each
+/// parameter.
+struct PointWeights {
+    unknowns: DVector<f64>,
+    parameters: DVector<f64>,
+}
+
+impl StageResult {
+    /// One line saying what grows, as an error, unless the equilibrium is stable (or
+    /// neutral). Every calculation that answers with a linearised model checks this first.
+    pub fn check_stable(&self) -> Result<(), Error> {
+        Ok(self.stability.check()?)
+    }
+
+    /// The check every command answering with a linearised model (transfer functions,
+    /// noise, state space, ...) makes before it answers: `Ok(None)` when nothing grows;
+    /// when something does, the error, or with `allow_unstable` `Ok(Some(warning))`, the
+    /// one line to show the user before going on (control design needs unstable plants).
+    pub fn require_stable(&self, allow_unstable: bool) -> Result<Option<String>, Error> {
+        match (self.check_stable(), allow_unstable) {
+            (Ok(()), _) => Ok(None),
+            (Err(e), true) => Ok(Some(format!("{e} (going on: --allow-unstable)"))),
+            (Err(e), false) => Err(e),
+        }
+    }
 }
 
 impl StageResult {
     /// A point on a body and a direction, written `<body>@x,y,z/dx,dy,dz` (m, body
-    /// coordinates; direction in lab axes, normalised): the generalised-force vector over
-    /// the variables of a unit force there, equal to the displacement-output vector of that
-    /// point along that direction (the linearised geometry at equilibrium).
-    fn point_vector(&self, spec: &str) -> Option<Result<DVector<f64>, Error>> {
+    /// coordinates; direction in lab axes, normalised): how far the point moves along the
+    /// direction per unit of every unknown and parameter (the linearised geometry at
+    /// equilibrium). The same weights are the generalised force of a unit force there.
+    fn point_weights(&self, spec: &str) -> Option<Result<PointWeights, Error>> {
         let (body, rest) = spec.split_once('@')?;
         Some((|| {
-            let bad = || Error::Name {
+            let bad = |why: &str| Error::Name {
                 name: spec.to_string(),
-                message: "expected <body>@x,y,z/dx,dy,dz".into(),
+                message: format!("expected <body>@x,y,z/dx,dy,dz ({why})"),
             };
-            let (point, dir) = rest.split_once('/').ok_or_else(bad)?;
-            let nums = |t: &str| -> Result<Vector3<f64>, Error> {
+            let (point, dir) = rest
+                .split_once('/')
+                .ok_or_else(|| bad("no '/' before the direction"))?;
+            let nums = |t: &str, what: &str| -> Result<Vector3<f64>, Error> {
                 let v: Vec<f64> = t
                     .split(',')
                     .map(|x| x.trim().parse::<f64>())
                     .collect::<Result<_, _>>()
-                    .map_err(|_| bad())?;
+                    .map_err(|_| bad(&format!("the {what} is not three numbers")))?;
                 if v.len() == 3 && v.iter().all(|x| x.is_finite()) {
                     Ok(Vector3::new(v[0], v[1], v[2]))
                 } else {
-                    Err(bad())
+                    Err(bad(&format!("the {what} must be three finite numbers")))
                 }
             };
-            let (p, d) = (nums(point)?, nums(dir)?);
-            if d.norm() == 0.0 {
-                return Err(bad());
+            let (p, d) = (nums(point, "point")?, nums(dir, "direction")?);
+            if !(d.norm() > 0.0 && d.norm().is_finite()) {
+                return Err(bad("the direction is zero"));
             }
             let b = self.system.body(body).ok_or_else(|| Error::Name {
                 name: spec.to_string(),
-                message: format!("unknown body '{body}'"),
+                message: format!(
+                    "unknown body '{body}' (bodies: {})",
+                    self.system
+                        .bodies
+                        .iter()
+                        .map(|b| b.name.as_str())
+                        .collect::<Vec<_>>()
+                        .join(" ")
+                ),
             })?;
-            Ok(self.point_row(b, &p, &d))
+            let jac = self.system.bodies[b]
+                .frame
+                .jacobian(&self.assembled.equilibrium.coords, &p);
+            let d = d.normalize();
+            let layout = &self.assembled.layout;
+            let along = |ids: &[usize]| {
+                DVector::from_iterator(
+                    ids.len(),
+                    ids.iter().map(|&g| jac.position.column(g).dot(&d)),
+                )
+            };
+            let unknowns: Vec<usize> = layout
+                .variables
+                .iter()
+                .chain(&layout.floats)
+                .copied()
+                .collect();
+            let weights = PointWeights {
+                unknowns: along(&unknowns),
+                parameters: along(&layout.parameters),
+            };
+            if weights
+                .unknowns
+                .iter()
+                .chain(weights.parameters.iter())
+                .any(|x| !x.is_finite())
+            {
+                return Err(bad("its motion is not finite at the equilibrium"));
+            }
+            Ok(weights)
         })())
     }
 
@@ -604,8 +766,12 @@ impl StageResult {
     }
 
     /// Parses an input: a named input the model declares, a parameter (support
-    /// displacement, e.g. `x00`), `force:<variable>` or `force:<body>@x,y,z/dx,dy,dz`. Names of a scheme the model declares are accepted
-    /// too (`GND_L`, `force:L3_P`).
+    /// displacement, e.g. `x00`), a point on a body the support alone moves
+    /// (`support@x,y,z/dx,dy,dz`: the smallest change of the parameters, metres and radians
+    /// alike, that moves the point by one unit along the direction), `force:<variable>` or
+    /// `force:<body>@x,y,z/dx,dy,dz` (a force at a point, also on a body a float poses, such
+    /// as a blade tip). Names of a scheme the model declares are accepted too (`GND_L`,
+    /// `force:L3_P`).
     pub fn input(&self, name: &str) -> Result<Input, Error> {
         if let Some(signal) = self.system.inputs.iter().find(|s| s.name == name) {
             let v = self.named_vector(signal, !signal.force)?;
@@ -617,28 +783,55 @@ impl StageResult {
         }
         let name = &self.unalias(name);
         let m = &self.model;
+        let err = |message: &str| Error::Name {
+            name: name.to_string(),
+            message: message.to_string(),
+        };
         if let Some(target) = name.strip_prefix("force:") {
-            if let Some(v) = self.point_vector(target) {
-                return Ok(Input::Force(v?));
+            if let Some(w) = self.point_weights(target) {
+                let w = w?;
+                if w.unknowns.iter().all(|&x| x == 0.0) {
+                    return Err(err(if w.parameters.iter().any(|&x| x != 0.0) {
+                        "a force on a point the support alone moves does nothing (the support is driven): use the point as a displacement input"
+                    } else {
+                        "the point does not move with any coordinate"
+                    }));
+                }
+                return Ok(Input::Force(w.unknowns));
             }
             return match m.variables.iter().position(|v| v == target) {
                 Some(k) => Ok(Input::Force(Self::unit(m.variables.len(), k))),
                 None => Err(self.names_error(target, "a variable to push on", &m.variables)),
             };
         }
+        if let Some(w) = self.point_weights(name) {
+            let w = w?;
+            if w.unknowns.iter().any(|&x| x != 0.0) {
+                return Err(err(
+                    "a displacement input must be a point that only the support moves: push on a moving body with force:<body>@x,y,z/dx,dy,dz",
+                ));
+            }
+            let norm2 = w.parameters.norm_squared();
+            if norm2.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
+                return Err(err("the point does not move with any parameter"));
+            }
+            return Ok(Input::Displacement(w.parameters / norm2));
+        }
         match m.parameters.iter().position(|v| v == name) {
             Some(k) => Ok(Input::Displacement(Self::unit(m.parameters.len(), k))),
             None => Err(self.names_error(
                 name,
-                "a parameter to drive (or force:<variable>)",
+                "a parameter to drive (or <support body>@x,y,z/dx,dy,dz, force:<variable>, force:<body>@x,y,z/dx,dy,dz)",
                 &m.parameters,
             )),
         }
     }
 
-    /// Parses an output: a variable, `<body>@x,y,z/dx,dy,dz`, an output the model names
-    /// (e.g. `tm_beam`), or `force:<parameter>` (the force on the support). Names of a scheme the model declares are accepted too
-    /// (`L3_L`, `L3@0,0,0/1,0,0`).
+    /// Parses an output: a named output the model declares, a variable,
+    /// `<body>@x,y,z/dx,dy,dz` (the point's whole motion: through the variables, the floats
+    /// that pose its body and the support), or `force:<parameter>` (the force on the
+    /// support). Names of a scheme the model declares are accepted too (`L3_L`,
+    /// `L3@0,0,0/1,0,0`).
     pub fn output(&self, name: &str) -> Result<Output, Error> {
         if let Some(signal) = self.system.outputs.iter().find(|s| s.name == name) {
             let v = self.named_vector(signal, signal.force)?;
@@ -656,8 +849,15 @@ impl StageResult {
                 None => Err(self.names_error(target, "a parameter", &m.parameters)),
             };
         }
-        if let Some(v) = self.point_vector(name) {
-            return Ok(Output::Displacement(v?));
+        if let Some(w) = self.point_weights(name) {
+            let w = w?;
+            let all: Vec<f64> = w
+                .unknowns
+                .iter()
+                .chain(w.parameters.iter())
+                .copied()
+                .collect();
+            return Ok(Output::Displacement(DVector::from_vec(all)));
         }
         match m.variables.iter().position(|v| v == name) {
             Some(k) => Ok(Output::Displacement(Self::unit(m.variables.len(), k))),
@@ -667,6 +867,23 @@ impl StageResult {
                 &m.variables,
             )),
         }
+    }
+}
+
+/// Every value finite, or an error naming the first frequency where one is not.
+fn check_finite<'a>(
+    what: &str,
+    freqs: &[f64],
+    values: impl IntoIterator<Item = &'a f64>,
+    per_frequency: usize,
+) -> Result<(), Error> {
+    let per = per_frequency.max(1);
+    match values.into_iter().position(|v| !v.is_finite()) {
+        None => Ok(()),
+        Some(k) => Err(Error::NotFinite {
+            what: what.to_string(),
+            f_hz: freqs.get(k / per).copied().unwrap_or(f64::NAN),
+        }),
     }
 }
 
@@ -693,9 +910,16 @@ impl StageResult {
         solver: Solver,
     ) -> Result<Vec<faer::c64>, Error> {
         let (i, o) = (self.input(input)?, self.output(output)?);
-        Ok(self
+        let h = self
             .model
-            .transfer_with(&self.system.damping, &i, &o, freqs, solver)?)
+            .transfer_with(&self.system.damping, &i, &o, freqs, solver)?;
+        check_finite(
+            &format!("transfer function {output}/{input}"),
+            freqs,
+            h.iter().flat_map(|z| [&z.re, &z.im]),
+            2,
+        )?;
+        Ok(h)
     }
 
     /// Thermal noise (PSD, m²/Hz or rad²/Hz) of the named displacement output at `freqs`
@@ -713,14 +937,22 @@ impl StageResult {
         options: &NoiseOptions,
     ) -> Result<ThermalNoise, Error> {
         match self.output(output)? {
-            Output::Displacement(v) => Ok(thermal_noise_with(
-                &self.model,
-                &self.system.damping,
-                &v,
-                self.system.temperature,
-                freqs,
-                options,
-            )?),
+            Output::Displacement(v) => {
+                let noise = thermal_noise_with(
+                    &self.model,
+                    &self.system.damping,
+                    &v,
+                    self.system.temperature,
+                    freqs,
+                    options,
+                )?;
+                let what = format!("thermal noise of {output}");
+                check_finite(&what, freqs, &noise.total, 1)?;
+                for (_, series) in &noise.tags {
+                    check_finite(&what, freqs, series, 1)?;
+                }
+                Ok(noise)
+            }
             Output::SupportForce(_) => Err(Error::Name {
                 name: output.to_string(),
                 message: "thermal noise needs a displacement output".into(),
@@ -769,7 +1001,7 @@ pub fn bench(
     repeat: usize,
     noise: Option<(&str, usize)>,
 ) -> Result<BenchReport, Error> {
-    if repeat == 0 {
+    if repeat == 0 || repeat > MAX_REPEAT {
         return Err(Error::ZeroRepeat);
     }
     if noise.is_some() && stage == Stage::S0A {
@@ -844,9 +1076,12 @@ pub fn bench(
     })
 }
 
-/// `n` log-spaced frequencies from `from` to `to` (Hz).
+/// `n` log-spaced frequencies from `from` to `to` (Hz): finite, 1e-9 Hz ≤ from ≤ to ≤
+/// 1e9 Hz ([`pendkit_dynamics::validate`]), 1 ≤ n ≤ 1 000 000.
 pub fn log_grid(from: f64, to: f64, n: usize) -> Result<Vec<f64>, Error> {
-    if from.is_nan() || to.is_nan() || from <= 0.0 || to < from || n == 0 {
+    use pendkit_dynamics::validate::{MAX_FREQUENCY, MAX_POINTS, MIN_FREQUENCY};
+    let in_range = |f: f64| f.is_finite() && (MIN_FREQUENCY..=MAX_FREQUENCY).contains(&f);
+    if !in_range(from) || !in_range(to) || to < from || n == 0 || n > MAX_POINTS {
         return Err(Error::Grid { from, to, n });
     }
     if n == 1 {

@@ -81,10 +81,12 @@ impl StageResult {
 
     /// Writes the state space to `path` (`.mat`, `.npz` or `.json`, by the extension):
     /// `A B C D`, the names `states inputs outputs` and their units `state_units
-    /// input_units output_units`, and the provenance: `model`, `case_name`, `stage`,
+    /// input_units output_units`, and the provenance: `model`, `case_name` (`case` is a MATLAB keyword), `stage`,
     /// `naming`, `pendkit_version` (one-item string lists), `damping_frequency_hz` (1 x 1),
     /// and the resolved parameters `parameter_names`, `parameter_values` (n x 1) and
-    /// `parameter_units` (empty where the model declares none).
+    /// `parameter_units` (empty where the model declares none). The file is written whole
+    /// or not at all (a temporary file renamed into place); an existing file is refused
+    /// unless `options.overwrite`.
     #[cfg(feature = "export")]
     pub fn write_state_space(
         &self,
@@ -92,6 +94,7 @@ impl StageResult {
         damping_frequency: f64,
         scheme: Option<&str>,
         provenance: &Provenance,
+        options: &pendkit_export::WriteOptions,
     ) -> Result<NamedStateSpace, Error> {
         use pendkit_export::{Matrix, Metadata, Names};
         let named = self.named_state_space(damping_frequency, scheme)?;
@@ -132,7 +135,7 @@ impl StageResult {
             .text("output_units", named.output_units.clone());
         provenance.add_to(&mut meta, self.assembled.stage.name(), scheme);
         meta.numbers("damping_frequency_hz", vec![damping_frequency]);
-        pendkit_export::write_with_metadata(path, &matrices, &names, &meta)
+        pendkit_export::write_with_metadata(path, &matrices, &names, &meta, options)
             .map_err(Error::Export)?;
         Ok(named)
     }

@@ -1,0 +1,243 @@
+//! What the command line refuses (issue 11), one test per defect, named by what it guards:
+//! each bad input gives exit status 1 and one line on stderr naming what and where, and
+//! never a table, a file or a non-finite number.
+
+use std::process::Command;
+
+fn pendkit(args: &[&str]) -> (bool, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_pendkit"))
+        .args(args)
+        .output()
+        .expect("pendkit runs");
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+/// Runs and expects a refusal: failure, nothing on stdout, one line on stderr containing
+/// every one of `words`.
+#[track_caller]
+fn refused(args: &[&str], words: &[&str]) -> String {
+    let (ok, stdout, stderr) = pendkit(args);
+    assert!(!ok, "{args:?} succeeded: {stdout}");
+    assert!(stdout.is_empty(), "{args:?} printed: {stdout}");
+    assert_eq!(stderr.trim_end().lines().count(), 1, "one line: {stderr}");
+    for w in words {
+        assert!(stderr.contains(w), "{args:?}: '{w}' not in {stderr}");
+    }
+    stderr
+}
+
+/// Every number in a CSV table's data rows, which must parse and be finite.
+#[track_caller]
+fn finite_csv(stdout: &str) {
+    for line in stdout.lines().skip(1) {
+        for cell in line.split(',') {
+            let x: f64 = cell
+                .parse()
+                .unwrap_or_else(|_| panic!("'{cell}' in {line}"));
+            assert!(x.is_finite(), "{line}");
+        }
+    }
+}
+
+#[test]
+fn tf_noise_and_ss_refuse_an_unstable_quad_naming_the_growing_mode() {
+    let sets = ["--set", "d4=-0.02"];
+    let tf = [
+        &["tf", "quad", "--input", "x00", "--output", "pitch3"][..],
+        &sets,
+    ]
+    .concat();
+    refused(&tf, &["unstable", "grows at", "Hz", "pitch3"]);
+    let noise = [&["noise", "quad", "--output", "pitch3"][..], &sets].concat();
+    refused(&noise, &["unstable", "pitch3"]);
+    let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR"));
+    let out = dir.join("unstable-quad.mat");
+    let _ = std::fs::remove_file(&out);
+    let path = out.to_string_lossy().into_owned();
+    let ss = [&["ss", "quad", "--out", &path][..], &sets].concat();
+    refused(&ss, &["unstable", "pitch3"]);
+    assert!(!out.exists(), "no file for a refused state space");
+    let modes = [&["modes", "quad"][..], &sets].concat();
+    refused(&modes, &["unstable", "pitch3"]);
+}
+
+#[test]
+fn allow_unstable_goes_on_with_a_warning_on_stderr() {
+    let (ok, stdout, stderr) = pendkit(&[
+        "tf",
+        "quad",
+        "--set",
+        "d4=-0.02",
+        "--input",
+        "x00",
+        "--output",
+        "pitch3",
+        "--points",
+        "5",
+        "--csv",
+        "--allow-unstable",
+    ]);
+    assert!(ok, "{stderr}");
+    assert!(
+        stderr.starts_with("warning: unstable") && stderr.contains("pitch3"),
+        "{stderr}"
+    );
+    assert_eq!(stdout.lines().count(), 6);
+    finite_csv(&stdout);
+}
+
+#[test]
+fn massless_float_on_a_negative_spring_is_not_reported_stable() {
+    refused(
+        &["modes", "toy", "--set", "k1=-4000"],
+        &["float 'q'", "no stable position"],
+    );
+}
+
+#[test]
+fn stiff_wires_reach_equilibrium_within_rounding() {
+    // r_wire = 30 × nominal: wire stiffness 900 times nominal (stiffness ratio ~1e8 to the
+    // pendulum's own); the force tolerance scales with the rounding of k |x| ε
+    let (ok, stdout, stderr) = pendkit(&["modes", "double-pendulum", "--set", "r_wire=scale(30)"]);
+    assert!(ok, "{stderr}");
+    assert!(stdout.contains("6 modes"), "{stdout}");
+}
+
+#[test]
+fn negative_loss_and_non_finite_damping_are_refused_naming_the_tag() {
+    refused(
+        &[
+            "noise",
+            "quad",
+            "--output",
+            "x3",
+            "--set",
+            "damping.fibre_stretch.structural=-1e-7",
+        ],
+        &["fibre_stretch", "negative loss"],
+    );
+    refused(
+        &[
+            "tf",
+            "quad",
+            "--input",
+            "x00",
+            "--output",
+            "x3",
+            "--set",
+            "damping.fibre_stretch.structural=1/0",
+        ],
+        &["fibre_stretch"],
+    );
+}
+
+#[test]
+fn frequency_grids_outside_the_documented_limits_are_refused() {
+    let tf = ["tf", "quad", "--input", "x00", "--output", "x3"];
+    refused(&[&tf[..], &["--to", "inf"]].concat(), &["--to"]);
+    refused(&[&tf[..], &["--from", "1e-320"]].concat(), &["1e-9"]);
+    refused(
+        &[&tf[..], &["--points", "100000000000000"]].concat(),
+        &["1000000"],
+    );
+    refused(&[&tf[..], &["--freqs", "1,nan"]].concat(), &["NaN"]);
+    refused(
+        &[&tf[..], &["--freqs", "1,1e300"]].concat(),
+        &["1e300", "1e9"],
+    );
+    refused(
+        &[
+            "ss",
+            "quad",
+            "--out",
+            "never-written.mat",
+            "--damping-frequency",
+            "1e-320",
+        ],
+        &["damping frequency", "1e-9"],
+    );
+    assert!(!std::path::Path::new("never-written.mat").exists());
+}
+
+#[test]
+fn negative_wire_radius_is_refused_not_read_as_its_absolute_value() {
+    refused(
+        &["modes", "double-pendulum", "--set", "r_wire=-0.0005"],
+        &["wire1", "positive"],
+    );
+    refused(&["modes", "quad", "--set", "r1=0"], &["w1_1", "positive"]);
+}
+
+#[test]
+fn set_on_a_parameter_nothing_reads_is_refused() {
+    refused(
+        &["modes", "quad", "--set", "maraging_Y=2e11"],
+        &["maraging_Y", "read by nothing"],
+    );
+}
+
+#[test]
+fn existing_export_is_refused_without_force_and_replaced_with_it() {
+    let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR"));
+    let out = dir.join("refusals-existing.json");
+    std::fs::write(&out, "kept").unwrap();
+    let path = out.to_string_lossy().into_owned();
+    refused(
+        &["ss", "double-pendulum", "--out", &path],
+        &["exists", "--force"],
+    );
+    assert_eq!(std::fs::read_to_string(&out).unwrap(), "kept");
+    let (ok, _, stderr) = pendkit(&["ss", "double-pendulum", "--out", &path, "--force"]);
+    assert!(ok, "{stderr}");
+    let written: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    assert!(written["A"].is_array());
+}
+
+#[test]
+fn support_point_as_input_moves_a_point_on_the_support_one_for_one() {
+    // a point on the support driven along x by the support's own x: the point's motion
+    // over the input is exactly 1 at every frequency (it is the input), and the pendulum
+    // mass follows as a pendulum does (→ 1 at low frequency)
+    let (ok, stdout, stderr) = pendkit(&[
+        "tf",
+        "pendulum",
+        "--input",
+        "x00",
+        "--output",
+        "support@0,0,0/1,0,0",
+        "--freqs",
+        "0.1,1,10",
+        "--csv",
+    ]);
+    assert!(ok, "{stderr}");
+    for line in stdout.lines().skip(1) {
+        let cells: Vec<f64> = line.split(',').map(|c| c.parse().unwrap()).collect();
+        assert_eq!((cells[1], cells[2]), (1.0, 0.0), "{line}");
+    }
+    let (ok, stdout, stderr) = pendkit(&[
+        "tf",
+        "pendulum",
+        "--input",
+        "support@0,0,0/1,0,0",
+        "--output",
+        "x1",
+        "--freqs",
+        "0.01",
+        "--csv",
+    ]);
+    assert!(ok, "{stderr}");
+    let row: Vec<f64> = stdout
+        .lines()
+        .nth(1)
+        .unwrap()
+        .split(',')
+        .map(|c| c.parse().unwrap())
+        .collect();
+    // pendulum: x1/x00 = ω0² / (ω0² − ω²) ≈ 1 + (f/f0)² with f0 ≈ 0.64 Hz, f = 0.01 Hz
+    assert!((row[1] - 1.0).abs() < 1e-3, "{row:?}");
+}

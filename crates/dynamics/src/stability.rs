@@ -1,0 +1,515 @@
+//! Whether an equilibrium is stable, and what grows when it is not: a typed verdict from
+//! a stage's modes and its float block, with every growing mode's growth rate and dominant
+//! coordinates, floats that have no stable position, and bodies that hang upside down.
+//!
+//! The equilibrium is stable when the stiffness over the variables *and* the floats is
+//! positive definite. By the inertia additivity of the Schur complement (Haynsworth), the
+//! negative eigenvalues of that matrix are those of the float block Q (with the variables
+//! held) plus those of K_eff = K − C Q⁻¹ Cᵀ (with the floats following), so both are checked:
+//! a float whose block is indefinite is massless and sits on a maximum of the potential, it
+//! runs away at once (an infinite growth rate), whatever K_eff says. A mode or a float
+//! stiffness is counted as negative only when it lies below minus its estimated error
+//! (rounding of the terms' Hessians and of the eigensolver); within it, it is neutral.
+//!
+//! [`TermRounding`] is that estimate for the assembled stage: each entry of each term's
+//! Hessian is known to a few ulps of itself, and each term's geometric stiffness (tension
+//! on minus tension off) to a few ulps of its *stiffness* part: a wire's geometric
+//! stiffness T/l is k (l − l₀)/l with l − l₀ a small difference of lengths, so it carries
+//! about ε k of error, not ε T/l (the inverse strain, 1e3–1e4 for steel wires and silica
+//! fibres, times more). The floats' share of a mode comes from the float-elimination map
+//! z_q = −Q⁻¹ C_qx v.
+
+use std::fmt;
+
+use nalgebra::DMatrix;
+use pendkit_assembly::{Assembled, OffHessian};
+use pendkit_energy::{Damping, System};
+
+use crate::DynamicsError;
+use crate::modes::{Modes, ROUNDING, StiffnessRounding};
+use crate::stage::StageModel;
+
+/// The stability of an equilibrium.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Verdict {
+    /// Every mode has ω² above its error and every float is held: a minimum of the
+    /// potential.
+    Stable,
+    /// Nothing grows, but some mode has ω² within its error of zero (a free coordinate, or
+    /// a stiffness too small to tell from rounding).
+    Neutral,
+    /// Some mode grows (ω² below minus its error) or some float has no stable position.
+    Unstable,
+    /// Nothing grows, but a body with mass hangs upside down (its z axis below the
+    /// horizontal): a minimum other than the hanging equilibrium, reached from a bad start.
+    /// Not reported as stable: it is not the suspension asked about.
+    Inverted,
+}
+
+/// A mode that grows exponentially: e^{2π rate t}.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GrowingMode {
+    /// 1-based number of the mode in ascending order of ω² among the stage's modes.
+    pub index: usize,
+    /// Growth rate sqrt(−ω²)/2π (Hz).
+    pub rate_hz: f64,
+    /// Estimated relative error of the growth rate.
+    pub accuracy: f64,
+    /// The coordinates with the largest kinetic-energy fractions (name, fraction 0–1).
+    pub dominant: Vec<(String, f64)>,
+}
+
+/// A direction of the float block with negative stiffness: with the variables held, the
+/// massless floats have no stable position along it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RunawayFloat {
+    /// Stiffness along the direction (N/m, N m/rad for angles; a unit vector over the
+    /// floats): negative.
+    pub stiffness: f64,
+    /// The floats with the largest shares of the direction (name, share 0–1).
+    pub floats: Vec<(String, f64)>,
+}
+
+/// A body whose frame's z axis points below the horizontal at equilibrium.
+#[derive(Clone, Debug, PartialEq)]
+pub struct InvertedBody {
+    /// Body name.
+    pub body: String,
+    /// Angle between its z axis and the lab's (degrees, above 90).
+    pub tilt_deg: f64,
+}
+
+/// The stability report of an equilibrium: the verdict and the evidence.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Stability {
+    /// Stable, neutral or unstable.
+    pub verdict: Verdict,
+    /// The growing modes, fastest first.
+    pub growing: Vec<GrowingMode>,
+    /// Float directions with negative stiffness.
+    pub runaway_floats: Vec<RunawayFloat>,
+    /// Number of neutral modes (ω² = 0 within its error).
+    pub neutral: usize,
+    /// Number of directions the potential was examined in: modes plus floats.
+    pub directions: usize,
+    /// Bodies hanging upside down (tilted past 90°), often the sign of an equilibrium
+    /// reached from a bad start.
+    pub inverted: Vec<InvertedBody>,
+}
+
+impl Stability {
+    /// The verdict from modes alone (no floats, no bodies): for [`Modes::check_stable`].
+    pub fn of_modes(modes: &Modes) -> Stability {
+        Stability::assess(modes, Vec::new(), 0, Vec::new())
+    }
+
+    /// The verdict from a stage's modes (which must include every mode with ω² < 0: all of
+    /// them, or those below a positive frequency), the runaway directions of its float
+    /// block among `floats` floats, and the bodies found upside down.
+    pub fn assess(
+        modes: &Modes,
+        runaway_floats: Vec<RunawayFloat>,
+        floats: usize,
+        inverted: Vec<InvertedBody>,
+    ) -> Stability {
+        let mut growing: Vec<GrowingMode> = modes
+            .modes
+            .iter()
+            .enumerate()
+            .filter(|(_, m)| m.omega_squared < 0.0)
+            .map(|(i, m)| GrowingMode {
+                index: i + 1,
+                rate_hz: -m.hz,
+                accuracy: m.accuracy(),
+                dominant: m.dominant(&modes.coordinates, 3),
+            })
+            .collect();
+        growing.sort_by(|a, b| b.rate_hz.total_cmp(&a.rate_hz));
+        let neutral = modes
+            .modes
+            .iter()
+            .filter(|m| m.omega_squared == 0.0)
+            .count();
+        let verdict = if !growing.is_empty() || !runaway_floats.is_empty() {
+            Verdict::Unstable
+        } else if !inverted.is_empty() {
+            Verdict::Inverted
+        } else if neutral > 0 {
+            Verdict::Neutral
+        } else {
+            Verdict::Stable
+        };
+        Stability {
+            verdict,
+            growing,
+            runaway_floats,
+            neutral,
+            directions: modes.coordinates.len() + floats,
+            inverted,
+        }
+    }
+
+    /// `Err(DynamicsError::Unstable)` (one line naming what grows, or which bodies hang
+    /// upside down) unless the equilibrium is stable or neutral.
+    pub fn check(&self) -> Result<(), DynamicsError> {
+        match self.verdict {
+            Verdict::Unstable | Verdict::Inverted => {
+                Err(DynamicsError::Unstable(Box::new(self.clone())))
+            }
+            Verdict::Stable | Verdict::Neutral => Ok(()),
+        }
+    }
+
+    /// Whether the equilibrium is the hanging one and nothing grows (stable or neutral).
+    pub fn is_stable(&self) -> bool {
+        matches!(self.verdict, Verdict::Stable | Verdict::Neutral)
+    }
+}
+
+/// "pitch3 68 %, pitch2 29 %".
+fn shares(list: &[(String, f64)]) -> String {
+    list.iter()
+        .map(|(name, f)| format!("{name} {:.0} %", 100.0 * f))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+impl fmt::Display for Stability {
+    /// One line: what grows, fastest first, and what kind of stationary point this is.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.verdict {
+            Verdict::Stable => return write!(f, "stable equilibrium (a minimum of the potential)"),
+            Verdict::Neutral => {
+                return write!(
+                    f,
+                    "neutral equilibrium: {} mode(s) with zero stiffness within rounding, nothing grows",
+                    self.neutral
+                );
+            }
+            Verdict::Inverted => {
+                let bodies: Vec<String> = self
+                    .inverted
+                    .iter()
+                    .map(|b| format!("'{}' ({:.0}°)", b.body, b.tilt_deg))
+                    .collect();
+                return write!(
+                    f,
+                    "inverted equilibrium: nothing grows, but {} hang(s) upside down (tilted past 90°): a minimum other than the hanging one, reached from a bad start",
+                    bodies.join(", ")
+                );
+            }
+            Verdict::Unstable => {}
+        }
+        write!(f, "unstable equilibrium: ")?;
+        let mut parts = Vec::new();
+        for r in &self.runaway_floats {
+            let names: Vec<&str> = r.floats.iter().map(|(n, _)| n.as_str()).collect();
+            let what = if names.len() == 1 {
+                format!("float '{}' has", names[0])
+            } else {
+                format!("floats {} have", names.join(", "))
+            };
+            parts.push(format!(
+                "{what} no stable position (stiffness {:.4e} N/m or N m/rad with the variables held: a massless coordinate on a maximum of the potential moves without limit)",
+                r.stiffness
+            ));
+        }
+        if let Some(g) = self.growing.first() {
+            let more = if self.growing.len() > 1 {
+                format!(" ({} growing modes, this the fastest)", self.growing.len())
+            } else {
+                String::new()
+            };
+            parts.push(format!(
+                "mode {} grows at {:.6} Hz (e-folding time {:.3e} s){more}, mostly {}",
+                g.index,
+                g.rate_hz,
+                1.0 / (2.0 * std::f64::consts::PI * g.rate_hz),
+                shares(&g.dominant)
+            ));
+        }
+        let downhill = self.growing.len() + self.runaway_floats.len();
+        let kind = if downhill >= self.directions && self.directions > 0 {
+            "a maximum of the potential".to_string()
+        } else {
+            format!(
+                "a saddle of the potential: {downhill} of {} directions go downhill",
+                self.directions.max(downhill)
+            )
+        };
+        parts.push(kind);
+        if !self.inverted.is_empty() {
+            let bodies: Vec<String> = self
+                .inverted
+                .iter()
+                .map(|b| format!("'{}' ({:.0}°)", b.body, b.tilt_deg))
+                .collect();
+            parts.push(format!(
+                "upside down (tilted past 90°, started from a bad position?): {}",
+                bodies.join(", ")
+            ));
+        }
+        write!(f, "{}", parts.join("; "))
+    }
+}
+
+/// The float-elimination map at f = 0: the floats' displacement −Q⁻¹ C_qx v that follows
+/// a displacement v of the variables (m or rad), from the stage's real stiffness.
+#[derive(Clone, Debug)]
+pub struct FloatMap {
+    nx: usize,
+    /// −Q⁻¹ C_qx (floats × variables); empty when there are no floats or Q is singular.
+    map: DMatrix<f64>,
+}
+
+impl FloatMap {
+    /// The map of `model` with `damping`'s ε'(0).
+    pub fn new(model: &StageModel, damping: &Damping) -> Self {
+        let (nx, nq, _) = model.sizes;
+        let (re, _) = model.master_values(damping, 0.0);
+        let mut q = DMatrix::zeros(nq, nq);
+        let mut c = DMatrix::zeros(nq, nx);
+        for (s, &v) in re.iter().enumerate() {
+            let (r, col) = model.pattern.position(s);
+            if (nx..nx + nq).contains(&r) {
+                if (nx..nx + nq).contains(&col) {
+                    q[(r - nx, col - nx)] = v;
+                } else if col < nx {
+                    c[(r - nx, col)] = v;
+                }
+            }
+        }
+        let map = if nq == 0 {
+            DMatrix::zeros(0, nx)
+        } else {
+            match q.full_piv_lu().solve(&c) {
+                Some(x) if x.iter().all(|v| v.is_finite()) => -x,
+                _ => DMatrix::zeros(nq, nx),
+            }
+        };
+        FloatMap { nx, map }
+    }
+
+    /// [v; −Q⁻¹ C_qx v] over the variables and the floats.
+    pub fn extend(&self, v: &[f64]) -> Vec<f64> {
+        let mut z: Vec<f64> = v.iter().copied().take(self.nx).collect();
+        z.resize(self.nx, 0.0);
+        for i in 0..self.map.nrows() {
+            z.push((0..self.nx).map(|j| self.map[(i, j)] * z[j]).sum());
+        }
+        z
+    }
+
+    /// The map −Q⁻¹ C_qx itself (floats × variables).
+    pub fn matrix(&self) -> &DMatrix<f64> {
+        &self.map
+    }
+}
+
+/// One term's Hessians for the rounding estimate: its coordinates' master positions
+/// (variables and floats only), the tension-off part and the geometric part on − off, and
+/// how much larger the rounding of the geometric part is than its size.
+struct TermParts {
+    /// (local index, master position) of the term's coordinates that are unknowns.
+    positions: Vec<(usize, usize)>,
+    size: usize,
+    off: Vec<f64>,
+    geometric: Vec<f64>,
+    /// max|off| / max|geometric|, at least 1: the geometric stiffness is a force times a
+    /// curvature, and the force (k times a small difference of lengths) carries the
+    /// rounding of the stiffness times the lengths, not of itself.
+    amplification: f64,
+    /// The tag's storage multiplier ε'(0) if above 1 (it scales the tension-off part).
+    storage: f64,
+}
+
+/// The rounding of an assembled stage's stiffness, term by term (see the module
+/// documentation), for a mode shape z over the variables and floats:
+/// ROUNDING ε Σ_t [ |z|ᵀ (|H_on| + |H_off|) |z| + a_t |zᵀ (H_on − H_off) z| ], the first
+/// sum the rounding of the entries as stored, the second that of each term's geometric
+/// stiffness, amplified by a_t = max|H_off| / max|H_on − H_off| (for a wire, k l / T: the
+/// inverse strain).
+pub struct TermRounding {
+    terms: Vec<TermParts>,
+    floats: FloatMap,
+    unknowns: usize,
+}
+
+impl TermRounding {
+    /// The rounding of `assembled`'s terms on `model` (the stage built from it).
+    pub fn new(model: &StageModel, assembled: &Assembled, damping: &Damping) -> Self {
+        let unknowns = model.unknowns();
+        let largest = |h: &[f64]| h.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+        let terms = assembled
+            .terms
+            .iter()
+            .map(|t| {
+                let size = t.coords.len();
+                let positions: Vec<(usize, usize)> = t
+                    .coords
+                    .iter()
+                    .enumerate()
+                    .filter_map(|(a, &g)| {
+                        let p = *assembled.layout.position.get(g)?;
+                        (p < unknowns).then_some((a, p))
+                    })
+                    .collect();
+                let off: Vec<f64> = match &t.off {
+                    OffHessian::Zero => vec![0.0; t.on.len()],
+                    OffHessian::Same => t.on.clone(),
+                    OffHessian::Matrix(m) => m.clone(),
+                };
+                let geometric: Vec<f64> = t.on.iter().zip(&off).map(|(a, b)| a - b).collect();
+                let g = largest(&geometric);
+                let amplification = if g > 0.0 {
+                    (largest(&off) / g).clamp(1.0, 1.0 / f64::EPSILON)
+                } else {
+                    1.0
+                };
+                let storage = damping.at(&t.tag, 0.0).0.abs();
+                TermParts {
+                    positions,
+                    size,
+                    off,
+                    geometric,
+                    amplification,
+                    storage: if storage.is_finite() {
+                        storage.max(1.0)
+                    } else {
+                        1.0
+                    },
+                }
+            })
+            .collect();
+        TermRounding {
+            terms,
+            floats: FloatMap::new(model, damping),
+            unknowns,
+        }
+    }
+
+    /// Estimated |δ(zᵀ K z)| for `z` over the variables and floats (master order).
+    pub fn error_unknowns(&self, z: &[f64]) -> f64 {
+        let mut total = 0.0;
+        for t in &self.terms {
+            let (mut entries, mut geometric) = (0.0, 0.0);
+            for &(a, pa) in &t.positions {
+                let Some(&za) = z.get(pa) else { continue };
+                if za == 0.0 {
+                    continue;
+                }
+                for &(b, pb) in &t.positions {
+                    let Some(&zb) = z.get(pb) else { continue };
+                    let k = a * t.size + b;
+                    let (off, g) = (t.off[k] * t.storage, t.geometric[k]);
+                    entries += za.abs() * ((off + g).abs() + off.abs()) * zb.abs();
+                    geometric += za * g * zb;
+                }
+            }
+            total += entries + t.amplification * geometric.abs();
+        }
+        ROUNDING * f64::EPSILON * total
+    }
+
+    /// The float-elimination map used for the floats' share of a mode.
+    pub fn float_map(&self) -> &FloatMap {
+        &self.floats
+    }
+
+    /// Number of unknowns (variables and floats) the terms are over.
+    pub fn unknowns(&self) -> usize {
+        self.unknowns
+    }
+}
+
+impl StiffnessRounding for TermRounding {
+    fn error(&self, v: &[f64]) -> f64 {
+        self.error_unknowns(&self.floats.extend(v))
+    }
+}
+
+/// The directions of the float block Q (real stiffness at f = 0, variables held) with
+/// stiffness below minus its rounding (`rounding`, or a few ulps of Q's entries without
+/// it): those where the massless floats have no stable position.
+pub fn runaway_floats(
+    model: &StageModel,
+    damping: &Damping,
+    rounding: Option<&TermRounding>,
+) -> Result<Vec<RunawayFloat>, DynamicsError> {
+    let (nx, nq, _) = model.sizes;
+    if nq == 0 {
+        return Ok(Vec::new());
+    }
+    let (re, _) = model.master_values(damping, 0.0);
+    let mut q = DMatrix::zeros(nq, nq);
+    for (s, &v) in re.iter().enumerate() {
+        let (r, c) = model.pattern.position(s);
+        if (nx..nx + nq).contains(&r) && (nx..nx + nq).contains(&c) {
+            q[(r - nx, c - nx)] = v;
+        }
+    }
+    if let Some(bad) = q.iter().position(|x| !x.is_finite()) {
+        return Err(DynamicsError::NotFinite {
+            what: "float stiffness block",
+            row: bad % nq,
+            column: bad / nq,
+        });
+    }
+    let eigen = q.clone().symmetric_eigen();
+    let mut runaway = Vec::new();
+    for (k, &kappa) in eigen.eigenvalues.iter().enumerate() {
+        if kappa >= 0.0 {
+            continue;
+        }
+        let w = eigen.eigenvectors.column(k);
+        let error = match rounding {
+            Some(r) => {
+                let mut z = vec![0.0; nx];
+                z.extend(w.iter());
+                r.error_unknowns(&z)
+            }
+            None => {
+                let mut sum = 0.0;
+                for i in 0..nq {
+                    for j in 0..nq {
+                        sum += w[i].abs() * q[(i, j)].abs() * w[j].abs();
+                    }
+                }
+                ROUNDING * f64::EPSILON * sum
+            }
+        };
+        if kappa < -error {
+            let mut floats: Vec<(String, f64)> = w
+                .iter()
+                .enumerate()
+                .map(|(i, x)| (model.floats.get(i).cloned().unwrap_or_default(), x * x))
+                .filter(|(_, share)| *share >= 0.01)
+                .collect();
+            floats.sort_by(|a, b| b.1.total_cmp(&a.1));
+            floats.truncate(3);
+            runaway.push(RunawayFloat {
+                stiffness: kappa,
+                floats,
+            });
+        }
+    }
+    Ok(runaway)
+}
+
+/// Bodies with mass whose z axis points below the horizontal at coordinates `x` (a full
+/// coordinate vector of `system`).
+pub fn inverted_bodies(system: &System, x: &[f64]) -> Vec<InvertedBody> {
+    system
+        .bodies
+        .iter()
+        .filter(|b| b.mass > 0.0)
+        .filter(|b| b.frame.var_list().iter().all(|&g| g < x.len()))
+        .filter_map(|b| {
+            let zz = b.frame.eval(x).rotation[(2, 2)];
+            (zz < 0.0).then(|| InvertedBody {
+                body: b.name.clone(),
+                tilt_deg: zz.clamp(-1.0, 1.0).acos().to_degrees(),
+            })
+        })
+        .collect()
+}

@@ -1,0 +1,159 @@
+//! Property tests (issue 11): over generated parameter values, expressions and case files,
+//! pendkit never panics, and whatever it answers with success is finite. Errors are
+//! fine; a panic or a NaN with `Ok` is a failure. Each property runs a few dozen cases
+//! (each case builds and solves a model); proptest's shrinking names the smallest input
+//! that breaks one.
+
+use pendkit::{Case, Error, StageResult, log_grid, run_stage};
+use pendkit_energy::Stage;
+use proptest::prelude::*;
+
+/// Builds and runs `case`, then checks every number a successful run gives: modes, and
+/// where the equilibrium is stable, a transfer function and the thermal noise.
+fn run_and_check(case: Result<Case, Error>, stage: Stage) -> Result<(), TestCaseError> {
+    let Ok(case) = case else { return Ok(()) };
+    let Ok((system, _)) = case.build() else {
+        return Ok(());
+    };
+    let Ok(r) = run_stage(system, stage) else {
+        return Ok(());
+    };
+    check_finite(&r, stage)
+}
+
+fn check_finite(r: &StageResult, stage: Stage) -> Result<(), TestCaseError> {
+    for m in &r.modes.modes {
+        prop_assert!(
+            m.omega_squared.is_finite() && m.hz.is_finite(),
+            "mode {m:?}"
+        );
+        prop_assert!(m.vector.iter().all(|x| x.is_finite()), "mode vector {m:?}");
+        prop_assert!(m.omega_squared_error.is_finite() && m.omega_squared_error >= 0.0);
+    }
+    for x in &r.assembled.equilibrium.coords {
+        prop_assert!(x.is_finite());
+    }
+    if stage == Stage::S0A || r.check_stable().is_err() {
+        return Ok(());
+    }
+    let freqs = log_grid(0.1, 10.0, 4).unwrap();
+    let input = r.model.parameters[0].clone();
+    let output = r.model.variables[0].clone();
+    if let Ok(h) = r.transfer(&input, &output, &freqs) {
+        prop_assert!(
+            h.iter().all(|z| z.re.is_finite() && z.im.is_finite()),
+            "{h:?}"
+        );
+    }
+    if let Ok(noise) = r.noise(&output, &freqs) {
+        prop_assert!(
+            noise.total.iter().all(|x| x.is_finite() && *x >= 0.0),
+            "{noise:?}"
+        );
+    }
+    Ok(())
+}
+
+/// Values a user might type, sensible or not.
+fn value() -> impl Strategy<Value = String> {
+    prop_oneof![
+        (-1e3f64..1e3).prop_map(|x| format!("{x:e}")),
+        (-30i32..30).prop_map(|e| format!("1e{e}")),
+        (-30i32..30).prop_map(|e| format!("-1e{e}")),
+        (0.0f64..40.0).prop_map(|x| format!("scale({x})")),
+        (-1.0f64..1.0).prop_map(|x| format!("increment({x})")),
+        Just("0".to_string()),
+        Just("-0".to_string()),
+        Just("1/0".to_string()),
+        Just("0/0".to_string()),
+        Just("1e308*10".to_string()),
+        Just("nan".to_string()),
+        Just("inf".to_string()),
+    ]
+}
+
+/// Expressions from a small grammar over numbers, the model's own parameter names and
+/// functions, nested a few levels.
+fn expression(names: &'static [&'static str]) -> impl Strategy<Value = String> {
+    let leaf = prop_oneof![
+        (-1e3f64..1e3).prop_map(|x| format!("{x}")),
+        (0..names.len()).prop_map(move |i| names[i].to_string()),
+        Just("pi".to_string()),
+    ];
+    leaf.prop_recursive(3, 12, 2, |inner| {
+        prop_oneof![
+            (inner.clone(), inner.clone(), 0..5usize).prop_map(|(a, b, op)| {
+                let op = ["+", "-", "*", "/", "^"][op];
+                format!("({a}){op}({b})")
+            }),
+            (inner.clone(), 0..6usize).prop_map(|(a, f)| {
+                let f = ["sqrt", "sin", "cos", "exp", "ln", "abs"][f];
+                format!("{f}({a})")
+            }),
+            inner.prop_map(|a| format!("-({a})")),
+        ]
+    })
+}
+
+const TOY: &[&str] = &["m", "k1", "k2"];
+const DOUBLE: &[&str] = &["m1", "m2", "r_wire", "l_wire"];
+const QUAD: &[&str] = &["d0", "d1", "d2", "d3", "d4", "m1", "m3", "r1", "r2", "Y1"];
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 48, ..ProptestConfig::default() })]
+
+    #[test]
+    fn any_parameter_value_on_small_models_gives_an_error_or_finite_numbers(
+        model in 0..2usize,
+        which in 0..4usize,
+        v in value(),
+    ) {
+        let (name, params) = [("toy", TOY), ("double-pendulum", DOUBLE)][model];
+        let p = params[which % params.len()];
+        let case = Case::model(name).and_then(|c| c.with_sets(&[format!("{p}={v}")]));
+        run_and_check(case, Stage::S2)?;
+    }
+
+    #[test]
+    fn any_expression_as_a_parameter_gives_an_error_or_finite_numbers(
+        which in 0..3usize,
+        e in expression(TOY),
+    ) {
+        let case = Case::model("toy").and_then(|c| c.with_sets(&[format!("{}={e}", TOY[which])]));
+        run_and_check(case, Stage::S0A)?;
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 16, ..ProptestConfig::default() })]
+
+    #[test]
+    fn any_value_on_quad_parameters_gives_an_error_or_finite_numbers(
+        which in 0..QUAD.len(),
+        v in value(),
+    ) {
+        let case = Case::model("quad").and_then(|c| c.with_sets(&[format!("{}={v}", QUAD[which])]));
+        run_and_check(case, Stage::S2)?;
+    }
+
+    #[test]
+    fn any_case_file_gives_an_error_or_finite_numbers(
+        model in prop_oneof![Just("toy"), Just("double-pendulum"), Just("nope"), Just("")],
+        p in 0..4usize,
+        v in value(),
+        tag in prop_oneof![Just("k1"), Just("wire_stretch"), Just("gravity"), Just("x")],
+        field in prop_oneof![Just("structural"), Just("viscous"), Just("loss"), Just("")],
+        loss in value(),
+        junk in "[ -~\n]{0,40}",
+    ) {
+        let param = [TOY, DOUBLE][usize::from(model == "double-pendulum")][p % 3];
+        let text = format!(
+            "model = \"{model}\"\n[parameters]\n{param} = \"{v}\"\n[damping.{tag}]\n{field} = \"{loss}\"\n{junk}\n"
+        );
+        let dir = std::env::temp_dir().join(format!("pendkit-prop-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("case.toml");
+        std::fs::write(&path, &text).unwrap();
+        run_and_check(Case::from_file(&path), Stage::S2)?;
+    }
+}
