@@ -194,11 +194,23 @@ impl Case {
     /// Reads a case file (TOML; see [`files`]).
     #[cfg(feature = "files")]
     pub fn from_file(path: &Path) -> Result<Case, Error> {
+        let text = std::fs::read_to_string(path).map_err(|source| Error::Case {
+            path: path.to_path_buf(),
+            message: source.to_string(),
+        })?;
+        Case::from_text(path, &text)
+    }
+
+    /// A case from the text of a case file that was read from `path` (which names the case
+    /// and the errors): for callers that keep the text, e.g. to rebuild the case in another
+    /// process.
+    #[cfg(feature = "files")]
+    pub fn from_text(path: &Path, text: &str) -> Result<Case, Error> {
         let err = |message: String| Error::Case {
             path: path.to_path_buf(),
             message,
         };
-        let file = pendkit_files::read_case(path).map_err(|e| match e {
+        let file = pendkit_files::parse_case(text).map_err(|e| match e {
             pendkit_files::FileError::Read { source, .. } => err(source.to_string()),
             pendkit_files::FileError::Parse { message } => err(message),
         })?;
