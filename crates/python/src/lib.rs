@@ -341,7 +341,7 @@ impl Run {
 /// positive, or a `PendkitError` naming the first bad one as the command line does.
 fn frequencies(freqs: &Bound<'_, PyAny>) -> PyResult<Vec<f64>> {
     let values: Vec<f64> = match freqs.cast::<PyArray1<f64>>() {
-        Ok(array) => array.to_vec().map_err(error)?,
+        Ok(array) => array.readonly().as_array().iter().copied().collect(),
         Err(_) => {
             let array = freqs
                 .py()
@@ -355,7 +355,7 @@ fn frequencies(freqs: &Bound<'_, PyAny>) -> PyResult<Vec<f64>> {
                     array.shape()
                 )));
             }
-            array.to_vec().map_err(error)?
+            array.readonly().as_array().iter().copied().collect()
         }
     };
     if values.is_empty() {
