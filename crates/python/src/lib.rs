@@ -341,12 +341,15 @@ impl Run {
 /// positive, or a `PendkitError` naming the first bad one as the command line does.
 fn frequencies(freqs: &Bound<'_, PyAny>) -> PyResult<Vec<f64>> {
     let values: Vec<f64> = match freqs.cast::<PyArray1<f64>>() {
-        Ok(array) => array.readonly().as_array().iter().copied().collect(),
-        Err(_) => {
+        // the common case, read in place (any strides); a misaligned buffer (as unpickled
+        // out of band, e.g. by Dask) cannot be viewed and takes the copying path
+        Ok(array) if array.is_aligned() => array.readonly().as_array().iter().copied().collect(),
+        _ => {
+            // a fresh float64 copy of anything array-like: aligned, any shape
             let array = freqs
                 .py()
                 .import("numpy")?
-                .call_method1("asarray", (freqs, "float64"))
+                .call_method1("array", (freqs, "float64"))
                 .map_err(|e| error(format!("freqs: not an array of numbers (Hz): {e}")))?;
             let array = array.cast_into::<PyArrayDyn<f64>>().map_err(error)?;
             if array.ndim() != 1 {
