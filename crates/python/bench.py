@@ -24,14 +24,15 @@ REPO = Path(__file__).resolve().parents[2]
 
 
 def median_time(call, repeat, inner=1):
-    """Median seconds of one call over `repeat` samples of `inner` calls each."""
+    """(median, minimum) seconds of one call over `repeat` samples of `inner` calls each
+    (the minimum is the steadier figure on a loaded machine)."""
     samples = []
     for _ in range(repeat):
         start = time.perf_counter()
         for _ in range(inner):
             call()
         samples.append((time.perf_counter() - start) / inner)
-    return statistics.median(samples)
+    return statistics.median(samples), min(samples)
 
 
 def rust_noise(cli, points, repeat):
@@ -42,7 +43,8 @@ def rust_noise(cli, points, repeat):
         capture_output=True, text=True, check=True,
     ).stdout
     phases = {p["name"]: p for p in json.loads(out)["phases"]}
-    return phases["noise"]["median_s"], json.loads(out)["total_median_s"]
+    noise = phases["noise"]
+    return (noise["median_s"], noise["min_s"]), json.loads(out)["total_median_s"]
 
 
 def main():
@@ -60,16 +62,17 @@ def main():
     rust_1, rust_run = rust_noise(cli, 1, 200)
     rust_1000, _ = rust_noise(cli, 1000, 30)
 
-    print(f"pendkit {pendkit.__version__}, quad stage 2, thermal noise of x3")
-    print(f"trivial call (Result.stage getter):        {py_getter * us:10.3f} µs")
-    print(f"tf, 1 point, Python:                       {py_tf_1 * us:10.2f} µs")
-    print(f"noise, 1 point: Python {py_1 * us:10.2f} µs, Rust {rust_1 * us:10.2f} µs, "
-          f"overhead {(py_1 - rust_1) * us:8.2f} µs")
-    print(f"noise, 1000 points: Python {py_1000 * 1e3:8.3f} ms, Rust {rust_1000 * 1e3:8.3f} ms, "
-          f"ratio {py_1000 / rust_1000:6.3f}")
-    print(f"build + run stage 2: Python {py_run * 1e3:8.3f} ms, Rust {rust_run * 1e3:8.3f} ms "
-          f"(Rust's total excludes nothing Python does but object creation)")
-
+    print(f"pendkit {pendkit.__version__}, quad stage 2, thermal noise of x3; "
+          "median / minimum over repetitions")
+    print(f"trivial call (Result.stage getter): {py_getter[0] * us:.3f} µs")
+    print(f"tf, 1 point, Python: {py_tf_1[0] * us:.2f} / {py_tf_1[1] * us:.2f} µs")
+    for name, py, rust, scale, unit in [("noise, 1 point", py_1, rust_1, us, "µs"),
+                                        ("noise, 1000 points", py_1000, rust_1000, 1e3, "ms")]:
+        print(f"{name}: Python {py[0] * scale:.3f} / {py[1] * scale:.3f} {unit}, "
+              f"Rust {rust[0] * scale:.3f} / {rust[1] * scale:.3f} {unit}, "
+              f"difference {(py[0] - rust[0]) * us:.2f} / {(py[1] - rust[1]) * us:.2f} µs, "
+              f"ratio {py[0] / rust[0]:.3f} / {py[1] / rust[1]:.3f}")
+    print(f"build + run stage 2: Python {py_run[0] * 1e3:.3f} ms, Rust {rust_run * 1e3:.3f} ms")
 
 if __name__ == "__main__":
     main()
