@@ -272,6 +272,18 @@ impl Case {
     /// file's folder.
     #[cfg(feature = "files")]
     pub fn from_file(path: &Path) -> Result<Case, Error> {
+        let text = std::fs::read_to_string(path).map_err(|source| Error::Case {
+            path: path.to_path_buf(),
+            message: source.to_string(),
+        })?;
+        Case::from_text(path, &text)
+    }
+
+    /// A case from the text of a case file that was read from `path` (which names the case
+    /// and the errors): for callers that keep the text, e.g. to rebuild the case in another
+    /// process.
+    #[cfg(feature = "files")]
+    pub fn from_text(path: &Path, text: &str) -> Result<Case, Error> {
         let err = |message: String| Error::Case {
             path: path.to_path_buf(),
             message,
@@ -280,8 +292,7 @@ impl Case {
             .file_stem()
             .map(|s| s.to_string_lossy().into_owned())
             .unwrap_or_default();
-        let text = std::fs::read_to_string(path).map_err(|e| err(e.to_string()))?;
-        if !pendkit_files::is_case_file(&text) {
+        if !pendkit_files::is_case_file(text) {
             return Ok(Case {
                 name,
                 description: None,
@@ -289,7 +300,7 @@ impl Case {
                 overrides: Overrides::default(),
             });
         }
-        let file = pendkit_files::parse_case(&text).map_err(|e| match e {
+        let file = pendkit_files::parse_case(text).map_err(|e| match e {
             pendkit_files::FileError::Read { source, .. } => err(source.to_string()),
             pendkit_files::FileError::Parse { message } => err(message),
         })?;
