@@ -14,7 +14,7 @@ gwinc = pytest.importorskip("gwinc")
 from gwinc.noise.suspensionthermal import suspension_thermal as gwinc_suspension_thermal  # noqa: E402
 from gwinc.suspension import precomp_suspension  # noqa: E402
 
-from pendkit.gwinc import suspension_thermal  # noqa: E402
+from pendkit.gwinc import DEFAULT_MODEL, suspension_thermal  # noqa: E402
 
 
 @pytest.fixture(scope="module")
@@ -39,12 +39,26 @@ def test_maps_temperature_and_vertical_coupling(aligo):
     freq, ifo, sustf = aligo
     theta = sustf.VHCoupling.theta
     assert 1e-4 < theta < 1e-2  # L / R_earth for a 4 km arm
-    run = pendkit.Model("quad", set={"temperature": ifo.Suspension.Temp}).run()
+    run = pendkit.Model(DEFAULT_MODEL, set={"temperature": ifo.Suspension.Temp}).run()
     expected = run.noise("x3", freq).psd + theta**2 * run.noise("z3", freq).psd
     assert np.array_equal(suspension_thermal(freq, ifo.Suspension, sustf), expected)
     # without sus and sustf nothing is mapped: the model's own temperature, no coupling
-    assert np.array_equal(suspension_thermal(freq), pendkit.Model("quad").run()
+    assert np.array_equal(suspension_thermal(freq), pendkit.Model(DEFAULT_MODEL).run()
                           .noise("x3", freq).psd)
+
+
+def test_agrees_with_pygwinc_for_aligo(aligo):
+    # independent reference: pygwinc 0.6.2's own suspension thermal noise for aLIGO. The
+    # default model (quad-aligo) takes its numbers from the same ifo.yaml; the residual
+    # differences are named in the README (pygwinc's fibres carry mass, pendkit's one-wire
+    # fibre does not: +3 % in the ASD at 100 Hz; computed vs given dilution, 3-D coupling:
+    # well under 1 % below 50 Hz), so the ASDs must agree to 5 % over 20-100 Hz
+    freq, ifo, sustf = aligo
+    band = (freq >= 20) & (freq <= 100)
+    ours = suspension_thermal(freq, ifo.Suspension, sustf)[band]
+    theirs = gwinc_suspension_thermal(freq, ifo.Suspension, sustf)[band]
+    ratio = np.sqrt(ours / theirs)
+    assert np.all(np.abs(ratio - 1) < 0.05), ratio
 
 
 def test_example_budget_runs():

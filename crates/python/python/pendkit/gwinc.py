@@ -15,8 +15,9 @@ import numpy as np
 
 from ._pendkit import Model
 
-#: The bundled pendkit model used unless ``model=`` says otherwise.
-DEFAULT_MODEL = "quad"
+#: The bundled pendkit model used unless ``model=`` says otherwise: the aLIGO test-mass
+#: quad as built (pygwinc 0.6.2's numbers, tapered fibres, surface and blade losses).
+DEFAULT_MODEL = "quad-aligo"
 #: The test-mass coordinates of the bundled quads: longitudinal (along the beam) and
 #: vertical displacement of the test mass (LIGO names L3_L and L3_V).
 LONGITUDINAL, VERTICAL = "x3", "z3"
@@ -58,7 +59,7 @@ def suspension_thermal(
     along the beam line (m²/Hz) at the frequencies ``f`` (Hz), as pygwinc 0.6's
     ``gwinc.noise.suspensionthermal.suspension_thermal(f, sus, sustf)``.
 
-    Computed by pendkit's 3-D quad (the bundled model ``model``, default ``"quad"``, at
+    Computed by pendkit's 3-D quad (the bundled model ``model``, default ``"quad-aligo"``, at
     ``stage``, default 2: every wire and fibre with stretch, bending and torsion losses and
     dissipation dilution), not from pygwinc's 1-D chain: **the suspension's parameters come
     from pendkit's model, not from** ``sus``, except these, mapped where present:
