@@ -540,7 +540,7 @@ pub(crate) fn finish(
 /// block (the low modes, the ones suspensions are about, then keep full relative accuracy
 /// even when very stiff, very light parts put other modes many decades higher); otherwise
 /// with M's factor, and when the block has growing modes beyond M's resolution, with the
-/// factor of the shifted K_eff + σM as well (see [`block_modes`]), so that growth rates are
+/// factor of the shifted K_eff + σM as well (see `block_modes`), so that growth rates are
 /// resolved relative to themselves. Each mode carries its estimated error
 /// ([`Mode::omega_squared_error`]); ω² within it of zero is reported as exactly zero:
 /// neutral. Modes stiffer than the lowest of their block by more than 1/(100 ε) ≈ 4.5e13 in
