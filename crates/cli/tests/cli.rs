@@ -1,18 +1,7 @@
 //! The command line as docs/cli.md specifies it.
 
-use std::process::Command;
-
-fn pendkit(args: &[&str]) -> (bool, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_pendkit"))
-        .args(args)
-        .output()
-        .expect("pendkit runs");
-    (
-        out.status.success(),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
+mod common;
+use common::pendkit;
 
 fn modes_json(args: &[&str]) -> serde_json::Value {
     let (ok, stdout, stderr) = pendkit(args);

@@ -2,19 +2,8 @@
 //! each bad input gives exit status 1 and one line on stderr naming what and where, and
 //! never a table, a file or a non-finite number.
 
-use std::process::Command;
-
-fn pendkit(args: &[&str]) -> (bool, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_pendkit"))
-        .args(args)
-        .output()
-        .expect("pendkit runs");
-    (
-        out.status.success(),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
+mod common;
+use common::pendkit;
 
 /// Runs and expects a refusal: failure, nothing on stdout, one line on stderr containing
 /// every one of `words`.

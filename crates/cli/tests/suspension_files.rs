@@ -3,19 +3,9 @@
 //! bad file's error is one line naming the file, the line and the field.
 
 use std::path::PathBuf;
-use std::process::Command;
 
-fn pendkit(args: &[&str]) -> (bool, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_pendkit"))
-        .args(args)
-        .output()
-        .expect("pendkit runs");
-    (
-        out.status.success(),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
+mod common;
+use common::pendkit;
 
 fn json(args: &[&str]) -> serde_json::Value {
     let (ok, stdout, stderr) = pendkit(args);

@@ -1,19 +1,8 @@
 //! `pendkit sweep`: modes tracked through a crossing keep their labels and follow their
 //! closed forms; noise and transfer-function sweeps print what the single commands print.
 
-use std::process::Command;
-
-fn pendkit(args: &[&str]) -> (bool, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_pendkit"))
-        .args(args)
-        .output()
-        .expect("pendkit runs");
-    (
-        out.status.success(),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
+mod common;
+use common::pendkit;
 
 /// CSV rows as fields.
 fn rows(stdout: &str) -> Vec<Vec<String>> {

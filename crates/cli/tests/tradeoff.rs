@@ -3,22 +3,12 @@
 //! checked against its own CSV.
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 use pendkit::energy::Stage;
 use pendkit::{Case, NoiseOptions, Solver, StageResult, log_grid, run_stage};
 
-fn pendkit(args: &[&str]) -> (bool, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_pendkit"))
-        .args(args)
-        .output()
-        .expect("pendkit runs");
-    (
-        out.status.success(),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
+mod common;
+use common::pendkit;
 
 /// A fresh directory for one test's files.
 fn scratch(name: &str) -> PathBuf {

@@ -1,0 +1,16 @@
+//! What the command-line tests share: running the `pendkit` binary this package builds.
+
+use std::process::Command;
+
+/// Runs `pendkit args...` and returns (exit status 0, stdout, stderr).
+pub fn pendkit(args: &[&str]) -> (bool, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_pendkit"))
+        .args(args)
+        .output()
+        .expect("pendkit runs");
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
