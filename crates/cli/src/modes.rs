@@ -115,6 +115,25 @@ fn finite_or_null(x: f64) -> serde_json::Value {
 /// Relative accuracy worse than this is printed next to the frequency.
 const PRINT_ACCURACY_ABOVE: f64 = 1e-6;
 
+/// A mode's largest kinetic-energy shares (at most three, each at least 1 %), as
+/// "coordinate N%" in the run's naming: the mode table's and the report's last column.
+pub fn top_shares(run: &Run, coordinates: &[String], fractions: &[f64]) -> Vec<String> {
+    let mut shares: Vec<(usize, f64)> = fractions.iter().copied().enumerate().collect();
+    shares.sort_by(|a, b| b.1.total_cmp(&a.1));
+    shares
+        .iter()
+        .take(3)
+        .filter(|(_, f)| *f >= 0.01)
+        .map(|(k, f)| {
+            format!(
+                "{} {}%",
+                run.coord(&coordinates[*k]),
+                fixed(100.0 * f, 0, 0)
+            )
+        })
+        .collect()
+}
+
 fn modes_table(run: &Run, lab: bool) -> String {
     let r = &run.result;
     let mut out = String::new();
@@ -133,21 +152,7 @@ fn modes_table(run: &Run, lab: bool) -> String {
         "mode", "frequency_hz", "family", "label"
     );
     for (i, m) in r.modes.modes.iter().enumerate() {
-        let mut shares: Vec<(usize, f64)> =
-            m.energy_fractions.iter().copied().enumerate().collect();
-        shares.sort_by(|a, b| b.1.total_cmp(&a.1));
-        let top: Vec<String> = shares
-            .iter()
-            .take(3)
-            .filter(|(_, f)| *f >= 0.01)
-            .map(|(k, f)| {
-                format!(
-                    "{} {}%",
-                    run.coord(&r.modes.coordinates[*k]),
-                    fixed(100.0 * f, 0, 0)
-                )
-            })
-            .collect();
+        let top = top_shares(run, &r.modes.coordinates, &m.energy_fractions);
         let mut flag = if m.is_stable() {
             String::new()
         } else {

@@ -414,21 +414,7 @@ fn modes_section(page: &mut Page, run: &Run, shapes: usize) -> Result<(), CliErr
         .iter()
         .enumerate()
         .map(|(i, m)| {
-            let mut shares: Vec<(usize, f64)> =
-                m.energy_fractions.iter().copied().enumerate().collect();
-            shares.sort_by(|a, b| b.1.total_cmp(&a.1));
-            let top: Vec<String> = shares
-                .iter()
-                .take(3)
-                .filter(|(_, f)| *f >= 0.01)
-                .map(|(k, f)| {
-                    format!(
-                        "{} {}%",
-                        run.coord(&r.modes.coordinates[*k]),
-                        fixed(100.0 * f, 0, 0)
-                    )
-                })
-                .collect();
+            let top = crate::modes::top_shares(run, &r.modes.coordinates, &m.energy_fractions);
             vec![
                 (i + 1).to_string(),
                 fixed(m.hz, 6, 0),
