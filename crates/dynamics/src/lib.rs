@@ -16,8 +16,8 @@ mod sweep;
 pub mod validate;
 
 pub use modes::{
-    BodyMotion, EntryRounding, Mode, Modes, StiffnessRounding, lab_motion, normal_modes,
-    normal_modes_with_rounding,
+    BodyMotion, EntryRounding, Mode, Modes, REFINE_ABOVE, StiffnessRounding, lab_motion,
+    normal_modes, normal_modes_with_rounding,
 };
 pub use pattern::Pattern;
 pub use stability::{

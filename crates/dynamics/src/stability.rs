@@ -27,6 +27,7 @@ use pendkit_energy::{Damping, System};
 
 use crate::DynamicsError;
 use crate::modes::{Modes, ROUNDING, StiffnessRounding};
+use crate::pattern::Pattern;
 use crate::stage::StageModel;
 
 /// The stability of an equilibrium.
@@ -306,21 +307,40 @@ impl FloatMap {
     }
 }
 
-/// One term's Hessians for the rounding estimate: its coordinates' master positions
-/// (variables and floats only), the tension-off part and the geometric part on − off, and
-/// how much larger the rounding of the geometric part is than its size.
-struct TermParts {
-    /// (local index, master position) of the term's coordinates that are unknowns.
-    positions: Vec<(usize, usize)>,
-    size: usize,
-    off: Vec<f64>,
-    geometric: Vec<f64>,
-    /// max|off| / max|geometric|, at least 1: the geometric stiffness is a force times a
-    /// curvature, and the force (k times a small difference of lengths) carries the
+/// One term's geometric stiffness for the term-by-term estimate: the part whose rounding
+/// is amplified (see [`TermRounding`]), over the term's coordinates that are unknowns.
+struct GeometricPart {
+    /// Master positions (variables and floats) of the term's unknown coordinates.
+    positions: Vec<usize>,
+    /// H_on − H_off over those positions, row-major (positions.len()²).
+    values: Vec<f64>,
+    /// a_t = max|H_off| / max|H_on − H_off|, at least 1: the geometric stiffness is a force
+    /// times a curvature, and the force (k times a small difference of lengths) carries the
     /// rounding of the stiffness times the lengths, not of itself.
     amplification: f64,
-    /// The tag's storage multiplier ε'(0) if above 1 (it scales the tension-off part).
-    storage: f64,
+}
+
+impl GeometricPart {
+    /// |zᵀ (H_on − H_off) z| over this term's positions.
+    fn form(&self, z: &[f64]) -> f64 {
+        let n = self.positions.len();
+        let local: Vec<f64> = self
+            .positions
+            .iter()
+            .map(|&p| z.get(p).copied().unwrap_or(0.0))
+            .collect();
+        if local.iter().all(|&x| x == 0.0) {
+            return 0.0;
+        }
+        let mut sum = 0.0;
+        for (a, row) in self.values.chunks_exact(n.max(1)).enumerate() {
+            if local[a] != 0.0 {
+                let row_dot: f64 = row.iter().zip(&local).map(|(g, zb)| g * zb).sum();
+                sum += local[a] * row_dot;
+            }
+        }
+        sum.abs()
+    }
 }
 
 /// The rounding of an assembled stage's stiffness, term by term (see the module
@@ -329,86 +349,197 @@ struct TermParts {
 /// sum the rounding of the entries as stored, the second that of each term's geometric
 /// stiffness, amplified by a_t = max|H_off| / max|H_on − H_off| (for a wire, k l / T: the
 /// inverse strain).
+///
+/// The first sum is linear in the terms, so it is added up once on the stage's pattern and
+/// costs one sparse quadratic form per mode. The second is not (the absolute value is per
+/// term), so [`TermRounding::error_unknowns`] evaluates it term by term; replacing each
+/// |zᵀ G_t z| by its upper bound |z|ᵀ |G_t| |z| makes it linear too, and
+/// [`TermRounding::bound_unknowns`] is that bound, one sparse form per mode. The modes use
+/// the bound where it already shows a mode resolved far better than anything reported
+/// (see `modes::REFINE_ABOVE`), and the term-by-term estimate elsewhere.
 pub struct TermRounding {
-    terms: Vec<TermParts>,
+    /// The entries part and the bound on the stage's pattern.
+    stored: AbsWeights,
+    /// The same at positions the pattern does not store (the terms there sum to an exact
+    /// zero, each term's own entries need not be zero).
+    unstored: AbsWeights,
+    /// The terms with a geometric part.
+    geometric: Vec<GeometricPart>,
     floats: FloatMap,
     unknowns: usize,
+}
+
+/// Two sets of non-negative weights on one sparsity pattern (compressed rows), for the forms
+/// Σ w_rc |z_r| |z_c|: the rounding of the stored entries, Σ_t (|H_off s + G| + |H_off s|)
+/// (s: the tag's storage multiplier ε'(0) if above 1; G = H_on − H_off), and the bound,
+/// that plus Σ_t a_t |G|.
+struct AbsWeights {
+    row_start: Vec<usize>,
+    cols: Vec<usize>,
+    entries: Vec<f64>,
+    bound: Vec<f64>,
+}
+
+impl AbsWeights {
+    fn on(pattern: &Pattern) -> Self {
+        let rows = pattern.dim();
+        AbsWeights {
+            row_start: (0..rows)
+                .map(|r| pattern.row_slots(r).start)
+                .chain([pattern.len()])
+                .collect(),
+            cols: (0..pattern.len()).map(|s| pattern.position(s).1).collect(),
+            entries: vec![0.0; pattern.len()],
+            bound: vec![0.0; pattern.len()],
+        }
+    }
+
+    /// The slot of (r, c), if stored.
+    fn slot(&self, r: usize, c: usize) -> Option<usize> {
+        let (start, end) = (*self.row_start.get(r)?, *self.row_start.get(r + 1)?);
+        let k = self.cols[start..end].binary_search(&c).ok()?;
+        Some(start + k)
+    }
+
+    /// Σ w_rc |z_r| |z_c| over rows and columns below `unknowns` (`bound`: the bound's
+    /// weights, else the entries').
+    fn form(&self, bound: bool, unknowns: usize, z: &[f64]) -> f64 {
+        let weights = if bound { &self.bound } else { &self.entries };
+        let mut sum = 0.0;
+        for (r, &zr) in z.iter().enumerate().take(unknowns) {
+            let (Some(&start), Some(&end)) = (self.row_start.get(r), self.row_start.get(r + 1))
+            else {
+                break;
+            };
+            if zr == 0.0 {
+                continue;
+            }
+            let mut row = 0.0;
+            for (&c, w) in self.cols[start..end].iter().zip(&weights[start..end]) {
+                if c < unknowns
+                    && let Some(zc) = z.get(c)
+                {
+                    row += w * zc.abs();
+                }
+            }
+            sum += zr.abs() * row;
+        }
+        sum
+    }
 }
 
 impl TermRounding {
     /// The rounding of `assembled`'s terms on `model` (the stage built from it).
     pub fn new(model: &StageModel, assembled: &Assembled, damping: &Damping) -> Self {
         let unknowns = model.unknowns();
-        let largest = |h: &[f64]| h.iter().fold(0.0f64, |a, x| a.max(x.abs()));
-        let terms = assembled
-            .terms
-            .iter()
-            .map(|t| {
-                let size = t.coords.len();
-                let positions: Vec<(usize, usize)> = t
-                    .coords
-                    .iter()
-                    .enumerate()
-                    .filter_map(|(a, &g)| {
-                        let p = *assembled.layout.position.get(g)?;
-                        (p < unknowns).then_some((a, p))
-                    })
-                    .collect();
-                let off: Vec<f64> = match &t.off {
-                    OffHessian::Zero => vec![0.0; t.on.len()],
-                    OffHessian::Same => t.on.clone(),
-                    OffHessian::Matrix(m) => m.clone(),
-                };
-                let geometric: Vec<f64> = t.on.iter().zip(&off).map(|(a, b)| a - b).collect();
-                let g = largest(&geometric);
-                let amplification = if g > 0.0 {
-                    (largest(&off) / g).clamp(1.0, 1.0 / f64::EPSILON)
-                } else {
-                    1.0
-                };
-                let storage = damping.at(&t.tag, 0.0).0.abs();
-                TermParts {
-                    positions,
-                    size,
-                    off,
-                    geometric,
-                    amplification,
-                    storage: if storage.is_finite() {
-                        storage.max(1.0)
-                    } else {
-                        1.0
-                    },
+        let mut stored = AbsWeights::on(&model.pattern);
+        let mut geometric = Vec::new();
+        // (row, column, entries part, bound part) of the positions the pattern lacks
+        let mut unstored_entries = Vec::new();
+        let mut slot_in_row = Vec::new();
+        for t in &assembled.terms {
+            let size = t.coords.len();
+            // (local index, master position) of the term's coordinates that are unknowns
+            let positions: Vec<(usize, usize)> = t
+                .coords
+                .iter()
+                .enumerate()
+                .filter_map(|(a, &g)| {
+                    let p = *assembled.layout.position.get(g)?;
+                    (p < unknowns).then_some((a, p))
+                })
+                .collect();
+            if positions.is_empty() || t.on.len() != size * size {
+                continue;
+            }
+            let off_at = |k: usize| match &t.off {
+                OffHessian::Zero => 0.0,
+                OffHessian::Same => t.on[k],
+                OffHessian::Matrix(m) => m.get(k).copied().unwrap_or(0.0),
+            };
+            let (mut off_max, mut g_max) = (0.0f64, 0.0f64);
+            for k in 0..size * size {
+                off_max = off_max.max(off_at(k).abs());
+                g_max = g_max.max((t.on[k] - off_at(k)).abs());
+            }
+            let amplification = if g_max > 0.0 {
+                (off_max / g_max).clamp(1.0, 1.0 / f64::EPSILON)
+            } else {
+                1.0
+            };
+            let storage = damping.at(&t.tag, 0.0).0.abs();
+            let storage = if storage.is_finite() {
+                storage.max(1.0)
+            } else {
+                1.0
+            };
+            let mut local_geometric = Vec::with_capacity(positions.len() * positions.len());
+            for &(a, pa) in &positions {
+                slot_in_row.clear();
+                slot_in_row.extend(positions.iter().map(|&(_, pb)| stored.slot(pa, pb)));
+                for (&(b, pb), slot) in positions.iter().zip(&slot_in_row) {
+                    let k = a * size + b;
+                    let off = off_at(k);
+                    let g = t.on[k] - off;
+                    local_geometric.push(g);
+                    let entries = (off * storage + g).abs() + (off * storage).abs();
+                    let bound = entries + amplification * g.abs();
+                    match *slot {
+                        Some(s) => {
+                            stored.entries[s] += entries;
+                            stored.bound[s] += bound;
+                        }
+                        None if bound != 0.0 => unstored_entries.push((pa, pb, entries, bound)),
+                        None => {}
+                    }
                 }
-            })
-            .collect();
+            }
+            if g_max > 0.0 {
+                geometric.push(GeometricPart {
+                    positions: positions.iter().map(|&(_, p)| p).collect(),
+                    values: local_geometric,
+                    amplification,
+                });
+            }
+        }
+        let mut unstored = AbsWeights::on(&Pattern::from_positions(
+            unknowns,
+            unstored_entries.iter().map(|&(r, c, _, _)| (r, c)),
+        ));
+        for (r, c, entries, bound) in unstored_entries {
+            if let Some(s) = unstored.slot(r, c) {
+                unstored.entries[s] += entries;
+                unstored.bound[s] += bound;
+            }
+        }
         TermRounding {
-            terms,
+            stored,
+            unstored,
+            geometric,
             floats: FloatMap::new(model, damping),
             unknowns,
         }
     }
 
+    /// Σ over both patterns' weights (`bound` or entries).
+    fn abs_form(&self, bound: bool, z: &[f64]) -> f64 {
+        self.stored.form(bound, self.unknowns, z) + self.unstored.form(bound, self.unknowns, z)
+    }
+
     /// Estimated |δ(zᵀ K z)| for `z` over the variables and floats (master order).
     pub fn error_unknowns(&self, z: &[f64]) -> f64 {
-        let mut total = 0.0;
-        for t in &self.terms {
-            let (mut entries, mut geometric) = (0.0, 0.0);
-            for &(a, pa) in &t.positions {
-                let Some(&za) = z.get(pa) else { continue };
-                if za == 0.0 {
-                    continue;
-                }
-                for &(b, pb) in &t.positions {
-                    let Some(&zb) = z.get(pb) else { continue };
-                    let k = a * t.size + b;
-                    let (off, g) = (t.off[k] * t.storage, t.geometric[k]);
-                    entries += za.abs() * ((off + g).abs() + off.abs()) * zb.abs();
-                    geometric += za * g * zb;
-                }
-            }
-            total += entries + t.amplification * geometric.abs();
-        }
-        ROUNDING * f64::EPSILON * total
+        let geometric: f64 = self
+            .geometric
+            .iter()
+            .map(|t| t.amplification * t.form(z))
+            .sum();
+        ROUNDING * f64::EPSILON * (self.abs_form(false, z) + geometric)
+    }
+
+    /// An upper bound of [`TermRounding::error_unknowns`] at the cost of sparse forms:
+    /// each term's |zᵀ G_t z| replaced by |z|ᵀ |G_t| |z|.
+    pub fn bound_unknowns(&self, z: &[f64]) -> f64 {
+        ROUNDING * f64::EPSILON * self.abs_form(true, z)
     }
 
     /// The float-elimination map used for the floats' share of a mode.
@@ -425,6 +556,10 @@ impl TermRounding {
 impl StiffnessRounding for TermRounding {
     fn error(&self, v: &[f64]) -> f64 {
         self.error_unknowns(&self.floats.extend(v))
+    }
+
+    fn bound(&self, v: &[f64]) -> f64 {
+        self.bound_unknowns(&self.floats.extend(v))
     }
 }
 
