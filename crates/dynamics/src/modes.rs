@@ -51,6 +51,17 @@ pub trait StiffnessRounding {
     fn bound(&self, v: &[f64]) -> f64 {
         self.error(v)
     }
+
+    /// [`StiffnessRounding::bound`] if `keep_bound` accepts it, else
+    /// [`StiffnessRounding::error`] (implementations may share work between the two).
+    fn estimate(&self, v: &[f64], keep_bound: &dyn Fn(f64) -> bool) -> f64 {
+        let bound = self.bound(v);
+        if keep_bound(bound) {
+            bound
+        } else {
+            self.error(v)
+        }
+    }
 }
 
 /// Rounding of a matrix given entry by entry: each entry known to a few ulps of itself,
@@ -532,12 +543,12 @@ pub(crate) fn finish(
             let mut mode = Mode::from_vector(r.omega_squared, &r.vector, &mu, names);
             let w2 = mode.omega_squared;
             let mass_part = ROUNDING * f64::EPSILON * w2.abs() * mass.abs_form(&mode.vector);
-            let coarse = r.error + rounding.bound(&mode.vector) + mass_part;
-            let error = if coarse.is_finite() && coarse <= 2.0 * REFINE_ABOVE * w2.abs() {
-                coarse
-            } else {
-                r.error + rounding.error(&mode.vector) + mass_part
+            let others = r.error + mass_part;
+            let keep_bound = |bound: f64| {
+                let coarse = others + bound;
+                coarse.is_finite() && coarse <= 2.0 * REFINE_ABOVE * w2.abs()
             };
+            let error = others + rounding.estimate(&mode.vector, &keep_bound);
             mode.omega_squared_error = if error.is_finite() { error } else { f64::MAX };
             if w2.abs() <= mode.omega_squared_error {
                 mode.set_omega_squared(0.0);

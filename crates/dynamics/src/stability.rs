@@ -293,10 +293,18 @@ impl FloatMap {
 
     /// [v; −Q⁻¹ C_qx v] over the variables and the floats.
     pub fn extend(&self, v: &[f64]) -> Vec<f64> {
+        let nq = self.map.nrows();
         let mut z: Vec<f64> = v.iter().copied().take(self.nx).collect();
-        z.resize(self.nx, 0.0);
-        for i in 0..self.map.nrows() {
-            z.push((0..self.nx).map(|j| self.map[(i, j)] * z[j]).sum());
+        z.resize(self.nx + nq, 0.0);
+        let (variables, floats) = z.split_at_mut(self.nx);
+        // by columns of the map (its storage order), skipping the variables a mode leaves
+        // still
+        for (column, &x) in self.map.column_iter().zip(variables.iter()) {
+            if x != 0.0 {
+                for (f, m) in floats.iter_mut().zip(column.iter()) {
+                    *f += m * x;
+                }
+            }
         }
         z
     }
@@ -323,19 +331,28 @@ struct GeometricPart {
 impl GeometricPart {
     /// |zᵀ (H_on − H_off) z| over this term's positions.
     fn form(&self, z: &[f64]) -> f64 {
+        // the term's few coordinates gathered on the stack (a term couples at most a few
+        // bodies' coordinates; larger ones take the heap)
+        const ON_STACK: usize = 32;
         let n = self.positions.len();
-        let local: Vec<f64> = self
-            .positions
-            .iter()
-            .map(|&p| z.get(p).copied().unwrap_or(0.0))
-            .collect();
+        let mut stack = [0.0; ON_STACK];
+        let mut heap = Vec::new();
+        let local: &mut [f64] = if n <= ON_STACK {
+            &mut stack[..n]
+        } else {
+            heap.resize(n, 0.0);
+            &mut heap
+        };
+        for (x, &p) in local.iter_mut().zip(&self.positions) {
+            *x = z.get(p).copied().unwrap_or(0.0);
+        }
         if local.iter().all(|&x| x == 0.0) {
             return 0.0;
         }
         let mut sum = 0.0;
         for (a, row) in self.values.chunks_exact(n.max(1)).enumerate() {
             if local[a] != 0.0 {
-                let row_dot: f64 = row.iter().zip(&local).map(|(g, zb)| g * zb).sum();
+                let row_dot: f64 = row.iter().zip(local.iter()).map(|(g, zb)| g * zb).sum();
                 sum += local[a] * row_dot;
             }
         }
@@ -437,6 +454,7 @@ impl TermRounding {
         // (row, column, entries part, bound part) of the positions the pattern lacks
         let mut unstored_entries = Vec::new();
         let mut slot_in_row = Vec::new();
+        let mut storages: Vec<(&str, f64)> = Vec::new();
         for t in &assembled.terms {
             let size = t.coords.len();
             // (local index, master position) of the term's coordinates that are unknowns
@@ -467,11 +485,19 @@ impl TermRounding {
             } else {
                 1.0
             };
-            let storage = damping.at(&t.tag, 0.0).0.abs();
-            let storage = if storage.is_finite() {
-                storage.max(1.0)
-            } else {
-                1.0
+            // the tag's ε'(0), evaluated once per tag (a model has a few tags, many terms)
+            let storage = match storages.iter().find(|(tag, _)| *tag == t.tag.as_str()) {
+                Some(&(_, storage)) => storage,
+                None => {
+                    let storage = damping.at(&t.tag, 0.0).0.abs();
+                    let storage = if storage.is_finite() {
+                        storage.max(1.0)
+                    } else {
+                        1.0
+                    };
+                    storages.push((t.tag.as_str(), storage));
+                    storage
+                }
             };
             let mut local_geometric = Vec::with_capacity(positions.len() * positions.len());
             for &(a, pa) in &positions {
@@ -560,6 +586,17 @@ impl StiffnessRounding for TermRounding {
 
     fn bound(&self, v: &[f64]) -> f64 {
         self.bound_unknowns(&self.floats.extend(v))
+    }
+
+    fn estimate(&self, v: &[f64], keep_bound: &dyn Fn(f64) -> bool) -> f64 {
+        // the floats' motion once for both figures
+        let z = self.floats.extend(v);
+        let bound = self.bound_unknowns(&z);
+        if keep_bound(bound) {
+            bound
+        } else {
+            self.error_unknowns(&z)
+        }
     }
 }
 

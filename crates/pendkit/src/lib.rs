@@ -534,7 +534,9 @@ pub struct RunOptions {
 
 /// [`run_stage`] with options, recording the time of each phase into `times` when given:
 /// the assembly's (`terms`, `equilibrium`, `hessian:<kind>`, `mass`), then `stage-model`
-/// (the stage's matrices by tag), `floats` (their elimination) and `modes`.
+/// (the stage's matrices by tag), `rounding` (each term's share of the stiffness rounding,
+/// for the modes' accuracy), `floats` (their elimination), `modes` and `stability` (the
+/// float block's and the bodies' checks for the verdict).
 pub fn run_stage_with(
     system: System,
     stage: Stage,
@@ -552,7 +554,9 @@ pub fn run_stage_with(
         StageModel::new(&system, &assembled)
     });
     model.check_damping_at_dc(&system.damping)?;
-    let rounding = TermRounding::new(&model, &assembled, &system.damping);
+    let rounding = timed(&mut times, "rounding", 1, || {
+        TermRounding::new(&model, &assembled, &system.damping)
+    });
     let modes = match options.modes {
         ModeSelection::Below(hz) if model.sizes.0 > DENSE_MODES_LIMIT => {
             timed(&mut times, "modes", 1, || {
@@ -581,9 +585,11 @@ pub fn run_stage_with(
             modes
         }
     };
-    let floats = runaway_floats(&model, &system.damping, Some(&rounding))?;
-    let inverted = inverted_bodies(&system, &assembled.equilibrium.coords);
-    let stability = Stability::assess(&modes, floats, model.sizes.1, inverted);
+    let stability = timed(&mut times, "stability", 1, || {
+        let floats = runaway_floats(&model, &system.damping, Some(&rounding))?;
+        let inverted = inverted_bodies(&system, &assembled.equilibrium.coords);
+        Ok::<_, Error>(Stability::assess(&modes, floats, model.sizes.1, inverted))
+    })?;
     Ok(StageResult {
         system,
         assembled,
