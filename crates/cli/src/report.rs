@@ -134,20 +134,23 @@ pub fn run(a: Args) -> Result<String, CliError> {
     page.timed("report:model", |p| model_section(p, &run))?;
     progress.step();
     equilibrium_section(&mut page, &run);
-    let stable = stability_section(&mut page, &run);
+    // an unstable equilibrium gets its verdict and modes; the responses of its
+    // linearisation only with --allow-unstable (the warning on stderr, as for `tf`)
+    let stable = stability_section(&mut page, &run, a.args.allow_unstable);
+    if !stable && a.args.allow_unstable {
+        run.check_stable(true)?; // the warning on stderr
+    }
+    let answer = lossy_answer(&run) && (stable || a.args.allow_unstable);
     progress.message("report: modes");
     page.timed("report:modes", |p| modes_section(p, &run, a.shapes))?;
     progress.step();
-    let lossy = run.stage != Stage::S0A;
     progress.message("report: transfer functions");
     page.timed("report:transfer-functions", |p| {
-        transfer_section(p, &run, &freqs, stable && lossy)
+        transfer_section(p, &run, &freqs, answer)
     })?;
     progress.step();
     progress.message("report: thermal noise");
-    page.timed("report:noise", |p| {
-        noise_section(p, &run, &freqs, stable && lossy)
-    })?;
+    page.timed("report:noise", |p| noise_section(p, &run, &freqs, answer))?;
     progress.step();
     timing_section(&mut page, &run, started.elapsed().as_secs_f64());
     let _ = writeln!(
@@ -382,14 +385,25 @@ fn equilibrium_section(page: &mut Page, run: &Run) {
     page.end_section();
 }
 
+/// Whether the stage has losses for transfer functions and noise: from stage 0B on (no
+/// dissipation dilution at 0A).
+fn lossy_answer(run: &Run) -> bool {
+    run.stage != Stage::S0A
+}
+
 /// Writes the verdict and returns whether the equilibrium is stable.
-fn stability_section(page: &mut Page, run: &Run) -> bool {
+fn stability_section(page: &mut Page, run: &Run, allow_unstable: bool) -> bool {
     page.section("stability", "Stability");
     let verdict = run.result.stability();
     let stable = verdict.is_ok();
     let text = match verdict {
         Ok(()) => "Stable: every mode has ω² ≥ 0.".to_string(),
-        Err(e) => format!("Unstable: {e}. Transfer functions and noise are not computed."),
+        Err(e) if allow_unstable => format!(
+            "Unstable: {e}. Transfer functions and noise below are those of the linearisation (--allow-unstable)."
+        ),
+        Err(e) => format!(
+            "Unstable: {e}. Transfer functions and noise are not computed (--allow-unstable computes those of the linearisation)."
+        ),
     };
     let _ = writeln!(
         page.html,
@@ -477,7 +491,7 @@ fn transfer_section(
     page.section("transfer", "Transfer functions");
     if !compute {
         page.paragraph(
-            "Not computed: they need a stable equilibrium and stage 0B or later (no dissipation dilution at 0A).",
+            "Not computed: they need a stable equilibrium (or --allow-unstable) and stage 0B or later (no dissipation dilution at 0A).",
         );
         page.end_section();
         return Ok(());
@@ -593,7 +607,7 @@ fn noise_section(page: &mut Page, run: &Run, freqs: &[f64], compute: bool) -> Re
     page.section("noise", "Thermal noise");
     if !compute {
         page.paragraph(
-            "Not computed: it needs a stable equilibrium and stage 0B or later (no dissipation dilution at 0A).",
+            "Not computed: it needs a stable equilibrium (or --allow-unstable) and stage 0B or later (no dissipation dilution at 0A).",
         );
         page.end_section();
         return Ok(());

@@ -230,3 +230,29 @@ fn support_point_as_input_moves_a_point_on_the_support_one_for_one() {
     // pendulum: x1/x00 = ω0² / (ω0² − ω²) ≈ 1 + (f/f0)² with f0 ≈ 0.64 Hz, f = 0.01 Hz
     assert!((row[1] - 1.0).abs() < 1e-3, "{row:?}");
 }
+
+#[test]
+fn tradeoff_refuses_an_unstable_suspension_naming_the_growing_mode() {
+    // the trade-off answers with the linearised model of every variant: the reference
+    // variant of an unstable rigid body (fibres below the centre of mass) is refused
+    let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("tradeoff-unstable");
+    let out = dir.to_string_lossy().into_owned();
+    refused(
+        &[
+            "tradeoff",
+            "rigid-body",
+            "--set",
+            "d_fibre=-0.01",
+            "--output",
+            "x1",
+            "--budget",
+            "0",
+            "--points",
+            "5",
+            "--out",
+            &out,
+        ],
+        &["unstable", "pitch1"],
+    );
+    assert!(!dir.join("tradeoff.csv").exists());
+}

@@ -80,6 +80,37 @@ fn an_unstable_model_gets_a_report_with_its_verdict() {
 }
 
 #[test]
+fn an_unstable_model_gets_its_linearised_responses_only_with_allow_unstable() {
+    // the same unstable rigid body: with --allow-unstable the transfer functions and noise
+    // of its linearisation are drawn, and the page and stderr say it is unstable
+    let dir: PathBuf = Path::new(env!("CARGO_TARGET_TMPDIR")).join("report-allow-unstable");
+    let out = Command::new(env!("CARGO_BIN_EXE_pendkit"))
+        .args([
+            "report",
+            "rigid-body",
+            "--set",
+            "d_fibre=-0.01",
+            "--points",
+            "20",
+        ])
+        .arg("--allow-unstable")
+        .arg("--out")
+        .arg(&dir)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("warning:") && stderr.contains("pitch1"),
+        "{stderr}"
+    );
+    let html = std::fs::read_to_string(dir.join("index.html")).unwrap();
+    assert!(html.contains("verdict unstable"));
+    assert!(html.contains("--allow-unstable"));
+    assert_eq!(html.matches("Not computed").count(), 0);
+}
+
+#[test]
 fn stage_0a_reports_modes_but_no_responses() {
     let (_, html) = report("0a", &["pendulum", "--stage", "0a"]);
     assert!(html.contains("verdict stable"));

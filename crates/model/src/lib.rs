@@ -556,8 +556,9 @@ impl SystemBuilder {
     }
 
     /// Adds a named input (`output = false`) or output, checking that its terms fit: a
-    /// displacement input combines parameters, a force input variables and points, a
-    /// displacement output variables and points, a force output (on the support) parameters.
+    /// displacement input combines parameters and points the support alone moves, a force
+    /// input variables, floats and points, a displacement output variables, floats and
+    /// points, a force output (on the support) parameters.
     pub fn named_signal(&mut self, signal: NamedSignal, output: bool) -> Result<(), BuildError> {
         let what = if output { "output" } else { "input" };
         let item = format!("{what} '{}'", signal.name);
@@ -596,7 +597,11 @@ impl SystemBuilder {
                                 item: item.clone(),
                                 message: format!("coordinate index {c} does not exist"),
                             })?;
-                    if coordinate.kind != wanted {
+                    // a float (such as a blade tip's height) responds as a variable does
+                    let responds = |k: CoordKind| k == CoordKind::Variable || k == CoordKind::Float;
+                    let fits = coordinate.kind == wanted
+                        || (wanted == CoordKind::Variable && responds(coordinate.kind));
+                    if !fits {
                         return Err(BuildError::Invalid {
                             item,
                             message: format!(
@@ -612,12 +617,12 @@ impl SystemBuilder {
                     body, direction, ..
                 } => {
                     self.check_end_body(&item, *body)?;
-                    if wanted == CoordKind::Parameter {
+                    // a driven point must be one the support alone moves: checked at the
+                    // equilibrium, where its motion is known
+                    if output && signal.force {
                         return Err(BuildError::Invalid {
                             item,
-                            message:
-                                "a point on a body cannot be driven or carry the support force"
-                                    .into(),
+                            message: "a point on a body cannot carry the support force".into(),
                         });
                     }
                     if !(direction.norm() > 0.0 && direction.norm().is_finite()) {

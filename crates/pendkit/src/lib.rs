@@ -670,86 +670,107 @@ impl StageResult {
                         .join(" ")
                 ),
             })?;
-            let jac = self.system.bodies[b]
-                .frame
-                .jacobian(&self.assembled.equilibrium.coords, &p);
-            let d = d.normalize();
-            let layout = &self.assembled.layout;
-            let along = |ids: &[usize]| {
-                DVector::from_iterator(
-                    ids.len(),
-                    ids.iter().map(|&g| jac.position.column(g).dot(&d)),
-                )
-            };
-            let unknowns: Vec<usize> = layout
-                .variables
-                .iter()
-                .chain(&layout.floats)
-                .copied()
-                .collect();
-            let weights = PointWeights {
-                unknowns: along(&unknowns),
-                parameters: along(&layout.parameters),
-            };
-            if weights
-                .unknowns
-                .iter()
-                .chain(weights.parameters.iter())
-                .any(|x| !x.is_finite())
-            {
-                return Err(bad("its motion is not finite at the equilibrium"));
-            }
-            Ok(weights)
+            self.weights_of_point(b, &p, &d)
+                .ok_or_else(|| bad("its motion is not finite at the equilibrium"))
         })())
     }
 
-    /// The displacement along `direction` (lab axes, normalised here) of `point` (m, body
-    /// coordinates) on body `body`, per unit of each variable: the linearised geometry at
-    /// the equilibrium (also the generalised force of a unit force there).
-    fn point_row(
+    /// How far `point` (m, body coordinates) on body `body` moves along `direction` (lab
+    /// axes, normalised here) per unit of every unknown (variables, then floats) and every
+    /// parameter: the linearised geometry at the equilibrium. `None` when a weight is not
+    /// finite (or the body index is out of range).
+    fn weights_of_point(
         &self,
         body: usize,
         point: &Vector3<f64>,
         direction: &Vector3<f64>,
-    ) -> DVector<f64> {
-        let jac = self.system.bodies[body]
+    ) -> Option<PointWeights> {
+        let jac = self
+            .system
+            .bodies
+            .get(body)?
             .frame
             .jacobian(&self.assembled.equilibrium.coords, point);
         let d = direction.normalize();
-        DVector::from_iterator(
-            self.assembled.layout.variables.len(),
-            self.assembled
-                .layout
-                .variables
-                .iter()
-                .map(|&g| jac.position.column(g).dot(&d)),
-        )
+        let layout = &self.assembled.layout;
+        let along = |ids: &[usize]| {
+            DVector::from_iterator(
+                ids.len(),
+                ids.iter().map(|&g| jac.position.column(g).dot(&d)),
+            )
+        };
+        let unknowns: Vec<usize> = layout
+            .variables
+            .iter()
+            .chain(&layout.floats)
+            .copied()
+            .collect();
+        let weights = PointWeights {
+            unknowns: along(&unknowns),
+            parameters: along(&layout.parameters),
+        };
+        let finite = weights
+            .unknowns
+            .iter()
+            .chain(weights.parameters.iter())
+            .all(|x| x.is_finite());
+        finite.then_some(weights)
     }
 
     /// The vector of a model's named input or output (`[inputs]`/`[outputs]` of a
-    /// suspension file): its terms' coefficients on the parameters (`parameters = true`:
-    /// displacement inputs, support-force outputs) or on the variables (forces on them,
-    /// displacements of them), points through [`StageResult::point_row`].
-    fn named_vector(&self, signal: &NamedSignal, parameters: bool) -> Result<DVector<f64>, Error> {
+    /// suspension file), laid out as the built-in forms are:
+    ///
+    /// - a displacement output: over the variables, floats and parameters (a point's whole
+    ///   motion, as `<body>@x,y,z/dx,dy,dz`: through the variables, the floats that pose
+    ///   its body, and the support);
+    /// - a force input: over the variables and floats (a force on a float-posed body such
+    ///   as a blade tip reaches the variables through the float elimination);
+    /// - a displacement input or a support-force output: over the parameters; a point there
+    ///   must be one the support alone moves (driven as `support@x,y,z/dx,dy,dz` is).
+    fn named_vector(&self, signal: &NamedSignal, input: bool) -> Result<DVector<f64>, Error> {
         let m = &self.model;
-        let names = if parameters {
-            &m.parameters
-        } else {
-            &m.variables
+        let (nx, nq, ns) = m.sizes;
+        let on_parameters = input != signal.force;
+        let n = match (on_parameters, input) {
+            (true, _) => ns,
+            (false, true) => nx + nq,
+            (false, false) => nx + nq + ns,
         };
-        let mut v = DVector::zeros(names.len());
+        let bad = |message: String| Error::Name {
+            name: signal.name.clone(),
+            message,
+        };
+        let mut v = DVector::zeros(n);
         for (coefficient, term) in &signal.terms {
             match term {
                 SignalTerm::Coordinate(c) => {
-                    let coordinate = &self.system.coords[*c].name;
-                    let k = names.iter().position(|n| n == coordinate).ok_or_else(|| {
-                        Error::Name {
-                            name: signal.name.clone(),
-                            message: format!(
-                                "combines '{coordinate}', which this stage does not keep as a {}",
-                                if parameters { "parameter" } else { "variable" }
-                            ),
-                        }
+                    let coordinate = self
+                        .system
+                        .coords
+                        .get(*c)
+                        .map(|c| c.name.as_str())
+                        .unwrap_or_default();
+                    let position = |names: &[String]| names.iter().position(|n| n == coordinate);
+                    let k = if on_parameters {
+                        position(&m.parameters)
+                    } else {
+                        // variables first, then floats, then (outputs) the parameters
+                        position(&m.variables)
+                            .or_else(|| position(&m.floats).map(|k| nx + k))
+                            .or_else(|| position(&m.parameters).map(|k| nx + nq + k))
+                            .filter(|&k| k < n)
+                    };
+                    let k = k.ok_or_else(|| {
+                        bad(format!(
+                            "combines '{coordinate}', which this stage does not keep as a {}",
+                            if on_parameters {
+                                "parameter"
+                            } else if input {
+                                "variable or float"
+                            } else {
+                                "variable, float or parameter"
+                            }
+                        ))
                     })?;
                     v[k] += coefficient;
                 }
@@ -757,12 +778,34 @@ impl StageResult {
                     body,
                     point,
                     direction,
-                } if !parameters => v += self.point_row(*body, point, direction) * *coefficient,
-                SignalTerm::Point { .. } => {
-                    return Err(Error::Name {
-                        name: signal.name.clone(),
-                        message: "a point cannot be driven or carry the support force".into(),
-                    });
+                } => {
+                    let w = self
+                        .weights_of_point(*body, point, direction)
+                        .ok_or_else(|| {
+                            bad("a point whose motion is not finite at the equilibrium".into())
+                        })?;
+                    if !on_parameters {
+                        v.rows_mut(0, nx + nq).axpy(*coefficient, &w.unknowns, 1.0);
+                        if n == nx + nq + ns {
+                            v.rows_mut(nx + nq, ns)
+                                .axpy(*coefficient, &w.parameters, 1.0);
+                        }
+                    } else if signal.force {
+                        return Err(bad(
+                            "a point cannot carry the support force: name the support's coordinates".into(),
+                        ));
+                    } else {
+                        // a driven point: the smallest change of the parameters that moves
+                        // it by one unit along the direction, as support@x,y,z/dx,dy,dz
+                        let norm2 = w.parameters.norm_squared();
+                        if w.unknowns.iter().any(|&x| x != 0.0) || !(norm2 > 0.0) {
+                            return Err(bad(
+                                "a displacement input must be a point that only the support moves"
+                                    .into(),
+                            ));
+                        }
+                        v.axpy(*coefficient / norm2, &w.parameters, 1.0);
+                    }
                 }
             }
         }
@@ -791,7 +834,7 @@ impl StageResult {
     /// `force:L3_P`).
     pub fn input(&self, name: &str) -> Result<Input, Error> {
         if let Some(signal) = self.system.inputs.iter().find(|s| s.name == name) {
-            let v = self.named_vector(signal, !signal.force)?;
+            let v = self.named_vector(signal, true)?;
             return Ok(if signal.force {
                 Input::Force(v)
             } else {
@@ -851,7 +894,7 @@ impl StageResult {
     /// `L3@0,0,0/1,0,0`).
     pub fn output(&self, name: &str) -> Result<Output, Error> {
         if let Some(signal) = self.system.outputs.iter().find(|s| s.name == name) {
-            let v = self.named_vector(signal, signal.force)?;
+            let v = self.named_vector(signal, false)?;
             return Ok(if signal.force {
                 Output::SupportForce(v)
             } else {

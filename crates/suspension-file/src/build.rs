@@ -1336,11 +1336,13 @@ impl<'s, 'c> Interpreter<'s, 'c> {
                 .index
                 .get(body.as_str())
                 .map(|&i| self.bodies[i].0)
+                // or a body the file's stages make, such as a blade tip (`blade1l`)
+                .or_else(|| self.b.body_id(&body))
                 .ok_or_else(|| {
                     invalid(
                         at,
                         format!(
-                            "unknown body '{body}' (bodies: {})",
+                            "unknown body '{body}' (bodies: {}, and the blade tips)",
                             known_bodies(self.spec)
                         ),
                     )
