@@ -137,10 +137,19 @@ pub fn add_beaded_fibre(
                         let r = if k == f.beads { lower_r } else { upper_r };
                         slice.section_bent_at(carried, r)
                     }
-                    // clamped at both ends and short: it bends along its whole length, as
-                    // the slice's pieces in series
+                    // clamped at both ends. An end segment bends most at the body's clamp,
+                    // within a bending length of it (the moment at a bead, where the fibre
+                    // is nearly straight, is far smaller): the clamp's radius. An inner
+                    // segment bends along its whole length: its pieces in series. Either
+                    // way the segment's constant tends to the local one as N grows.
                     BeadJoints::Clamped => {
-                        slice.section_bent_at(carried, slice.series_bending_radius())
+                        let (upper_r, lower_r) = slice.clamp_radii();
+                        let r = match k {
+                            0 => upper_r,
+                            _ if k == f.beads => lower_r,
+                            _ => slice.series_bending_radius(),
+                        };
+                        slice.section_bent_at(carried, r)
                     }
                 };
                 slice.wire_with_section(name, ends, carried, section, tags.clone())
