@@ -10,12 +10,20 @@
 //!   bead's position whose orientation is three floats (yaw, pitch, roll; `yaw<name>b<k>`
 //!   ...), and both segments are clamped to it. The slope is continuous across the bead and
 //!   the bending moment is carried through it, so the chain is a beam discretisation whose
-//!   bending energy converges to the continuum's. The joint floats carry no inertia (the
-//!   rotary inertia of a slice, ~μ h³/12, is negligible beside the lumped mass) and are
-//!   eliminated exactly by the stage model; in stages without bending (0A–1A) nothing holds
-//!   their pitch and roll and the assembly leaves them out of that stage. The joint's yaw
-//!   joins the segments' twist in series, so the fibre's torsion stiffness is the whole
-//!   fibre's, not its end segments'.
+//!   bending energy converges to the continuum's. The joint floats carry no inertia (a
+//!   slice's rotary inertia changes the modes by O(h²), the order of the mass lumping's
+//!   error, and as variables the angles would be free modes at 0 Hz before bending joins)
+//!   and are eliminated exactly by the stage model. The joint's yaw joins the segments'
+//!   twist in series, so the fibre's torsion stiffness is the whole fibre's, not its end
+//!   segments' (as with hinged beads, whose orientation is fixed).
+//!
+//!   Stages: before 1B nothing turns a joint's pitch and roll. In 0A and 0B no term touches
+//!   the joint angles at all and the assembly leaves them out of the stage (exact: they
+//!   carry no energy). In 1A the torsion holds the yaw and, on a vertical fibre, touches
+//!   pitch and roll with exact zeros, so they are left out too; on a slanted fibre the
+//!   twist axis is not vertical, torsion couples pitch or roll without holding them, and
+//!   stage 1A stops with the singular-float error naming the joint angle (1B and 2, the
+//!   complete model, are unaffected; hinged beads avoid it).
 //! - [`BeadJoints::Hinged`]: the segments are hinged at the beads (no moment carried, the
 //!   loaded string of the 2005 violin model): too soft once a segment is shorter than a
 //!   few bending lengths (kept for the loaded-string reference values).
