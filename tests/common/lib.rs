@@ -159,7 +159,7 @@ pub fn assert_blocks(r: &StageResult, counts: [usize; 4]) {
 /// `t` (N), bending stiffness `ei` (N m²), linear density `mu` (kg/m), length `l` (m): the
 /// root of 2 k kₑ (1 − cos kL cosh kₑL) + (kₑ² − k²) sin kL sinh kₑL = 0 (divided by
 /// cosh kₑL), k² = (−T + s)/2EI, kₑ² = (T + s)/2EI, s = sqrt(T² + 4 EI μ ω²)
-/// (docs/reference-values.md §5), by bisection next to the ideal string's f₁.
+/// (docs/reference-values.md §5), by bisection between the ideal string's f₁ and 1.5 times it.
 pub fn stiff_string_f1(t: f64, ei: f64, mu: f64, l: f64) -> f64 {
     let residual = |f: f64| {
         let w = TWO_PI * f;
@@ -169,7 +169,8 @@ pub fn stiff_string_f1(t: f64, ei: f64, mu: f64, l: f64) -> f64 {
         2.0 * k * ke * (sech - (k * l).cos()) + (ke * ke - k * k) * (k * l).sin() * (ke * l).tanh()
     };
     let ideal = (t / mu).sqrt() / (2.0 * l);
-    let (mut a, mut b) = (ideal * 0.999, ideal * 1.01);
+    // bending only raises f₁ (by ~2λ/L, λ = √(EI/T)); the second root is near 2× ideal
+    let (mut a, mut b) = (ideal * 0.999, ideal * 1.5);
     for _ in 0..200 {
         let m = 0.5 * (a + b);
         if residual(a) * residual(m) <= 0.0 {

@@ -85,17 +85,28 @@ pub struct Layout {
     pub floats: Vec<usize>,
     /// Global indices of the parameters.
     pub parameters: Vec<usize>,
-    /// Master-matrix row of each global coordinate.
+    /// Master-matrix row of each global coordinate ([`Layout::NO_ROW`] for a float left
+    /// out of the stage).
     pub position: Vec<usize>,
 }
 
 impl Layout {
     /// The layout of `system`'s coordinates.
     pub fn new(system: &System) -> Self {
+        Layout::without(system, &[])
+    }
+
+    /// The layout of `system`'s coordinates less the floats `idle` (global indices), which
+    /// get no row ([`Layout::NO_ROW`]).
+    pub fn without(system: &System, idle: &[usize]) -> Self {
         let variables = system.coords_of(CoordKind::Variable);
-        let floats = system.coords_of(CoordKind::Float);
+        let floats: Vec<usize> = system
+            .coords_of(CoordKind::Float)
+            .into_iter()
+            .filter(|g| !idle.contains(g))
+            .collect();
         let parameters = system.coords_of(CoordKind::Parameter);
-        let mut position = vec![0; system.coords.len()];
+        let mut position = vec![Layout::NO_ROW; system.coords.len()];
         for (row, &g) in variables
             .iter()
             .chain(&floats)
@@ -121,14 +132,17 @@ impl Layout {
         )
     }
 
-    /// Total number of coordinates.
+    /// The row of a coordinate that has none (an idle float).
+    pub const NO_ROW: usize = usize::MAX;
+
+    /// Number of rows of the master matrix (variables, floats and parameters).
     pub fn len(&self) -> usize {
-        self.position.len()
+        self.variables.len() + self.floats.len() + self.parameters.len()
     }
 
-    /// Whether the model has no coordinates.
+    /// Whether the master matrix is empty.
     pub fn is_empty(&self) -> bool {
-        self.position.is_empty()
+        self.len() == 0
     }
 }
 
@@ -446,11 +460,7 @@ fn finish(
         .chain(kinds_0a..core)
         .chain((core..total).filter(|t| !plugin_range.contains(t)))
         .collect();
-    let layout = Layout::new(system);
-    let mass = timed(&mut times, "mass", 1, || {
-        mass_at(system, &layout, &mut evaluator, x)
-    })?;
-    let matrices = order
+    let matrices: Vec<TermMatrices> = order
         .into_iter()
         .map(|t| {
             let (on, off) = evaluator.take_hessians(t);
@@ -465,6 +475,16 @@ fn finish(
             }
         })
         .collect();
+    let idle = idle_floats(system, &matrices);
+    let matrices = if idle.is_empty() {
+        matrices
+    } else {
+        matrices.into_iter().map(|t| t.without(&idle)).collect()
+    };
+    let layout = Layout::without(system, &idle);
+    let mass = timed(&mut times, "mass", 1, || {
+        mass_at(system, &layout, &mut evaluator, x)
+    })?;
     Ok(Assembled {
         stage,
         layout,
@@ -472,6 +492,64 @@ fn finish(
         terms: matrices,
         mass,
     })
+}
+
+/// The floats that no term of this stage holds or couples: every Hessian entry on their
+/// rows, tension on and off, is exactly zero (a violin bead's joint rotations before the
+/// stage that adds bending: only the bending term turns them). Such a float carries no
+/// energy in the stage and moves nothing, so leaving it out is the exact elimination;
+/// keeping it would make the float block singular. A float that some term couples but
+/// nothing holds (a mistake in a model) is still reported by the elimination.
+fn idle_floats(system: &System, terms: &[TermMatrices]) -> Vec<usize> {
+    let mut touched = vec![false; system.coords.len()];
+    for t in terms {
+        let m = t.coords.len();
+        let off = match &t.off {
+            OffHessian::Matrix(off) => Some(off.as_slice()),
+            _ => None,
+        };
+        for (a, &g) in t.coords.iter().enumerate() {
+            let row = a * m..(a + 1) * m;
+            let nonzero = |h: &[f64]| h[row.clone()].iter().any(|&v| v != 0.0);
+            if nonzero(&t.on) || off.is_some_and(nonzero) {
+                touched[g] = true;
+            }
+        }
+    }
+    system
+        .coords_of(CoordKind::Float)
+        .into_iter()
+        .filter(|&g| !touched[g])
+        .collect()
+}
+
+impl TermMatrices {
+    /// The term without the coordinates `idle` (whose rows and columns are zero).
+    fn without(self, idle: &[usize]) -> TermMatrices {
+        let keep: Vec<usize> = (0..self.coords.len())
+            .filter(|&a| !idle.contains(&self.coords[a]))
+            .collect();
+        if keep.len() == self.coords.len() {
+            return self;
+        }
+        let m = self.coords.len();
+        let pick = |h: &[f64]| -> Vec<f64> {
+            keep.iter()
+                .flat_map(|&a| keep.iter().map(move |&b| h[a * m + b]))
+                .collect()
+        };
+        TermMatrices {
+            coords: keep.iter().map(|&a| self.coords[a]).collect(),
+            on: pick(&self.on),
+            off: match &self.off {
+                OffHessian::Matrix(off) => OffHessian::Matrix(pick(off)),
+                other => other.clone(),
+            },
+            label: self.label,
+            kind: self.kind,
+            tag: self.tag,
+        }
+    }
 }
 
 /// M = Σ_b J_bᵀ diag(m, m, m, I_b) J_b over the variables, with J_b the Jacobian of the

@@ -152,6 +152,14 @@ impl FibreProfile {
         (first, last)
     }
 
+    /// The radius (m) of the uniform fibre with the same bending compliance as the pieces in
+    /// series, r with 1/r⁴ = Σ (lᵢ/l)/rᵢ⁴: the bending constant of a segment clamped at both
+    /// ends and short beside the bending length, which bends along its whole length.
+    pub fn series_bending_radius(&self) -> f64 {
+        let compliance: f64 = self.pieces.iter().map(|&(l, r)| l / r.powi(4)).sum();
+        (self.length() / compliance).powf(0.25)
+    }
+
     /// The shorter clamp piece's length in bending lengths λ = √(Y I/T) at tension `tension`
     /// (N): the effective bending constant is exact up to e^(−this).
     pub fn clamp_length_in_bending_lengths(&self, tension: f64) -> f64 {

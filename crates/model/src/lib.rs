@@ -5,6 +5,7 @@
 //! Every quantity is in SI units: lengths in m, angles in rad, masses in kg, inertias in
 //! kg m^2, stiffnesses in N/m (or N m/rad), forces in N, moduli in Pa.
 
+pub mod beads;
 mod damping;
 mod fibre;
 pub mod losses;

@@ -14,9 +14,10 @@ use std::collections::{BTreeSet, HashMap};
 use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
 use pendkit_energy::{
     BodyId, CoordKind, EndDirection, ExtraPhase, NamedSignal, SignalTerm, SpringEnd, Stage, System,
-    Wire, WireEnd, WireSection, WireTags,
+    WireEnd, WireSection, WireTags,
 };
 use pendkit_expr::Expr;
+use pendkit_model::beads::{BeadedFibre, add_beaded_fibre};
 use pendkit_model::{BodySpec, BuildError, Shape, SystemBuilder};
 use pendkit_params::Resolved;
 
@@ -1121,11 +1122,9 @@ impl<'s, 'c> Interpreter<'s, 'c> {
         Ok(tip)
     }
 
-    /// Adds one wire of a set, split into `beads + 1` segments with point-mass beads between
-    /// them when the set has beads: each bead carries one segment's mass μ L / (N + 1) (the
-    /// lumped-mass rule); the wire is clamped (or as its ends say) at the bodies and hinged
-    /// at the beads; each segment carries the tension of the lowest plus the weight of the
-    /// beads below it.
+    /// Adds one wire of a set: with beads, the shared beaded fibre
+    /// ([`add_beaded_fibre`]), its segments joined at the beads as the set says; each
+    /// segment carries the tension of the lowest plus the weight of the beads below it.
     fn wire(
         &mut self,
         set: &PlannedSet,
@@ -1135,56 +1134,29 @@ impl<'s, 'c> Interpreter<'s, 'c> {
         tension: f64,
         tags: &WireTags,
     ) -> Result<(), BuildError> {
-        let at = &set.set.at;
-        let beads = set.beads;
-        let segment = set.length / (beads + 1) as f64;
-        let bead_mass = set.section.linear_density * segment;
-        let mut above = (upper.0, upper.1, set.ends[0].clone());
-        for k in 0..=beads {
-            let below = if k < beads {
-                let names = ["x", "y", "z"].map(|c| format!("{c}{}b{}", w.name, k + 1));
-                let position = w.nominal[0]
-                    + (w.nominal[1] - w.nominal[0]) * ((k + 1) as f64 / (beads + 1) as f64);
-                for (name, value) in names.iter().zip(position.iter()) {
-                    self.b.variable(name, *value).map_err(placed(at))?;
-                }
-                let bead = self
-                    .b
-                    .body(
-                        BodySpec::new(format!("{}b{}", w.name, k + 1))
-                            .pose([&names[0], &names[1], &names[2], "0", "0", "0"])
-                            .mass(bead_mass)
-                            .mode_family("violin"),
-                    )
-                    .map_err(placed(at))?;
-                (bead, Vector3::zeros(), EndDirection::Hinged)
-            } else {
-                (lower.0, lower.1, set.ends[1].clone())
-            };
-            let end = |(body, point, direction): &(BodyId, Vector3<f64>, EndDirection)| WireEnd {
-                body: *body,
-                point: *point,
-                direction: direction.clone(),
-            };
-            let name = if beads == 0 {
-                w.name.clone()
-            } else {
-                format!("{}s{}", w.name, k + 1)
-            };
-            let carried = tension + (beads - k) as f64 * bead_mass * self.g;
-            self.b
-                .wire(Wire::from_tension(
-                    name,
-                    [end(&above), end(&below)],
-                    set.section.clone(),
-                    segment,
-                    carried,
-                    tags.clone(),
-                ))
-                .map_err(placed(at))?;
-            above = below;
-        }
-        Ok(())
+        let end = |(body, point): (BodyId, Vector3<f64>), direction: &EndDirection| WireEnd {
+            body,
+            point,
+            direction: direction.clone(),
+        };
+        add_beaded_fibre(
+            &mut self.b,
+            &BeadedFibre {
+                name: &w.name,
+                upper: end(upper, &set.ends[0]),
+                lower: end(lower, &set.ends[1]),
+                nominal: w.nominal,
+                section: &set.section,
+                length: set.length,
+                tension,
+                g: self.g,
+                beads: set.beads,
+                joints: set.set.bead_joints,
+                profile: None,
+            },
+            tags,
+        )
+        .map_err(placed(&set.set.at))
     }
 
     fn springs(&mut self, stage: &StageFile, set: &SpringSet) -> Result<(), BuildError> {

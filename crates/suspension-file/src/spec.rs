@@ -3,6 +3,7 @@
 //! the parameters' values).
 
 use pendkit_energy::{CoordKind, Stage};
+use pendkit_model::beads::BeadJoints;
 
 use crate::read::{Ex, Fields, expr_array};
 use crate::source::{At, FileError, Located, join};
@@ -387,6 +388,9 @@ pub struct WireSet {
     pub shear_modulus: Option<Ex>,
     /// Violin-mode beads per wire (a whole number 0–200).
     pub beads: Option<Ex>,
+    /// How the beads join the segments (`bead_joints = "clamped"`, the default, or
+    /// `"hinged"`).
+    pub bead_joints: BeadJoints,
     /// Damping tag prefix: tags `<p>_stretch`, `<p>_bending`, `<p>_torsion`.
     pub tags: Located<String>,
 }
@@ -1069,7 +1073,7 @@ fn wire_set(slot: &'static str, body: &str, node: &Node, at: At) -> Result<WireS
             Some(section)
         }
     };
-    let w = WireSet {
+    let mut w = WireSet {
         slot,
         names,
         upper,
@@ -1081,6 +1085,7 @@ fn wire_set(slot: &'static str, body: &str, node: &Node, at: At) -> Result<WireS
         youngs_modulus: f.expr("youngs_modulus")?,
         shear_modulus: f.expr("shear_modulus")?,
         beads: f.expr("beads")?,
+        bead_joints: BeadJoints::default(),
         tags: f.string("tags")?.unwrap_or_else(|| Located {
             value: format!("{body}_{slot}"),
             at: at.clone(),
@@ -1098,12 +1103,12 @@ fn wire_set(slot: &'static str, body: &str, node: &Node, at: At) -> Result<WireS
     )?;
     f.planned("temperature", "a temperature per element")?;
     f.planned("dilution", "a given (measured) dilution factor")?;
-    if let Some((node, joints_at)) = f.node("bead_joints")
-        && !matches!(&node.value, Value::Str(s) if s == "hinged")
-    {
-        return Err(joints_at.error(
-            "beads joined other than by hinges (converging to the continuum) are planned (issue 12, item 3) but not implemented yet; only \"hinged\" is",
-        ));
+    if let Some((node, joints_at)) = f.node("bead_joints") {
+        w.bead_joints = match &node.value {
+            Value::Str(s) => BeadJoints::from_name(s),
+            _ => None,
+        }
+        .ok_or_else(|| joints_at.error("expected \"clamped\" or \"hinged\""))?;
     }
     f.finish()?;
     Ok(w)

@@ -138,3 +138,32 @@ fn extends_errors_name_the_file() {
         "{e}"
     );
 }
+
+#[test]
+fn bead_joints_are_clamped_or_hinged() {
+    let with = |joints: &str| {
+        broken(
+            "material = \"steel\"\n",
+            &format!("material = \"steel\"\nbeads = 2\nbead_joints = {joints}\n"),
+        )
+    };
+    let floats = |text: &str| {
+        let s = Suspension::from_text("beads.toml", text, &NoLibrary).unwrap();
+        let (system, _) = build_with(&s, &Overrides::default()).unwrap();
+        // 2 wires of 3 segments each
+        assert_eq!(system.wires.len(), 6);
+        system
+            .coords
+            .iter()
+            .filter(|c| c.kind == pendkit_energy::CoordKind::Float)
+            .count()
+    };
+    // clamped: each bead's joint has three orientation floats; hinged: none
+    assert_eq!(floats(&with("\"clamped\"")), 2 * 2 * 3);
+    assert_eq!(floats(&with("\"hinged\"")), 0);
+    starts(
+        &with("\"welded\""),
+        "bad.toml:23: stages.bob.wires.bead_joints: ",
+        "expected \"clamped\" or \"hinged\"",
+    );
+}

@@ -5,6 +5,7 @@ use std::collections::BTreeMap;
 
 use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
 use pendkit_energy::{BodyId, EndDirection, SpringEnd, Wire, WireEnd, WireSection, WireTags};
+use pendkit_model::beads::{BeadJoints, BeadedFibre, add_beaded_fibre};
 use pendkit_model::losses::WireLoss;
 use pendkit_model::{BodySpec, BuildError, DampingSpec, FibreProfile, Shape, SystemBuilder};
 use pendkit_params::Resolved;
@@ -231,117 +232,6 @@ pub fn wire(
     Ok(())
 }
 
-/// A vertical fibre between two bodies, optionally carrying violin-mode beads.
-pub struct Fibre<'a> {
-    /// Name; segments are `<name>s1 ...`, beads `<name>b1 ...` (coordinates
-    /// `x<name>b1 y<name>b1 z<name>b1 ...`).
-    pub name: &'a str,
-    /// Upper body and attachment point (m, body coordinates).
-    pub upper: (BodyId, Vector3<f64>),
-    /// Lower body and attachment point.
-    pub lower: (BodyId, Vector3<f64>),
-    /// Lab positions of the upper and lower attachments at the nominal geometry (m).
-    pub nominal: [Vector3<f64>; 2],
-    /// Cross-section.
-    pub section: &'a WireSection,
-    /// Length between the attachment points (m).
-    pub length: f64,
-    /// Tension of the lowest segment (N).
-    pub tension: f64,
-    /// Number of beads (0: one plain fibre).
-    pub beads: usize,
-    /// A radius profile along the fibre (tapered fibres): each segment is then the slice of
-    /// the profile it spans, and `section` is not used.
-    pub profile: Option<&'a FibreProfile>,
-}
-
-/// Adds a fibre split into `beads + 1` segments with point-mass beads between them, each
-/// bead carrying one segment's mass μ L / (N + 1) (the lumped-mass rule; with a profile,
-/// half of each neighbouring segment's mass). The fibre is clamped at both ends and hinged
-/// at the beads (a string between them); each segment carries the tension of the lowest
-/// plus the weight of the beads below it.
-pub fn beaded_fibre(
-    b: &mut SystemBuilder,
-    f: &Fibre,
-    g: f64,
-    tags: &WireTags,
-) -> Result<(), BuildError> {
-    let segment = f.length / (f.beads + 1) as f64;
-    let slices: Vec<FibreProfile> = f
-        .profile
-        .map(|p| {
-            (0..=f.beads)
-                .map(|k| p.slice(k as f64 * segment, (k + 1) as f64 * segment))
-                .collect()
-        })
-        .unwrap_or_default();
-    let bead_masses: Vec<f64> = (0..f.beads)
-        .map(|k| match (slices.get(k), slices.get(k + 1)) {
-            (Some(upper), Some(lower)) => 0.5 * (upper.mass() + lower.mass()),
-            _ => f.section.linear_density * segment,
-        })
-        .collect();
-    let mut above = (f.upper.0, f.upper.1, EndDirection::Auto);
-    for k in 0..=f.beads {
-        let below = if k < f.beads {
-            let names = ["x", "y", "z"].map(|c| format!("{c}{}b{}", f.name, k + 1));
-            let at = f.nominal[0]
-                + (f.nominal[1] - f.nominal[0]) * ((k + 1) as f64 / (f.beads + 1) as f64);
-            for (name, value) in names.iter().zip(at.iter()) {
-                b.variable(name, *value)?;
-            }
-            let bead = b.body(
-                BodySpec::new(format!("{}b{}", f.name, k + 1))
-                    .pose([&names[0], &names[1], &names[2], "0", "0", "0"])
-                    .mass(bead_masses[k])
-                    .mode_family("violin"),
-            )?;
-            (bead, Vector3::zeros(), EndDirection::Hinged)
-        } else {
-            (f.lower.0, f.lower.1, EndDirection::Auto)
-        };
-        let end = |(body, point, direction): &(BodyId, Vector3<f64>, EndDirection)| WireEnd {
-            body: *body,
-            point: *point,
-            direction: direction.clone(),
-        };
-        let name = if f.beads == 0 {
-            f.name.to_string()
-        } else {
-            format!("{}s{}", f.name, k + 1)
-        };
-        let ends = [end(&above), end(&below)];
-        match slices.get(k) {
-            None => {
-                let carried =
-                    f.tension + (f.beads - k) as f64 * (f.section.linear_density * segment) * g;
-                b.wire(Wire::from_tension(
-                    name,
-                    ends,
-                    f.section.clone(),
-                    segment,
-                    carried,
-                    tags.clone(),
-                ))?
-            }
-            Some(slice) => {
-                let carried = f.tension + bead_masses[k..].iter().sum::<f64>() * g;
-                // the segment bends at its clamped end: the lower one for the last segment
-                let (upper_r, lower_r) = slice.clamp_radii();
-                let r = if k == f.beads && k > 0 {
-                    lower_r
-                } else {
-                    upper_r
-                };
-                let section = slice.section_bent_at(carried, r);
-                b.wire(slice.wire_with_section(name, ends, carried, section, tags.clone()))?
-            }
-        };
-        above = below;
-    }
-    Ok(())
-}
-
 /// The number of violin beads per fibre from parameter `n_beads` (a whole number, 0–200:
 /// dense linear algebra, and 200 beads per fibre is already ~2400 degrees of freedom).
 pub fn bead_count(p: &Resolved) -> Result<usize, BuildError> {
@@ -360,7 +250,7 @@ pub fn lowest_wires(
     (upper, lower): (BodyId, BodyId),
     heights: [f64; 2],
     (section, profile, weight): (&WireSection, Option<&FibreProfile>, f64),
-    beads: usize,
+    (beads, joints): (usize, BeadJoints),
     tags: &WireTags,
 ) -> Result<(), BuildError> {
     let (sl, n4, n5, d3, d4, l3) = (
@@ -381,12 +271,17 @@ pub fn lowest_wires(
             Vector3::new(sx * sl, sy * n5, d4),
         );
         let tension = weight / 4.0 * l3 / vert;
-        beaded_fibre(
+        let end = |body, point| WireEnd {
+            body,
+            point,
+            direction: EndDirection::Auto,
+        };
+        add_beaded_fibre(
             b,
-            &Fibre {
+            &BeadedFibre {
                 name: &format!("f{}", k + 1),
-                upper: (upper, upper_point),
-                lower: (lower, lower_point),
+                upper: end(upper, upper_point),
+                lower: end(lower, lower_point),
                 nominal: [
                     Vector3::z() * heights[0] + upper_point,
                     Vector3::z() * heights[1] + lower_point,
@@ -394,10 +289,11 @@ pub fn lowest_wires(
                 section,
                 length: l3,
                 tension,
+                g: p.get("g")?,
                 beads,
+                joints,
                 profile,
             },
-            p.get("g")?,
             tags,
         )?;
     }
@@ -416,7 +312,7 @@ pub fn cylinder_along_x(radius: f64, length: f64) -> Shape {
 
 /// Mass (kg) of the beads of one fibre: N/(N + 1) of a uniform fibre's mass, or with a
 /// `profile`, the whole mass less half of the two end segments' (which the end bodies
-/// carry, as in [`beaded_fibre`]).
+/// carry, as in [`add_beaded_fibre`]).
 pub fn beads_mass(
     section: &WireSection,
     profile: Option<&FibreProfile>,

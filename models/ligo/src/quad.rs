@@ -10,6 +10,7 @@ use std::collections::BTreeMap;
 
 use nalgebra::Vector3;
 use pendkit_energy::System;
+use pendkit_model::beads::BeadJoints;
 use pendkit_model::losses::{WireLoss, blade_loss};
 use pendkit_model::{
     BodySpec, BuildError, DampingSpec, DefaultsCache, FibreProfile, LIGO_DOF_NAMES, Model,
@@ -596,7 +597,7 @@ impl Model for Quad {
             (pum, tm),
             [z2, z3],
             (&sec_3, profile.as_ref(), m3 * g),
-            beads,
+            (beads, BeadJoints::Clamped),
             &chain::tags("fibre"),
         )?;
         if self.design == Design::AsBuilt {

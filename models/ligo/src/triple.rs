@@ -15,6 +15,7 @@ use std::collections::BTreeMap;
 
 use nalgebra::Vector3;
 use pendkit_energy::System;
+use pendkit_model::beads::BeadJoints;
 use pendkit_model::{
     BodySpec, BuildError, DampingSpec, DefaultsCache, LIGO_DOF_NAMES, Model, Shape, SystemBuilder,
 };
@@ -375,7 +376,7 @@ impl Model for Triple {
             (intermediate, optic),
             [z2, z3],
             (&sec_3, None, m3 * g),
-            beads,
+            (beads, BeadJoints::Clamped),
             &chain::tags("w3"),
         )?;
         b.build()
