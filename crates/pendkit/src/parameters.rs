@@ -25,19 +25,12 @@ pub struct ParameterRow {
 
 /// Every parameter of `case`, in definition order: value with the case's overrides, unit,
 /// definition, and what the model says about it ([`pendkit_model::Model::parameter_info`]).
-/// A bundled model written in Rust says only its units; with the `files` feature its
-/// descriptions and readers come from the bundled suspension file of the same name (the
-/// same model: tests/files_vs_rust.rs), for the parameters the file has.
+/// Every bundled model is a suspension file, so every one says all of it.
 pub fn parameter_table(case: &Case) -> Result<Vec<ParameterRow>, Error> {
     let defaults = Defaults::of(case.model)?;
     let (params, resolved) = parameters_with(&defaults, &case.overrides)?;
     let info = case.model.parameter_info(&resolved)?;
-    let twin = twin_info(case);
-    let about = |name: &str| -> Option<&ParameterInfo> {
-        info.iter()
-            .find(|i| i.name == name && !(i.description.is_empty() && i.read_by.is_empty()))
-            .or_else(|| twin.iter().find(|i| i.name == name))
-    };
+    let about = |name: &str| -> Option<&ParameterInfo> { info.iter().find(|i| i.name == name) };
     Ok(resolved
         .iter()
         .map(|(name, value)| {
@@ -59,25 +52,4 @@ pub fn parameter_table(case: &Case) -> Result<Vec<ParameterRow>, Error> {
             }
         })
         .collect())
-}
-
-/// What the bundled suspension file of the same name as `case`'s bundled Rust model says
-/// about its parameters at the case's overrides (nothing without the `files` feature, for
-/// other models, or if the file does not take the overrides).
-fn twin_info(case: &Case) -> Vec<ParameterInfo> {
-    #[cfg(feature = "files")]
-    {
-        let bundled = crate::models()
-            .into_iter()
-            .any(|m| std::ptr::addr_eq(m, case.model));
-        if let (true, Some(file)) = (bundled, pendkit_models::find(case.model.name())) {
-            let file: &dyn pendkit_model::Model = &*file;
-            return Defaults::of(file)
-                .and_then(|d| parameters_with(&d, &case.overrides))
-                .and_then(|(_, resolved)| file.parameter_info(&resolved))
-                .unwrap_or_default();
-        }
-    }
-    let _ = case;
-    Vec::new()
 }

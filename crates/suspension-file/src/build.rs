@@ -17,7 +17,7 @@ use pendkit_energy::{
     Wire, WireEnd, WireSection, WireTags,
 };
 use pendkit_expr::Expr;
-use pendkit_model::{BodySpec, BuildError, Shape, SystemBuilder};
+use pendkit_model::{BodySpec, BuildError, FibreProfile, Shape, SystemBuilder};
 use pendkit_params::Resolved;
 
 use crate::damping::{blade_tag, find_material, subtree};
@@ -242,6 +242,8 @@ struct PlannedSet<'s> {
     length: f64,
     section: WireSection,
     beads: usize,
+    /// A tapered fibre's profile (`profile`): each wire is one effective wire of it.
+    profile: Option<FibreProfile>,
 }
 
 /// A blade set, planned.
@@ -763,6 +765,11 @@ impl<'s, 'c> Interpreter<'s, 'c> {
                 None => 0,
             };
             let section = self.section(set)?;
+            let profile = self.profile(set, &section, length, beads)?;
+            // read here so that a bad value is reported by the build (the damping reads them)
+            for ex in [&set.temperature, &set.dilution].into_iter().flatten() {
+                ctx.positive(ex, "")?;
+            }
             sets.push(PlannedSet {
                 set,
                 wires,
@@ -770,6 +777,7 @@ impl<'s, 'c> Interpreter<'s, 'c> {
                 length,
                 section,
                 beads,
+                profile,
             });
         }
         Ok(PlannedStage {
@@ -843,6 +851,13 @@ impl<'s, 'c> Interpreter<'s, 'c> {
             }
             BladeForm::XtraLite | BladeForm::Lateral => 0.0,
         };
+        // read here so that a bad value is reported by the build (the damping reads them)
+        for ex in [&fields.thickness, &fields.temperature]
+            .into_iter()
+            .flatten()
+        {
+            ctx.positive(ex, "")?;
+        }
         Ok(PlannedBlades {
             set,
             fields,
@@ -852,6 +867,41 @@ impl<'s, 'c> Interpreter<'s, 'c> {
             form,
             tip_mass,
         })
+    }
+
+    /// The tapered profile of a wire set that gives one (`profile`, with `radius` the
+    /// middle's), of the set's elastic constants and density.
+    fn profile(
+        &self,
+        set: &WireSet,
+        section: &WireSection,
+        length: f64,
+        beads: usize,
+    ) -> Result<Option<FibreProfile>, BuildError> {
+        let (Some(p), Some(radius)) = (&set.profile, &set.radius) else {
+            return Ok(None);
+        };
+        let ctx = self.ctx;
+        let neck_length = ctx.positive(&p.neck_length, "m")?;
+        let neck_radius = ctx.positive(&p.neck_radius, "m")?;
+        let middle = ctx.positive(radius, "m")?;
+        if beads > 0 {
+            return Err(invalid(
+                &p.at,
+                "violin beads on a tapered fibre are not supported by suspension files yet (beads: 0)",
+            ));
+        }
+        let density = section.linear_density / section.area;
+        let profile = FibreProfile::tapered(
+            length,
+            (neck_length, neck_radius),
+            middle,
+            (section.youngs_modulus, section.shear_modulus, density),
+        );
+        profile
+            .check("the profile")
+            .map_err(|e| invalid(&p.at, e.to_string()))?;
+        Ok(Some(profile))
     }
 
     /// The section of a wire set from its radius (or section) and material.
@@ -1001,7 +1051,23 @@ impl<'s, 'c> Interpreter<'s, 'c> {
                 } else {
                     share * set.length / w.vertical
                 };
-                self.wire(set, w, upper_end, (lower, w.lower), tension, &tags)?;
+                match &set.profile {
+                    Some(profile) => {
+                        let end = |(body, point), direction: &EndDirection| WireEnd {
+                            body,
+                            point,
+                            direction: direction.clone(),
+                        };
+                        let ends = [
+                            end(upper_end, &set.ends[0]),
+                            end((lower, w.lower), &set.ends[1]),
+                        ];
+                        self.b
+                            .wire(profile.wire(w.name.clone(), ends, tension, tags.clone()))
+                            .map_err(placed(&set.set.at))?;
+                    }
+                    None => self.wire(set, w, upper_end, (lower, w.lower), tension, &tags)?,
+                }
             }
         }
         Ok(())

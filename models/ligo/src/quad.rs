@@ -10,7 +10,7 @@ use std::collections::BTreeMap;
 
 use nalgebra::Vector3;
 use pendkit_energy::System;
-use pendkit_model::losses::{WireLoss, blade_loss};
+use pendkit_model::losses::{LossMaterial, WireLoss, blade_loss};
 use pendkit_model::{
     BodySpec, BuildError, DampingSpec, DefaultsCache, FibreProfile, LIGO_DOF_NAMES, Model,
     SystemBuilder,
@@ -252,7 +252,7 @@ fn as_built_damping() -> BTreeMap<String, DampingSpec> {
         let temperature = format!("temp_{set}");
         let loss = WireLoss {
             set,
-            material,
+            material: LossMaterial::parameters(material),
             tension,
             youngs,
             clamp_radius: radius,
@@ -269,7 +269,7 @@ fn as_built_damping() -> BTreeMap<String, DampingSpec> {
         d.insert(
             blade.to_string(),
             blade_loss(
-                "maraging",
+                &LossMaterial::parameters("maraging"),
                 &format!("{blade}_thickness"),
                 &format!("temp_{blade}"),
             ),
