@@ -1,5 +1,6 @@
 //! Suspension files on the command line: a file runs like a bundled model, a case file can
-//! name one, `pendkit chain-file` writes one, `pendkit params` lists every parameter, and a
+//! name one, `pendkit chain-file` writes one, `pendkit model-file` prints a bundled one,
+//! `pendkit params` lists every parameter, and a
 //! bad file's error is one line naming the file, the line and the field.
 
 use std::path::PathBuf;
@@ -193,4 +194,24 @@ fn a_bad_file_names_file_line_and_field() {
         "{stderr}"
     );
     assert_eq!(stderr.trim_end().lines().count(), 1, "{stderr}");
+}
+
+/// `pendkit model-file NAME` prints a bundled model's file; saved in a scratch folder and
+/// run from there (its `extends` names bundled files, found wherever the copy is), it is the
+/// bundled model: the same file read twice, so the same mode frequencies exactly. An unknown
+/// name is refused with the names there are.
+#[test]
+fn model_file_prints_a_bundled_model_to_copy() {
+    let (ok, text, stderr) = pendkit(&["model-file", "quad-lite"]);
+    assert!(ok, "{stderr}");
+    assert!(text.contains("name = \"quad-lite\""), "{text}");
+    let path = scratch("model-file").join("my-quad.toml");
+    std::fs::write(&path, text).unwrap();
+    let copy = frequencies(&["modes", path.to_str().unwrap(), "--json"]);
+    let bundled = frequencies(&["modes", "quad-lite", "--json"]);
+    assert_eq!(copy.len(), 30);
+    assert_eq!(copy, bundled);
+    let _ = std::fs::remove_dir_all(path.parent().unwrap());
+    let (ok, _, stderr) = pendkit(&["model-file", "quadd"]);
+    assert!(!ok && stderr.contains("triple-v5"), "{stderr}");
 }

@@ -721,7 +721,25 @@ impl<'s, 'c> Interpreter<'s, 'c> {
                 }
                 _ => {}
             }
-            let length = ctx.positive(&set.length, "m")?;
+            let length = ctx.eval(&set.length)?;
+            if length <= 0.0 {
+                // named after the set's first wire, and said plainly when it is zero
+                let first = names
+                    .first()
+                    .map_or(String::new(), |n| format!("wire '{n}': "));
+                let zero = if length == 0.0 {
+                    " (a zero-length wire)"
+                } else {
+                    ""
+                };
+                return Err(invalid(
+                    &set.length.at,
+                    format!(
+                        "{first}`{}` = {length} m must be positive{zero}",
+                        set.length.text
+                    ),
+                ));
+            }
             let mut wires = Vec::with_capacity(lowers.len());
             for (w, (lower, name)) in lowers.iter().zip(names).enumerate() {
                 let (tip, point) = match tips {
