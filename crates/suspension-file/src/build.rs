@@ -374,7 +374,10 @@ impl<'s, 'c> Interpreter<'s, 'c> {
     fn run(mut self) -> Result<System, BuildError> {
         let ctx = self.ctx;
         for p in &self.spec.parameters {
-            if let (Some(allowed), Ok(value)) = (&p.allowed, ctx.params.get(&p.name))
+            // only a switch's value is looked up here: a look-up counts as a read, and an
+            // override of a parameter nothing reads is refused
+            if let Some(allowed) = &p.allowed
+                && let Ok(value) = ctx.params.get(&p.name)
                 && !allowed.value.contains(&value)
             {
                 let list: Vec<String> = allowed.value.iter().map(f64::to_string).collect();
@@ -721,6 +724,7 @@ impl<'s, 'c> Interpreter<'s, 'c> {
                 }
                 _ => {}
             }
+            let names_first = names.first().cloned();
             let length = ctx.eval(&set.length)?;
             if length <= 0.0 {
                 // named after the set's first wire, and said plainly when it is zero
@@ -782,7 +786,7 @@ impl<'s, 'c> Interpreter<'s, 'c> {
                 Some(ex) => ctx.count(ex, 0..=MAX_BEADS)?,
                 None => 0,
             };
-            let section = self.section(set)?;
+            let section = self.section(set, names_first.as_deref())?;
             let profile = self.profile(set, &section, length, beads)?;
             // read here so that a bad value is reported by the build (the damping reads them)
             for ex in [&set.temperature, &set.dilution].into_iter().flatten() {
@@ -923,7 +927,7 @@ impl<'s, 'c> Interpreter<'s, 'c> {
     }
 
     /// The section of a wire set from its radius (or section) and material.
-    fn section(&self, set: &WireSet) -> Result<WireSection, BuildError> {
+    fn section(&self, set: &WireSet, first: Option<&str>) -> Result<WireSection, BuildError> {
         let ctx = self.ctx;
         let material = match &set.material {
             Some(m) => Some(
@@ -982,10 +986,12 @@ impl<'s, 'c> Interpreter<'s, 'c> {
         }
         if let Some(r) = &set.radius {
             let radius = ctx.eval(r)?;
+            // zero passes on to the wire's stiffness check, which names the wire too
             if radius < 0.0 {
+                let wire = first.map_or(String::new(), |n| format!("wire '{n}': "));
                 return Err(invalid(
                     &r.at,
-                    format!("`{}` = {radius} m: a radius cannot be negative", r.text),
+                    format!("{wire}`{}` = {radius} m: a radius must be positive", r.text),
                 ));
             }
             Ok(WireSection::round(radius, e, g, rho))

@@ -139,11 +139,11 @@ fn wire_damping(
     let temperature = set.temperature.as_ref().map(Ex::paren);
     let lossy = loss_material(m, set.youngs_modulus.as_ref());
     let (Some(material), Some(r)) = (lossy, &set.radius) else {
-        // no thermoelastic loss: structural φ alone, which is all the extra fields could scale
+        // no thermoelastic loss: structural φ alone (a profile still shapes the mechanics);
+        // surface loss and a given dilution are written for the full loss model only
         if let Some(field) = [
             (set.surface_loss, "surface_loss"),
             (set.dilution.is_some(), "dilution"),
-            (set.profile.is_some(), "profile"),
         ]
         .iter()
         .find(|(given, _)| *given)
@@ -153,14 +153,11 @@ fn wire_damping(
                 field.1
             )));
         }
-        let structural = |_: ()| {
-            let mut d = DampingSpec::structural(&phi.text);
-            d.temperature = temperature.clone();
-            d
-        };
+        let mut structural = DampingSpec::structural(&phi.text);
+        structural.temperature = temperature;
         return Ok(["stretch", "bending", "torsion"]
             .into_iter()
-            .map(|part| (format!("{prefix}_{part}"), structural(())))
+            .map(|part| (format!("{prefix}_{part}"), structural.clone()))
             .collect());
     };
     if set.surface_loss && m.dissipation_depth.is_none() {
