@@ -72,6 +72,8 @@ enum Command {
     Params(params::Args),
     /// Write an N-stage chain suspension file to standard output.
     ChainFile(params::ChainArgs),
+    /// Print a bundled model's suspension file, to copy and edit into a new suspension.
+    ModelFile(params::ModelFileArgs),
 }
 
 fn main() -> ExitCode {
@@ -101,6 +103,7 @@ fn run(cli: Cli) -> Result<String, CliError> {
         Command::Tradeoff(a) => tradeoff::run(a),
         Command::Params(a) => params::run(a),
         Command::ChainFile(a) => params::chain_file(a),
+        Command::ModelFile(a) => params::model_file(a),
         Command::Elements => {
             let mut out = String::new();
             let _ = writeln!(out, "{:<20} {:<5} {:<32} what", "kind", "stage", "crate");

@@ -1,6 +1,7 @@
 //! `pendkit params`: every parameter of a model, case or suspension file, with its value,
-//! unit, description and the parts that read it; and `pendkit chain-file`, which writes an
-//! N-stage chain suspension file.
+//! unit, description and the parts that read it; `pendkit chain-file`, which writes an
+//! N-stage chain suspension file; and `pendkit model-file`, which prints a bundled model's
+//! file to start a new suspension from.
 
 use std::fmt::Write as _;
 
@@ -82,4 +83,32 @@ pub fn chain_file(a: ChainArgs) -> Result<String, CliError> {
         )));
     }
     Ok(pendkit::suspension::generate::chain(a.stages))
+}
+
+/// Arguments of `pendkit model-file`.
+#[derive(clap::Args)]
+pub struct ModelFileArgs {
+    /// Bundled model name (`pendkit models` lists them), or a file a bundled model extends
+    /// (`ligo-materials`).
+    model: String,
+}
+
+/// The text of a bundled suspension file, as embedded in the program: saved beside a new
+/// file, it reads as the bundled model does (its `extends` names bundled files, which are
+/// found wherever the copy is).
+pub fn model_file(a: ModelFileArgs) -> Result<String, CliError> {
+    use pendkit::suspension::Library as _;
+    pendkit::bundled_files::Bundled
+        .file(&a.model)
+        .map(|(_, text)| text.to_string())
+        .ok_or_else(|| {
+            let known: Vec<&str> = pendkit::bundled_files::files()
+                .map(|(name, _, _)| name.trim_end_matches(".toml"))
+                .collect();
+            CliError::usage(format!(
+                "model-file: no bundled file '{}' (bundled: {})",
+                a.model,
+                known.join(", ")
+            ))
+        })
 }

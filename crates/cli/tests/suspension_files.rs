@@ -1,5 +1,6 @@
 //! Suspension files on the command line: a file runs like a bundled model, a case file can
-//! name one, `pendkit chain-file` writes one, `pendkit params` lists every parameter, and a
+//! name one, `pendkit chain-file` writes one, `pendkit model-file` prints a bundled one,
+//! `pendkit params` lists every parameter, and a
 //! bad file's error is one line naming the file, the line and the field.
 
 use std::path::PathBuf;
@@ -78,10 +79,10 @@ fn the_worked_example_runs() {
     assert!((named[0] - 1.0).abs() < 1e-4, "{}", named[0]);
 }
 
-/// `pendkit chain-file N` writes a file that is the bundled Rust chain with n_stages = N
-/// (models/basic/src/chain.rs, an independent implementation): equal mode frequencies.
-/// Tolerance 1e-9 relative: the two differ by rounding in the stage heights (~1e-16), which
-/// the stiffest modes amplify to ~1e-12 (tests/files_vs_rust.rs measures it).
+/// `pendkit chain-file N` writes a file that is the bundled chain with n_stages = N through
+/// the command line: equal mode frequencies (the bundled chain is the same generator's text,
+/// so they agree exactly; 1e-9 relative is the bound this test had when the bundled chain
+/// was an independent Rust model). The chain's physics is pinned by tests/chain.rs.
 #[test]
 fn chain_file_is_the_bundled_chain() {
     let (ok, text, stderr) = pendkit(&["chain-file", "3"]);
@@ -174,6 +175,15 @@ fn params_lists_every_parameter() {
     let m3 = table.lines().find(|l| l.starts_with("m3 ")).unwrap();
     assert!(m3.contains(" kg ") && m3.contains("test mass"), "{m3}");
     assert!(table.contains("read by: bodies.testmass.mass"), "{table}");
+    // quad-aligo, still a Rust model: descriptions and readers from its bundled file
+    let (ok, table, stderr) = pendkit(&["params", "quad-aligo"]);
+    assert!(ok, "{stderr}");
+    let neck = table.lines().find(|l| l.starts_with("r3_neck ")).unwrap();
+    assert!(neck.contains(" m ") && neck.contains("necks"), "{neck}");
+    assert!(
+        table.contains("read by: stages.testmass.fibres.profile.neck_radius"),
+        "{table}"
+    );
 }
 
 /// A bad file fails with one line: `error: <file>:<line>: <field>: <what>`.
@@ -193,4 +203,24 @@ fn a_bad_file_names_file_line_and_field() {
         "{stderr}"
     );
     assert_eq!(stderr.trim_end().lines().count(), 1, "{stderr}");
+}
+
+/// `pendkit model-file NAME` prints a bundled model's file; saved in a scratch folder and
+/// run from there (its `extends` names bundled files, found wherever the copy is), it is the
+/// bundled model: the same file read twice, so the same mode frequencies exactly. An unknown
+/// name is refused with the names there are.
+#[test]
+fn model_file_prints_a_bundled_model_to_copy() {
+    let (ok, text, stderr) = pendkit(&["model-file", "quad-lite"]);
+    assert!(ok, "{stderr}");
+    assert!(text.contains("name = \"quad-lite\""), "{text}");
+    let path = scratch("model-file").join("my-quad.toml");
+    std::fs::write(&path, text).unwrap();
+    let copy = frequencies(&["modes", path.to_str().unwrap(), "--json"]);
+    let bundled = frequencies(&["modes", "quad-lite", "--json"]);
+    assert_eq!(copy.len(), 30);
+    assert_eq!(copy, bundled);
+    let _ = std::fs::remove_dir_all(path.parent().unwrap());
+    let (ok, _, stderr) = pendkit(&["model-file", "quadd"]);
+    assert!(!ok && stderr.contains("triple-v5"), "{stderr}");
 }

@@ -25,15 +25,55 @@
 
 use crate::DampingSpec;
 
+/// A material's constants as the loss formulas read them: each an expression over the
+/// model's parameters (a parameter's name, a number, or any expression).
+#[derive(Clone, Debug, PartialEq)]
+pub struct LossMaterial {
+    /// Structural (bulk) loss angle φ (rad).
+    pub phi: String,
+    /// Density ρ (kg/m³).
+    pub rho: String,
+    /// Specific heat C (J/(kg K)).
+    pub specific_heat: String,
+    /// Thermal conductivity K (W/(m K)).
+    pub conductivity: String,
+    /// Linear thermal expansion α (1/K).
+    pub alpha: String,
+    /// β = d ln Y / dT (1/K): the stress term of the thermoelastic loss.
+    pub dlne_dt: String,
+    /// Surface-loss dissipation depth d_s (m).
+    pub dissipation_depth: String,
+    /// Young's modulus Y (Pa).
+    pub youngs: String,
+}
+
+impl LossMaterial {
+    /// The material whose constants are the parameters `<prefix>_phi`, `<prefix>_rho`,
+    /// `<prefix>_C`, `<prefix>_K`, `<prefix>_alpha`, `<prefix>_dlnE_dT`,
+    /// `<prefix>_dissdepth` and `<prefix>_Y` (the LIGO models' materials table).
+    pub fn parameters(prefix: &str) -> Self {
+        let p = |column: &str| format!("{prefix}_{column}");
+        LossMaterial {
+            phi: p("phi"),
+            rho: p("rho"),
+            specific_heat: p("C"),
+            conductivity: p("K"),
+            alpha: p("alpha"),
+            dlne_dt: p("dlnE_dT"),
+            dissipation_depth: p("dissdepth"),
+            youngs: p("Y"),
+        }
+    }
+}
+
 /// The deformations of a wire and the inputs of their loss angles; each field is an
 /// expression over the model's parameters.
 #[derive(Clone, Debug)]
 pub struct WireLoss<'a> {
     /// Prefix of the wire set's tags: `<set>_stretch`, `<set>_bending`, `<set>_torsion`.
     pub set: &'a str,
-    /// Prefix of the material's parameters (`<m>_phi`, `<m>_rho`, `<m>_C`, `<m>_K`,
-    /// `<m>_alpha`, `<m>_dlnE_dT`, `<m>_dissdepth`).
-    pub material: &'a str,
+    /// The material's constants (its `youngs` is not read: the set's own is `youngs`).
+    pub material: LossMaterial,
     /// Static tension per wire (N).
     pub tension: &'a str,
     /// Young's modulus (Pa).
@@ -55,26 +95,31 @@ impl WireLoss<'_> {
     /// The tags and damping of the set: stretch, bending (with the thermoelastic peak) and
     /// torsion.
     pub fn damping(&self) -> Vec<(String, DampingSpec)> {
-        let m = self.material;
-        let phi = format!("{m}_phi");
+        let m = &self.material;
+        let phi = format!("({})", m.phi);
+        let (rho, c, k) = (&m.rho, &m.specific_heat, &m.conductivity);
+        let (alpha, beta) = (&m.alpha, &m.dlne_dt);
         let surface = |mu: f64, inverse_radius: &str| {
-            format!("{phi}*(1 + {mu}*{m}_dissdepth*({inverse_radius}))")
+            format!(
+                "{phi}*(1 + {mu}*({})*({inverse_radius}))",
+                m.dissipation_depth
+            )
         };
         let (stretch, bending, torsion) = match &self.surface {
             None => (phi.clone(), phi.clone(), phi.clone()),
             Some((stretch_ir, torsion_ir)) => (
                 surface(2.0, stretch_ir),
-                surface(4.0, &format!("1/{}", self.clamp_radius)),
+                surface(4.0, &format!("1/({})", self.clamp_radius)),
                 surface(4.0, torsion_ir),
             ),
         };
         let (t, r, y) = (self.tension, self.clamp_radius, self.youngs);
-        let stress = format!("({t})/(pi*{r}^2)");
+        let stress = format!("({t})/(pi*({r})^2)");
         let delta = format!(
-            "{y}*{temp}/({m}_rho*{m}_C)*({m}_alpha - {stress}*{m}_dlnE_dT/{y})^2",
+            "({y})*({temp})/(({rho})*({c}))*(({alpha}) - {stress}*({beta})/({y}))^2",
             temp = self.temperature
         );
-        let tau = format!("{m}_rho*{m}_C*(2*{r})^2/(2.16*2*pi*{m}_K)");
+        let tau = format!("({rho})*({c})*(2*({r}))^2/(2.16*2*pi*({k}))");
         let (bending, delta) = match &self.dilution_scale {
             None => (bending, delta),
             Some(scale) => (
@@ -109,16 +154,22 @@ impl WireLoss<'_> {
     }
 }
 
-/// Damping of a blade of material `material` (parameter prefix) and thickness
-/// `thickness` (m, an expression) at `temperature` (K, an expression): structural φ plus
-/// the plate's thermoelastic loss.
-pub fn blade_loss(material: &str, thickness: &str, temperature: &str) -> DampingSpec {
+/// Damping of a blade of `material` and thickness `thickness` (m, an expression) at
+/// `temperature` (K, an expression): structural φ plus the plate's thermoelastic loss.
+pub fn blade_loss(material: &LossMaterial, thickness: &str, temperature: &str) -> DampingSpec {
     let m = material;
+    let (y, alpha, rho, c, k) = (
+        &m.youngs,
+        &m.alpha,
+        &m.rho,
+        &m.specific_heat,
+        &m.conductivity,
+    );
     DampingSpec {
-        structural: Some(format!("{m}_phi")),
+        structural: Some(m.phi.clone()),
         thermoelastic: Some((
-            format!("{m}_Y*{m}_alpha^2*{temperature}/({m}_rho*{m}_C)"),
-            format!("{m}_rho*{m}_C*({thickness})^2/(pi^2*{m}_K)"),
+            format!("({y})*({alpha})^2*({temperature})/(({rho})*({c}))"),
+            format!("({rho})*({c})*({thickness})^2/(pi^2*({k}))"),
         )),
         temperature: (temperature != "temperature").then(|| temperature.to_string()),
         ..Default::default()
@@ -166,7 +217,7 @@ mod tests {
         let p = params();
         let loss = WireLoss {
             set: "fibre",
-            material: "silica",
+            material: LossMaterial::parameters("silica"),
             tension: "T3",
             youngs: "silica_Y",
             clamp_radius: "r_neck",
@@ -199,7 +250,7 @@ mod tests {
     fn blade_loss_matches_pygwinc_formula_and_carries_its_temperature() {
         // pygwinc bladeTELoss: τ = ρ C t²/(K π²), Δ = Y α² T/(ρ C)
         let p = params();
-        let spec = blade_loss("maraging", "4200e-6", "cold");
+        let spec = blade_loss(&LossMaterial::parameters("maraging"), "4200e-6", "cold");
         assert_eq!(spec.temperature.as_deref(), Some("cold"));
         let (rho, c, k, alpha, y, t) = (7800.0, 460.0, 20.0, 11e-6, 187e9, 4200e-6);
         let tau = rho * c * t * t / (k * std::f64::consts::PI.powi(2));
@@ -209,7 +260,7 @@ mod tests {
         let (_, im) = spec.resolve("b", &p).unwrap().at(30.0);
         assert!((im / expected - 1.0).abs() < 1e-12);
         assert!(
-            blade_loss("maraging", "t", "temperature")
+            blade_loss(&LossMaterial::parameters("maraging"), "t", "temperature")
                 .temperature
                 .is_none()
         );

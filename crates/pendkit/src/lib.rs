@@ -42,8 +42,9 @@
 //! | `files` | [`Case::from_file`], and [`Case::open`] taking a case-file path | `pendkit-files` (a TOML parser) |
 //! | `export` | [`StageResult::write_state_space`]: the state space to `.mat`, `.npz` or JSON, with units and provenance | `pendkit-export` (zip) |
 //!
-//! Neither is on by default, so the library alone has no command-line or file-format
-//! dependencies; the `pendkit` command-line program enables both.
+//! Neither is on by default; the `pendkit` command-line program enables both. Suspension
+//! files need no feature: every bundled model is one (embedded, [`bundled_files`]), so the
+//! library always reads them ([`suspension`], [`load_suspension`]).
 //!
 //! # What it links
 //!
@@ -58,7 +59,6 @@
 mod describe;
 mod parameters;
 mod state_space;
-#[cfg(feature = "files")]
 mod suspension_files;
 pub mod tradeoff;
 
@@ -91,11 +91,9 @@ pub use pendkit_expr as expr;
 pub use pendkit_files as files;
 pub use pendkit_geometry as geometry;
 pub use pendkit_model as model;
-#[cfg(feature = "files")]
 pub use pendkit_models as bundled_files;
 pub use pendkit_noise as noise;
 pub use pendkit_params as params;
-#[cfg(feature = "files")]
 pub use pendkit_suspension as suspension;
 
 pub use pendkit_assembly::{AssemblyOptions, PhaseTimes};
@@ -110,7 +108,6 @@ pub use pendkit_params::Resolved;
 pub use describe::{DOF_FAMILIES, OTHER_FAMILY, unit_ratio, unit_slug};
 pub use parameters::{ParameterRow, parameter_table};
 pub use state_space::NamedStateSpace;
-#[cfg(feature = "files")]
 pub use suspension_files::load_suspension;
 
 /// pendkit's version, recorded in exports and reports.
@@ -137,7 +134,6 @@ pub enum Error {
     },
     /// A suspension file that cannot be read or describes no valid suspension: its file,
     /// line and field.
-    #[cfg(feature = "files")]
     #[error(transparent)]
     SuspensionFile(#[from] pendkit_suspension::FileError),
     /// A `--set NAME=EXPR` argument without '='.
@@ -220,10 +216,15 @@ pub enum Error {
 /// Most repetitions `pendkit bench` makes.
 pub const MAX_REPEAT: usize = 100_000;
 
-/// Every bundled model.
+/// Every bundled model: each is a suspension file under `models/`, embedded in the
+/// program ([`bundled_files`]).
 pub fn models() -> Vec<&'static dyn Model> {
-    let mut all = pendkit_models_basic::models();
-    all.extend(pendkit_models_ligo::models());
+    let mut all = pendkit_models::models();
+    all.extend(
+        pendkit_models_ligo::models()
+            .into_iter()
+            .filter(|m| m.name() == "quad-aligo"),
+    );
     all
 }
 

@@ -1,7 +1,7 @@
 //! What `pendkit params` lists: every parameter of a case with its value, unit, description
 //! and the parts of the model that read it.
 
-use pendkit_model::{Defaults, ParameterInfo, parameters_with};
+use pendkit_model::{Defaults, Model as _, ParameterInfo, parameters_with};
 
 use crate::{Case, Error};
 
@@ -25,9 +25,9 @@ pub struct ParameterRow {
 
 /// Every parameter of `case`, in definition order: value with the case's overrides, unit,
 /// definition, and what the model says about it ([`pendkit_model::Model::parameter_info`]).
-/// A bundled model written in Rust says only its units; with the `files` feature its
-/// descriptions and readers come from the bundled suspension file of the same name (the
-/// same model: tests/files_vs_rust.rs), for the parameters the file has.
+/// The bundled models are suspension files, which say all of it; `quad-aligo`, still a Rust
+/// model that says only its units, takes descriptions and readers from its bundled file
+/// (the same model: tests/files_vs_rust.rs).
 pub fn parameter_table(case: &Case) -> Result<Vec<ParameterRow>, Error> {
     let defaults = Defaults::of(case.model)?;
     let (params, resolved) = parameters_with(&defaults, &case.overrides)?;
@@ -61,23 +61,24 @@ pub fn parameter_table(case: &Case) -> Result<Vec<ParameterRow>, Error> {
         .collect())
 }
 
-/// What the bundled suspension file of the same name as `case`'s bundled Rust model says
-/// about its parameters at the case's overrides (nothing without the `files` feature, for
-/// other models, or if the file does not take the overrides).
+/// What the bundled file of the same name says about the parameters of `case`'s model, when
+/// that is a bundled model written in Rust (nothing otherwise, or if the file does not take
+/// the case's overrides).
 fn twin_info(case: &Case) -> Vec<ParameterInfo> {
-    #[cfg(feature = "files")]
-    {
-        let bundled = crate::models()
+    use pendkit_suspension::{Library as _, Suspension};
+    let rust = pendkit_models::find(case.model.name()).is_none()
+        && crate::models()
             .into_iter()
             .any(|m| std::ptr::addr_eq(m, case.model));
-        if let (true, Some(file)) = (bundled, pendkit_models::find(case.model.name())) {
-            let file: &dyn pendkit_model::Model = &*file;
-            return Defaults::of(file)
-                .and_then(|d| parameters_with(&d, &case.overrides))
-                .and_then(|(_, resolved)| file.parameter_info(&resolved))
-                .unwrap_or_default();
-        }
-    }
-    let _ = case;
-    Vec::new()
+    let file = rust
+        .then(|| pendkit_models::Bundled.file(case.model.name()))
+        .flatten()
+        .and_then(|(path, text)| Suspension::from_text(&path, text, &pendkit_models::Bundled).ok());
+    let Some(file) = file else {
+        return Vec::new();
+    };
+    Defaults::of(&file)
+        .and_then(|d| parameters_with(&d, &case.overrides))
+        .and_then(|(_, resolved)| file.parameter_info(&resolved))
+        .unwrap_or_default()
 }

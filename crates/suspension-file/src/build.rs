@@ -18,7 +18,7 @@ use pendkit_energy::{
 };
 use pendkit_expr::Expr;
 use pendkit_model::beads::{BeadedFibre, add_beaded_fibre};
-use pendkit_model::{BodySpec, BuildError, Shape, SystemBuilder};
+use pendkit_model::{BodySpec, BuildError, FibreProfile, Shape, SystemBuilder};
 use pendkit_params::Resolved;
 
 use crate::damping::{blade_tag, find_material, subtree};
@@ -243,6 +243,8 @@ struct PlannedSet<'s> {
     length: f64,
     section: WireSection,
     beads: usize,
+    /// A tapered fibre's profile (`profile`): each wire is one effective wire of it.
+    profile: Option<FibreProfile>,
 }
 
 /// A blade set, planned.
@@ -373,7 +375,10 @@ impl<'s, 'c> Interpreter<'s, 'c> {
     fn run(mut self) -> Result<System, BuildError> {
         let ctx = self.ctx;
         for p in &self.spec.parameters {
-            if let (Some(allowed), Ok(value)) = (&p.allowed, ctx.params.get(&p.name))
+            // only a switch's value is looked up here: a look-up counts as a read, and an
+            // override of a parameter nothing reads is refused
+            if let Some(allowed) = &p.allowed
+                && let Ok(value) = ctx.params.get(&p.name)
                 && !allowed.value.contains(&value)
             {
                 let list: Vec<String> = allowed.value.iter().map(f64::to_string).collect();
@@ -720,7 +725,26 @@ impl<'s, 'c> Interpreter<'s, 'c> {
                 }
                 _ => {}
             }
-            let length = ctx.positive(&set.length, "m")?;
+            let names_first = names.first().cloned();
+            let length = ctx.eval(&set.length)?;
+            if length <= 0.0 {
+                // named after the set's first wire, and said plainly when it is zero
+                let first = names
+                    .first()
+                    .map_or(String::new(), |n| format!("wire '{n}': "));
+                let zero = if length == 0.0 {
+                    " (a zero-length wire)"
+                } else {
+                    ""
+                };
+                return Err(invalid(
+                    &set.length.at,
+                    format!(
+                        "{first}`{}` = {length} m must be positive{zero}",
+                        set.length.text
+                    ),
+                ));
+            }
             let mut wires = Vec::with_capacity(lowers.len());
             for (w, (lower, name)) in lowers.iter().zip(names).enumerate() {
                 let (tip, point) = match tips {
@@ -763,7 +787,12 @@ impl<'s, 'c> Interpreter<'s, 'c> {
                 Some(ex) => ctx.count(ex, 0..=MAX_BEADS)?,
                 None => 0,
             };
-            let section = self.section(set)?;
+            let section = self.section(set, names_first.as_deref())?;
+            let profile = self.profile(set, &section, length, beads)?;
+            // read here so that a bad value is reported by the build (the damping reads them)
+            for ex in [&set.temperature, &set.dilution].into_iter().flatten() {
+                ctx.positive(ex, "")?;
+            }
             sets.push(PlannedSet {
                 set,
                 wires,
@@ -771,6 +800,7 @@ impl<'s, 'c> Interpreter<'s, 'c> {
                 length,
                 section,
                 beads,
+                profile,
             });
         }
         Ok(PlannedStage {
@@ -844,6 +874,13 @@ impl<'s, 'c> Interpreter<'s, 'c> {
             }
             BladeForm::XtraLite | BladeForm::Lateral => 0.0,
         };
+        // read here so that a bad value is reported by the build (the damping reads them)
+        for ex in [&fields.thickness, &fields.temperature]
+            .into_iter()
+            .flatten()
+        {
+            ctx.positive(ex, "")?;
+        }
         Ok(PlannedBlades {
             set,
             fields,
@@ -855,8 +892,43 @@ impl<'s, 'c> Interpreter<'s, 'c> {
         })
     }
 
+    /// The tapered profile of a wire set that gives one (`profile`, with `radius` the
+    /// middle's), of the set's elastic constants and density.
+    fn profile(
+        &self,
+        set: &WireSet,
+        section: &WireSection,
+        length: f64,
+        beads: usize,
+    ) -> Result<Option<FibreProfile>, BuildError> {
+        let (Some(p), Some(radius)) = (&set.profile, &set.radius) else {
+            return Ok(None);
+        };
+        let ctx = self.ctx;
+        let neck_length = ctx.positive(&p.neck_length, "m")?;
+        let neck_radius = ctx.positive(&p.neck_radius, "m")?;
+        let middle = ctx.positive(radius, "m")?;
+        if beads > 0 {
+            return Err(invalid(
+                &p.at,
+                "violin beads on a tapered fibre are not supported by suspension files yet (beads: 0)",
+            ));
+        }
+        let density = section.linear_density / section.area;
+        let profile = FibreProfile::tapered(
+            length,
+            (neck_length, neck_radius),
+            middle,
+            (section.youngs_modulus, section.shear_modulus, density),
+        );
+        profile
+            .check("the profile")
+            .map_err(|e| invalid(&p.at, e.to_string()))?;
+        Ok(Some(profile))
+    }
+
     /// The section of a wire set from its radius (or section) and material.
-    fn section(&self, set: &WireSet) -> Result<WireSection, BuildError> {
+    fn section(&self, set: &WireSet, first: Option<&str>) -> Result<WireSection, BuildError> {
         let ctx = self.ctx;
         let material = match &set.material {
             Some(m) => Some(
@@ -915,10 +987,12 @@ impl<'s, 'c> Interpreter<'s, 'c> {
         }
         if let Some(r) = &set.radius {
             let radius = ctx.eval(r)?;
+            // zero passes on to the wire's stiffness check, which names the wire too
             if radius < 0.0 {
+                let wire = first.map_or(String::new(), |n| format!("wire '{n}': "));
                 return Err(invalid(
                     &r.at,
-                    format!("`{}` = {radius} m: a radius cannot be negative", r.text),
+                    format!("{wire}`{}` = {radius} m: a radius must be positive", r.text),
                 ));
             }
             Ok(WireSection::round(radius, e, g, rho))
@@ -1002,7 +1076,23 @@ impl<'s, 'c> Interpreter<'s, 'c> {
                 } else {
                     share * set.length / w.vertical
                 };
-                self.wire(set, w, upper_end, (lower, w.lower), tension, &tags)?;
+                match &set.profile {
+                    Some(profile) => {
+                        let end = |(body, point), direction: &EndDirection| WireEnd {
+                            body,
+                            point,
+                            direction: direction.clone(),
+                        };
+                        let ends = [
+                            end(upper_end, &set.ends[0]),
+                            end((lower, w.lower), &set.ends[1]),
+                        ];
+                        self.b
+                            .wire(profile.wire(w.name.clone(), ends, tension, tags.clone()))
+                            .map_err(placed(&set.set.at))?;
+                    }
+                    None => self.wire(set, w, upper_end, (lower, w.lower), tension, &tags)?,
+                }
             }
         }
         Ok(())

@@ -6,10 +6,12 @@
 use std::collections::BTreeMap;
 
 use pendkit_model::DampingSpec;
+use pendkit_model::fibre_inverse_radius;
+use pendkit_model::losses::{LossMaterial, WireLoss, blade_loss};
 
 use crate::read::Ex;
 use crate::source::FileError;
-use crate::spec::{MaterialSpec, Points, Spec, StageFile, WireSet};
+use crate::spec::{BladeFields, MaterialSpec, Points, Spec, StageFile, WireSet};
 
 /// Every tag's default damping: material defaults, then the file's own tables merged in.
 pub fn damping(spec: &Spec) -> Result<BTreeMap<String, DampingSpec>, FileError> {
@@ -29,7 +31,7 @@ pub fn damping(spec: &Spec) -> Result<BTreeMap<String, DampingSpec>, FileError> 
         for set in stage.wire_sets() {
             let Some(name) = &set.material else { continue };
             let material = find_material(spec, &name.value, &name.at)?;
-            for (tag, d) in wire_damping(spec, stage, set, material) {
+            for (tag, d) in wire_damping(spec, stage, set, material)? {
                 insert(tag, d, &set.tags.at)?;
             }
         }
@@ -37,9 +39,9 @@ pub fn damping(spec: &Spec) -> Result<BTreeMap<String, DampingSpec>, FileError> 
             let fields = blades.fields.or(&spec.blade_defaults);
             if let Some(name) = &fields.material {
                 let material = find_material(spec, &name.value, &name.at)?;
-                if let Some(phi) = &material.loss_angle {
+                if let Some(d) = blade_damping(&fields, material)? {
                     let tag = blade_tag(stage, &fields.tag);
-                    insert(tag, DampingSpec::structural(&phi.text), &blades.at)?;
+                    insert(tag, d, &blades.at)?;
                 }
             }
         }
@@ -96,53 +98,143 @@ pub fn point_count(p: &Points) -> usize {
     p.base.len() << p.mirror.len()
 }
 
-/// Material damping of a wire set's tags `<p>_stretch`, `<p>_bending`, `<p>_torsion`:
-/// structural φ on each and, for a round wire of a material with density, specific heat,
-/// conductivity and expansion, the thermoelastic peak on bending (docs/reference-values.md §7, with
-/// the stress term): Δ = (E T/ρC)(α − σβ/E)², τ = ρ C d² / (2.16 · 2π · K), σ = T/(π r²),
-/// T the nominal static tension from the weight of the bodies hung below (blade tips and
-/// beads, a fraction of a percent, left out).
+/// The constants of `m` the thermoelastic loss needs (density, specific heat,
+/// conductivity, expansion, Young's modulus: `youngs` overrides the material's), as
+/// expressions, or `None` if one is missing; β = d ln E/dT is 0 and the dissipation depth
+/// 0 when absent.
+fn loss_material(m: &MaterialSpec, youngs: Option<&Ex>) -> Option<LossMaterial> {
+    let need = |e: &Option<Ex>| e.as_ref().map(Ex::paren);
+    let or_zero = |e: &Option<Ex>| e.as_ref().map_or("(0)".to_string(), Ex::paren);
+    Some(LossMaterial {
+        phi: need(&m.loss_angle)?,
+        rho: need(&m.density)?,
+        specific_heat: need(&m.specific_heat)?,
+        conductivity: need(&m.conductivity)?,
+        alpha: need(&m.thermal_expansion)?,
+        dlne_dt: or_zero(&m.dlne_dt),
+        dissipation_depth: or_zero(&m.dissipation_depth),
+        youngs: youngs.or(m.youngs_modulus.as_ref()).map(Ex::paren)?,
+    })
+}
+
+/// Material damping of a wire set's tags `<p>_stretch`, `<p>_bending`, `<p>_torsion`
+/// ([`pendkit_model::losses::WireLoss`]): structural φ on each and, for a round wire of a
+/// material with density, specific heat, conductivity and expansion, the thermoelastic
+/// peak on bending at the clamp's radius (the neck's for a tapered fibre), with the stress
+/// term σ = T/(π r²), T the nominal static tension from the weight of the bodies hung below
+/// (blade tips and beads, a fraction of a percent, left out). With `surface_loss`, the
+/// material's dissipation depth adds surface loss (weighted over the profile of a tapered
+/// fibre); `temperature` sets the tags' noise temperature and the Δ it enters; `dilution`
+/// scales the bending loss by (computed dilution)/(given).
 fn wire_damping(
     spec: &Spec,
     stage: &StageFile,
     set: &WireSet,
     m: &MaterialSpec,
-) -> Vec<(String, DampingSpec)> {
+) -> Result<Vec<(String, DampingSpec)>, FileError> {
     let prefix = &set.tags.value;
     let Some(phi) = &m.loss_angle else {
-        return Vec::new();
+        return Ok(Vec::new());
     };
-    let phi = phi.text.clone();
-    let mut bending = DampingSpec::structural(&phi);
-    let thermal = (
-        &m.density,
-        &m.specific_heat,
-        &m.conductivity,
-        &m.thermal_expansion,
-    );
-    let youngs = set.youngs_modulus.as_ref().or(m.youngs_modulus.as_ref());
-    if let ((Some(rho), Some(c), Some(k), Some(alpha)), Some(r), Some(e)) =
-        (thermal, &set.radius, youngs)
-    {
-        let (rho, c, k, alpha, r, e) = (
-            rho.paren(),
-            c.paren(),
-            k.paren(),
-            alpha.paren(),
-            r.paren(),
-            e.paren(),
-        );
-        let beta = m.dlne_dt.as_ref().map_or("(0)".to_string(), Ex::paren);
-        let stress = format!("({})/(pi*{r}^2)", nominal_tension(spec, stage, set));
-        let delta = format!("{e}*temperature/({rho}*{c})*({alpha} - {stress}*{beta}/{e})^2");
-        let tau = format!("{rho}*{c}*(2*{r})^2/(2.16*2*pi*{k})");
-        bending.thermoelastic = Some((delta, tau));
+    let temperature = set.temperature.as_ref().map(Ex::paren);
+    let lossy = loss_material(m, set.youngs_modulus.as_ref());
+    let (Some(material), Some(r)) = (lossy, &set.radius) else {
+        // no thermoelastic loss: structural φ alone (a profile still shapes the mechanics);
+        // surface loss and a given dilution are written for the full loss model only
+        if let Some(field) = [
+            (set.surface_loss, "surface_loss"),
+            (set.dilution.is_some(), "dilution"),
+        ]
+        .iter()
+        .find(|(given, _)| *given)
+        {
+            return Err(set.at.error(format!(
+                "`{}` needs a round wire (`radius`) of a material with density, specific_heat, conductivity, thermal_expansion and youngs_modulus",
+                field.1
+            )));
+        }
+        let mut structural = DampingSpec::structural(&phi.text);
+        structural.temperature = temperature;
+        return Ok(["stretch", "bending", "torsion"]
+            .into_iter()
+            .map(|part| (format!("{prefix}_{part}"), structural.clone()))
+            .collect());
+    };
+    if set.surface_loss && m.dissipation_depth.is_none() {
+        return Err(set.at.error(format!(
+            "`surface_loss` needs the material's `dissipation_depth` (m) (material '{}')",
+            m.name
+        )));
     }
-    vec![
-        (format!("{prefix}_stretch"), DampingSpec::structural(&phi)),
-        (format!("{prefix}_bending"), bending),
-        (format!("{prefix}_torsion"), DampingSpec::structural(&phi)),
-    ]
+    let r = r.paren();
+    let length = set.length.paren();
+    let clamp_radius = set
+        .profile
+        .as_ref()
+        .map_or_else(|| r.clone(), |p| p.neck_radius.paren());
+    let surface = set.surface_loss.then(|| match &set.profile {
+        None => (format!("1/{r}"), format!("1/{r}")),
+        Some(p) => {
+            let profile = (
+                length.as_str(),
+                &*p.neck_length.paren(),
+                &*p.neck_radius.paren(),
+                r.as_str(),
+            );
+            (
+                fibre_inverse_radius(profile, 2),
+                fibre_inverse_radius(profile, 4),
+            )
+        }
+    });
+    let tension = format!("({})", nominal_tension(spec, stage, set));
+    let youngs = material.youngs.clone();
+    // the dilution a wire clamped at both ends has, l/λ, λ = √(Y π r⁴/4 / T)
+    let dilution_scale = set.dilution.as_ref().map(|given| {
+        format!(
+            "({length}/sqrt({youngs}*pi*{clamp_radius}^4/4/{tension}))/{}",
+            given.paren()
+        )
+    });
+    let temperature = temperature.unwrap_or_else(|| "temperature".to_string());
+    Ok(WireLoss {
+        set: prefix,
+        material,
+        tension: &tension,
+        youngs: &youngs,
+        clamp_radius: &clamp_radius,
+        surface,
+        temperature: &temperature,
+        dilution_scale,
+    }
+    .damping())
+}
+
+/// The damping of a blade set of material `m`: its structural φ and, with `thickness`, the
+/// thermoelastic loss of a plate bent across it ([`pendkit_model::losses::blade_loss`]), at
+/// the set's `temperature`; `None` for a material without a loss angle.
+fn blade_damping(fields: &BladeFields, m: &MaterialSpec) -> Result<Option<DampingSpec>, FileError> {
+    let Some(phi) = &m.loss_angle else {
+        return Ok(None);
+    };
+    let temperature = fields.temperature.as_ref().map(Ex::paren);
+    let Some(thickness) = &fields.thickness else {
+        let mut d = DampingSpec::structural(&phi.text);
+        d.temperature = temperature;
+        return Ok(Some(d));
+    };
+    let material = loss_material(m, None).ok_or_else(|| {
+        thickness.at.error(format!(
+            "blade thermoelastic loss needs the material's density, specific_heat, conductivity, thermal_expansion and youngs_modulus (material '{}')",
+            m.name
+        ))
+    })?;
+    let temperature = temperature.unwrap_or_else(|| "temperature".to_string());
+    Ok(Some(blade_loss(
+        &material,
+        &thickness.paren(),
+        &temperature,
+    )))
 }
 
 /// The bodies hung from `body`, itself first, depth first in the order of the stages.

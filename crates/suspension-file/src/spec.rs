@@ -287,6 +287,11 @@ pub struct BladeFields {
     pub material: Option<Located<String>>,
     /// Damping tag.
     pub tag: Option<Located<String>>,
+    /// Blade thickness (m): with it, the blades' tag gets the material's thermoelastic
+    /// loss of a plate bent across its thickness.
+    pub thickness: Option<Ex>,
+    /// Temperature of the blades (K) for their thermal noise; the model's when absent.
+    pub temperature: Option<Ex>,
 }
 
 impl BladeFields {
@@ -321,6 +326,14 @@ impl BladeFields {
                 .or_else(|| defaults.lateral_ratio.clone()),
             material: self.material.clone().or_else(|| defaults.material.clone()),
             tag: self.tag.clone().or_else(|| defaults.tag.clone()),
+            thickness: self
+                .thickness
+                .clone()
+                .or_else(|| defaults.thickness.clone()),
+            temperature: self
+                .temperature
+                .clone()
+                .or_else(|| defaults.temperature.clone()),
         }
     }
 }
@@ -393,6 +406,28 @@ pub struct WireSet {
     pub bead_joints: BeadJoints,
     /// Damping tag prefix: tags `<p>_stretch`, `<p>_bending`, `<p>_torsion`.
     pub tags: Located<String>,
+    /// A tapered fibre: thicker necks of their own length at both ends (`radius` is the
+    /// middle's).
+    pub profile: Option<ProfileFile>,
+    /// Surface loss from the material's dissipation depth (`surface_loss = true`).
+    pub surface_loss: bool,
+    /// Temperature of the set (K) for its thermal noise; the model's when absent.
+    pub temperature: Option<Ex>,
+    /// A given (measured) dilution factor of the set's bending: the bending loss is scaled
+    /// by (computed dilution)/(this).
+    pub dilution: Option<Ex>,
+}
+
+/// A tapered fibre's profile: a neck of `neck_length` and `neck_radius` at each end, the
+/// set's `radius` in between (m).
+#[derive(Clone, Debug)]
+pub struct ProfileFile {
+    /// Where it is written.
+    pub at: At,
+    /// Length of each neck (m).
+    pub neck_length: Ex,
+    /// Radius of the necks (m).
+    pub neck_radius: Ex,
 }
 
 /// A general wire section.
@@ -951,12 +986,9 @@ fn blade_fields(f: &mut Fields) -> Result<BladeFields, FileError> {
         lateral_ratio: f.expr("lateral_ratio")?,
         material: f.string("material")?,
         tag: f.string("tag")?,
+        thickness: f.expr("thickness")?,
+        temperature: f.expr("temperature")?,
     };
-    f.planned(
-        "thickness",
-        "blade thermoelastic loss from the blade's thickness",
-    )?;
-    f.planned("temperature", "a temperature per element")?;
     if let (Some(s), Some(_)) = (&fields.lateral_stiffness, &fields.lateral_ratio) {
         return Err(s
             .at
@@ -1015,7 +1047,11 @@ fn stage(body: String, node: &Node, at: At) -> Result<StageFile, FileError> {
             Some(link)
         }
     };
-    f.planned("dilution", "a given (measured) dilution factor per stage")?;
+    if let Some((_, at)) = f.node("dilution") {
+        return Err(at.error(
+            "a given dilution factor belongs to the stage's wires or fibres: `[stages.<body>.wires] dilution = ...`",
+        ));
+    }
     f.finish()?;
     if let Some(l) = &link
         && (blades.is_some() || wires.is_some() || fibres.is_some() || springs.is_some())
@@ -1091,18 +1127,35 @@ fn wire_set(slot: &'static str, body: &str, node: &Node, at: At) -> Result<WireS
             at: at.clone(),
         }),
         at: at.clone(),
+        profile: match f.table("profile")? {
+            None => None,
+            Some(mut p) => {
+                let profile = ProfileFile {
+                    at: p.at.clone(),
+                    neck_length: p.required_expr("neck_length", "m, the length of each neck")?,
+                    neck_radius: p.required_expr("neck_radius", "m, the radius of the necks")?,
+                };
+                p.finish()?;
+                Some(profile)
+            }
+        },
+        surface_loss: f.bool("surface_loss")?.is_some_and(|b| b.value),
+        temperature: f.expr("temperature")?,
+        dilution: f.expr("dilution")?,
     };
     match (&w.radius, &w.section) {
         (Some(r), Some(_)) => return Err(r.at.error("give `radius` or `section`, not both")),
         (None, None) => return Err(at.error("needs `radius` (m) or a `section`")),
         _ => {}
     }
-    f.planned(
-        "profile",
-        "tapered fibres (a radius profile along the fibre)",
-    )?;
-    f.planned("temperature", "a temperature per element")?;
-    f.planned("dilution", "a given (measured) dilution factor")?;
+    if let (Some(p), None) = (&w.profile, &w.radius) {
+        return Err(p
+            .at
+            .error("a profile needs `radius` (m, the middle's), not a `section`"));
+    }
+    if let (true, None) = (w.surface_loss, &w.radius) {
+        return Err(at.error("surface loss needs a round section (`radius`)"));
+    }
     if let Some((node, joints_at)) = f.node("bead_joints") {
         w.bead_joints = match &node.value {
             Value::Str(s) => BeadJoints::from_name(s),

@@ -167,3 +167,137 @@ fn bead_joints_are_clamped_or_hinged() {
         "expected \"clamped\" or \"hinged\"",
     );
 }
+
+/// `GOOD` with a material that has every constant of the loss physics and a wire set that
+/// uses them, with `set` (fields of the wire set) and `blades` (a blade set on the support
+/// whose tips carry the wires).
+fn lossy(set: &str, blades: &str) -> String {
+    let text = broken(
+        "density = 7800",
+        "density = 7800\nloss_angle = 1e-4\nspecific_heat = 486\nconductivity = 49\nthermal_expansion = 12e-6\ndissipation_depth = 1e-3",
+    );
+    let text = text.replace(
+        "upper = { at = [0, 0.1, 0], mirror = \"y\" }",
+        "upper = { at = [0, 0, 0] }",
+    );
+    let text = text.replace(
+        "[stages.bob.wires]",
+        &format!(
+            "[stages.bob.blades]\ntips = {{ at = [0, 0.1, 0], mirror = \"y\" }}\nstiffness = 1e4\nmaterial = \"steel\"\n{blades}\n[stages.bob.wires]"
+        ),
+    );
+    format!("{text}{set}\n")
+}
+
+/// Line (from 1) of the first line of `text` that starts with `key`.
+fn line_of(text: &str, key: &str) -> usize {
+    text.lines().position(|l| l.starts_with(key)).unwrap() + 1
+}
+
+#[test]
+fn loss_physics_fields_build_and_bad_values_name_file_line_and_field() {
+    let good = lossy(
+        "profile = { neck_length = 0.02, neck_radius = 0.5e-3 }\nsurface_loss = true\ntemperature = 120\ndilution = 50",
+        "thickness = 4e-3\ntemperature = 80",
+    );
+    let s = Suspension::from_text("good.toml", &good, &NoLibrary).unwrap_or_else(|e| panic!("{e}"));
+    let (system, _) = build_with(&s, &Overrides::default()).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(system.wires.len(), 2);
+    // each new field, made impossible in turn: zero, negative, not a number, too long
+    for (set, blades, key, field, why) in [
+        (
+            "profile = { neck_length = 0.02, neck_radius = -1e-4 }",
+            "",
+            "profile",
+            "stages.bob.wires.profile.neck_radius",
+            "must be positive",
+        ),
+        (
+            "profile = { neck_length = 0.3, neck_radius = 1e-4 }",
+            "",
+            "profile",
+            "stages.bob.wires.profile",
+            "half the fibre",
+        ),
+        (
+            "profile = { neck_length = 0.02 }",
+            "",
+            "profile",
+            "stages.bob.wires.profile",
+            "needs `neck_radius`",
+        ),
+        (
+            "profile = { neck_length = 0.02, neck_radius = 1e-4 }\nbeads = 2",
+            "",
+            "profile",
+            "stages.bob.wires.profile",
+            "beads",
+        ),
+        (
+            "temperature = 0",
+            "",
+            "temperature",
+            "stages.bob.wires.temperature",
+            "must be positive",
+        ),
+        (
+            "dilution = \"0/0\"",
+            "",
+            "dilution",
+            "stages.bob.wires.dilution",
+            "not a finite number",
+        ),
+        (
+            "dilution = -3",
+            "",
+            "dilution",
+            "stages.bob.wires.dilution",
+            "must be positive",
+        ),
+        (
+            "",
+            "thickness = -4e-3",
+            "thickness",
+            "stages.bob.blades.thickness",
+            "must be positive",
+        ),
+        (
+            "",
+            "temperature = \"0/0\"",
+            "temperature",
+            "stages.bob.blades.temperature",
+            "not a finite number",
+        ),
+    ] {
+        let text = lossy(set, blades);
+        let line = if set.is_empty() {
+            // the blades' field: after the `[stages.bob.blades]` line
+            let from = line_of(&text, "[stages.bob.blades]");
+            from + 1
+                + text
+                    .lines()
+                    .skip(from)
+                    .position(|l| l.starts_with(key))
+                    .unwrap()
+        } else {
+            line_of(&text, key)
+        };
+        starts(&text, &format!("bad.toml:{line}: {field}: "), why);
+    }
+    // surface loss needs the material's dissipation depth
+    let text = lossy("surface_loss = true", "").replace("\ndissipation_depth = 1e-3", "");
+    starts(&text, "bad.toml:", "dissipation_depth");
+    // a given dilution at the stage, not its wires, is pointed to them
+    let text = lossy("", "").replace(
+        "[stages.bob]\nfrom = \"support\"",
+        "[stages.bob]\nfrom = \"support\"\ndilution = 50",
+    );
+    starts(
+        &text,
+        &format!(
+            "bad.toml:{}: stages.bob.dilution: ",
+            line_of(&text, "dilution")
+        ),
+        "wires or fibres",
+    );
+}

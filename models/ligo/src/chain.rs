@@ -6,7 +6,7 @@ use std::collections::BTreeMap;
 use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
 use pendkit_energy::{BodyId, EndDirection, SpringEnd, Wire, WireEnd, WireSection, WireTags};
 use pendkit_model::beads::{BeadJoints, BeadedFibre, add_beaded_fibre};
-use pendkit_model::losses::WireLoss;
+use pendkit_model::losses::{LossMaterial, WireLoss};
 use pendkit_model::{BodySpec, BuildError, DampingSpec, FibreProfile, Shape, SystemBuilder};
 use pendkit_params::Resolved;
 
@@ -347,7 +347,7 @@ pub fn wire_damping(
 ) -> Vec<(String, DampingSpec)> {
     WireLoss {
         set,
-        material,
+        material: LossMaterial::parameters(material),
         tension,
         youngs,
         clamp_radius: radius,

@@ -1,5 +1,5 @@
-//! The aLIGO quadruple test-mass suspension (T020205 §6.2), parameters and topology from
-//! `params/quad2005.csv` and its README: support, 2 structure blades, 2 top wires, top mass
+//! `quad-aligo`: the aLIGO quadruple test-mass suspension as built, on the topology and
+//! geometry of the 2005 design (T020205 §6.2, `params/quad2005.csv` and its README): support, 2 structure blades, 2 top wires, top mass
 //! (stage 0), 2 blades, 4 wires, UIM (1), 2 blades, 4 wires, PUM (2), 4 silica fibres, test
 //! mass (3). Wire lengths are equilibrium lengths between attachment points; each wire's
 //! stiffness is Y π r² / l and its unstretched length l − T/k with T the static tension,
@@ -11,7 +11,7 @@ use std::collections::BTreeMap;
 use nalgebra::Vector3;
 use pendkit_energy::System;
 use pendkit_model::beads::BeadJoints;
-use pendkit_model::losses::{WireLoss, blade_loss};
+use pendkit_model::losses::{LossMaterial, WireLoss, blade_loss};
 use pendkit_model::{
     BodySpec, BuildError, DampingSpec, DefaultsCache, FibreProfile, LIGO_DOF_NAMES, Model,
     SystemBuilder,
@@ -21,82 +21,26 @@ use pendkit_params::{ParamError, ParamSet, Resolved};
 use crate::chain::{self, Blade, Blades, vertical};
 use crate::tables;
 
-/// Which numbers a quad variant uses.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Design {
-    /// `params/quad2005.csv` exactly: uniform 200 µm fibres, bulk losses only.
-    Quad2005,
-    /// aLIGO as built, as pygwinc 0.6.2's aLIGO `ifo.yaml` `Suspension` gives it: masses,
-    /// stage lengths, wire radii, blade vertical stiffnesses and thicknesses, tapered
-    /// fibres, materials and temperature, with surface loss, blade thermoelastic loss,
-    /// per-set temperatures and optional given dilution factors; the geometry pygwinc does
-    /// not carry (attachment points, break-offs, inertias) stays the 2005 set's.
-    AsBuilt,
-}
-
-/// One variant of the quad.
+/// The aLIGO quad as built, as pygwinc 0.6.2's aLIGO `ifo.yaml` `Suspension` gives it:
+/// masses, stage lengths, wire radii, blade vertical stiffnesses and thicknesses, tapered
+/// fibres, materials and temperature, with surface loss, blade thermoelastic loss, per-set
+/// temperatures and optional given dilution factors; the geometry pygwinc does not carry
+/// (attachment points, break-offs, inertias) stays the 2005 set's. Xtra-lite blades.
 pub struct Quad {
     name: &'static str,
     summary: &'static str,
-    design: Design,
     blades: Blades,
-    /// Default number of violin beads per fibre (parameter `n_beads`).
-    beads: usize,
     /// This variant's parsed defaults, after its first build.
     cache: DefaultsCache,
 }
 
-/// The bundled quad variants.
-pub static QUADS: [Quad; 6] = [
-    Quad {
-        name: "quad",
-        summary: "aLIGO quad, xtra-lite (massless blade tips as floats), quad2005 parameters",
-        design: Design::Quad2005,
-        blades: Blades::XtraLite,
-        beads: 0,
-        cache: DefaultsCache::new(),
-    },
-    Quad {
-        name: "quad-lite",
-        summary: "aLIGO quad, lite (blade tips with mass, 1 DOF each)",
-        design: Design::Quad2005,
-        blades: Blades::Lite,
-        beads: 0,
-        cache: DefaultsCache::new(),
-    },
-    Quad {
-        name: "quad-full",
-        summary: "aLIGO quad, full (blade tips as 6-DOF bodies on 6x6 springs)",
-        design: Design::Quad2005,
-        blades: Blades::Full,
-        beads: 0,
-        cache: DefaultsCache::new(),
-    },
-    Quad {
-        name: "quad-lateral",
-        summary: "aLIGO quad, xtra-lite with lateral blade compliance (the source's preferred model)",
-        design: Design::Quad2005,
-        blades: Blades::Lateral,
-        beads: 0,
-        cache: DefaultsCache::new(),
-    },
-    Quad {
-        name: "quad-v5",
-        summary: "aLIGO quad, xtra-lite with 5 violin beads per fibre (n_beads sets any N)",
-        design: Design::Quad2005,
-        blades: Blades::XtraLite,
-        beads: 5,
-        cache: DefaultsCache::new(),
-    },
-    Quad {
-        name: "quad-aligo",
-        summary: "aLIGO quad as built (pygwinc 0.6.2 aLIGO numbers): tapered fibres, surface and blade thermoelastic loss, output tm_beam",
-        design: Design::AsBuilt,
-        blades: Blades::XtraLite,
-        beads: 0,
-        cache: DefaultsCache::new(),
-    },
-];
+/// The Rust quads: `quad-aligo` (the 2005 quad and its variants are files, models/ligo/).
+pub static QUADS: [Quad; 1] = [Quad {
+    name: "quad-aligo",
+    summary: "aLIGO quad as built (pygwinc 0.6.2 aLIGO numbers): tapered fibres, surface and blade thermoelastic loss, output tm_beam",
+    blades: Blades::XtraLite,
+    cache: DefaultsCache::new(),
+}];
 
 /// pygwinc 0.6.2's aLIGO `Suspension` numbers (ifo.yaml), as overrides of the 2005 set
 /// and new parameters: (name, value, unit, what).
@@ -253,7 +197,7 @@ fn as_built_damping() -> BTreeMap<String, DampingSpec> {
         let temperature = format!("temp_{set}");
         let loss = WireLoss {
             set,
-            material,
+            material: LossMaterial::parameters(material),
             tension,
             youngs,
             clamp_radius: radius,
@@ -270,7 +214,7 @@ fn as_built_damping() -> BTreeMap<String, DampingSpec> {
         d.insert(
             blade.to_string(),
             blade_loss(
-                "maraging",
+                &LossMaterial::parameters("maraging"),
                 &format!("{blade}_thickness"),
                 &format!("temp_{blade}"),
             ),
@@ -300,7 +244,7 @@ impl Model for Quad {
             // Poisson's ratios (not in the tables): silica as docs/reference-values.md §0, steel typical
             ("nu_steel", "0.29".to_string()),
             ("nu_silica", "0.17".to_string()),
-            ("n_beads", self.beads.to_string()),
+            ("n_beads", "0".to_string()),
             // static tensions (N) of each wire set at the nominal geometry, for the
             // thermoelastic stress term
             (
@@ -327,7 +271,7 @@ impl Model for Quad {
         for (name, value) in self.blades.parameters() {
             set.define(name, value)?;
         }
-        if self.design == Design::AsBuilt {
+        {
             for &(name, value, unit, _) in AS_BUILT {
                 if set.contains(name) {
                     set.apply_text(name, value)?;
@@ -355,23 +299,7 @@ impl Model for Quad {
     }
 
     fn damping(&self) -> BTreeMap<String, DampingSpec> {
-        if self.design == Design::AsBuilt {
-            return as_built_damping();
-        }
-        let mut d = chain::damping_map(
-            [
-                ("wn", "steel", "Tn", "rn", "Yn"),
-                ("w1", "steel", "T1", "r1", "Y1"),
-                ("w2", "steel", "T2", "r2", "Y2"),
-                ("fibre", "silica", "T3", "r3", "Y3"),
-            ]
-            .into_iter()
-            .flat_map(|(set, m, t, r, y)| chain::wire_damping(set, m, t, r, y)),
-        );
-        for blade in BLADE_TAGS {
-            d.insert(blade.into(), DampingSpec::structural("maraging_phi"));
-        }
-        d
+        as_built_damping()
     }
 
     fn build(&self, p: &Resolved) -> Result<System, BuildError> {
@@ -392,19 +320,14 @@ impl Model for Quad {
         let sec_3 = chain::round_section(p, "r3", "Y3", "nu_silica", "silica_rho")?;
         let l3 = v("l3")?;
         // quad-aligo's fibres: necks at both ends, one effective wire each
-        let profile = match self.design {
-            Design::Quad2005 => None,
-            Design::AsBuilt => {
-                let profile = FibreProfile::tapered(
-                    l3,
-                    (v("l3_neck")?, v("r3_neck")?),
-                    v("r3")?,
-                    (sec_3.youngs_modulus, sec_3.shear_modulus, v("silica_rho")?),
-                );
-                profile.check("the fibres (l3, l3_neck, r3_neck, r3)")?;
-                Some(profile)
-            }
-        };
+        let profile = FibreProfile::tapered(
+            l3,
+            (v("l3_neck")?, v("r3_neck")?),
+            v("r3")?,
+            (sec_3.youngs_modulus, sec_3.shear_modulus, v("silica_rho")?),
+        );
+        profile.check("the fibres (l3, l3_neck, r3_neck, r3)")?;
+        let profile = Some(profile);
         let m_beads = 4.0 * chain::beads_mass(&sec_3, profile.as_ref(), l3, beads);
 
         // nominal geometry: centre-of-mass heights from the wire lengths (the derived tl*)
@@ -600,10 +523,8 @@ impl Model for Quad {
             (beads, BeadJoints::Clamped),
             &chain::tags("fibre"),
         )?;
-        if self.design == Design::AsBuilt {
-            // the test mass along the beam: x3 + θ z3 (see the README for the sign)
-            b.named_output("tm_beam", &[("x3", 1.0), ("z3", v("vh_theta")?)])?;
-        }
+        // the test mass along the beam: x3 + θ z3 (see the README for the sign)
+        b.named_output("tm_beam", &[("x3", 1.0), ("z3", v("vh_theta")?)])?;
         b.build()
     }
 }
