@@ -57,6 +57,7 @@
 
 mod describe;
 mod parameters;
+pub mod sensitivity;
 mod state_space;
 #[cfg(feature = "files")]
 mod suspension_files;
@@ -109,6 +110,7 @@ pub use pendkit_params::Resolved;
 
 pub use describe::{DOF_FAMILIES, OTHER_FAMILY, unit_ratio, unit_slug};
 pub use parameters::{ParameterRow, parameter_table};
+pub use sensitivity::{SensitivityRequest, Sensitivities, sensitivities};
 pub use state_space::NamedStateSpace;
 #[cfg(feature = "files")]
 pub use suspension_files::load_suspension;
@@ -204,6 +206,9 @@ pub enum Error {
         /// Why.
         message: String,
     },
+    /// A sensitivity request that cannot be answered (what and why).
+    #[error("sensitivity: {0}")]
+    Sensitivity(String),
     /// A benchmark asked to repeat nothing, or too often.
     #[error("--repeat must be from 1 to {MAX_REPEAT}")]
     ZeroRepeat,
