@@ -110,7 +110,7 @@ pub use pendkit_params::Resolved;
 
 pub use describe::{DOF_FAMILIES, OTHER_FAMILY, unit_ratio, unit_slug};
 pub use parameters::{ParameterRow, parameter_table};
-pub use sensitivity::{SensitivityRequest, Sensitivities, sensitivities};
+pub use sensitivity::{Sensitivities, SensitivityRequest, sensitivities};
 pub use state_space::NamedStateSpace;
 #[cfg(feature = "files")]
 pub use suspension_files::load_suspension;

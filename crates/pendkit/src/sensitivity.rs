@@ -122,6 +122,10 @@ pub struct Sensitivities {
     /// Thermal-noise ASD (m/√Hz or rad/√Hz) at the requested frequencies and d(ASD)/dp
     /// `[freq][parameter]`.
     pub noise_asd: Option<(Vec<f64>, Vec<Vec<f64>>)>,
+    /// Parameters left out of the columns, with why: switches and counts the model
+    /// refuses to set to a value near theirs (only when every parameter was asked for; a
+    /// parameter named in the request is an error instead).
+    pub not_differentiable: Vec<(String, String)>,
     /// The stability warning when the equilibrium is unstable and the request allowed it.
     pub warning: Option<String>,
 }
@@ -331,10 +335,7 @@ pub fn sensitivities(case: &Case, request: &SensitivityRequest) -> Result<Sensit
 
     let (system, resolved) = case.build()?;
     let defaults = Defaults::of(case.model)?;
-    let all: Vec<(String, f64)> = resolved
-        .iter()
-        .map(|(n, v)| (n.to_string(), v))
-        .collect();
+    let all: Vec<(String, f64)> = resolved.iter().map(|(n, v)| (n.to_string(), v)).collect();
     let names: Vec<String> = match &request.parameters {
         None => all.iter().map(|(n, _)| n.clone()).collect(),
         Some(list) => {
@@ -433,6 +434,7 @@ pub fn sensitivities(case: &Case, request: &SensitivityRequest) -> Result<Sensit
     let mut d_tf: Vec<Vec<C>> = vec![vec![C::new(0.0, 0.0); np]; nf];
     let mut d_noise: Vec<Vec<(f64, C)>> = vec![vec![(0.0, C::new(0.0, 0.0)); np]; nf];
     let mut steps = vec![0.0; np];
+    let mut refused: Vec<Option<String>> = vec![None; np];
 
     // the nominal responses' factorisations, once per frequency
     let nominal: Vec<Nominal> = if responses {
@@ -464,21 +466,38 @@ pub fn sensitivities(case: &Case, request: &SensitivityRequest) -> Result<Sensit
             RELATIVE_STEP * p0.abs()
         };
         steps[j] = h;
-        let points: Vec<Point> = STENCIL
-            .iter()
-            .map(|&(k, _)| {
-                let set = format!("{name}={:e}", p0 + k * h);
-                let (system, _) = case.clone().with_sets(&[set])?.build()?;
-                match reach[j] {
-                    Reach::Mechanics => stage_point(system, request.stage),
-                    _ => matrices_point(
-                        system,
-                        base_point.result.assembled.clone(),
-                        base_point.result.model.clone(),
-                    ),
+        let mut points = Vec::with_capacity(STENCIL.len());
+        for &(k, _) in &STENCIL {
+            let value = p0 + k * h;
+            let built = case
+                .clone()
+                .with_sets(&[format!("{name}={value:e}")])?
+                .build();
+            let system = match built {
+                Ok((system, _)) => system,
+                // a switch or a count: the model refuses any value near it
+                Err(Error::Build(e)) => {
+                    let why = format!("the model refuses {name} = {value:e} ({e})");
+                    if request.parameters.is_some() {
+                        return Err(bad(format!("'{name}' has no derivative: {why}")));
+                    }
+                    refused[j] = Some(why);
+                    break;
                 }
-            })
-            .collect::<Result<_, _>>()?;
+                Err(e) => return Err(e),
+            };
+            points.push(match reach[j] {
+                Reach::Mechanics => stage_point(system, request.stage)?,
+                _ => matrices_point(
+                    system,
+                    base_point.result.assembled.clone(),
+                    base_point.result.model.clone(),
+                )?,
+            });
+        }
+        if refused[j].is_some() {
+            continue;
+        }
         for p in &points {
             if p.result.model.sizes != sizes {
                 return Err(bad(format!(
@@ -517,7 +536,10 @@ pub fn sensitivities(case: &Case, request: &SensitivityRequest) -> Result<Sensit
         }
         if responses {
             let tf_ports: Vec<Ports> = match &request.tf {
-                Some(tf) => points.iter().map(|p| ports(p, tf)).collect::<Result<_, _>>()?,
+                Some(tf) => points
+                    .iter()
+                    .map(|p| ports(p, tf))
+                    .collect::<Result<_, _>>()?,
                 None => Vec::new(),
             };
             let noise_ports: Vec<Ports> = match &request.noise {
@@ -649,11 +671,38 @@ pub fn sensitivities(case: &Case, request: &SensitivityRequest) -> Result<Sensit
         None => None,
     };
 
+    // the parameters the model refuses to move lose their columns
+    let keep: Vec<bool> = refused.iter().map(Option::is_none).collect();
+    let not_differentiable: Vec<(String, String)> = names
+        .iter()
+        .zip(&refused)
+        .filter_map(|(n, r)| r.as_ref().map(|r| (n.clone(), r.clone())))
+        .collect();
+    let kept = |v: Vec<f64>| -> Vec<f64> {
+        v.into_iter()
+            .zip(&keep)
+            .filter_map(|(x, &k)| k.then_some(x))
+            .collect()
+    };
+    let tf_abs = tf_abs.map(|(a, d)| (a, d.into_iter().map(kept).collect()));
+    let noise_asd = noise_asd.map(|(a, d)| (a, d.into_iter().map(kept).collect()));
+    let dfdp: Vec<Vec<f64>> = dfdp.into_iter().map(kept).collect();
+    let names: Vec<String> = names
+        .into_iter()
+        .zip(&keep)
+        .filter_map(|(x, &k)| k.then_some(x))
+        .collect();
+    let units: Vec<String> = units
+        .into_iter()
+        .zip(&keep)
+        .filter_map(|(x, &k)| k.then_some(x))
+        .collect();
     let out = Sensitivities {
+        not_differentiable,
         parameters: names,
-        values,
+        values: kept(values),
         units,
-        steps,
+        steps: kept(steps),
         modes_hz,
         mode_labels,
         dfdp,
