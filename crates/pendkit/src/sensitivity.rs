@@ -177,7 +177,8 @@ fn matrices_point(
     })
 }
 
-/// Offsets (in steps) and weights of the fourth-order central difference.
+/// Offsets (in steps) of the points of the fourth-order central difference, in the order
+/// [`difference`] takes them, with their weights (× 1/h).
 const STENCIL: [(f64, f64); 4] = [
     (-2.0, 1.0 / 12.0),
     (-1.0, -8.0 / 12.0),
@@ -185,16 +186,21 @@ const STENCIL: [(f64, f64); 4] = [
     (2.0, -1.0 / 12.0),
 ];
 
-/// Σ_k w_k X_k / h over the stencil's points (`points` holds one point per stencil entry).
+/// The fourth-order central difference [8(X₊₁ − X₋₁) − (X₊₂ − X₋₂)] / 12h over the
+/// stencil's points (`points` holds one point per [`STENCIL`] entry). Written as
+/// differences of pairs, so that a quantity the parameter does not move gives exactly 0.
 fn difference<T>(points: &[Point], h: f64, x: impl Fn(&Point) -> T) -> T
 where
     T: std::ops::Mul<f64, Output = T> + std::ops::Add<T, Output = T>,
 {
-    let mut sum = x(&points[0]) * (STENCIL[0].1 / h);
-    for (p, (_, w)) in points.iter().zip(STENCIL).skip(1) {
-        sum = sum + x(p) * (w / h);
-    }
-    sum
+    let inner = x(&points[2]) + x(&points[1]) * -1.0;
+    let outer = x(&points[3]) + x(&points[0]) * -1.0;
+    inner * (8.0 / (12.0 * h)) + outer * (-1.0 / (12.0 * h))
+}
+
+/// [`difference`] of vectors given one per stencil point.
+fn difference_of(v: &[&DVector<f64>], h: f64) -> DVector<f64> {
+    ((v[2] - v[1]) * 8.0 - (v[3] - v[0])) / (12.0 * h)
 }
 
 /// A complex matrix that [`difference`] can weigh by real numbers.
@@ -562,31 +568,12 @@ pub fn sensitivities(case: &Case, request: &SensitivityRequest) -> Result<Sensit
                 .iter()
                 .map(|p| port_vectors(p, sizes).1)
                 .collect();
-            let weight = |k: usize| STENCIL[k].1 / h;
-            let db = (!tf_vectors.is_empty()).then(|| {
-                tf_vectors
-                    .iter()
-                    .enumerate()
-                    .fold(DVector::zeros(tf_vectors[0].0.len()), |acc, (k, v)| {
-                        acc + &v.0 * weight(k)
-                    })
-            });
-            let dc = (!tf_vectors.is_empty()).then(|| {
-                tf_vectors
-                    .iter()
-                    .enumerate()
-                    .fold(DVector::zeros(tf_vectors[0].1.len()), |acc, (k, v)| {
-                        acc + &v.1 * weight(k)
-                    })
-            });
-            let d_o = (!noise_vectors.is_empty()).then(|| {
-                noise_vectors
-                    .iter()
-                    .enumerate()
-                    .fold(DVector::zeros(noise_vectors[0].len()), |acc, (k, v)| {
-                        acc + v * weight(k)
-                    })
-            });
+            let db = (tf_vectors.len() == STENCIL.len())
+                .then(|| difference_of(&tf_vectors.iter().map(|v| &v.0).collect::<Vec<_>>(), h));
+            let dc = (tf_vectors.len() == STENCIL.len())
+                .then(|| difference_of(&tf_vectors.iter().map(|v| &v.1).collect::<Vec<_>>(), h));
+            let d_o = (noise_vectors.len() == STENCIL.len())
+                .then(|| difference_of(&noise_vectors.iter().collect::<Vec<_>>(), h));
             let d_temperature = difference(&points, h, |p| p.result.system.temperature);
             for (i, &f) in request.freqs.iter().enumerate() {
                 let da = difference(&points, h, |p| Scaled(dynamic_matrix(p, f))).0;
