@@ -475,10 +475,13 @@ pub fn sensitivities(case: &Case, request: &SensitivityRequest) -> Result<Sensit
         let mut points = Vec::with_capacity(STENCIL.len());
         for &(k, _) in &STENCIL {
             let value = p0 + k * h;
-            let built = case
-                .clone()
-                .with_sets(&[format!("{name}={value:e}")])?
-                .build();
+            // the case's overrides and this one last (the nominal build has checked that
+            // every override is read; this one is, or it would have no step)
+            let mut overrides = case.overrides.clone();
+            overrides
+                .parameters
+                .push((name.clone(), format!("{value:e}")));
+            let built = pendkit_model::build_with(case.model, &overrides).map_err(Error::from);
             let system = match built {
                 Ok((system, _)) => system,
                 // a switch or a count: the model refuses any value near it
