@@ -1,6 +1,7 @@
 //! pendkit's library facade: the catalogue of bundled models, case files, and the whole
 //! pipeline from a model or case to equilibrium, normal modes, transfer functions, thermal
-//! noise and state space, for downstream tools that want one call.
+//! noise and state space, and their sensitivities to the parameters, for downstream tools that
+//! want one call.
 //!
 //! The example in the README (`crates/pendkit/tests/readme.rs` checks that the two agree):
 //!
