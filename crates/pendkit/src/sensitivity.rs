@@ -231,9 +231,7 @@ enum Reach {
     Nothing,
 }
 
-/// The input and output vectors of a point, padded to the master dimension: (input on
-/// the unknowns [force] or parameters [displacement], output over all master rows or the
-/// parameters).
+/// The input (none for noise) and output of one point, as the stage result parses them.
 struct Ports {
     input: Option<Input>,
     output: Output,
@@ -266,9 +264,9 @@ fn padded(v: &DVector<f64>, n: usize) -> DVector<f64> {
     DVector::from_fn(n, |i, _| v.get(i).copied().unwrap_or(0.0))
 }
 
-/// The port vectors of one point as fixed-length real vectors: (b, c, is_force_input,
-/// is_force_output), b over the unknowns (force) or parameters (displacement), c over all
-/// master rows (displacement) or the parameters (support force).
+/// The port vectors of one point as fixed-length real vectors (b, c): b over the unknowns
+/// (a force input) or the parameters (a displacement input; empty without an input), c
+/// over all master rows (a displacement output) or the parameters (a support force).
 fn port_vectors(ports: &Ports, sizes: (usize, usize, usize)) -> (DVector<f64>, DVector<f64>) {
     let (nx, nq, ns) = sizes;
     let b = match &ports.input {
@@ -734,7 +732,8 @@ fn mode_clusters(modes: &[pendkit_dynamics::Mode]) -> Vec<Vec<usize>> {
 struct Nominal {
     a: DMatrix<C>,
     lu: nalgebra::LU<C, nalgebra::Dyn, nalgebra::Dyn>,
-    /// The nominal ports' vectors (b, c) when a transfer function is asked for.
+    /// The nominal ports' vectors (b, c), whether the input is a force and whether the
+    /// output is a support force, when a transfer function is asked for.
     tf_vectors: Option<(DVector<f64>, DVector<f64>, bool, bool)>,
     /// w = [z; s]: the response over every master row to the input.
     w: DVector<C>,
