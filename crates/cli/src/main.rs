@@ -11,6 +11,7 @@ mod params;
 mod plotting;
 mod progress;
 mod report;
+mod sensitivity;
 mod ss;
 mod sweep;
 mod tf;
@@ -53,6 +54,10 @@ enum Command {
     /// Modes (tracked by shape), thermal noise or a transfer function over a grid of
     /// parameter values, as CSV against the swept values.
     Sweep(sweep::Args),
+    /// Derivatives of the mode frequencies (and of |TF| and thermal-noise ASD at given
+    /// frequencies) with respect to every parameter: the largest relative sensitivities
+    /// first, or JSON.
+    Sensitivity(sensitivity::Args),
     /// Time each phase of a calculation in this process (build, equilibrium, Hessians per
     /// element kind, mass matrix, modes, and optionally noise): median and minimum over
     /// repetitions.
@@ -99,6 +104,7 @@ fn run(cli: Cli) -> Result<String, CliError> {
         Command::Ss(a) => ss::run(a),
         Command::Sweep(a) => sweep::run(a),
         Command::Report(a) => report::run(a),
+        Command::Sensitivity(a) => sensitivity::run(a),
         Command::Bench(a) => Ok(bench::run(a)?),
         Command::Tradeoff(a) => tradeoff::run(a),
         Command::Params(a) => params::run(a),

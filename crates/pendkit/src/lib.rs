@@ -1,6 +1,7 @@
 //! pendkit's library facade: the catalogue of bundled models, case files, and the whole
 //! pipeline from a model or case to equilibrium, normal modes, transfer functions, thermal
-//! noise and state space, for downstream tools that want one call.
+//! noise and state space, and their sensitivities to the parameters, for downstream tools that
+//! want one call.
 //!
 //! The example in the README (`crates/pendkit/tests/readme.rs` checks that the two agree):
 //!
@@ -58,6 +59,7 @@
 
 mod describe;
 mod parameters;
+pub mod sensitivity;
 mod state_space;
 mod suspension_files;
 pub mod tradeoff;
@@ -107,6 +109,7 @@ pub use pendkit_params::Resolved;
 
 pub use describe::{DOF_FAMILIES, OTHER_FAMILY, unit_ratio, unit_slug};
 pub use parameters::{ParameterRow, parameter_table};
+pub use sensitivity::{Sensitivities, SensitivityRequest, sensitivities};
 pub use state_space::NamedStateSpace;
 pub use suspension_files::load_suspension;
 
@@ -200,6 +203,9 @@ pub enum Error {
         /// Why.
         message: String,
     },
+    /// A sensitivity request that cannot be answered (what and why).
+    #[error("sensitivity: {0}")]
+    Sensitivity(String),
     /// A benchmark asked to repeat nothing, or too often.
     #[error("--repeat must be from 1 to {MAX_REPEAT}")]
     ZeroRepeat,

@@ -253,6 +253,120 @@ impl Model {
             .map_err(error)?;
         Ok(StageRun { run: Arc::new(run) })
     }
+
+    /// Derivatives with respect to the parameters at `stage` (default `"2"`), as
+    /// `pendkit sensitivity`: of every mode frequency (`modes=True`), of |H| of the transfer
+    /// function `tf=(input, output)` and of the thermal-noise ASD of the displacement
+    /// output `noise`, at `freqs` (Hz, array-like; needed with `tf` or `noise`).
+    /// `parameters` (names) restricts the columns (default: every parameter).
+    /// `allow_unstable=True` goes on from an unstable equilibrium (the warning is in
+    /// `Sensitivities.warning`). Returns a `Sensitivities`.
+    #[pyo3(signature = (stage = None, *, modes = true, tf = None, noise = None, freqs = None, parameters = None, allow_unstable = false))]
+    #[allow(clippy::too_many_arguments)]
+    fn sensitivities(
+        &self,
+        py: Python<'_>,
+        stage: Option<&Bound<'_, PyAny>>,
+        modes: bool,
+        tf: Option<(String, String)>,
+        noise: Option<String>,
+        freqs: Option<&Bound<'_, PyAny>>,
+        parameters: Option<Vec<String>>,
+        allow_unstable: bool,
+    ) -> PyResult<Sensitivities> {
+        let stage = match stage {
+            None => Stage::S2,
+            Some(s) => s
+                .str()?
+                .extract::<String>()?
+                .parse::<Stage>()
+                .map_err(error)?,
+        };
+        let freqs = match freqs {
+            Some(f) => frequencies(f)?,
+            None => Vec::new(),
+        };
+        let request = pendkit::SensitivityRequest {
+            stage,
+            modes,
+            tf,
+            noise,
+            freqs,
+            parameters,
+            allow_unstable,
+        };
+        let case = &self.case;
+        let s = py
+            .detach(|| pendkit::sensitivities(case, &request))
+            .map_err(error)?;
+        let rows = |m: &[Vec<f64>], columns: usize| {
+            let data: Vec<f64> = m.iter().flatten().copied().collect();
+            Array2::from_shape_vec((m.len(), columns), data)
+                .map(|a| a.into_pyarray(py).unbind())
+                .map_err(error)
+        };
+        let np = s.parameters.len();
+        let pair = |x: &Option<(Vec<f64>, Vec<Vec<f64>>)>| -> PyResult<_> {
+            Ok(match x {
+                Some((v, d)) => (
+                    Some(PyArray1::from_slice(py, v).unbind()),
+                    Some(rows(d, np)?),
+                ),
+                None => (None, None),
+            })
+        };
+        let (tf_abs, dtf_abs_dp) = pair(&s.tf_abs)?;
+        let (noise_asd, dnoise_asd_dp) = pair(&s.noise_asd)?;
+        Ok(Sensitivities {
+            values: PyArray1::from_slice(py, &s.values).unbind(),
+            modes_hz: PyArray1::from_slice(py, &s.modes_hz).unbind(),
+            dfdp: rows(&s.dfdp, np)?,
+            freqs: PyArray1::from_slice(py, &request.freqs).unbind(),
+            parameters: s.parameters,
+            units: s.units,
+            mode_labels: s.mode_labels,
+            tf_abs,
+            dtf_abs_dp,
+            noise_asd,
+            dnoise_asd_dp,
+            not_differentiable: s.not_differentiable,
+            warning: s.warning,
+        })
+    }
+}
+
+/// Derivatives of a stage's answers with respect to the parameters (`Model.sensitivities`):
+/// `parameters`, `values`, `units` (the columns), `modes_hz` and `mode_labels` (the rows of
+/// `dfdp`), `dfdp` (modes × parameters, Hz per unit of the parameter; no rows when the
+/// modes were not asked for), `freqs` (Hz), `tf_abs` and `dtf_abs_dp` (frequencies ×
+/// parameters), `noise_asd` and `dnoise_asd_dp` (None unless asked for),
+/// `not_differentiable` ((name, why) of switches and counts left out) and `warning`.
+#[pyclass(module = "pendkit._pendkit", frozen, get_all)]
+struct Sensitivities {
+    parameters: Vec<String>,
+    values: Py<PyArray1<f64>>,
+    units: Vec<String>,
+    modes_hz: Py<PyArray1<f64>>,
+    mode_labels: Vec<String>,
+    dfdp: Py<PyArray2<f64>>,
+    freqs: Py<PyArray1<f64>>,
+    tf_abs: Option<Py<PyArray1<f64>>>,
+    dtf_abs_dp: Option<Py<PyArray2<f64>>>,
+    noise_asd: Option<Py<PyArray1<f64>>>,
+    dnoise_asd_dp: Option<Py<PyArray2<f64>>>,
+    not_differentiable: Vec<(String, String)>,
+    warning: Option<String>,
+}
+
+#[pymethods]
+impl Sensitivities {
+    fn __repr__(&self) -> String {
+        format!(
+            "<pendkit.Sensitivities: {} modes × {} parameters>",
+            self.mode_labels.len(),
+            self.parameters.len()
+        )
+    }
 }
 
 fn parameters(case: &Case, resolved: &Resolved) -> std::result::Result<Vec<Parameter>, Error> {
@@ -841,6 +955,7 @@ fn _pendkit(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Noise>()?;
     m.add_class::<Stability>()?;
     m.add_class::<StateSpace>()?;
+    m.add_class::<Sensitivities>()?;
     m.add_function(wrap_pyfunction!(models, m)?)?;
     m.add_function(wrap_pyfunction!(log_grid, m)?)?;
     Ok(())

@@ -57,6 +57,45 @@ class Model:
         """Every numeric parameter as resolved."""
     def run(self, stage: Union[str, int, None] = None) -> "Result":
         """Builds the model and runs a stage ("0a", "0b", "1a", "1b", "2"; default "2")."""
+    def sensitivities(
+        self,
+        stage: Union[str, int, None] = None,
+        *,
+        modes: bool = True,
+        tf: Optional[Tuple[str, str]] = None,
+        noise: Optional[str] = None,
+        freqs: Optional[Frequencies] = None,
+        parameters: Optional[Sequence[str]] = None,
+        allow_unstable: bool = False,
+    ) -> "Sensitivities":
+        """Derivatives of the mode frequencies (and of |H| of `tf` and the noise ASD of
+        `noise` at `freqs`, Hz) with respect to the parameters, as `pendkit sensitivity`."""
+
+class Sensitivities:
+    """Derivatives of a stage's answers with respect to the parameters."""
+
+    parameters: List[str]
+    """The columns."""
+    values: npt.NDArray[np.float64]
+    """The parameters' values, in `units`."""
+    units: List[str]
+    modes_hz: npt.NDArray[np.float64]
+    """The rows of `dfdp` (Hz)."""
+    mode_labels: List[str]
+    dfdp: npt.NDArray[np.float64]
+    """modes × parameters, Hz per unit of the parameter."""
+    freqs: npt.NDArray[np.float64]
+    """Hz (the rows of `dtf_abs_dp` and `dnoise_asd_dp`)."""
+    tf_abs: Optional[npt.NDArray[np.float64]]
+    dtf_abs_dp: Optional[npt.NDArray[np.float64]]
+    """frequencies × parameters."""
+    noise_asd: Optional[npt.NDArray[np.float64]]
+    """m/√Hz or rad/√Hz."""
+    dnoise_asd_dp: Optional[npt.NDArray[np.float64]]
+    """frequencies × parameters."""
+    not_differentiable: List[Tuple[str, str]]
+    """Switches and counts left out, with why."""
+    warning: Optional[str]
 
 class Modes:
     """Normal modes ascending in ω²."""

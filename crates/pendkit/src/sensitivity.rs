@@ -1,0 +1,858 @@
+//! Sensitivities: the derivatives of a stage's mode frequencies, and of |transfer function|
+//! and thermal-noise ASD at given frequencies, with respect to the model's parameters
+//! (`pendkit sensitivity`).
+//!
+//! # Method, and what is exact
+//!
+//! The model's numbers (masses, attachment points, wire sections, tensions) come from
+//! `f64` builders, so there is no dual-number path from a parameter into the energies. The
+//! split is:
+//!
+//! 1. **The stage's matrices, by a difference.** For each parameter p (value p₀, step h),
+//!    the whole stage is rebuilt and re-solved at p₀ ± h and p₀ ± 2h: parameters,
+//!    equilibrium (so the equilibrium's motion dq*/dp is included), Hessians of the stage,
+//!    float elimination (K_eff = K_aa − K_af K_ff⁻¹ K_fa), mass matrix, damping. The
+//!    derivatives dK_eff/dp, dM/dp and dP(f)/dp (the complex master matrix with damping)
+//!    are the fourth-order central difference
+//!    (−X(p₀+2h) + 8X(p₀+h) − 8X(p₀−h) + X(p₀−2h)) / 12h, whose truncation error is
+//!    h⁴ X⁽⁵⁾/30: with h = 10⁻³|p₀| ([`RELATIVE_STEP`]) that is ~10⁻¹³ of X for a smooth
+//!    dependence on the scale of p₀, below the rounding of the matrices' entries
+//!    (~10⁻¹⁶ |X| / h ≈ 10⁻¹³ relative). A parameter whose value is 0 is stepped by
+//!    [`ZERO_STEP`] (in its own unit).
+//! 2. **Everything after the matrices, exactly.** Mode frequencies: dω²/dp =
+//!    vᵀ(dK_eff/dp − ω² dM/dp)v with the mass-normalised mode v (Hellmann–Feynman); for a
+//!    cluster of (nearly) equal ω² the derivatives are the eigenvalues of that projected
+//!    matrix over the cluster, so degenerate modes get the right derivatives. Transfer
+//!    functions: dH = −cᵀA⁻¹(dA)A⁻¹b + (dc)ᵀA⁻¹b + cᵀA⁻¹(db), A = P(f) − ω²M over the
+//!    unknowns, with the input's and output's vectors (which follow the equilibrium's
+//!    geometry) differenced like the matrices. Thermal noise: PSD = 4k_BT/ω |Im R| with
+//!    R = oᵀA⁻¹o, dR = 2(do)ᵀz − zᵀ(dA)z, z = A⁻¹o.
+//!
+//! Differencing the matrices, not the answers, keeps the results smooth where the answers
+//! are not: a |TF| near a high-Q resonance moves by many line widths when p moves by
+//! 10⁻³ p₀, but the matrices move by 10⁻³ of themselves. No mode has to be matched between
+//! the rebuilt models either.
+//!
+//! Work skipped exactly: a parameter the model's build does not read (directly or through
+//! the definitions of parameters it reads) changes nothing but the damping, so its stage
+//! matrices are the nominal ones with its damping; a parameter read by nothing at all has
+//! zero sensitivities and costs nothing.
+
+use std::collections::BTreeSet;
+
+use nalgebra::{Complex, DMatrix, DVector};
+use pendkit_assembly::{AssemblyOptions, assemble_with};
+use pendkit_dynamics::{
+    Input, Modes, Output, Stability, StageModel, eliminate_floats, validate::check_frequencies,
+};
+use pendkit_energy::{Stage, System};
+use pendkit_model::{Defaults, parameters_with};
+use pendkit_noise::BOLTZMANN;
+
+use crate::{Case, Error, StageResult, run_stage};
+
+/// Step of a parameter for the difference of the stage's matrices, relative to its value.
+pub const RELATIVE_STEP: f64 = 1e-3;
+
+/// Step of a parameter whose value is exactly 0, in the parameter's own unit.
+pub const ZERO_STEP: f64 = 1e-6;
+
+/// Relative gap of ω² below which modes are one cluster for their derivatives.
+const CLUSTER_GAP: f64 = 1e-8;
+
+/// What to differentiate, at which stage.
+#[derive(Clone, Debug)]
+pub struct SensitivityRequest {
+    /// The stage whose modes and responses are differentiated.
+    pub stage: Stage,
+    /// Whether to compute the mode frequencies' sensitivities.
+    pub modes: bool,
+    /// A transfer function (input, output; names as [`StageResult::transfer`] takes them)
+    /// whose |H| to differentiate at `freqs`.
+    pub tf: Option<(String, String)>,
+    /// A displacement output whose thermal-noise ASD to differentiate at `freqs`.
+    pub noise: Option<String>,
+    /// Frequencies (Hz) for `tf` and `noise`.
+    pub freqs: Vec<f64>,
+    /// The parameters to differentiate with respect to (`None`: every numeric parameter
+    /// of the case, in definition order).
+    pub parameters: Option<Vec<String>>,
+    /// Go on when the equilibrium is unstable (the warning is in
+    /// [`Sensitivities::warning`]); otherwise an unstable equilibrium is an error.
+    pub allow_unstable: bool,
+}
+
+impl SensitivityRequest {
+    /// Mode sensitivities at `stage` to every parameter, nothing else.
+    pub fn modes(stage: Stage) -> SensitivityRequest {
+        SensitivityRequest {
+            stage,
+            modes: true,
+            tf: None,
+            noise: None,
+            freqs: Vec::new(),
+            parameters: None,
+            allow_unstable: false,
+        }
+    }
+}
+
+/// Derivatives of a stage's answers with respect to the parameters.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Sensitivities {
+    /// Parameter names (the columns).
+    pub parameters: Vec<String>,
+    /// Their values, in their units.
+    pub values: Vec<f64>,
+    /// Their units (empty when the model declares none).
+    pub units: Vec<String>,
+    /// The steps used for the differences of the stage's matrices, in the parameters'
+    /// units (0 for a parameter nothing reads).
+    pub steps: Vec<f64>,
+    /// Mode frequencies (Hz), ascending in ω² (the rows of `dfdp`).
+    pub modes_hz: Vec<f64>,
+    /// Mode labels (dominant coordinate).
+    pub mode_labels: Vec<String>,
+    /// d(mode frequency)/d(parameter), `[mode][parameter]`, Hz per unit of the parameter
+    /// (empty when the modes were not asked for).
+    pub dfdp: Vec<Vec<f64>>,
+    /// |H| at the requested frequencies and d|H|/dp `[freq][parameter]` (|H|'s unit per
+    /// unit of the parameter).
+    pub tf_abs: Option<(Vec<f64>, Vec<Vec<f64>>)>,
+    /// Thermal-noise ASD (m/√Hz or rad/√Hz) at the requested frequencies and d(ASD)/dp
+    /// `[freq][parameter]`.
+    pub noise_asd: Option<(Vec<f64>, Vec<Vec<f64>>)>,
+    /// Parameters left out of the columns, with why: switches and counts the model
+    /// refuses to set to a value near theirs (only when every parameter was asked for; a
+    /// parameter named in the request is an error instead).
+    pub not_differentiable: Vec<(String, String)>,
+    /// The stability warning when the equilibrium is unstable and the request allowed it.
+    pub warning: Option<String>,
+}
+
+fn bad(message: impl Into<String>) -> Error {
+    Error::Sensitivity(message.into())
+}
+
+/// One rebuilt stage: its matrices and what the input and output vectors need.
+struct Point {
+    result: StageResult,
+    k_eff: DMatrix<f64>,
+}
+
+/// The stage's matrices for `system`: assembly, stage model and float elimination, without
+/// the modes (the returned result has none).
+fn stage_point(system: System, stage: Stage) -> Result<Point, Error> {
+    let assembled = assemble_with(&system, stage, &AssemblyOptions::default(), None)?;
+    let model = StageModel::new(&system, &assembled);
+    matrices_point(system, assembled, model)
+}
+
+fn matrices_point(
+    system: System,
+    assembled: pendkit_assembly::Assembled,
+    model: StageModel,
+) -> Result<Point, Error> {
+    model.check_damping_at_dc(&system.damping)?;
+    let k_eff = eliminate_floats(
+        &model.real_stiffness(&system.damping),
+        &assembled.layout,
+        &system,
+    )?
+    .k_eff;
+    let modes = Modes {
+        coordinates: model.variables.clone(),
+        modes: Vec::new(),
+    };
+    let stability = Stability::assess(&modes, Vec::new(), model.sizes.1, Vec::new());
+    Ok(Point {
+        result: StageResult {
+            system,
+            assembled,
+            model,
+            modes,
+            stability,
+        },
+        k_eff,
+    })
+}
+
+/// Offsets (in steps) of the points of the fourth-order central difference, in the order
+/// [`difference`] takes them, with their weights (× 1/h).
+const STENCIL: [(f64, f64); 4] = [
+    (-2.0, 1.0 / 12.0),
+    (-1.0, -8.0 / 12.0),
+    (1.0, 8.0 / 12.0),
+    (2.0, -1.0 / 12.0),
+];
+
+/// The fourth-order central difference [8(X₊₁ − X₋₁) − (X₊₂ − X₋₂)] / 12h over the
+/// stencil's points (`points` holds one point per [`STENCIL`] entry). Written as
+/// differences of pairs, so that a quantity the parameter does not move gives exactly 0.
+fn difference<T>(points: &[Point], h: f64, x: impl Fn(&Point) -> T) -> T
+where
+    T: std::ops::Mul<f64, Output = T> + std::ops::Add<T, Output = T>,
+{
+    let inner = x(&points[2]) + x(&points[1]) * -1.0;
+    let outer = x(&points[3]) + x(&points[0]) * -1.0;
+    inner * (8.0 / (12.0 * h)) + outer * (-1.0 / (12.0 * h))
+}
+
+/// [`difference`] of vectors given one per stencil point.
+fn difference_of(v: &[&DVector<f64>], h: f64) -> DVector<f64> {
+    ((v[2] - v[1]) * 8.0 - (v[3] - v[0])) / (12.0 * h)
+}
+
+/// A complex matrix that [`difference`] can weigh by real numbers.
+struct Scaled(DMatrix<C>);
+
+impl std::ops::Mul<f64> for Scaled {
+    type Output = Scaled;
+    fn mul(self, w: f64) -> Scaled {
+        Scaled(self.0 * C::new(w, 0.0))
+    }
+}
+
+impl std::ops::Add for Scaled {
+    type Output = Scaled;
+    fn add(self, other: Scaled) -> Scaled {
+        Scaled(self.0 + other.0)
+    }
+}
+
+/// How each parameter enters the model.
+#[derive(Clone, Copy, PartialEq)]
+enum Reach {
+    /// Read by the build of the mechanical model (and perhaps the damping).
+    Mechanics,
+    /// Read only by the damping (and temperature).
+    DampingOnly,
+    /// Read by nothing: every sensitivity is exactly zero.
+    Nothing,
+}
+
+/// The input (none for noise) and output of one point, as the stage result parses them.
+struct Ports {
+    input: Option<Input>,
+    output: Output,
+}
+
+fn ports(point: &Point, tf: &(String, String)) -> Result<Ports, Error> {
+    Ok(Ports {
+        input: Some(point.result.input(&tf.0)?),
+        output: point.result.output(&tf.1)?,
+    })
+}
+
+fn noise_port(point: &Point, name: &str) -> Result<Ports, Error> {
+    match point.result.output(name)? {
+        Output::Displacement(v) => Ok(Ports {
+            input: None,
+            output: Output::Displacement(v),
+        }),
+        Output::SupportForce(_) => Err(Error::Name {
+            name: name.to_string(),
+            message: "thermal noise needs a displacement output".into(),
+        }),
+    }
+}
+
+type C = Complex<f64>;
+
+/// A vector padded with zeros to `n` entries.
+fn padded(v: &DVector<f64>, n: usize) -> DVector<f64> {
+    DVector::from_fn(n, |i, _| v.get(i).copied().unwrap_or(0.0))
+}
+
+/// The port vectors of one point as fixed-length real vectors (b, c): b over the unknowns
+/// (a force input) or the parameters (a displacement input; empty without an input), c
+/// over all master rows (a displacement output) or the parameters (a support force).
+fn port_vectors(ports: &Ports, sizes: (usize, usize, usize)) -> (DVector<f64>, DVector<f64>) {
+    let (nx, nq, ns) = sizes;
+    let b = match &ports.input {
+        Some(Input::Force(f)) => padded(f, nx + nq),
+        Some(Input::Displacement(s)) => padded(s, ns),
+        None => DVector::zeros(0),
+    };
+    let c = match &ports.output {
+        Output::Displacement(o) => padded(o, nx + nq + ns),
+        Output::SupportForce(o) => padded(o, ns),
+    };
+    (b, c)
+}
+
+fn same_kinds(a: &Ports, b: &Ports) -> bool {
+    let input = matches!(
+        (&a.input, &b.input),
+        (Some(Input::Force(_)), Some(Input::Force(_)))
+            | (Some(Input::Displacement(_)), Some(Input::Displacement(_)))
+            | (None, None)
+    );
+    let output = matches!(
+        (&a.output, &b.output),
+        (Output::Displacement(_), Output::Displacement(_))
+            | (Output::SupportForce(_), Output::SupportForce(_))
+    );
+    input && output
+}
+
+/// A = P(f) − ω² M over every master row (mass in the variables' block), complex dense.
+fn dynamic_matrix(point: &Point, f_hz: f64) -> DMatrix<C> {
+    let model = &point.result.model;
+    let (re, im) = model.master(&point.result.system.damping, f_hz);
+    let w2 = (2.0 * std::f64::consts::PI * f_hz).powi(2);
+    let nx = model.sizes.0;
+    DMatrix::from_fn(re.nrows(), re.ncols(), |i, j| {
+        let m = if i < nx && j < nx {
+            model.mass[(i, j)]
+        } else {
+            0.0
+        };
+        C::new(re[(i, j)] - w2 * m, im[(i, j)])
+    })
+}
+
+/// Sensitivities of `case` at the request's stage. See the module's documentation for the
+/// method and its accuracy.
+pub fn sensitivities(case: &Case, request: &SensitivityRequest) -> Result<Sensitivities, Error> {
+    let responses = request.tf.is_some() || request.noise.is_some();
+    if responses {
+        if request.stage == Stage::S0A {
+            return Err(Error::StageTooEarly);
+        }
+        if request.freqs.is_empty() {
+            return Err(bad(
+                "transfer-function and noise sensitivities need at least one frequency",
+            ));
+        }
+        check_frequencies(&request.freqs)?;
+    } else if !request.freqs.is_empty() {
+        return Err(bad(
+            "frequencies given without a transfer function or noise output to differentiate",
+        ));
+    }
+    if !request.modes && !responses {
+        return Err(bad(
+            "nothing to differentiate: ask for the modes, a transfer function or noise",
+        ));
+    }
+
+    let (system, resolved) = case.build()?;
+    let defaults = Defaults::of(case.model)?;
+    let all: Vec<(String, f64)> = resolved.iter().map(|(n, v)| (n.to_string(), v)).collect();
+    let names: Vec<String> = match &request.parameters {
+        None => all.iter().map(|(n, _)| n.clone()).collect(),
+        Some(list) => {
+            if list.is_empty() {
+                return Err(bad("an empty list of parameters"));
+            }
+            let mut seen = BTreeSet::new();
+            for name in list {
+                if !all.iter().any(|(n, _)| n == name) {
+                    return Err(Error::Name {
+                        name: name.clone(),
+                        message: format!(
+                            "not a numeric parameter of model '{}' (parameters: {})",
+                            case.model.name(),
+                            all.iter()
+                                .map(|(n, _)| n.as_str())
+                                .collect::<Vec<_>>()
+                                .join(" ")
+                        ),
+                    });
+                }
+                if !seen.insert(name.as_str()) {
+                    return Err(Error::Name {
+                        name: name.clone(),
+                        message: "listed twice".into(),
+                    });
+                }
+            }
+            list.clone()
+        }
+    };
+    let values: Vec<f64> = names
+        .iter()
+        .map(|n| all.iter().find(|(m, _)| m == n).map_or(0.0, |(_, v)| *v))
+        .collect();
+    let units: Vec<String> = names
+        .iter()
+        .map(|n| defaults.params.unit(n).unwrap_or_default().to_string())
+        .collect();
+
+    // which parameters the mechanical build reads (with the definitions they follow), and
+    // which anything reads at all
+    let read_all = case.parameters_read(&resolved)?;
+    let (_, fresh) = parameters_with(&defaults, &case.overrides)?;
+    case.model.build(&fresh)?;
+    let read_mechanics = case.parameters_read(&fresh)?;
+    let reach: Vec<Reach> = names
+        .iter()
+        .map(|n| {
+            if read_mechanics.contains(n) {
+                Reach::Mechanics
+            } else if read_all.contains(n) {
+                Reach::DampingOnly
+            } else {
+                Reach::Nothing
+            }
+        })
+        .collect();
+
+    let base = run_stage(system, request.stage)?;
+    let warning = base.require_stable(request.allow_unstable)?;
+    let base_k = eliminate_floats(
+        &base.model.real_stiffness(&base.system.damping),
+        &base.assembled.layout,
+        &base.system,
+    )?
+    .k_eff;
+    let base_point = Point {
+        k_eff: base_k,
+        result: base,
+    };
+    let sizes = base_point.result.model.sizes;
+    let nx = sizes.0;
+
+    let base_ports = match &request.tf {
+        Some(tf) => Some(ports(&base_point, tf)?),
+        None => None,
+    };
+    let base_noise = match &request.noise {
+        Some(name) => Some(noise_port(&base_point, name)?),
+        None => None,
+    };
+
+    let modes = &base_point.result.modes.modes;
+    let modes_hz: Vec<f64> = modes.iter().map(|m| m.hz).collect();
+    let mode_labels: Vec<String> = modes.iter().map(|m| m.label.clone()).collect();
+    let vectors = DMatrix::from_fn(nx, modes.len(), |i, k| {
+        modes[k].vector.get(i).copied().unwrap_or(0.0)
+    });
+    let clusters = mode_clusters(modes);
+
+    let np = names.len();
+    let nf = request.freqs.len();
+    let mut dfdp = vec![vec![0.0; np]; if request.modes { modes.len() } else { 0 }];
+    // per frequency, per parameter: d of the TF and of the noise response R
+    let mut d_tf: Vec<Vec<C>> = vec![vec![C::new(0.0, 0.0); np]; nf];
+    let mut d_noise: Vec<Vec<(f64, C)>> = vec![vec![(0.0, C::new(0.0, 0.0)); np]; nf];
+    let mut steps = vec![0.0; np];
+    let mut refused: Vec<Option<String>> = vec![None; np];
+
+    // the nominal responses' factorisations, once per frequency
+    let nominal: Vec<Nominal> = if responses {
+        request
+            .freqs
+            .iter()
+            .map(|&f| {
+                Nominal::new(
+                    &base_point,
+                    f,
+                    base_ports.as_ref(),
+                    base_noise.as_ref(),
+                    sizes,
+                )
+            })
+            .collect::<Result<_, _>>()?
+    } else {
+        Vec::new()
+    };
+
+    for (j, name) in names.iter().enumerate() {
+        if reach[j] == Reach::Nothing {
+            continue;
+        }
+        let p0 = values[j];
+        let h = if p0 == 0.0 {
+            ZERO_STEP
+        } else {
+            RELATIVE_STEP * p0.abs()
+        };
+        steps[j] = h;
+        let mut points = Vec::with_capacity(STENCIL.len());
+        for &(k, _) in &STENCIL {
+            let value = p0 + k * h;
+            // the case's overrides and this one last (the nominal build has checked that
+            // every override is read; this one is, or it would have no step)
+            let mut overrides = case.overrides.clone();
+            overrides
+                .parameters
+                .push((name.clone(), format!("{value:e}")));
+            let built = pendkit_model::build_with(case.model, &overrides).map_err(Error::from);
+            let system = match built {
+                Ok((system, _)) => system,
+                // a switch or a count: the model refuses any value near it
+                Err(Error::Build(e)) => {
+                    let why = format!("the model refuses {name} = {value:e} ({e})");
+                    if request.parameters.is_some() {
+                        return Err(bad(format!("'{name}' has no derivative: {why}")));
+                    }
+                    refused[j] = Some(why);
+                    break;
+                }
+                Err(e) => return Err(e),
+            };
+            points.push(match reach[j] {
+                Reach::Mechanics => stage_point(system, request.stage)?,
+                _ => matrices_point(
+                    system,
+                    base_point.result.assembled.clone(),
+                    base_point.result.model.clone(),
+                )?,
+            });
+        }
+        if refused[j].is_some() {
+            continue;
+        }
+        for p in &points {
+            if p.result.model.sizes != sizes {
+                return Err(bad(format!(
+                    "changing '{name}' changes the model's coordinates: no derivative"
+                )));
+            }
+        }
+        if request.modes {
+            let dk = difference(&points, h, |p| p.k_eff.clone());
+            let dm = difference(&points, h, |p| p.result.assembled.mass.clone());
+            let vk = vectors.transpose() * &dk * &vectors;
+            let vm = vectors.transpose() * &dm * &vectors;
+            for cluster in &clusters {
+                let w2: f64 = cluster.iter().map(|&k| modes[k].omega_squared).sum::<f64>()
+                    / cluster.len() as f64;
+                let g = DMatrix::from_fn(cluster.len(), cluster.len(), |a, b| {
+                    let (ka, kb) = (cluster[a], cluster[b]);
+                    vk[(ka, kb)] - w2 * vm[(ka, kb)]
+                });
+                let g = (&g + g.transpose()) * 0.5;
+                let mut d: Vec<f64> = g.symmetric_eigenvalues().iter().copied().collect();
+                d.sort_by(f64::total_cmp);
+                for (&k, dw2) in cluster.iter().zip(d) {
+                    let mode = &modes[k];
+                    if mode.omega_squared == 0.0 {
+                        return Err(bad(format!(
+                            "mode {} ({}) is neutral (ω² = 0): its frequency has no derivative",
+                            k + 1,
+                            mode.label
+                        )));
+                    }
+                    dfdp[k][j] =
+                        dw2 / (4.0 * std::f64::consts::PI * mode.omega_squared.abs().sqrt());
+                }
+            }
+        }
+        if responses {
+            let tf_ports: Vec<Ports> = match &request.tf {
+                Some(tf) => points
+                    .iter()
+                    .map(|p| ports(p, tf))
+                    .collect::<Result<_, _>>()?,
+                None => Vec::new(),
+            };
+            let noise_ports: Vec<Ports> = match &request.noise {
+                Some(name) => points
+                    .iter()
+                    .map(|p| noise_port(p, name))
+                    .collect::<Result<_, _>>()?,
+                None => Vec::new(),
+            };
+            if let Some(b) = &base_ports
+                && tf_ports.iter().any(|p| !same_kinds(p, b))
+            {
+                return Err(bad(format!(
+                    "changing '{name}' changes the kind of the transfer function's input or output"
+                )));
+            }
+            let tf_vectors: Vec<(DVector<f64>, DVector<f64>)> =
+                tf_ports.iter().map(|p| port_vectors(p, sizes)).collect();
+            let noise_vectors: Vec<DVector<f64>> = noise_ports
+                .iter()
+                .map(|p| port_vectors(p, sizes).1)
+                .collect();
+            let db = (tf_vectors.len() == STENCIL.len())
+                .then(|| difference_of(&tf_vectors.iter().map(|v| &v.0).collect::<Vec<_>>(), h));
+            let dc = (tf_vectors.len() == STENCIL.len())
+                .then(|| difference_of(&tf_vectors.iter().map(|v| &v.1).collect::<Vec<_>>(), h));
+            let d_o = (noise_vectors.len() == STENCIL.len())
+                .then(|| difference_of(&noise_vectors.iter().collect::<Vec<_>>(), h));
+            let d_temperature = difference(&points, h, |p| p.result.system.temperature);
+            for (i, &f) in request.freqs.iter().enumerate() {
+                let da = difference(&points, h, |p| Scaled(dynamic_matrix(p, f))).0;
+                let nominal = &nominal[i];
+                if let (Some(db), Some(dc)) = (&db, &dc) {
+                    d_tf[i][j] = nominal.d_transfer(&da, db, dc, sizes)?;
+                }
+                if let Some(d_o) = &d_o {
+                    d_noise[i][j] = (d_temperature, nominal.d_noise_response(&da, d_o, sizes));
+                }
+            }
+        }
+    }
+
+    let tf_abs = match &request.tf {
+        Some(_) => {
+            let mut abs = Vec::with_capacity(nf);
+            let mut d = Vec::with_capacity(nf);
+            for (i, n) in nominal.iter().enumerate() {
+                let h = n.tf;
+                let a = h.norm();
+                if !(a > 0.0 && a.is_finite()) {
+                    return Err(Error::NotFinite {
+                        what: "d|H|/dp (|H| is zero or not finite)".into(),
+                        f_hz: request.freqs[i],
+                    });
+                }
+                abs.push(a);
+                d.push(
+                    d_tf[i]
+                        .iter()
+                        .map(|dh| (h.conj() * dh).re / a)
+                        .collect::<Vec<f64>>(),
+                );
+            }
+            Some((abs, d))
+        }
+        None => None,
+    };
+    let noise_asd = match &request.noise {
+        Some(_) => {
+            let damping = &base_point.result.system.damping;
+            if base_point
+                .result
+                .model
+                .by_tag
+                .iter()
+                .any(|(tag, _)| damping.temperature(tag).is_some())
+            {
+                return Err(bad(
+                    "noise sensitivities with damping tags at their own temperatures are not supported",
+                ));
+            }
+            let t = base_point.result.system.temperature;
+            let mut asd = Vec::with_capacity(nf);
+            let mut d = Vec::with_capacity(nf);
+            for (i, n) in nominal.iter().enumerate() {
+                let f = request.freqs[i];
+                let scale = 4.0 * BOLTZMANN / (2.0 * std::f64::consts::PI * f);
+                let im = n.noise_response.im;
+                let psd = scale * t * im.abs();
+                let a = psd.sqrt();
+                if !(a > 0.0 && a.is_finite()) {
+                    return Err(Error::NotFinite {
+                        what: "d(noise ASD)/dp (the ASD is zero or not finite)".into(),
+                        f_hz: f,
+                    });
+                }
+                asd.push(a);
+                d.push(
+                    d_noise[i]
+                        .iter()
+                        .map(|(dt, dr)| {
+                            let dpsd = scale * (dt * im.abs() + t * im.signum() * dr.im);
+                            dpsd / (2.0 * a)
+                        })
+                        .collect::<Vec<f64>>(),
+                );
+            }
+            Some((asd, d))
+        }
+        None => None,
+    };
+
+    // the parameters the model refuses to move lose their columns
+    let keep: Vec<bool> = refused.iter().map(Option::is_none).collect();
+    let not_differentiable: Vec<(String, String)> = names
+        .iter()
+        .zip(&refused)
+        .filter_map(|(n, r)| r.as_ref().map(|r| (n.clone(), r.clone())))
+        .collect();
+    let kept = |v: Vec<f64>| -> Vec<f64> {
+        v.into_iter()
+            .zip(&keep)
+            .filter_map(|(x, &k)| k.then_some(x))
+            .collect()
+    };
+    let tf_abs = tf_abs.map(|(a, d)| (a, d.into_iter().map(kept).collect()));
+    let noise_asd = noise_asd.map(|(a, d)| (a, d.into_iter().map(kept).collect()));
+    let dfdp: Vec<Vec<f64>> = dfdp.into_iter().map(kept).collect();
+    let names: Vec<String> = names
+        .into_iter()
+        .zip(&keep)
+        .filter_map(|(x, &k)| k.then_some(x))
+        .collect();
+    let units: Vec<String> = units
+        .into_iter()
+        .zip(&keep)
+        .filter_map(|(x, &k)| k.then_some(x))
+        .collect();
+    let out = Sensitivities {
+        not_differentiable,
+        parameters: names,
+        values: kept(values),
+        units,
+        steps: kept(steps),
+        modes_hz,
+        mode_labels,
+        dfdp,
+        tf_abs,
+        noise_asd,
+        warning,
+    };
+    let finite = out.dfdp.iter().flatten().all(|x| x.is_finite())
+        && [&out.tf_abs, &out.noise_asd]
+            .iter()
+            .filter_map(|x| x.as_ref())
+            .all(|(v, d)| v.iter().chain(d.iter().flatten()).all(|x| x.is_finite()));
+    if !finite {
+        return Err(bad("a sensitivity came out NaN or infinite"));
+    }
+    Ok(out)
+}
+
+/// Modes grouped into clusters of (nearly) equal ω², each ascending.
+fn mode_clusters(modes: &[pendkit_dynamics::Mode]) -> Vec<Vec<usize>> {
+    let mut clusters: Vec<Vec<usize>> = Vec::new();
+    for (k, m) in modes.iter().enumerate() {
+        let joins = clusters.last().and_then(|c| c.last()).is_some_and(|&l| {
+            let prev = &modes[l];
+            let gap = (m.omega_squared - prev.omega_squared).abs();
+            let scale = m.omega_squared.abs().max(prev.omega_squared.abs());
+            gap <= CLUSTER_GAP * scale + m.omega_squared_error + prev.omega_squared_error
+        });
+        match clusters.last_mut() {
+            Some(c) if joins => c.push(k),
+            _ => clusters.push(vec![k]),
+        }
+    }
+    clusters
+}
+
+/// The nominal model's responses at one frequency, with the factorisation of A over the
+/// unknowns that every parameter's derivative reuses.
+struct Nominal {
+    a: DMatrix<C>,
+    lu: nalgebra::LU<C, nalgebra::Dyn, nalgebra::Dyn>,
+    /// The nominal ports' vectors (b, c), whether the input is a force and whether the
+    /// output is a support force, when a transfer function is asked for.
+    tf_vectors: Option<(DVector<f64>, DVector<f64>, bool, bool)>,
+    /// w = [z; s]: the response over every master row to the input.
+    w: DVector<C>,
+    tf: C,
+    /// z = A⁻¹o over the unknowns for the noise output, and R = oᵀz.
+    noise_z: DVector<C>,
+    noise_response: C,
+}
+
+fn complex(v: &DVector<f64>) -> DVector<C> {
+    v.map(|x| C::new(x, 0.0))
+}
+
+impl Nominal {
+    fn new(
+        point: &Point,
+        f_hz: f64,
+        tf: Option<&Ports>,
+        noise: Option<&Ports>,
+        sizes: (usize, usize, usize),
+    ) -> Result<Nominal, Error> {
+        let (nx, nq, ns) = sizes;
+        let u = nx + nq;
+        let a = dynamic_matrix(point, f_hz);
+        let lu = a.view((0, 0), (u, u)).into_owned().lu();
+        let singular = || Error::Dynamics(pendkit_dynamics::DynamicsError::Singular { f_hz });
+        let solve = |rhs: &DVector<C>| lu.solve(rhs).ok_or_else(singular);
+        let mut w = DVector::zeros(u + ns);
+        let mut tf_value = C::new(0.0, 0.0);
+        let mut tf_vectors = None;
+        if let Some(ports) = tf {
+            let (b, c) = port_vectors(ports, sizes);
+            let force_in = matches!(ports.input, Some(Input::Force(_)));
+            let force_out = matches!(ports.output, Output::SupportForce(_));
+            let rhs = if force_in {
+                complex(&b)
+            } else {
+                -(a.view((0, u), (u, ns)) * complex(&b))
+            };
+            let z = solve(&rhs)?;
+            w.rows_mut(0, u).copy_from(&z);
+            if !force_in {
+                w.rows_mut(u, ns).copy_from(&complex(&b));
+            }
+            tf_value = if force_out {
+                -(complex(&c).transpose() * (a.view((u, 0), (ns, u + ns)) * &w))[(0, 0)]
+            } else {
+                (complex(&c).transpose() * &w)[(0, 0)]
+            };
+            tf_vectors = Some((b, c, force_in, force_out));
+        }
+        let mut noise_z = DVector::zeros(0);
+        let mut noise_response = C::new(0.0, 0.0);
+        if let Some(ports) = noise {
+            let o = complex(&port_vectors(ports, sizes).1.rows(0, u).into_owned());
+            noise_z = solve(&o)?;
+            noise_response = (o.transpose() * &noise_z)[(0, 0)];
+        }
+        Ok(Nominal {
+            a,
+            lu,
+            tf_vectors,
+            w,
+            tf: tf_value,
+            noise_z,
+            noise_response,
+        })
+    }
+
+    /// dH for the derivative `da` of A and `db`, `dc` of the port vectors.
+    fn d_transfer(
+        &self,
+        da: &DMatrix<C>,
+        db: &DVector<f64>,
+        dc: &DVector<f64>,
+        sizes: (usize, usize, usize),
+    ) -> Result<C, Error> {
+        let (nx, nq, ns) = sizes;
+        let u = nx + nq;
+        let Some((_, c, force_in, force_out)) = &self.tf_vectors else {
+            return Ok(C::new(0.0, 0.0));
+        };
+        // d rhs − dA_uu z (and for a displacement input, −dA_us s − A_us ds)
+        let mut rhs = -(da.view((0, 0), (u, u + ns)) * &self.w);
+        let mut dw = DVector::zeros(u + ns);
+        if *force_in {
+            rhs += complex(db);
+        } else {
+            rhs -= self.a.view((0, u), (u, ns)) * complex(db);
+            dw.rows_mut(u, ns).copy_from(&complex(db));
+        }
+        let dz = self
+            .lu
+            .solve(&rhs)
+            .ok_or_else(|| bad("the dynamic stiffness is singular"))?;
+        dw.rows_mut(0, u).copy_from(&dz);
+        let c = complex(c);
+        Ok(if *force_out {
+            let a_s = self.a.view((u, 0), (ns, u + ns));
+            let da_s = da.view((u, 0), (ns, u + ns));
+            -((complex(dc).transpose() * (a_s * &self.w))[(0, 0)]
+                + (c.transpose() * (da_s * &self.w))[(0, 0)]
+                + (c.transpose() * (a_s * &dw))[(0, 0)])
+        } else {
+            (complex(dc).transpose() * &self.w)[(0, 0)] + (c.transpose() * &dw)[(0, 0)]
+        })
+    }
+
+    /// dR for R = oᵀA⁻¹o over the unknowns: 2(do)ᵀz − zᵀ(dA)z (A is symmetric).
+    fn d_noise_response(
+        &self,
+        da: &DMatrix<C>,
+        d_o: &DVector<f64>,
+        sizes: (usize, usize, usize),
+    ) -> C {
+        let u = sizes.0 + sizes.1;
+        let z = &self.noise_z;
+        let d_o = complex(&d_o.rows(0, u).into_owned());
+        (d_o.transpose() * z)[(0, 0)] * 2.0
+            - (z.transpose() * (da.view((0, 0), (u, u)) * z))[(0, 0)]
+    }
+}

@@ -1,0 +1,406 @@
+//! Sensitivities (`pendkit::sensitivities`) against independent references: closed forms
+//! (a simple pendulum, a mass on two springs) and central differences of the answers of
+//! the same model re-solved from scratch (`Case::with_sets`, the whole pipeline: build,
+//! equilibrium, stage, modes or responses), with the modes matched by shape (MAC), not by
+//! order.
+//!
+//! The library differences the stage's *matrices* and differentiates the eigenproblem and
+//! the responses exactly; these references difference the *answers* (frequencies, |H|,
+//! ASD) instead, so the two share only the model.
+
+use pendkit::nalgebra::DMatrix;
+use pendkit::{Case, Sensitivities, SensitivityRequest, Stage, run_stage, sensitivities};
+
+fn case(spec: &str) -> Case {
+    Case::open(spec).expect("case")
+}
+
+fn modes_of(case: &Case, stage: Stage, parameters: Option<&[&str]>) -> Sensitivities {
+    let mut request = SensitivityRequest::modes(stage);
+    request.parameters = parameters.map(|p| p.iter().map(|s| s.to_string()).collect());
+    sensitivities(case, &request).expect("sensitivities")
+}
+
+/// The nominal modes' frequencies (Hz), vectors (columns) and mass matrix.
+fn modes_at(case: &Case, stage: Stage) -> (Vec<f64>, DMatrix<f64>, DMatrix<f64>) {
+    let (system, _) = case.build().expect("build");
+    let r = run_stage(system, stage).expect("stage");
+    let n = r.modes.coordinates.len();
+    let hz = r.modes.modes.iter().map(|m| m.hz).collect();
+    let v = DMatrix::from_fn(n, r.modes.modes.len(), |i, k| r.modes.modes[k].vector[i]);
+    (hz, v, r.assembled.mass.clone())
+}
+
+/// Groups of modes whose frequencies are within 1e-6 relative of each other: their
+/// individual derivatives are not differentiable functions of the parameter (the order
+/// within the group can swap), but their sum is.
+fn groups(hz: &[f64]) -> Vec<Vec<usize>> {
+    let mut out: Vec<Vec<usize>> = Vec::new();
+    for (k, f) in hz.iter().enumerate() {
+        match out.last_mut() {
+            Some(g) if (f - hz[g[g.len() - 1]]).abs() <= 1e-6 * f.abs() => g.push(k),
+            _ => out.push(vec![k]),
+        }
+    }
+    out
+}
+
+/// The frequencies of `case` with `name` set to `value`, re-solved from scratch, in the
+/// order of the nominal modes: each nominal mode takes the perturbed mode of largest MAC
+/// |v₀ᵀ M v|² (both mass-normalised).
+fn matched_hz(case: &Case, stage: Stage, name: &str, value: f64, v0: &DMatrix<f64>) -> Vec<f64> {
+    let perturbed = case
+        .clone()
+        .with_sets(&[format!("{name}={value:e}")])
+        .expect("set");
+    let (hz, v, m) = modes_at(&perturbed, stage);
+    let mac = v0.transpose() * &m * &v;
+    (0..v0.ncols())
+        .map(|k| {
+            let best = (0..v.ncols())
+                .max_by(|&a, &b| mac[(k, a)].abs().total_cmp(&mac[(k, b)].abs()))
+                .expect("modes");
+            hz[best]
+        })
+        .collect()
+}
+
+/// Fourth-order central difference of the re-solved, matched frequencies with step `h`.
+fn fd_modes(case: &Case, stage: Stage, name: &str, p0: f64, h: f64, v0: &DMatrix<f64>) -> Vec<f64> {
+    let at = |k: f64| matched_hz(case, stage, name, p0 + k * h, v0);
+    let (m2, m1, p1, p2) = (at(-2.0), at(-1.0), at(1.0), at(2.0));
+    (0..v0.ncols())
+        .map(|k| (m2[k] - 8.0 * m1[k] + 8.0 * p1[k] - p2[k]) / (12.0 * h))
+        .collect()
+}
+
+/// Every mode sensitivity (summed over groups of equal frequencies) of `spec` at `stage`
+/// against the re-solved difference, for `parameters` (all when `None`).
+///
+/// The reference difference is taken with two steps, 2·10⁻⁴ and 10⁻⁴ of |p| (fourth order:
+/// truncation ~(10⁻⁴)⁴ relative; rounding of frequencies ~10⁻¹⁴ relative over the step
+/// gives ~10⁻¹⁰ in p/f·df/dp). Where the two agree to 10⁻⁷ in the relative sensitivity
+/// p/f·df/dp, the difference is converged and the library must agree with it to 10⁻⁶ of
+/// |df/dp| plus 10⁻⁸ relative-sensitivity units (the floor is what rounding allows for
+/// parameters that barely move a mode). Every comparison must have been converged.
+fn check_against_re_solved(spec: &str, stage: Stage, parameters: Option<&[&str]>) {
+    let case = case(spec);
+    let s = modes_of(&case, stage, parameters);
+    let (hz, v0, _) = modes_at(&case, stage);
+    assert_eq!(hz, s.modes_hz, "{spec}: the nominal modes");
+    let groups = groups(&hz);
+    let mut compared = 0;
+    for (j, name) in s.parameters.iter().enumerate() {
+        let p0 = s.values[j];
+        if s.steps[j] == 0.0 {
+            // read by nothing: the library says exactly zero, and so must every mode
+            assert!(s.dfdp.iter().all(|row| row[j] == 0.0));
+            continue;
+        }
+        let scale = if p0 == 0.0 { 1e-3 } else { p0.abs() };
+        let coarse = fd_modes(&case, stage, name, p0, 2e-4 * scale, &v0);
+        let fine = fd_modes(&case, stage, name, p0, 1e-4 * scale, &v0);
+        for g in &groups {
+            let sum = |d: &dyn Fn(usize) -> f64| g.iter().map(|&k| d(k)).sum::<f64>();
+            let f: f64 = g.iter().map(|&k| hz[k]).sum();
+            let (a, b) = (sum(&|k| coarse[k]), sum(&|k| fine[k]));
+            let lib = sum(&|k| s.dfdp[k][j]);
+            let rel = scale / f.abs();
+            assert!(
+                (a - b).abs() * rel < 1e-7,
+                "{spec} {name} modes {g:?}: the reference difference is not converged ({a} vs {b})"
+            );
+            let tol = 1e-6 * b.abs() + 1e-8 / rel;
+            assert!(
+                (lib - b).abs() <= tol,
+                "{spec} stage {stage} d f{g:?}/d {name}: library {lib:e}, re-solved {b:e} (tol {tol:e})"
+            );
+            compared += 1;
+        }
+    }
+    assert!(compared > 0, "{spec}: nothing compared");
+}
+
+#[test]
+fn pendulum_closed_forms() {
+    // stage 0A of the pendulum is f = √(g/l)/2π for the swing modes (x1, y1, a degenerate
+    // pair; the model's 0.6435451 Hz is √(9.81/0.6)/2π to 7 digits), so df/dl = −f/(2l) and
+    // df/dg = f/(2g) exactly; the mass does not enter (the wires do not stretch into l).
+    // Tolerance 1e-8 relative: the matrices' difference has truncation ~1e-12 and
+    // rounding ~1e-13/1e-3 relative.
+    let case = case("pendulum");
+    let s = modes_of(&case, Stage::S0A, Some(&["l_fibre", "g", "m1"]));
+    let (l, g) = (s.values[0], s.values[1]);
+    for k in 0..2 {
+        let f = s.modes_hz[k];
+        assert!(s.mode_labels[k] == "x1" || s.mode_labels[k] == "y1");
+        let expected_l = -f / (2.0 * l);
+        let expected_g = f / (2.0 * g);
+        assert!(
+            (s.dfdp[k][0] - expected_l).abs() <= 1e-8 * expected_l.abs(),
+            "df/dl {} vs {expected_l}",
+            s.dfdp[k][0]
+        );
+        assert!(
+            (s.dfdp[k][1] - expected_g).abs() <= 1e-8 * expected_g.abs(),
+            "df/dg {} vs {expected_g}",
+            s.dfdp[k][1]
+        );
+        // p/f df/dm below 1e-8: zero up to the difference's rounding
+        assert!(
+            s.dfdp[k][2].abs() * s.values[2] / f < 1e-8,
+            "df/dm {}",
+            s.dfdp[k][2]
+        );
+    }
+}
+
+#[test]
+fn mass_on_springs_closed_forms() {
+    // the toy: a mass m on springs k1 and k2 in series (a massless junction, a float):
+    // f = √(k/m)/2π with k = k1 k2/(k1 + k2). So df/dm = −f/(2m), and
+    // df/dk1 = f/(2k) · dk/dk1 = f/(2k) · (k/k1)², likewise for k2. The series stiffness is
+    // the float's Schur complement, differentiated through the elimination. Tolerance
+    // 1e-9 relative (linear springs: the difference is exact but for rounding).
+    let s = modes_of(&case("toy"), Stage::S0A, Some(&["m", "k1", "k2"]));
+    let (m, k1, k2) = (s.values[0], s.values[1], s.values[2]);
+    let k = k1 * k2 / (k1 + k2);
+    let f = s.modes_hz[0];
+    assert!((f - (k / m).sqrt() / (2.0 * std::f64::consts::PI)).abs() < 1e-12 * f);
+    let expected = [
+        -f / (2.0 * m),
+        f / (2.0 * k) * (k / k1).powi(2),
+        f / (2.0 * k) * (k / k2).powi(2),
+    ];
+    for (j, e) in expected.iter().enumerate() {
+        let got = s.dfdp[0][j];
+        assert!(
+            (got - e).abs() <= 1e-9 * e.abs(),
+            "{}: {got} vs {e}",
+            s.parameters[j]
+        );
+    }
+}
+
+#[test]
+fn pendulum_every_parameter_against_re_solved() {
+    check_against_re_solved("pendulum", Stage::S2, None);
+}
+
+#[test]
+fn double_pendulum_against_re_solved() {
+    check_against_re_solved("double-pendulum", Stage::S2, None);
+    check_against_re_solved("double-pendulum", Stage::S0A, None);
+}
+
+#[test]
+fn triple_against_re_solved() {
+    check_against_re_solved("triple", Stage::S2, None);
+}
+
+#[test]
+fn quad_against_re_solved() {
+    check_against_re_solved("quad", Stage::S0A, None);
+    check_against_re_solved("quad", Stage::S2, None);
+}
+
+#[test]
+fn suspension_file_against_re_solved() {
+    let file = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../models/basic/rigid-body.toml"
+    );
+    check_against_re_solved(file, Stage::S2, None);
+}
+
+/// |H| (or the ASD) of `case` with `name = value`, re-solved from scratch.
+fn response_at(case: &Case, name: &str, value: f64, f: f64, tf: bool) -> f64 {
+    let perturbed = case
+        .clone()
+        .with_sets(&[format!("{name}={value:e}")])
+        .expect("set");
+    let (system, _) = perturbed.build().expect("build");
+    let r = run_stage(system, Stage::S2).expect("stage");
+    if tf {
+        r.transfer("x00", "x1", &[f]).expect("tf")[0].norm()
+    } else {
+        r.noise("x1", &[f]).expect("noise").asd()[0]
+    }
+}
+
+#[test]
+fn pendulum_tf_and_noise_against_re_solved() {
+    // |H| from the support x00 to the mass x1 and the thermal-noise ASD of x1, at
+    // frequencies away from the modes (0.644 Hz swing, ~6 Hz bounce, violin modes above
+    // 100 Hz), against fourth-order central differences of the re-solved answers with steps
+    // 2·10⁻⁴ and 10⁻⁴ of |p| (converged to 1e-7 relative, checked), to 1e-6 relative
+    // plus a floor of 1e-9 of the response per unit relative change of p.
+    let case = case("pendulum");
+    let freqs = vec![0.1, 0.3, 2.0, 20.0];
+    let request = SensitivityRequest {
+        stage: Stage::S2,
+        modes: false,
+        tf: Some(("x00".into(), "x1".into())),
+        noise: Some("x1".into()),
+        freqs: freqs.clone(),
+        parameters: None,
+        allow_unstable: false,
+    };
+    let s = sensitivities(&case, &request).expect("sensitivities");
+    let (tf_abs, d_tf) = s.tf_abs.as_ref().expect("tf");
+    let (asd, d_asd) = s.noise_asd.as_ref().expect("noise");
+    // the nominal values are the library's own transfer function and noise (the
+    // sensitivity code solves its own dense system: they must agree)
+    let (system, _) = case.build().expect("build");
+    let r = run_stage(system, Stage::S2).expect("stage");
+    let h = r.transfer("x00", "x1", &freqs).expect("tf");
+    let n = r.noise("x1", &freqs).expect("noise").asd();
+    for i in 0..freqs.len() {
+        assert!((tf_abs[i] - h[i].norm()).abs() <= 1e-9 * h[i].norm());
+        assert!((asd[i] - n[i]).abs() <= 1e-9 * n[i]);
+    }
+    let mut compared = 0;
+    for (j, name) in s.parameters.iter().enumerate() {
+        if s.steps[j] == 0.0 {
+            continue;
+        }
+        let p0 = s.values[j];
+        let scale = if p0 == 0.0 { 1e-3 } else { p0.abs() };
+        for (i, &f) in freqs.iter().enumerate() {
+            for (tf, value, lib) in [(true, tf_abs[i], d_tf[i][j]), (false, asd[i], d_asd[i][j])] {
+                let fd = |h: f64| {
+                    let at = |k: f64| response_at(&case, name, p0 + k * h, f, tf);
+                    (at(-2.0) - 8.0 * at(-1.0) + 8.0 * at(1.0) - at(2.0)) / (12.0 * h)
+                };
+                let (a, b) = (fd(2e-4 * scale), fd(1e-4 * scale));
+                let per_relative = value / scale;
+                assert!(
+                    (a - b).abs() <= 1e-7 * b.abs() + 1e-9 * per_relative,
+                    "{name} at {f} Hz (tf {tf}): reference not converged ({a} vs {b})"
+                );
+                let tol = 1e-6 * b.abs() + 1e-9 * per_relative;
+                assert!(
+                    (lib - b).abs() <= tol,
+                    "{name} at {f} Hz (tf {tf}): library {lib:e}, re-solved {b:e}"
+                );
+                compared += 1;
+            }
+        }
+    }
+    assert!(compared > 0);
+}
+
+#[test]
+fn loss_angle_moves_no_mode_but_moves_the_noise() {
+    // the modes use the storage part ε'(0) = 1 of the damping, so the loss angle moves no
+    // mode; the noise ASD grows with the loss angle (to
+    // first order PSD ∝ φ away from resonances, so d ASD/dφ ≈ ASD/(2φ), to the 1e-3 that
+    // the nonlinearity of |Im R| in φ allows at 2 Hz with φ = 1e-7).
+    let case = case("pendulum");
+    let request = SensitivityRequest {
+        stage: Stage::S2,
+        modes: true,
+        tf: None,
+        noise: Some("x1".into()),
+        freqs: vec![2.0],
+        parameters: Some(vec!["phi_fibre".into()]),
+        allow_unstable: false,
+    };
+    let s = sensitivities(&case, &request).expect("sensitivities");
+    // the build reads φ too (the fibres' material), so the stage is rebuilt: what is left
+    // of the mode sensitivities is the rounding of the matrices over the step, ~1e-14 in
+    // p/f·df/dp (a real dependence would show at the 1e-1 of a loss-driven shift)
+    for (k, row) in s.dfdp.iter().enumerate() {
+        assert!(
+            row[0].abs() * s.values[0] / s.modes_hz[k] < 1e-12,
+            "{row:?}"
+        );
+    }
+    let (asd, d) = s.noise_asd.expect("noise");
+    let expected = asd[0] / (2.0 * s.values[0]);
+    assert!(
+        (d[0][0] - expected).abs() <= 1e-3 * expected,
+        "{} vs {expected}",
+        d[0][0]
+    );
+}
+
+#[test]
+fn bad_requests_are_errors() {
+    let case = case("pendulum");
+    let base = SensitivityRequest::modes(Stage::S2);
+    let err = |r: SensitivityRequest| sensitivities(&case, &r).expect_err("must fail").to_string();
+    let e = err(SensitivityRequest {
+        parameters: Some(vec!["no_such".into()]),
+        ..base.clone()
+    });
+    assert!(
+        e.contains("no_such") && e.contains("not a numeric parameter"),
+        "{e}"
+    );
+    let e = err(SensitivityRequest {
+        parameters: Some(vec![]),
+        ..base.clone()
+    });
+    assert!(e.contains("empty list"), "{e}");
+    let e = err(SensitivityRequest {
+        parameters: Some(vec!["g".into(), "g".into()]),
+        ..base.clone()
+    });
+    assert!(e.contains("twice"), "{e}");
+    let e = err(SensitivityRequest {
+        tf: Some(("x00".into(), "x1".into())),
+        ..base.clone()
+    });
+    assert!(e.contains("at least one frequency"), "{e}");
+    let e = err(SensitivityRequest {
+        tf: Some(("x00".into(), "nowhere".into())),
+        freqs: vec![1.0],
+        ..base.clone()
+    });
+    assert!(e.contains("nowhere"), "{e}");
+    let e = err(SensitivityRequest {
+        noise: Some("x1".into()),
+        freqs: vec![-1.0],
+        ..base.clone()
+    });
+    assert!(e.contains("out of range"), "{e}");
+    let e = err(SensitivityRequest {
+        noise: Some("x1".into()),
+        freqs: vec![f64::NAN],
+        ..base.clone()
+    });
+    assert!(e.contains("out of range"), "{e}");
+    let e = err(SensitivityRequest {
+        freqs: vec![1.0],
+        ..base.clone()
+    });
+    assert!(e.contains("without a transfer function"), "{e}");
+    let e = err(SensitivityRequest {
+        stage: Stage::S0A,
+        noise: Some("x1".into()),
+        freqs: vec![1.0],
+        ..base.clone()
+    });
+    assert!(e.contains("stage 0b"), "{e}");
+    let e = err(SensitivityRequest {
+        modes: false,
+        ..base.clone()
+    });
+    assert!(e.contains("nothing to differentiate"), "{e}");
+}
+
+#[test]
+fn unstable_equilibrium_is_refused_unless_allowed() {
+    // d4 = −0.02 m makes the quad's test-mass pitch an inverted pendulum (tests/stability.rs)
+    let case = case("quad").with_sets(&["d4=-0.02".into()]).expect("set");
+    let mut request = SensitivityRequest::modes(Stage::S2);
+    request.parameters = Some(vec!["m3".into()]);
+    let e = sensitivities(&case, &request)
+        .expect_err("unstable")
+        .to_string();
+    assert!(e.contains("pitch3"), "{e}");
+    request.allow_unstable = true;
+    let s = sensitivities(&case, &request).expect("allowed");
+    assert!(s.warning.expect("a warning").contains("pitch3"));
+}
