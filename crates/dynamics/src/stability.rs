@@ -255,54 +255,78 @@ impl fmt::Display for Stability {
 }
 
 /// The float-elimination map at f = 0: the floats' displacement −Q⁻¹ C_qx v that follows
-/// a displacement v of the variables (m or rad), from the stage's real stiffness.
+/// a displacement v of the variables (m or rad), from the stage's real stiffness. Kept per
+/// group of floats that Q couples (each fibre's bead joints, each blade's tip): the map is
+/// zero between a group and the variables it does not touch.
 #[derive(Clone, Debug)]
 pub struct FloatMap {
     nx: usize,
-    /// −Q⁻¹ C_qx (floats × variables); empty when there are no floats or Q is singular.
-    map: DMatrix<f64>,
+    nq: usize,
+    /// Per group: its floats (0-based among the floats), the variables it couples to, and
+    /// −Q_g⁻¹ C_g over them; empty when there are no floats or Q is singular.
+    groups: Vec<(Vec<usize>, Vec<usize>, DMatrix<f64>)>,
+}
+
+/// The float block Q (nq × nq) and the float–variable coupling C (nq × nx) of `model` at
+/// f = 0 with `damping`'s ε'(0).
+fn float_blocks(model: &StageModel, damping: &Damping) -> (DMatrix<f64>, DMatrix<f64>) {
+    let (nx, nq, _) = model.sizes;
+    let (re, _) = model.master_values(damping, 0.0);
+    let mut q = DMatrix::zeros(nq, nq);
+    let mut c = DMatrix::zeros(nq, nx);
+    for (s, &v) in re.iter().enumerate() {
+        let (r, col) = model.pattern.position(s);
+        if (nx..nx + nq).contains(&r) {
+            if (nx..nx + nq).contains(&col) {
+                q[(r - nx, col - nx)] = v;
+            } else if col < nx {
+                c[(r - nx, col)] = v;
+            }
+        }
+    }
+    (q, c)
 }
 
 impl FloatMap {
     /// The map of `model` with `damping`'s ε'(0).
     pub fn new(model: &StageModel, damping: &Damping) -> Self {
         let (nx, nq, _) = model.sizes;
-        let (re, _) = model.master_values(damping, 0.0);
-        let mut q = DMatrix::zeros(nq, nq);
-        let mut c = DMatrix::zeros(nq, nx);
-        for (s, &v) in re.iter().enumerate() {
-            let (r, col) = model.pattern.position(s);
-            if (nx..nx + nq).contains(&r) {
-                if (nx..nx + nq).contains(&col) {
-                    q[(r - nx, col - nx)] = v;
-                } else if col < nx {
-                    c[(r - nx, col)] = v;
+        let (q, c) = float_blocks(model, damping);
+        let mut groups = Vec::new();
+        for group in crate::schur::components(nq, |i, j| q[(i, j)] != 0.0) {
+            let variables: Vec<usize> = (0..nx)
+                .filter(|&j| group.iter().any(|&f| c[(f, j)] != 0.0))
+                .collect();
+            let qg = DMatrix::from_fn(group.len(), group.len(), |i, j| q[(group[i], group[j])]);
+            let cg = DMatrix::from_fn(group.len(), variables.len(), |i, j| {
+                c[(group[i], variables[j])]
+            });
+            match qg.full_piv_lu().solve(&cg) {
+                Some(x) if x.iter().all(|v| v.is_finite()) => groups.push((group, variables, -x)),
+                // Q singular: no map (the elimination itself reports the float)
+                _ => {
+                    groups.clear();
+                    break;
                 }
             }
         }
-        let map = if nq == 0 {
-            DMatrix::zeros(0, nx)
-        } else {
-            match q.full_piv_lu().solve(&c) {
-                Some(x) if x.iter().all(|v| v.is_finite()) => -x,
-                _ => DMatrix::zeros(nq, nx),
-            }
-        };
-        FloatMap { nx, map }
+        FloatMap { nx, nq, groups }
     }
 
     /// [v; −Q⁻¹ C_qx v] over the variables and the floats.
     pub fn extend(&self, v: &[f64]) -> Vec<f64> {
-        let nq = self.map.nrows();
         let mut z: Vec<f64> = v.iter().copied().take(self.nx).collect();
-        z.resize(self.nx + nq, 0.0);
+        z.resize(self.nx + self.nq, 0.0);
         let (variables, floats) = z.split_at_mut(self.nx);
-        // by columns of the map (its storage order), skipping the variables a mode leaves
-        // still
-        for (column, &x) in self.map.column_iter().zip(variables.iter()) {
-            if x != 0.0 {
-                for (f, m) in floats.iter_mut().zip(column.iter()) {
-                    *f += m * x;
+        for (group, coupled, map) in &self.groups {
+            // by columns of the map (its storage order), skipping the variables a mode
+            // leaves still
+            for (column, &j) in map.column_iter().zip(coupled) {
+                let x = variables[j];
+                if x != 0.0 {
+                    for (&f, m) in group.iter().zip(column.iter()) {
+                        floats[f] += m * x;
+                    }
                 }
             }
         }
@@ -310,8 +334,16 @@ impl FloatMap {
     }
 
     /// The map −Q⁻¹ C_qx itself (floats × variables).
-    pub fn matrix(&self) -> &DMatrix<f64> {
-        &self.map
+    pub fn matrix(&self) -> DMatrix<f64> {
+        let mut m = DMatrix::zeros(self.nq, self.nx);
+        for (group, coupled, map) in &self.groups {
+            for (a, &f) in group.iter().enumerate() {
+                for (b, &j) in coupled.iter().enumerate() {
+                    m[(f, j)] = map[(a, b)];
+                }
+            }
+        }
+        m
     }
 }
 
@@ -612,14 +644,7 @@ pub fn runaway_floats(
     if nq == 0 {
         return Ok(Vec::new());
     }
-    let (re, _) = model.master_values(damping, 0.0);
-    let mut q = DMatrix::zeros(nq, nq);
-    for (s, &v) in re.iter().enumerate() {
-        let (r, c) = model.pattern.position(s);
-        if (nx..nx + nq).contains(&r) && (nx..nx + nq).contains(&c) {
-            q[(r - nx, c - nx)] = v;
-        }
-    }
+    let (q, _) = float_blocks(model, damping);
     if let Some(bad) = q.iter().position(|x| !x.is_finite()) {
         return Err(DynamicsError::NotFinite {
             what: "float stiffness block",
@@ -627,44 +652,52 @@ pub fn runaway_floats(
             column: bad / nq,
         });
     }
-    let eigen = q.clone().symmetric_eigen();
     let mut runaway = Vec::new();
-    for (k, &kappa) in eigen.eigenvalues.iter().enumerate() {
-        if kappa >= 0.0 {
-            continue;
-        }
-        let w = eigen.eigenvectors.column(k);
-        let error = match rounding {
-            Some(r) => {
-                let mut z = vec![0.0; nx];
-                z.extend(w.iter());
-                r.error_unknowns(&z)
+    // Q is block diagonal over the groups its exact zeros separate: its eigenpairs are the
+    // groups' own
+    for group in crate::schur::components(nq, |i, j| q[(i, j)] != 0.0) {
+        let qg = DMatrix::from_fn(group.len(), group.len(), |i, j| q[(group[i], group[j])]);
+        let eigen = qg.clone().symmetric_eigen();
+        for (k, &kappa) in eigen.eigenvalues.iter().enumerate() {
+            if kappa >= 0.0 {
+                continue;
             }
-            None => {
-                let mut sum = 0.0;
-                for i in 0..nq {
-                    for j in 0..nq {
-                        sum += w[i].abs() * q[(i, j)].abs() * w[j].abs();
+            let w = eigen.eigenvectors.column(k);
+            let error = match rounding {
+                Some(r) => {
+                    let mut z = vec![0.0; nx + nq];
+                    for (&f, x) in group.iter().zip(w.iter()) {
+                        z[nx + f] = *x;
                     }
+                    r.error_unknowns(&z)
                 }
-                ROUNDING * f64::EPSILON * sum
+                None => {
+                    let mut sum = 0.0;
+                    for i in 0..group.len() {
+                        for j in 0..group.len() {
+                            sum += w[i].abs() * qg[(i, j)].abs() * w[j].abs();
+                        }
+                    }
+                    ROUNDING * f64::EPSILON * sum
+                }
+            };
+            if kappa < -error {
+                let mut floats: Vec<(String, f64)> = w
+                    .iter()
+                    .zip(&group)
+                    .map(|(x, &f)| (model.floats.get(f).cloned().unwrap_or_default(), x * x))
+                    .filter(|(_, share)| *share >= 0.01)
+                    .collect();
+                floats.sort_by(|a, b| b.1.total_cmp(&a.1));
+                floats.truncate(3);
+                runaway.push(RunawayFloat {
+                    stiffness: kappa,
+                    floats,
+                });
             }
-        };
-        if kappa < -error {
-            let mut floats: Vec<(String, f64)> = w
-                .iter()
-                .enumerate()
-                .map(|(i, x)| (model.floats.get(i).cloned().unwrap_or_default(), x * x))
-                .filter(|(_, share)| *share >= 0.01)
-                .collect();
-            floats.sort_by(|a, b| b.1.total_cmp(&a.1));
-            floats.truncate(3);
-            runaway.push(RunawayFloat {
-                stiffness: kappa,
-                floats,
-            });
         }
     }
+    runaway.sort_by(|a, b| a.stiffness.total_cmp(&b.stiffness));
     Ok(runaway)
 }
 
