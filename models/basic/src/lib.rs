@@ -108,11 +108,12 @@ fn wire_tags(kind: &str) -> WireTags {
 
 fn round_section(p: &Resolved, prefix: &str) -> Result<WireSection, BuildError> {
     let e = p.get(&format!("E_{prefix}"))?;
-    let nu = p.get(&format!("nu_{prefix}"))?;
+    let nu = format!("nu_{prefix}");
+    let g = pendkit_model::shear_modulus(&format!("parameter '{nu}'"), e, p.get(&nu)?)?;
     Ok(WireSection::round(
         p.get(&format!("r_{prefix}"))?,
         e,
-        e / (2.0 * (1.0 + nu)),
+        g,
         p.get(&format!("rho_{prefix}"))?,
     ))
 }
@@ -180,7 +181,7 @@ fn four_wires(b: &mut SystemBuilder, w: &FourWires, weight: f64) -> Result<(), B
 /// The four silica fibres `fibre1` ... `fibre4` of the pendulum and the rigid body, from
 /// the support (at z = 0) to `body`, attached at (±a_fibre, ±b_fibre, d) on the body whose
 /// centre sits at z = -(l_fibre + d); each carries a quarter of `weight` (N). Their lower
-/// ends are hinged when the parameter `hinged_bottom` is non-zero, else clamped.
+/// ends are hinged when the parameter `hinged_bottom` is 1, clamped when it is 0.
 fn four_fibres(
     b: &mut SystemBuilder,
     (support, body): (BodyId, BodyId),
@@ -188,7 +189,7 @@ fn four_fibres(
     d: f64,
     weight: f64,
 ) -> Result<(), BuildError> {
-    let bottom = if p.get("hinged_bottom")? != 0.0 {
+    let bottom = if pendkit_model::switch(p, "hinged_bottom")? {
         EndDirection::Hinged
     } else {
         EndDirection::Auto
