@@ -362,7 +362,7 @@ impl ParamSet {
         } else if unit == "Hz" && value <= 0.0 {
             Some("a frequency must be positive")
         } else if unit == "kg" && value < 0.0 {
-            Some("a mass cannot be negative")
+            Some("negative mass: a mass cannot be negative")
         } else {
             None
         };
