@@ -143,8 +143,8 @@ pub enum ParamError {
         /// The value obtained.
         value: f64,
     },
-    /// A parameter whose value its unit rules out (a frequency not positive, a negative
-    /// mass), or a subnormal number (below 2.2e-308 in magnitude: never a physical value,
+    /// A parameter whose value its unit rules out (a frequency not positive), or a
+    /// subnormal number (below 2.2e-308 in magnitude: never a physical value,
     /// and its reciprocal overflows).
     #[error("parameter '{name}' = {value:e} {unit}: {why}")]
     OutOfRange {
@@ -353,16 +353,15 @@ impl ParamSet {
     }
 
     /// The checks every resolved value passes: not subnormal; and by its declared unit, a
-    /// frequency (`Hz`) positive, a mass (`kg`) not negative. (A frequency enters a
-    /// stiffness squared, so a negative one would silently act as its absolute value.)
+    /// frequency (`Hz`) positive (a frequency enters a stiffness squared, so a negative one
+    /// would silently act as its absolute value). Masses are checked where a body reads
+    /// them, naming the body.
     fn check_range(&self, name: &str, value: f64) -> Result<(), ParamError> {
         let unit = self.unit(name).unwrap_or_default();
         let why = if value != 0.0 && value.abs() < f64::MIN_POSITIVE {
             Some("subnormal (magnitude below 2.2e-308): not a physical value")
         } else if unit == "Hz" && value <= 0.0 {
             Some("a frequency must be positive")
-        } else if unit == "kg" && value < 0.0 {
-            Some("negative mass: a mass cannot be negative")
         } else {
             None
         };
