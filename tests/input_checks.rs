@@ -55,6 +55,33 @@ fn mis_sized_inputs_to_public_functions_are_errors_not_panics_or_nan() {
     assert!(normal_modes(&bad, &DMatrix::identity(2, 2), &names).is_err());
     // modes below a frequency that is not one
     assert!(r.model.modes_below(d, f64::NAN).is_err());
+    // values on the pattern, and the blocks an input and output couple, of the wrong size
+    assert!(matches!(
+        r.model.dense(&[1.0; 3]),
+        Err(DynamicsError::Length { .. })
+    ));
+    assert!(r.model.dense(&r.model.lossless).is_ok());
+    assert!(matches!(
+        pendkit::dynamics::coupled_unknowns(&r.model, &short_in, &good_out),
+        Err(DynamicsError::Length { .. })
+    ));
+    assert!(pendkit::dynamics::coupled_unknowns(&r.model, &good_in, &good_out).is_ok());
+    // a damping tag's multiplier past the model's tags
+    let mut sweep = pendkit::dynamics::Sweep::new(
+        &r.model,
+        d,
+        &good_in,
+        &good_out,
+        pendkit::dynamics::Solver::Restricted,
+    )
+    .unwrap();
+    sweep.at(1.0).unwrap();
+    assert!(sweep.multiplier(r.model.by_tag.len()).is_none());
+    assert!(sweep.multiplier(0).is_some());
+    // the float elimination of a matrix of the wrong size
+    let k = r.model.real_stiffness(d);
+    let small = k.view((0, 0), (3, 3)).into_owned();
+    assert!(pendkit::dynamics::eliminate_floats(&small, &r.assembled.layout, &r.system).is_err());
     // names that are not the model's
     assert!(r.input("nope").is_err() && r.output("nope").is_err());
     assert!(r.output("testmass@0,0/1,0,0").is_err());

@@ -1,4 +1,5 @@
-//! Property tests (issue 11): over generated parameter values, expressions and case files,
+//! Property tests (issue 11): over generated parameter values, expressions, case files and
+//! suspension files (with named signals),
 //! pendkit never panics, and whatever it answers with success is finite. Errors are
 //! fine; a panic or a NaN with `Ok` is a failure. Each property runs a few dozen cases
 //! (each case builds and solves a model); proptest's shrinking names the smallest input
@@ -155,5 +156,114 @@ proptest! {
         let path = dir.join("case.toml");
         std::fs::write(&path, &text).unwrap();
         run_and_check(Case::from_file(&path), Stage::S2)?;
+    }
+}
+
+/// Signal texts for a suspension file's `[outputs]`/`[inputs]`: points on its bodies (also
+/// the support, an unknown body, degenerate directions), combinations of coordinates and
+/// malformed text.
+fn signal() -> impl Strategy<Value = String> {
+    let number = prop_oneof![
+        3 => (-2.0f64..2.0).prop_map(|x| format!("{x}")),
+        1 => Just("0".to_string()),
+        1 => Just("1e300".to_string()),
+        1 => Just("a_fibre".to_string()),
+    ];
+    let body = prop_oneof![3 => Just("mass1"), 2 => Just("support"), 1 => Just("nobody")];
+    let coordinate = prop_oneof![Just("x1"), Just("y1"), Just("z1"), Just("x00"), Just("m1")];
+    let point = (
+        body,
+        proptest::collection::vec(number.clone(), 3),
+        proptest::collection::vec(number.clone(), 3),
+    )
+        .prop_map(|(b, p, d)| format!("{b}@{}/{}", p.join(","), d.join(",")));
+    let combination = proptest::collection::vec((number, coordinate), 1..3).prop_map(|terms| {
+        terms
+            .iter()
+            .map(|(c, x)| format!("({c})*{x}"))
+            .collect::<Vec<_>>()
+            .join(" + ")
+    });
+    let text = prop_oneof![3 => point, 2 => combination, 1 => "[ -~]{0,20}"];
+    let generated =
+        (text, any::<bool>()).prop_map(|(s, force)| if force { format!("force:{s}") } else { s });
+    // and, as often, well-formed signals, so that many files get as far as a response
+    let valid = prop_oneof![
+        Just("x00".to_string()),
+        Just("support@0,0,0/1,0,0".to_string()),
+        Just("force:mass1@0,0,0/0,0,1".to_string()),
+        Just("mass1@0.1,0,0/1,0,0".to_string()),
+        Just("2*x1 - z1".to_string()),
+    ];
+    prop_oneof![generated, valid]
+}
+
+/// A fresh file name for each generated suspension file: they are cached by path.
+fn fresh_path(stem: &str) -> std::path::PathBuf {
+    static COUNT: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let k = COUNT.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let dir = std::env::temp_dir().join(format!("pendkit-prop-files-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(format!("{stem}-{k}.toml"))
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 128, ..ProptestConfig::default() })]
+
+    /// The bundled pendulum's suspension file with one parameter's value replaced, a named
+    /// output and input added, and a line of junk: an error, or finite numbers (modes,
+    /// and where stable, the named signals' transfer function and noise).
+    #[test]
+    fn any_suspension_file_gives_an_error_or_finite_numbers(
+        p in 0..18usize,
+        v in value(),
+        output in signal(),
+        input in signal(),
+        // mostly nothing (junk breaks the TOML, and the rest would go untried)
+        junk in prop_oneof![3 => Just(String::new()), 1 => "[ -~]{0,30}"],
+    ) {
+        let source = concat!(env!("CARGO_MANIFEST_DIR"), "/../models/basic/pendulum.toml");
+        let base = std::fs::read_to_string(source).unwrap();
+        // two cases in three keep every parameter (p ≥ 6), so the signals get tried
+        let param = ["m1", "a_fibre", "r_fibre", "E_fibre", "l_fibre", "phi_fibre"]
+            .get(p)
+            .copied()
+            .unwrap_or("none");
+        // replace the value of `param`'s definition line
+        let text: String = base
+            .lines()
+            .map(|line| match line.strip_prefix(&format!("{param} = {{ value = ")) {
+                Some(rest) => {
+                    let tail = rest.split_once(',').map_or("", |(_, t)| t);
+                    format!("{param} = {{ value = \"{v}\",{tail}")
+                }
+                None => line.to_string(),
+            })
+            .collect::<Vec<_>>()
+            .join("\n");
+        let text = format!(
+            "{text}\n[outputs]\nprobe = {output:?}\n[inputs]\ndrive = {input:?}\n{junk}\n"
+        );
+        let path = fresh_path("pendulum");
+        std::fs::write(&path, &text).unwrap();
+        let Ok(case) = Case::from_file(&path) else { return Ok(()) };
+        let Ok((system, _)) = case.build() else { return Ok(()) };
+        let Ok(r) = run_stage(system, Stage::S2) else { return Ok(()) };
+        check_finite(&r, Stage::S2)?;
+        if r.check_stable().is_err() {
+            return Ok(());
+        }
+        let freqs = log_grid(0.1, 10.0, 4).unwrap();
+        for (i, o) in [("drive", "x1"), ("x00", "probe"), ("drive", "probe")] {
+            if let Ok(h) = r.transfer(i, o, &freqs) {
+                prop_assert!(
+                    h.iter().all(|z| z.re.is_finite() && z.im.is_finite()),
+                    "{i} -> {o}: {h:?}"
+                );
+            }
+        }
+        if let Ok(noise) = r.noise("probe", &freqs) {
+            prop_assert!(noise.total.iter().all(|x| x.is_finite() && *x >= 0.0), "{noise:?}");
+        }
     }
 }

@@ -33,11 +33,15 @@ fn pattern_values_equal_the_dense_scatter() {
             let r = run(name, sets, stage);
             let m = &r.model;
             let (lossless, tags) = r.assembled.dilution_parts();
-            assert_eq!(m.dense(&m.lossless), lossless, "{name} {stage}: lossless");
+            assert_eq!(
+                m.dense(&m.lossless).unwrap(),
+                lossless,
+                "{name} {stage}: lossless"
+            );
             for (tag, dense) in &tags {
                 match m.by_tag.iter().find(|(t, _)| t == tag) {
                     Some((_, values)) => {
-                        assert_eq!(&m.dense(values), dense, "{name} {stage}: {tag}")
+                        assert_eq!(&m.dense(values).unwrap(), dense, "{name} {stage}: {tag}")
                     }
                     None => assert!(
                         dense.iter().all(|&x| x == 0.0),
@@ -52,7 +56,7 @@ fn pattern_values_equal_the_dense_scatter() {
                 );
             }
             let (nx, _, _) = m.sizes;
-            let mass = m.dense(&m.mass_on_pattern);
+            let mass = m.dense(&m.mass_on_pattern).unwrap();
             assert_eq!(
                 mass.view((0, 0), (nx, nx)),
                 r.assembled.mass.view((0, 0), (nx, nx)),

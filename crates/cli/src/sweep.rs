@@ -22,7 +22,7 @@ pub struct Args {
     args: ModelArgs,
     /// A parameter and its values: NAME=START:STOP:N (N evenly spaced values, ends
     /// included), or NAME=START:STOP:N:log (log-spaced). Repeatable: every combination,
-    /// the last --vary changing fastest.
+    /// the last --vary changing fastest; at most 100000 steps in all.
     #[arg(long = "vary", required = true, value_name = "NAME=START:STOP:N")]
     vary: Vec<String>,
     /// The normal modes at every step, tracked by shape.
@@ -51,7 +51,11 @@ pub struct Vary {
     pub values: Vec<f64>,
 }
 
-/// Parses `NAME=START:STOP:N[:log]`.
+/// Most steps of a sweep, all `--vary` combined: each step is a whole run (build,
+/// equilibrium, modes), so more is a mistake, not a calculation.
+pub const MAX_STEPS: usize = 100_000;
+
+/// Parses `NAME=START:STOP:N[:log]` (1 ≤ N ≤ [`MAX_STEPS`]).
 pub fn parse_vary(text: &str) -> Result<Vary, CliError> {
     let bad = |why: &str| {
         CliError::usage(format!(
@@ -75,8 +79,13 @@ pub fn parse_vary(text: &str) -> Result<Vary, CliError> {
     let n: usize = parts[2]
         .parse()
         .ok()
-        .filter(|&n| n >= 1)
-        .ok_or_else(|| bad(&format!("N '{}' is not a whole number >= 1", parts[2])))?;
+        .filter(|&n| (1..=MAX_STEPS).contains(&n))
+        .ok_or_else(|| {
+            bad(&format!(
+                "N '{}' is not a whole number from 1 to {MAX_STEPS}",
+                parts[2]
+            ))
+        })?;
     if log && !(start > 0.0 && stop > 0.0) {
         return Err(bad("log spacing needs START and STOP > 0"));
     }
@@ -259,6 +268,20 @@ pub fn run(a: Args) -> Result<String, CliError> {
         .iter()
         .map(|t| parse_vary(t))
         .collect::<Result<_, _>>()?;
+    let steps = varies
+        .iter()
+        .try_fold(1usize, |n, v| n.checked_mul(v.values.len()))
+        .filter(|&n| n <= MAX_STEPS);
+    if steps.is_none() {
+        return Err(CliError::usage(format!(
+            "--vary: {} combinations in all; at most {MAX_STEPS} steps",
+            varies
+                .iter()
+                .map(|v| v.values.len().to_string())
+                .collect::<Vec<_>>()
+                .join(" x ")
+        )));
+    }
     if a.modes && a.plot.is_some() && varies.len() != 1 {
         return Err(CliError::usage(
             "--plot with --modes draws frequencies against one swept parameter: give one --vary",

@@ -256,3 +256,125 @@ fn tradeoff_refuses_an_unstable_suspension_naming_the_growing_mode() {
     );
     assert!(!dir.join("tradeoff.csv").exists());
 }
+
+#[test]
+fn negative_or_zero_frequency_parameter_is_refused_not_squared_away() {
+    // the quad's blade stiffness is ½ (2π ufc1)² m: a negative ufc1 would act as its
+    // absolute value, a zero one leave a blade without stiffness
+    for v in ["-2.48", "0"] {
+        refused(
+            &["modes", "quad", "--set", &format!("ufc1={v}")],
+            &["ufc1", "frequency must be positive"],
+        );
+    }
+    refused(&["modes", "quad", "--set", "m3=-40"], &["negative mass"]);
+}
+
+#[test]
+fn subnormal_parameter_is_refused_not_turned_into_infinite_frequencies() {
+    // m1 = 1e-320 kg gave "inf" mode frequencies with exit status 0
+    refused(
+        &["modes", "pendulum", "--set", "m1=1e-320"],
+        &["m1", "subnormal"],
+    );
+}
+
+#[test]
+fn sweep_with_more_steps_than_the_limit_is_refused_at_once() {
+    // 1e9 steps ran (and allocated) for hours; two --vary multiply
+    refused(
+        &[
+            "sweep",
+            "pendulum",
+            "--vary",
+            "m1=1:2:1000000000",
+            "--modes",
+        ],
+        &["--vary", "100000"],
+    );
+    refused(
+        &[
+            "sweep",
+            "pendulum",
+            "--vary",
+            "m1=1:2:1000",
+            "--vary",
+            "l_fibre=1:2:1000",
+            "--modes",
+        ],
+        &["1000 x 1000", "100000"],
+    );
+}
+
+/// Writes `text` to `name` in the tests' scratch folder and returns its path.
+fn scratch_file(name: &str, text: &str) -> String {
+    let path = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name);
+    std::fs::write(&path, text).unwrap();
+    path.to_string_lossy().into_owned()
+}
+
+#[test]
+fn empty_suspension_file_is_refused_not_a_model_with_no_modes() {
+    // an empty .toml read as a suspension file with nothing in it gave "0 modes", exit 0
+    let path = scratch_file("empty-suspension.toml", "");
+    refused(&["modes", &path], &["no variables"]);
+}
+
+#[test]
+fn named_output_with_every_coefficient_zero_is_refused() {
+    // `0*x1` is an output that reads nothing: a table of zeros with exit status 0 before
+    let base = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../models/basic/pendulum.toml"
+    ))
+    .unwrap();
+    let path = scratch_file(
+        "zero-output.toml",
+        &format!("{base}\n[outputs]\nnothing = \"0*x1\"\n"),
+    );
+    refused(
+        &[
+            "tf", &path, "--input", "x00", "--output", "nothing", "--points", "3",
+        ],
+        &["nothing", "every coefficient zero"],
+    );
+}
+
+#[test]
+fn switch_parameter_other_than_0_or_1_is_refused() {
+    // hinged_bottom = -1 was read as "hinged" (anything non-zero), in the bundled model
+    // and in its suspension file alike
+    refused(
+        &["modes", "pendulum", "--set", "hinged_bottom=-1"],
+        &["hinged_bottom", "0", "1"],
+    );
+    let file = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../models/basic/pendulum.toml"
+    );
+    refused(
+        &["modes", file, "--set", "hinged_bottom=2"],
+        &["hinged", "must be 0 (clamped) or 1 (hinged)"],
+    );
+}
+
+#[test]
+fn poisson_ratio_outside_its_physical_range_is_refused() {
+    // G = E / (2 (1 + ν)): ν = 1e300 gave a shear modulus of ~0 and torsion-free fibres
+    refused(
+        &["modes", "pendulum", "--set", "nu_fibre=1e300"],
+        &["nu_fibre", "Poisson's ratio"],
+    );
+    refused(
+        &["modes", "quad", "--set", "nu_silica=0.6"],
+        &["nu_silica", "(-1, 0.5)"],
+    );
+    let file = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../models/basic/pendulum.toml"
+    );
+    refused(
+        &["modes", file, "--set", "nu_fibre=-1"],
+        &["poisson_ratio", "(-1, 0.5)"],
+    );
+}

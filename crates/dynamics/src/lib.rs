@@ -166,7 +166,12 @@ pub fn eliminate_floats(
     let e = schur::eliminate(|i, j| p[(i, j)], &kept, &floats);
     if let Some(k) = e.singular {
         return Err(DynamicsError::SingularFloats {
-            float: system.coords[layout.floats[k]].name.clone(),
+            float: layout
+                .floats
+                .get(k)
+                .and_then(|&c| system.coords.get(c))
+                .map(|c| c.name.clone())
+                .unwrap_or_default(),
         });
     }
     let a = e.matrix;

@@ -380,11 +380,24 @@ impl StageModel {
         (re, im)
     }
 
-    /// Values on the pattern as a dense master matrix.
-    pub fn dense(&self, values: &[f64]) -> DMatrix<f64> {
+    /// Values on the pattern (one per slot, as [`StageModel::lossless`]) as a dense master
+    /// matrix; an error when `values` has another length.
+    pub fn dense(&self, values: &[f64]) -> Result<DMatrix<f64>, DynamicsError> {
+        if values.len() != self.pattern.len() {
+            return Err(DynamicsError::Length {
+                what: "values on the pattern",
+                expected: self.pattern.len(),
+                got: values.len(),
+            });
+        }
+        Ok(self.dense_on_pattern(values))
+    }
+
+    /// [`StageModel::dense`] of values this model made on its own pattern.
+    fn dense_on_pattern(&self, values: &[f64]) -> DMatrix<f64> {
         let n = self.pattern.dim();
         let mut m = DMatrix::zeros(n, n);
-        for (s, &v) in values.iter().enumerate() {
+        for (s, &v) in values.iter().enumerate().take(self.pattern.len()) {
             m[self.pattern.position(s)] = v;
         }
         m
@@ -392,13 +405,13 @@ impl StageModel {
 
     /// Real stiffness at f = 0 (ε' of each tag at DC), dense: the matrix the modes use.
     pub fn real_stiffness(&self, damping: &Damping) -> DMatrix<f64> {
-        self.dense(&self.master_values(damping, 0.0).0)
+        self.dense_on_pattern(&self.master_values(damping, 0.0).0)
     }
 
     /// Complex master matrix P(f) (layout order x, q, s), dense real and imaginary parts.
     pub fn master(&self, damping: &Damping, f_hz: f64) -> (DMatrix<f64>, DMatrix<f64>) {
         let (re, im) = self.master_values(damping, f_hz);
-        (self.dense(&re), self.dense(&im))
+        (self.dense_on_pattern(&re), self.dense_on_pattern(&im))
     }
 
     /// Checks that an input and an output have one entry per parameter or variable (or,

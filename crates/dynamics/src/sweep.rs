@@ -209,7 +209,7 @@ impl<'m> Sweep<'m> {
         model.check(input, output)?;
         let n_all = model.unknowns();
         let unknowns: Vec<usize> = match solver {
-            Solver::Restricted => coupled_unknowns(model, input, output),
+            Solver::Restricted => coupled_unknowns_checked(model, input, output),
             Solver::Full | Solver::DenseReference => (0..n_all).collect(),
         };
         let mut local = vec![NONE; n_all];
@@ -282,9 +282,9 @@ impl<'m> Sweep<'m> {
     }
 
     /// The multiplier ε' + i ε'' of tag `t` (index into the model's `by_tag`) at the last
-    /// frequency given to [`Sweep::at`].
-    pub fn multiplier(&self, t: usize) -> c64 {
-        self.now[t]
+    /// frequency given to [`Sweep::at`]; `None` for an index past the model's tags.
+    pub fn multiplier(&self, t: usize) -> Option<c64> {
+        self.now.get(t).copied()
     }
 
     /// Solves at `f_hz` (Hz) and returns the output per unit input.
@@ -610,7 +610,17 @@ impl Reference {
 
 /// The unknowns (master indices, ascending) in the blocks of the pattern that both the
 /// input's right-hand side and the output's vector touch.
-pub fn coupled_unknowns(model: &StageModel, input: &Input, output: &Output) -> Vec<usize> {
+pub fn coupled_unknowns(
+    model: &StageModel,
+    input: &Input,
+    output: &Output,
+) -> Result<Vec<usize>, DynamicsError> {
+    model.check(input, output)?;
+    Ok(coupled_unknowns_checked(model, input, output))
+}
+
+/// [`coupled_unknowns`] of an input and output [`StageModel::check`] accepted.
+fn coupled_unknowns_checked(model: &StageModel, input: &Input, output: &Output) -> Vec<usize> {
     let n_all = model.unknowns();
     let n_blocks = model.blocks.iter().map(|&b| b + 1).max().unwrap_or(0);
     let mark = |touched: &mut Vec<bool>, u: usize| {

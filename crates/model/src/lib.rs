@@ -574,10 +574,14 @@ impl SystemBuilder {
                 name: signal.name,
             });
         }
-        if signal.terms.is_empty() {
+        if signal
+            .terms
+            .iter()
+            .all(|(coefficient, _)| *coefficient == 0.0)
+        {
             return Err(BuildError::Invalid {
                 item,
-                message: "combines nothing".into(),
+                message: "combines nothing (no term, or every coefficient zero)".into(),
             });
         }
         // parameters are driven (displacement inputs, support forces), variables respond
@@ -711,7 +715,57 @@ impl SystemBuilder {
     /// The finished model.
     pub fn build(self) -> Result<System, BuildError> {
         check_finite("model", "gravity", self.system.gravity, "m/s^2")?;
+        // an empty file, or one whose bodies are all driven, has nothing to compute
+        if !self
+            .system
+            .coords
+            .iter()
+            .any(|c| c.kind == CoordKind::Variable)
+        {
+            return Err(BuildError::Invalid {
+                item: "model".into(),
+                message: "no variables (no body with mass moves): nothing to compute".into(),
+            });
+        }
         Ok(self.system)
+    }
+}
+
+/// Shear modulus G = E / (2 (1 + ν)) (Pa) from Young's modulus `youngs_modulus` (Pa) and
+/// Poisson's ratio `poisson_ratio`, which must lie in (-1, 0.5) for an isotropic solid (G
+/// and the bulk modulus positive); `item` names where it is read, for the error.
+pub fn shear_modulus(
+    item: &str,
+    youngs_modulus: f64,
+    poisson_ratio: f64,
+) -> Result<f64, BuildError> {
+    if poisson_ratio > -1.0 && poisson_ratio < 0.5 {
+        Ok(youngs_modulus / (2.0 * (1.0 + poisson_ratio)))
+    } else {
+        Err(BuildError::Invalid {
+            item: item.to_string(),
+            message: format!(
+                "Poisson's ratio {} must lie in (-1, 0.5) for an isotropic material",
+                if poisson_ratio.abs() < 1e6 {
+                    poisson_ratio.to_string()
+                } else {
+                    format!("{poisson_ratio:e}")
+                }
+            ),
+        })
+    }
+}
+
+/// A 0-or-1 switch parameter (`hinged_bottom`): anything else is an error naming it, not
+/// silently read as "on".
+pub fn switch(params: &Resolved, name: &str) -> Result<bool, BuildError> {
+    match params.get(name)? {
+        0.0 => Ok(false),
+        1.0 => Ok(true),
+        other => Err(BuildError::Invalid {
+            item: format!("parameter '{name}'"),
+            message: format!("must be 0 (off) or 1 (on), got {other}"),
+        }),
     }
 }
 

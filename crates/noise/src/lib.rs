@@ -236,7 +236,7 @@ pub fn thermal_noise_with(
         total.push(scale * response.im.abs());
         let z = sweep.response();
         let share = |forms: &Forms, form: usize, tag: usize| {
-            let loss = sweep.multiplier(tag).im;
+            let loss = sweep.multiplier(tag).map_or(0.0, |m| m.im);
             if loss != 0.0 {
                 scale * tag_ratio[tag] * loss * forms.energy(form)
             } else {

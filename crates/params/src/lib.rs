@@ -143,6 +143,20 @@ pub enum ParamError {
         /// The value obtained.
         value: f64,
     },
+    /// A parameter whose value its unit rules out (a frequency not positive), or a
+    /// subnormal number (below 2.2e-308 in magnitude: never a physical value,
+    /// and its reciprocal overflows).
+    #[error("parameter '{name}' = {value:e} {unit}: {why}")]
+    OutOfRange {
+        /// The parameter name.
+        name: String,
+        /// The value obtained.
+        value: f64,
+        /// Its declared unit (empty if none).
+        unit: String,
+        /// What the value must be.
+        why: &'static str,
+    },
     /// A numeric value asked of a parameter that depends on free symbols.
     #[error("parameter '{name}' has no numeric value: it depends on {}", free.join(", "))]
     Symbolic {
@@ -331,7 +345,35 @@ impl ParamSet {
     /// symbols in sorted order. A free symbol takes precedence over a parameter of the same
     /// name, which is then left out.
     pub fn resolve_with_free(&self, free: &[&str]) -> Result<Resolved, ParamError> {
-        resolve::resolve(&self.entries, &self.index, free)
+        let resolved = resolve::resolve(&self.entries, &self.index, free)?;
+        for (name, value) in resolved.iter() {
+            self.check_range(name, value)?;
+        }
+        Ok(resolved)
+    }
+
+    /// The checks every resolved value passes: not subnormal; and by its declared unit, a
+    /// frequency (`Hz`) positive (a frequency enters a stiffness squared, so a negative one
+    /// would silently act as its absolute value). Masses are checked where a body reads
+    /// them, naming the body.
+    fn check_range(&self, name: &str, value: f64) -> Result<(), ParamError> {
+        let unit = self.unit(name).unwrap_or_default();
+        let why = if value != 0.0 && value.abs() < f64::MIN_POSITIVE {
+            Some("subnormal (magnitude below 2.2e-308): not a physical value")
+        } else if unit == "Hz" && value <= 0.0 {
+            Some("a frequency must be positive")
+        } else {
+            None
+        };
+        match why {
+            Some(why) => Err(ParamError::OutOfRange {
+                name: name.to_string(),
+                value,
+                unit: unit.to_string(),
+                why,
+            }),
+            None => Ok(()),
+        }
     }
 }
 

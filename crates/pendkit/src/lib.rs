@@ -805,7 +805,9 @@ impl StageResult {
                         // a driven point: the smallest change of the parameters that moves
                         // it by one unit along the direction, as support@x,y,z/dx,dy,dz
                         let norm2 = w.parameters.norm_squared();
-                        if w.unknowns.iter().any(|&x| x != 0.0) || !(norm2 > 0.0) {
+                        if w.unknowns.iter().any(|&x| x != 0.0)
+                            || norm2.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater)
+                        {
                             return Err(bad(
                                 "a displacement input must be a point that only the support moves"
                                     .into(),

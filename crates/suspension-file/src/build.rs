@@ -201,10 +201,18 @@ impl Ctx<'_> {
 
     /// How a wire leaves the points of `p`.
     fn end_direction(&self, p: &Points) -> Result<EndDirection, BuildError> {
-        if let Some(h) = &p.hinged
-            && self.eval(h)? != 0.0
-        {
-            return Ok(EndDirection::Hinged);
+        if let Some(h) = &p.hinged {
+            // a switch: 0 or 1, nothing else silently read as "on"
+            match self.eval(h)? {
+                0.0 => {}
+                1.0 => return Ok(EndDirection::Hinged),
+                other => {
+                    return Err(invalid(
+                        &h.at,
+                        format!("`hinged` = {other}: must be 0 (clamped) or 1 (hinged)"),
+                    ));
+                }
+            }
         }
         match &p.direction {
             Some(d) => Ok(EndDirection::Explicit(self.vec3(d)?)),
@@ -957,7 +965,15 @@ impl<'s, 'c> Interpreter<'s, 'c> {
             (Some(ex), _) => ctx.eval(ex)?,
             (None, Some(m)) => match (&m.shear_modulus, &m.poisson_ratio) {
                 (Some(g), _) => ctx.eval_for(g, Some(user))?,
-                (None, Some(nu)) => e / (2.0 * (1.0 + ctx.eval_for(nu, Some(user))?)),
+                (None, Some(nu)) => {
+                    let nu_value = ctx.eval_for(nu, Some(user))?;
+                    pendkit_model::shear_modulus("poisson_ratio", e, nu_value).map_err(|err| {
+                        match err {
+                            BuildError::Invalid { message, .. } => invalid(&nu.at, message),
+                            other => placed(&nu.at)(other),
+                        }
+                    })?
+                }
                 (None, None) => {
                     return Err(invalid(
                         &m.at,

@@ -298,9 +298,9 @@ fn check_parameters(spec: &Spec) -> Result<(), FileError> {
         Err(e) => Err(match &e {
             ParamError::Cycle { chain } => fail(&chain[0], e.clone()),
             ParamError::Undefined { used_in, .. } => fail(used_in, e.clone()),
-            ParamError::NotFinite { name, .. } | ParamError::Syntax { name, .. } => {
-                fail(name, e.clone())
-            }
+            ParamError::NotFinite { name, .. }
+            | ParamError::Syntax { name, .. }
+            | ParamError::OutOfRange { name, .. } => fail(name, e.clone()),
             _ => FileError::file("parameters", e.to_string()),
         }),
     }

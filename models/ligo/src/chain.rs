@@ -189,12 +189,8 @@ pub fn round_section(
     rho: &str,
 ) -> Result<WireSection, BuildError> {
     let e = p.get(y)?;
-    Ok(WireSection::round(
-        p.get(r)?,
-        e,
-        e / (2.0 * (1.0 + p.get(nu)?)),
-        p.get(rho)?,
-    ))
+    let g = pendkit_model::shear_modulus(&format!("parameter '{nu}'"), e, p.get(nu)?)?;
+    Ok(WireSection::round(p.get(r)?, e, g, p.get(rho)?))
 }
 
 /// Tags `<set>_stretch`, `<set>_bending`, `<set>_torsion`.
