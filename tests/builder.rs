@@ -184,7 +184,8 @@ fn products_of_inertia_and_the_lab_table() {
             &r.assembled.layout,
             &r.assembled.equilibrium.coords,
             m,
-        );
+        )
+        .expect("sizes of the library's own run match");
         for k in 0..3 {
             assert!((lab[0].rotation[k] - m.vector[k]).abs() < 1e-12);
         }

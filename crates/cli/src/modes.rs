@@ -50,26 +50,40 @@ pub fn run(a: Args) -> Result<String, CliError> {
             None => plotting::save(&plotting::mode_chart(&run), path)?,
         }
     }
-    Ok(if a.json {
+    if a.json {
         modes_json(&run)
     } else {
         modes_table(&run, a.lab)
-    })
+    }
 }
 
-fn modes_json(run: &Run) -> String {
+/// The bodies' lab-frame motion in mode `m` of the run.
+fn lab(
+    run: &Run,
+    m: &pendkit::dynamics::Mode,
+) -> Result<Vec<pendkit::dynamics::BodyMotion>, CliError> {
     let r = &run.result;
-    let x = &r.assembled.equilibrium.coords;
-    let modes: Vec<_> = r
+    lab_motion(
+        &r.system,
+        &r.assembled.layout,
+        &r.assembled.equilibrium.coords,
+        m,
+    )
+    .map_err(|e| CliError::Pendkit(e.into()))
+}
+
+fn modes_json(run: &Run) -> Result<String, CliError> {
+    let r = &run.result;
+    let modes: Vec<serde_json::Value> = r
         .modes
         .modes
         .iter()
         .map(|m| {
-            let lab: Vec<_> = lab_motion(&r.system, &r.assembled.layout, x, m)
+            let lab: Vec<_> = lab(run, m)?
                 .into_iter()
                 .map(|b| json!({"body": run.body(&b.body), "translation": b.translation, "rotation": b.rotation}))
                 .collect();
-            json!({
+            Ok(json!({
                 "hz": m.hz,
                 "omega_squared": m.omega_squared,
                 "stable": m.is_stable(),
@@ -80,14 +94,14 @@ fn modes_json(run: &Run) -> String {
                 "vector": m.vector,
                 "energy_fractions": m.energy_fractions,
                 "lab": lab,
-            })
+            }))
         })
-        .collect();
+        .collect::<Result<_, CliError>>()?;
     let equilibrium: serde_json::Map<String, serde_json::Value> = r
         .system
         .coords
         .iter()
-        .zip(x)
+        .zip(&r.assembled.equilibrium.coords)
         .map(|(c, v)| (run.coord(&c.name), json!(v)))
         .collect();
     let out = json!({
@@ -100,7 +114,7 @@ fn modes_json(run: &Run) -> String {
         "equilibrium": equilibrium,
         "modes": modes,
     });
-    serde_json::to_string_pretty(&out).unwrap_or_default() + "\n"
+    Ok(serde_json::to_string_pretty(&out).unwrap_or_default() + "\n")
 }
 
 /// A JSON number, or null for infinity (the relative accuracy of a neutral mode).
@@ -134,7 +148,7 @@ pub fn top_shares(run: &Run, coordinates: &[String], fractions: &[f64]) -> Vec<S
         .collect()
 }
 
-fn modes_table(run: &Run, lab: bool) -> String {
+fn modes_table(run: &Run, with_lab: bool) -> Result<String, CliError> {
     let r = &run.result;
     let mut out = String::new();
     let eq = &r.assembled.equilibrium;
@@ -176,8 +190,8 @@ fn modes_table(run: &Run, lab: bool) -> String {
             top.join(", "),
             flag
         );
-        if lab {
-            for b in lab_motion(&r.system, &r.assembled.layout, &eq.coords, m) {
+        if with_lab {
+            for b in lab(run, m)? {
                 let t = b.translation.map(|v| sci(v, 3, 10));
                 let w = b.rotation.map(|v| sci(v, 3, 10));
                 let _ = writeln!(
@@ -194,5 +208,5 @@ fn modes_table(run: &Run, lab: bool) -> String {
             }
         }
     }
-    out
+    Ok(out)
 }

@@ -692,8 +692,40 @@ pub struct BodyMotion {
 /// The lab-frame table of a mode (the source's `e2ni`): each massive body's centre-of-mass
 /// displacement and small rotation, through the linearised geometry at `x_eq`. Float
 /// motion is not included (it follows from the variables).
-pub fn lab_motion(system: &System, layout: &Layout, x_eq: &[f64], mode: &Mode) -> Vec<BodyMotion> {
-    system
+pub fn lab_motion(
+    system: &System,
+    layout: &Layout,
+    x_eq: &[f64],
+    mode: &Mode,
+) -> Result<Vec<BodyMotion>, DynamicsError> {
+    for (what, expected, got) in [
+        (
+            "coordinates of the equilibrium for the lab motion",
+            system.coords.len(),
+            x_eq.len(),
+        ),
+        (
+            "mode vector for the lab motion (one entry per variable)",
+            layout.variables.len(),
+            mode.vector.len(),
+        ),
+    ] {
+        if expected != got {
+            return Err(DynamicsError::Length {
+                what,
+                expected,
+                got,
+            });
+        }
+    }
+    if let Some(&g) = layout.variables.iter().find(|&&g| g >= system.coords.len()) {
+        return Err(DynamicsError::Length {
+            what: "coordinates of the system (a layout variable lies beyond them)",
+            expected: system.coords.len(),
+            got: g + 1,
+        });
+    }
+    Ok(system
         .bodies
         .iter()
         .filter(|b| b.mass > 0.0)
@@ -701,10 +733,10 @@ pub fn lab_motion(system: &System, layout: &Layout, x_eq: &[f64], mode: &Mode) -
             let jac = body.frame.jacobian(x_eq, &body.centre_of_mass);
             let mut translation = Vector3::zeros();
             let mut omega = Vector3::zeros();
-            for (k, &g) in layout.variables.iter().enumerate() {
+            for (&g, &v) in layout.variables.iter().zip(&mode.vector) {
                 debug_assert_eq!(system.coords[g].kind, CoordKind::Variable);
-                translation += jac.position.column(g) * mode.vector[k];
-                omega += jac.omega_space.column(g) * mode.vector[k];
+                translation += jac.position.column(g) * v;
+                omega += jac.omega_space.column(g) * v;
             }
             BodyMotion {
                 body: body.name.clone(),
@@ -712,7 +744,7 @@ pub fn lab_motion(system: &System, layout: &Layout, x_eq: &[f64], mode: &Mode) -
                 rotation: lab_yaw_pitch_roll(&omega),
             }
         })
-        .collect()
+        .collect())
 }
 
 #[cfg(test)]

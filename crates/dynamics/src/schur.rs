@@ -69,9 +69,7 @@ pub(crate) fn eliminate<T: ComplexField<RealField = f64> + Copy>(
     }
     let zero = T::zero();
     let scale = floats.iter().fold(0.0f64, |m, &i| {
-        floats
-            .iter()
-            .fold(m, |m, &j| m.max(entry(i, j).modulus()))
+        floats.iter().fold(m, |m, &j| m.max(entry(i, j).modulus()))
     });
     // each group: its floats, the kept rows it couples to, and Q_g⁻¹ C_g,kept
     let mut updates = Vec::new();
