@@ -56,6 +56,7 @@
 //! version-matched dependencies of its own.
 
 mod describe;
+pub mod fit;
 mod parameters;
 mod state_space;
 #[cfg(feature = "files")]
@@ -107,6 +108,10 @@ pub use pendkit_model::{Model, Overrides};
 pub use pendkit_noise::{NoiseOptions, ThermalNoise};
 pub use pendkit_params::Resolved;
 
+pub use fit::{
+    FitError, FitOptions, FitResult, MeasuredModes, MeasuredTf, fit, mode_jacobian,
+    pair_modes_by_overlap,
+};
 pub use describe::{DOF_FAMILIES, OTHER_FAMILY, unit_ratio, unit_slug};
 pub use parameters::{ParameterRow, parameter_table};
 pub use state_space::NamedStateSpace;
@@ -207,6 +212,9 @@ pub enum Error {
     /// A benchmark asked to repeat nothing, or too often.
     #[error("--repeat must be from 1 to {MAX_REPEAT}")]
     ZeroRepeat,
+    /// Measurements that cannot be read, or a fit that cannot be made.
+    #[error(transparent)]
+    Fit(#[from] fit::FitError),
     /// A result that came out NaN or infinite (never returned as a success).
     #[error("{what} is not finite at {f_hz} Hz")]
     NotFinite {
