@@ -4,6 +4,7 @@
 mod bench;
 mod common;
 mod error;
+mod fit;
 mod format;
 mod modes;
 mod noise;
@@ -53,6 +54,10 @@ enum Command {
     /// Modes (tracked by shape), thermal noise or a transfer function over a grid of
     /// parameter values, as CSV against the swept values.
     Sweep(sweep::Args),
+    /// Fit free parameters to measured mode frequencies (and |TF| points): fitted values
+    /// with uncertainties, correlations, residuals, undetermined combinations, and the
+    /// fitted case file.
+    Fit(fit::Args),
     /// Time each phase of a calculation in this process (build, equilibrium, Hessians per
     /// element kind, mass matrix, modes, and optionally noise): median and minimum over
     /// repetitions.
@@ -98,6 +103,7 @@ fn run(cli: Cli) -> Result<String, CliError> {
         Command::Sweep(a) => sweep::run(a),
         Command::Report(a) => report::run(a),
         Command::Bench(a) => Ok(bench::run(a)?),
+        Command::Fit(a) => fit::run(a),
         Command::Tradeoff(a) => tradeoff::run(a),
         Command::Params(a) => params::run(a),
         Command::ChainFile(a) => params::chain_file(a),

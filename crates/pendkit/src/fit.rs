@@ -12,9 +12,15 @@
 //!   model's names or a naming scheme's (`L2_P`).
 //! - `hz`: the measured frequency (Hz, positive); `sigma_hz`: its standard uncertainty
 //!   (Hz, positive).
-//! - `shape` (optional): the coordinates the mode mostly moves, joined by `+`
-//!   (`yaw1+yaw3`). Needed when the label names more than one mode of the model: the mode
-//!   with the largest kinetic-energy share in these coordinates is taken.
+//! - `shape` (optional): more coordinates the mode mostly moves, joined by `+`
+//!   (`yaw1+yaw3`); needed with a family label.
+//!
+//! Each measurement is matched to the model mode (at the start values) with the largest
+//! share of kinetic energy in its label's and shape's coordinates, not by order;
+//! measurements with the same coordinates go to the nearest frequencies, and each model
+//! mode is matched once ([`MatchedModes::by_label`]). From then on each matched mode is
+//! followed by the overlap of its shape ([`MatchedModes::follow`]), so that modes that cross
+//! in frequency keep their identity.
 //!
 //! # Measured transfer-function file
 //!
@@ -349,6 +355,10 @@ impl Default for FitOptions {
     }
 }
 
+/// Least kinetic-energy share a mode must have in a measurement's coordinates to be its
+/// match: below it, the measurement names a motion no mode left makes.
+const MIN_SHARE: f64 = 0.1;
+
 /// A measured mode's identity in the model: which mode it is, and its shape to follow it
 /// from one solution to the next.
 #[derive(Clone, Debug)]
@@ -439,7 +449,11 @@ impl MatchedModes {
         }
     }
 
-    /// The first match: each measured mode to the model mode its label (and shape) names.
+    /// The first match: each measured mode to the model mode with the largest share of
+    /// kinetic energy in the coordinates its label and shape name (or, for a family label,
+    /// the mode of that family with the largest share in its shape's coordinates), taken in
+    /// order of decreasing share, measurements with equal shares to the nearest frequency,
+    /// each model mode at most once. A share below 10 % is no match.
     pub fn by_label(result: &StageResult, measured: &MeasuredModes) -> Result<Self, FitError> {
         let modes = &result.modes.modes;
         let coordinates = &result.modes.coordinates;
@@ -452,71 +466,85 @@ impl MatchedModes {
                 .collect::<Vec<_>>()
                 .join(", ")
         };
-        let mut indices: Vec<usize> = Vec::with_capacity(measured.modes.len());
-        for mm in &measured.modes {
+        let is_family = |label: &str| families.iter().any(|f| f == label);
+        // every (measurement, candidate mode) pair with the mode's kinetic-energy share in
+        // the measurement's coordinates (its label's and its shape's) and its distance in
+        // log frequency
+        let mut pairs: Vec<(usize, usize, f64, f64)> = Vec::new();
+        for (row, mm) in measured.modes.iter().enumerate() {
             let unmatched = |message: String| FitError::Unmatched {
                 path: measured.path.clone(),
                 line: mm.line,
                 message,
             };
             let label = result.unalias(&mm.label);
-            let candidates: Vec<usize> = (0..modes.len())
-                .filter(|&k| modes[k].label == label || families[k] == label)
-                .collect();
-            if candidates.is_empty() {
+            let family = is_family(&label) && !coordinates.contains(&label);
+            let mut names: Vec<&str> = mm.shape.iter().map(String::as_str).collect();
+            if !family {
+                names.push(&mm.label);
+            }
+            if names.is_empty() {
                 return Err(unmatched(format!(
-                    "label '{}' names no mode of the model (modes: {})",
-                    mm.label,
-                    catalogue()
+                    "label '{}' is a mode family: give the shape column (the coordinates the mode mostly moves, joined by '+')",
+                    mm.label
                 )));
             }
-            let chosen = if mm.shape.is_empty() {
-                if candidates.len() > 1 {
-                    return Err(unmatched(format!(
-                        "label '{}' names {} modes ({}): give the shape column (the coordinates it mostly moves, joined by '+')",
-                        mm.label,
-                        candidates.len(),
-                        candidates
-                            .iter()
-                            .map(|&k| format!("{:.4} Hz", modes[k].hz))
-                            .collect::<Vec<_>>()
-                            .join(", ")
-                    )));
-                }
-                candidates[0]
-            } else {
-                let mut columns = Vec::with_capacity(mm.shape.len());
-                for c in &mm.shape {
-                    let native = result.unalias(c);
-                    match coordinates.iter().position(|x| *x == native) {
-                        Some(k) => columns.push(k),
-                        None => {
-                            return Err(unmatched(format!(
-                                "shape coordinate '{c}' is not a variable of the model ({})",
-                                coordinates.join(" ")
-                            )));
-                        }
+            let mut columns = Vec::with_capacity(names.len());
+            for c in names {
+                let native = result.unalias(c);
+                match coordinates.iter().position(|x| *x == native) {
+                    Some(k) => columns.push(k),
+                    None => {
+                        return Err(unmatched(format!(
+                            "'{c}' is neither a variable of the model nor a mode family (variables: {}; modes: {})",
+                            coordinates.join(" "),
+                            catalogue()
+                        )));
                     }
                 }
-                let share = |k: usize| -> f64 {
-                    columns
-                        .iter()
-                        .map(|&c| modes[k].energy_fractions.get(c).copied().unwrap_or(0.0))
-                        .sum()
-                };
-                candidates
-                    .iter()
-                    .copied()
-                    .max_by(|&a, &b| share(a).total_cmp(&share(b)))
-                    .unwrap_or(candidates[0])
-            };
-            if let Some(other) = indices.iter().position(|&k| k == chosen) {
-                return Err(unmatched(format!(
-                    "names the same model mode ({:.4} Hz, {}) as line {}",
-                    modes[chosen].hz, modes[chosen].label, measured.modes[other].line
-                )));
             }
-            indices.push(chosen);
+            columns.dedup();
+            for k in (0..modes.len()).filter(|&k| !family || families[k] == label) {
+                let share: f64 = columns
+                    .iter()
+                    .map(|&c| modes[k].energy_fractions.get(c).copied().unwrap_or(0.0))
+                    .sum();
+                let distance = (modes[k].hz.abs() / mm.hz).ln().abs();
+                pairs.push((row, k, share, distance));
+            }
+        }
+        // largest shares first; equal shares (measurements with the same coordinates) go to
+        // the nearest frequencies
+        pairs.sort_by(|a, b| {
+            b.2.total_cmp(&a.2)
+                .then(a.3.total_cmp(&b.3))
+                .then(a.0.cmp(&b.0))
+        });
+        let mut chosen: Vec<Option<(usize, f64)>> = vec![None; measured.modes.len()];
+        for &(row, k, share, _) in &pairs {
+            if chosen[row].is_none() && !chosen.iter().flatten().any(|(taken, _)| *taken == k) {
+                chosen[row] = Some((k, share));
+            }
+        }
+        let mut indices: Vec<usize> = Vec::with_capacity(measured.modes.len());
+        for (row, mm) in measured.modes.iter().enumerate() {
+            match chosen[row] {
+                Some((k, share)) if share >= MIN_SHARE => indices.push(k),
+                found => {
+                    return Err(FitError::Unmatched {
+                        path: measured.path.clone(),
+                        line: mm.line,
+                        message: format!(
+                            "no model mode left that moves {}{} (largest share {:.0} %, need {:.0} %; modes: {})",
+                            mm.label,
+                            if mm.shape.is_empty() { String::new() } else { format!(" / {}", mm.shape.join("+")) },
+                            100.0 * found.map_or(0.0, |f| f.1),
+                            100.0 * MIN_SHARE,
+                            catalogue()
+                        ),
+                    });
+                }
+            }
         }
         let overlaps = vec![1.0; indices.len()];
         Ok(MatchedModes::from_indices(result, indices, overlaps))
