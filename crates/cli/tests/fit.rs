@@ -43,12 +43,14 @@ fn fit_writes_a_case_file_that_reproduces_the_fitted_modes() {
             .collect();
         let mut order: Vec<usize> = (0..shares.len()).collect();
         order.sort_by(|&a, &b| shares[b].total_cmp(&shares[a]));
+        // the shape: the three coordinates `pendkit modes` lists for the mode
         csv += &format!(
-            "{},{hz},{},{}+{}\n",
+            "{},{hz},{},{}+{}+{}\n",
             m["label"].as_str().unwrap(),
             1e-4 * hz,
             coordinates[order[0]],
-            coordinates[order[1]]
+            coordinates[order[1]],
+            coordinates[order[2]]
         );
     }
     let measured = dir.join("measured.csv");

@@ -794,7 +794,8 @@ impl FitResult {
                 Some(u) => format!("+- {u:.3e}"),
                 None => "undetermined: start value".to_string(),
             };
-            out += &format!("{} = {}  # {note}\n", quote(&p.name), p.value);
+            // `{:e}`: a TOML float whatever the magnitude, every digit of the f64
+            out += &format!("{} = {:e}  # {note}\n", quote(&p.name), p.value);
         }
         for (tag, spec) in &case.overrides.damping {
             out += &format!("\n[damping.{}]\n", quote(tag));

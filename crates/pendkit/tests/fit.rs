@@ -215,3 +215,59 @@ fn a_fit_out_of_iterations_says_so_with_its_last_state() {
     let message = err.to_string();
     assert!(message.contains("did not converge") && message.contains("m1="), "{message}");
 }
+
+#[test]
+fn a_measured_transfer_function_joins_the_modes() {
+    // truth: fibres 1 % longer and a 2 % heavier test mass; measured: three test-mass modes
+    // and |x3/x00| at five frequencies between the resonances, from an independent solve
+    let sets = ["l3=0.606".to_string(), "m3=40.392".to_string()];
+    let case = Case::model("quad").unwrap().with_sets(&sets).unwrap();
+    let r = run_stage(case.build().unwrap().0, Stage::S2).unwrap();
+    let freqs = [0.2, 0.75, 1.6, 5.0, 20.0];
+    let h = r.transfer("x00", "x3", &freqs).unwrap();
+    let mut rng = Normal(11);
+    let mut text = String::from("# input = x00\n# output = x3\nfreq_hz,abs,sigma_abs\n");
+    for (f, z) in freqs.iter().zip(&h) {
+        let sigma = 1e-3 * z.norm();
+        text += &format!("{f},{},{sigma}\n", z.norm() + sigma * rng.sample());
+    }
+    let tf = pendkit::MeasuredTf::parse(Path::new("tf.csv"), &text).unwrap();
+    let all = synthetic(&["l3=0.606", "m3=40.392"], 1e-4, 5);
+    let keep = ["x3", "pitch3", "z3"];
+    let measured = MeasuredModes {
+        path: all.path.clone(),
+        modes: all
+            .modes
+            .into_iter()
+            .filter(|m| keep.contains(&m.label.as_str()))
+            .collect(),
+    };
+    assert_eq!(measured.modes.len(), 3);
+    let result = fit(
+        &Case::model("quad").unwrap(),
+        &measured,
+        Some(&tf),
+        &names(&["l3", "m3"]),
+        &FitOptions::default(),
+    )
+    .unwrap();
+    assert_eq!(result.tf.len(), 5);
+    for (p, truth) in result.parameters.iter().zip([0.606, 40.392]) {
+        let sigma = p.uncertainty.unwrap();
+        assert!((p.value - truth).abs() < 3.0 * sigma, "{p:?}");
+    }
+    // 8 measurements, 2 parameters
+    assert_eq!(result.dof, 6);
+}
+
+#[test]
+fn a_transfer_function_file_names_its_input_and_output() {
+    let err = pendkit::MeasuredTf::parse(Path::new("tf.csv"), "freq_hz,abs,sigma_abs\n1,2,0.1\n")
+        .unwrap_err()
+        .to_string();
+    assert_eq!(err, "tf.csv: no '# input = NAME' line before the data");
+    let err = pendkit::MeasuredTf::parse(Path::new("tf.csv"), "# input = x00\n# output = x3\n1,2\n")
+        .unwrap_err()
+        .to_string();
+    assert_eq!(err, "tf.csv:3: expected freq_hz,abs,sigma_abs, got 2 fields");
+}
