@@ -16,9 +16,9 @@
 //!   (`yaw1+yaw3`); needed with a family label.
 //!
 //! Each measurement is matched to the model mode (at the start values) with the largest
-//! share of kinetic energy in its label's and shape's coordinates, not by order;
-//! measurements with the same coordinates go to the nearest frequencies, and each model
-//! mode is matched once ([`MatchedModes::by_label`]). From then on each matched mode is
+//! share of kinetic energy in its label's and shape's coordinates less the distance in log
+//! frequency |ln(f_model/f_measured)|, not by order (modes that move the same coordinates go
+//! to the nearest frequencies), and each model mode is matched once ([`MatchedModes::by_label`]). From then on each matched mode is
 //! followed by the overlap of its shape ([`MatchedModes::follow`]), so that modes that cross
 //! in frequency keep their identity.
 //!
@@ -452,8 +452,9 @@ impl MatchedModes {
     /// The first match: each measured mode to the model mode with the largest share of
     /// kinetic energy in the coordinates its label and shape name (or, for a family label,
     /// the mode of that family with the largest share in its shape's coordinates), taken in
-    /// order of decreasing share, measurements with equal shares to the nearest frequency,
-    /// each model mode at most once. A share below 10 % is no match.
+    /// order of decreasing share less distance in log frequency (so that modes moving the
+    /// same coordinates go to the nearest frequencies), each model mode at most once. A
+    /// share below 10 % is no match.
     pub fn by_label(result: &StageResult, measured: &MeasuredModes) -> Result<Self, FitError> {
         let modes = &result.modes.modes;
         let coordinates = &result.modes.coordinates;
@@ -513,12 +514,14 @@ impl MatchedModes {
                 pairs.push((row, k, share, distance));
             }
         }
-        // largest shares first; equal shares (measurements with the same coordinates) go to
-        // the nearest frequencies
+        // best scores first: the share less the distance in log frequency (a mode e times
+        // off in frequency needs a share larger by 1), so that modes moving the same
+        // coordinates (in phase, out of phase) go to the nearest frequencies
         pairs.sort_by(|a, b| {
-            b.2.total_cmp(&a.2)
-                .then(a.3.total_cmp(&b.3))
+            (b.2 - b.3)
+                .total_cmp(&(a.2 - a.3))
                 .then(a.0.cmp(&b.0))
+                .then(a.1.cmp(&b.1))
         });
         let mut chosen: Vec<Option<(usize, f64)>> = vec![None; measured.modes.len()];
         for &(row, k, share, _) in &pairs {

@@ -254,7 +254,7 @@ fn a_measured_transfer_function_joins_the_modes() {
     assert_eq!(result.tf.len(), 5);
     for (p, truth) in result.parameters.iter().zip([0.606, 40.392]) {
         let sigma = p.uncertainty.unwrap();
-        assert!((p.value - truth).abs() < 3.0 * sigma, "{p:?}");
+        assert!((p.value - truth).abs() < 3.0 * sigma, "{p:?} {result:#?}");
     }
     // 8 measurements, 2 parameters
     assert_eq!(result.dof, 6);
