@@ -25,14 +25,17 @@ fn modes_json(args: &[&str]) -> Value {
 fn fit_writes_a_case_file_that_reproduces_the_fitted_modes() {
     let dir = scratch("case");
     // the truth: a heavier UIM on longer wires
-    let truth = modes_json(&["modes", "quad", "--set", "m1=23", "--set", "l1=0.31", "--json"]);
+    let truth = modes_json(&[
+        "modes", "quad", "--set", "m1=23", "--set", "l1=0.31", "--json",
+    ]);
     let coordinates: Vec<&str> = truth["coordinates"]
         .as_array()
         .unwrap()
         .iter()
         .map(|c| c.as_str().unwrap())
         .collect();
-    let mut csv = String::from("# synthetic: the quad with m1=23, l1=0.31\nlabel,hz,sigma_hz,shape\n");
+    let mut csv =
+        String::from("# synthetic: the quad with m1=23, l1=0.31\nlabel,hz,sigma_hz,shape\n");
     for m in truth["modes"].as_array().unwrap() {
         let hz = m["hz"].as_f64().unwrap();
         let shares: Vec<f64> = m["energy_fractions"]
@@ -76,7 +79,11 @@ fn fit_writes_a_case_file_that_reproduces_the_fitted_modes() {
         let value = p["value"].as_f64().unwrap();
         assert!((value - truth).abs() < 0.01 * sigma, "{p}");
     }
-    assert!(parameters[2]["uncertainty"].is_null(), "silica_phi: {}", parameters[2]);
+    assert!(
+        parameters[2]["uncertainty"].is_null(),
+        "silica_phi: {}",
+        parameters[2]
+    );
     assert_eq!(result["fit"]["undetermined"].as_array().unwrap().len(), 1);
 
     // the case file loads and gives the fitted model's frequencies, mode by mode
@@ -100,7 +107,12 @@ fn fit_writes_a_case_file_that_reproduces_the_fitted_modes() {
         "m1,l1,silica_phi",
     ]);
     assert!(ok, "{stderr}");
-    for expected in ["chi^2/dof", "correlation", "undetermined combinations", "1.000 silica_phi"] {
+    for expected in [
+        "chi^2/dof",
+        "correlation",
+        "undetermined combinations",
+        "1.000 silica_phi",
+    ] {
         assert!(table.contains(expected), "no '{expected}' in\n{table}");
     }
     let _ = std::fs::remove_dir_all(&dir);

@@ -295,7 +295,10 @@ impl MeasuredTf {
             if fields.len() != 3 {
                 return Err(at(
                     line,
-                    format!("expected freq_hz,abs,sigma_abs, got {} fields", fields.len()),
+                    format!(
+                        "expected freq_hz,abs,sigma_abs, got {} fields",
+                        fields.len()
+                    ),
                 ));
             }
             points.push(TfPoint {
@@ -540,7 +543,11 @@ impl MatchedModes {
                         message: format!(
                             "no model mode left that moves {}{} (largest share {:.0} %, need {:.0} %; modes: {})",
                             mm.label,
-                            if mm.shape.is_empty() { String::new() } else { format!(" / {}", mm.shape.join("+")) },
+                            if mm.shape.is_empty() {
+                                String::new()
+                            } else {
+                                format!(" / {}", mm.shape.join("+"))
+                            },
                             100.0 * found.map_or(0.0, |f| f.1),
                             100.0 * MIN_SHARE,
                             catalogue()
@@ -633,11 +640,7 @@ pub fn mode_jacobian(
 }
 
 /// |TF| at the measured points and its central-difference Jacobian (one row per point).
-fn tf_values(
-    result: &StageResult,
-    tf: &MeasuredTf,
-    freqs: &[f64],
-) -> Result<Vec<f64>, Error> {
+fn tf_values(result: &StageResult, tf: &MeasuredTf, freqs: &[f64]) -> Result<Vec<f64>, Error> {
     Ok(result
         .transfer(&tf.input, &tf.output, freqs)?
         .iter()
@@ -778,8 +781,10 @@ impl FitResult {
             "# written by pendkit fit {}: {} free parameters, chi^2/dof = {}\nmodel = {}\n",
             crate::VERSION,
             self.parameters.len(),
-            self.reduced_chi_squared
-                .map_or_else(|| "- (no degrees of freedom)".to_string(), |r| format!("{r:.4}")),
+            self.reduced_chi_squared.map_or_else(
+                || "- (no degrees of freedom)".to_string(),
+                |r| format!("{r:.4}")
+            ),
             quote(model)
         );
         out += &format!(
@@ -918,27 +923,31 @@ pub fn fit(
         .into());
     }
     let stage = options.stage;
-    let tf_freqs: Vec<f64> = tf.map_or_else(Vec::new, |t| t.points.iter().map(|p| p.freq_hz).collect());
-    let evaluate = |values: &[f64], matched: &MatchedModes, result: &StageResult| -> Result<State, Error> {
-        let tf_model = match tf {
-            Some(t) => tf_values(result, t, &tf_freqs)?,
-            None => Vec::new(),
+    let tf_freqs: Vec<f64> =
+        tf.map_or_else(Vec::new, |t| t.points.iter().map(|p| p.freq_hz).collect());
+    let evaluate =
+        |values: &[f64], matched: &MatchedModes, result: &StageResult| -> Result<State, Error> {
+            let tf_model = match tf {
+                Some(t) => tf_values(result, t, &tf_freqs)?,
+                None => Vec::new(),
+            };
+            let r = residuals(&matched.hz, measured, tf, &tf_model);
+            if r.iter().any(|x| !x.is_finite()) {
+                return Err(FitError::NotFinite("a residual".into()).into());
+            }
+            Ok(State {
+                values: values.to_vec(),
+                matched: matched.clone(),
+                tf_model,
+                chi_squared: r.norm_squared(),
+                r,
+            })
         };
-        let r = residuals(&matched.hz, measured, tf, &tf_model);
-        if r.iter().any(|x| !x.is_finite()) {
-            return Err(FitError::NotFinite("a residual".into()).into());
-        }
-        Ok(State {
-            values: values.to_vec(),
-            matched: matched.clone(),
-            tf_model,
-            chi_squared: r.norm_squared(),
-            r,
-        })
-    };
 
     let first = solve(case, free, &start, stage).map_err(|e| FitError::Start(Box::new(e)))?;
-    first.check_stable().map_err(|e| FitError::Start(Box::new(e)))?;
+    first
+        .check_stable()
+        .map_err(|e| FitError::Start(Box::new(e)))?;
     let matched = MatchedModes::by_label(&first, measured)?;
     let mut state = evaluate(&start, &matched, &first)?;
     let mut solves = 1;
@@ -1013,7 +1022,13 @@ pub fn fit(
                 scale,
                 units,
             };
-            return Ok(finish(&problem, &state, &svd, &determined, (iterations, solves)));
+            return Ok(finish(
+                &problem,
+                &state,
+                &svd,
+                &determined,
+                (iterations, solves),
+            ));
         }
         let mut lambda = damping.unwrap_or(1e-3 * s_max * s_max);
         let mut accepted = false;

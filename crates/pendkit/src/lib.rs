@@ -108,11 +108,11 @@ pub use pendkit_model::{Model, Overrides};
 pub use pendkit_noise::{NoiseOptions, ThermalNoise};
 pub use pendkit_params::Resolved;
 
+pub use describe::{DOF_FAMILIES, OTHER_FAMILY, unit_ratio, unit_slug};
 pub use fit::{
     FitError, FitOptions, FitResult, MeasuredModes, MeasuredTf, fit, mode_jacobian,
     pair_modes_by_overlap,
 };
-pub use describe::{DOF_FAMILIES, OTHER_FAMILY, unit_ratio, unit_slug};
 pub use parameters::{ParameterRow, parameter_table};
 pub use state_space::NamedStateSpace;
 #[cfg(feature = "files")]

@@ -99,7 +99,10 @@ fn recovers_five_quad_parameters_and_leaves_a_loss_angle_undetermined() {
         );
     }
     let phi = &result.parameters[5];
-    assert_eq!(phi.value, phi.start, "an undetermined parameter is not stepped");
+    assert_eq!(
+        phi.value, phi.start,
+        "an undetermined parameter is not stepped"
+    );
     assert_eq!(phi.uncertainty, None);
     assert_eq!(result.undetermined.len(), 1);
     let combination = &result.undetermined[0].combination;
@@ -142,7 +145,10 @@ fn matching_by_shape_survives_a_mode_crossing() {
     let sigma = i1y.uncertainty.unwrap();
     assert!((i1y.value - true_i1y).abs() < 3.0 * sigma, "{i1y:?}");
     let m1 = &result.parameters[1];
-    assert!((m1.value - 22.011).abs() < 3.0 * m1.uncertainty.unwrap(), "{m1:?}");
+    assert!(
+        (m1.value - 22.011).abs() < 3.0 * m1.uncertainty.unwrap(),
+        "{m1:?}"
+    );
     // the pitch1 measurement is matched to the pitch1 mode, now below y1 in frequency
     let pitch = result.modes.iter().find(|r| r.label == "pitch1").unwrap();
     let y = result.modes.iter().find(|r| r.label == "y1").unwrap();
@@ -166,11 +172,20 @@ fn fit_error(text: &str, free: &[&str]) -> String {
 #[test]
 fn bad_measurements_are_refused_with_file_and_line() {
     let cases = [
-        ("label,hz,sigma_hz\nx3,0.43,0.001\n\nz3,0.67,0\n", "measured.csv:4: sigma_hz must be positive"),
+        (
+            "label,hz,sigma_hz\nx3,0.43,0.001\n\nz3,0.67,0\n",
+            "measured.csv:4: sigma_hz must be positive",
+        ),
         ("x3,0.43,-1\n", "measured.csv:1: sigma_hz must be positive"),
-        ("# comment\nx3,nan,0.001\n", "measured.csv:2: hz must be positive and finite"),
+        (
+            "# comment\nx3,nan,0.001\n",
+            "measured.csv:2: hz must be positive and finite",
+        ),
         ("x3,abc,0.001\n", "measured.csv:1: hz 'abc' is not a number"),
-        ("x3,0.43\n", "measured.csv:1: expected label,hz,sigma_hz[,shape], got 2 fields"),
+        (
+            "x3,0.43\n",
+            "measured.csv:1: expected label,hz,sigma_hz[,shape], got 2 fields",
+        ),
         ("x3,0.43,0.001,yaw1+\n", "measured.csv:1: shape"),
         ("# nothing\n", "measured.csv: no measured modes"),
     ];
@@ -184,14 +199,34 @@ fn bad_measurements_are_refused_with_file_and_line() {
 fn fits_that_cannot_be_made_say_why() {
     let modes = "x3,0.4328,0.001\ny3,0.4681,0.001\npitch3,0.4919,0.001\n";
     let cases: [(&str, &[&str], &str); 6] = [
-        (modes, &["m9"], "free parameter 'm9': not a parameter of model 'quad'"),
+        (
+            modes,
+            &["m9"],
+            "free parameter 'm9': not a parameter of model 'quad'",
+        ),
         (modes, &["m1", "m1"], "free parameter 'm1': listed twice"),
-        (modes, &["m1", "m2", "m3"], "3 measurements for 3 free parameters"),
-        ("x3,0.4328,0.001\nbanana,1,0.1\n", &["m1"], "measured.csv:2: 'banana' is neither a variable"),
-        ("x3,0.4328,0.001\nY,0.6,0.001\n", &["m1"], "measured.csv:2: label 'Y' is a mode family"),
+        (
+            modes,
+            &["m1", "m2", "m3"],
+            "3 measurements for 3 free parameters",
+        ),
+        (
+            "x3,0.4328,0.001\nbanana,1,0.1\n",
+            &["m1"],
+            "measured.csv:2: 'banana' is neither a variable",
+        ),
+        (
+            "x3,0.4328,0.001\nY,0.6,0.001\n",
+            &["m1"],
+            "measured.csv:2: label 'Y' is a mode family",
+        ),
         // x3 moves mostly in modes 1 and 7 (64 % and 26 %): a third x3 finds no mode left
         // with a tenth of its energy there
-        ("x3,0.4328,0.001\nx3,0.98,0.001\nx3,2,0.001\n", &["m1"], "measured.csv:3: no model mode left that moves x3"),
+        (
+            "x3,0.4328,0.001\nx3,0.98,0.001\nx3,2,0.001\n",
+            &["m1"],
+            "measured.csv:3: no model mode left that moves x3",
+        ),
     ];
     for (text, free, expected) in cases {
         let message = fit_error(text, free);
@@ -213,7 +248,10 @@ fn a_fit_out_of_iterations_says_so_with_its_last_state() {
     let err = fit(&case, &measured, None, &names(&["m1"]), &options).unwrap_err();
     assert!(matches!(err, Error::Fit(FitError::NotConverged { .. })));
     let message = err.to_string();
-    assert!(message.contains("did not converge") && message.contains("m1="), "{message}");
+    assert!(
+        message.contains("did not converge") && message.contains("m1="),
+        "{message}"
+    );
 }
 
 #[test]
@@ -266,8 +304,12 @@ fn a_transfer_function_file_names_its_input_and_output() {
         .unwrap_err()
         .to_string();
     assert_eq!(err, "tf.csv: no '# input = NAME' line before the data");
-    let err = pendkit::MeasuredTf::parse(Path::new("tf.csv"), "# input = x00\n# output = x3\n1,2\n")
-        .unwrap_err()
-        .to_string();
-    assert_eq!(err, "tf.csv:3: expected freq_hz,abs,sigma_abs, got 2 fields");
+    let err =
+        pendkit::MeasuredTf::parse(Path::new("tf.csv"), "# input = x00\n# output = x3\n1,2\n")
+            .unwrap_err()
+            .to_string();
+    assert_eq!(
+        err,
+        "tf.csv:3: expected freq_hz,abs,sigma_abs, got 2 fields"
+    );
 }

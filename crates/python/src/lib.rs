@@ -120,10 +120,9 @@ fn measured_modes(modes: &Bound<'_, PyAny>) -> PyResult<pendkit::MeasuredModes> 
         return pendkit::MeasuredModes::read(Path::new(&fspath(modes)?)).map_err(error);
     }
     let mut text = String::new();
-    for item in modes
-        .try_iter()
-        .map_err(|_| error("modes: expected a file path or a list of (label, hz, sigma_hz[, shape]) tuples"))?
-    {
+    for item in modes.try_iter().map_err(|_| {
+        error("modes: expected a file path or a list of (label, hz, sigma_hz[, shape]) tuples")
+    })? {
         let fields: Vec<String> = item?
             .try_iter()?
             .map(|f| f.and_then(|f| f.str()?.extract::<String>()))
@@ -284,9 +283,9 @@ impl Model {
         let measured = measured_modes(modes)?;
         let tf = match tf {
             None => None,
-            Some(path) => Some(
-                pendkit::MeasuredTf::read(Path::new(&fspath(path)?)).map_err(error)?,
-            ),
+            Some(path) => {
+                Some(pendkit::MeasuredTf::read(Path::new(&fspath(path)?)).map_err(error)?)
+            }
         };
         let case = self.case.clone();
         let options = pendkit::FitOptions {
