@@ -621,57 +621,53 @@ pub fn mode_jacobian(
     matched: &MatchedModes,
     relative_step: f64,
 ) -> Result<(Vec<f64>, DMatrix<f64>), Error> {
-    let mut jacobian = DMatrix::zeros(matched.indices.len(), free.len());
+    let jacobian = central_differences(case, stage, free, values, relative_step, |result| {
+        Ok(matched.follow(result).hz)
+    })?;
+    Ok((matched.hz.clone(), jacobian))
+}
+
+/// The derivatives of `quantities` (of a solution) with respect to each free parameter at
+/// `values`: central differences with steps `relative_step` × the parameter's scale, one
+/// row per quantity, one column per parameter.
+fn central_differences(
+    case: &Case,
+    stage: Stage,
+    free: &[String],
+    values: &[f64],
+    relative_step: f64,
+    quantities: impl Fn(&StageResult) -> Result<Vec<f64>, Error>,
+) -> Result<DMatrix<f64>, Error> {
     let scale = scales(values);
+    let mut columns = Vec::with_capacity(free.len());
     for p in 0..free.len() {
         let h = relative_step * scale[p];
         let at = |sign: f64| -> Result<Vec<f64>, Error> {
             let mut shifted = values.to_vec();
             shifted[p] += sign * h;
-            let result = solve(case, free, &shifted, stage)?;
-            Ok(matched.follow(&result).hz)
+            quantities(&solve(case, free, &shifted, stage)?)
         };
         let (up, down) = (at(1.0)?, at(-1.0)?);
-        for (m, (u, d)) in up.iter().zip(&down).enumerate() {
-            jacobian[(m, p)] = (u - d) / (2.0 * h);
-        }
+        columns.push(
+            up.iter()
+                .zip(&down)
+                .map(|(u, d)| (u - d) / (2.0 * h))
+                .collect::<Vec<f64>>(),
+        );
     }
-    Ok((matched.hz.clone(), jacobian))
+    let rows = columns.first().map_or(0, Vec::len);
+    Ok(DMatrix::from_fn(rows, free.len(), |i, p| {
+        columns[p].get(i).copied().unwrap_or(0.0)
+    }))
 }
 
-/// |TF| at the measured points and its central-difference Jacobian (one row per point).
+/// |TF| (the transfer function's unit) of `result` at the measured points' frequencies.
 fn tf_values(result: &StageResult, tf: &MeasuredTf, freqs: &[f64]) -> Result<Vec<f64>, Error> {
     Ok(result
         .transfer(&tf.input, &tf.output, freqs)?
         .iter()
         .map(|z| z.norm())
         .collect())
-}
-
-fn tf_jacobian(
-    case: &Case,
-    stage: Stage,
-    free: &[String],
-    values: &[f64],
-    tf: &MeasuredTf,
-    relative_step: f64,
-) -> Result<DMatrix<f64>, Error> {
-    let freqs: Vec<f64> = tf.points.iter().map(|p| p.freq_hz).collect();
-    let mut jacobian = DMatrix::zeros(freqs.len(), free.len());
-    let scale = scales(values);
-    for p in 0..free.len() {
-        let h = relative_step * scale[p];
-        let at = |sign: f64| -> Result<Vec<f64>, Error> {
-            let mut shifted = values.to_vec();
-            shifted[p] += sign * h;
-            tf_values(&solve(case, free, &shifted, stage)?, tf, &freqs)
-        };
-        let (up, down) = (at(1.0)?, at(-1.0)?);
-        for (k, (u, d)) in up.iter().zip(&down).enumerate() {
-            jacobian[(k, p)] = (u - d) / (2.0 * h);
-        }
-    }
-    Ok(jacobian)
 }
 
 /// A fitted parameter.
@@ -977,7 +973,14 @@ pub fn fit(
         )?;
         let mut jacobian = jm;
         if let Some(t) = tf {
-            let jt = tf_jacobian(case, stage, free, &state.values, t, options.relative_step)?;
+            let jt = central_differences(
+                case,
+                stage,
+                free,
+                &state.values,
+                options.relative_step,
+                |result| tf_values(result, t, &tf_freqs),
+            )?;
             jacobian = stack(&jacobian, &jt);
         }
         solves += 2 * free.len() * if tf.is_some() { 2 } else { 1 };
