@@ -4,6 +4,7 @@
 mod bench;
 mod common;
 mod error;
+mod fit;
 mod format;
 mod modes;
 mod noise;
@@ -58,6 +59,10 @@ enum Command {
     /// frequencies) with respect to every parameter: the largest relative sensitivities
     /// first, or JSON.
     Sensitivity(sensitivity::Args),
+    /// Fit free parameters to measured mode frequencies (and |TF| points): fitted values
+    /// with uncertainties, correlations, residuals, undetermined combinations, and the
+    /// fitted case file.
+    Fit(fit::Args),
     /// Time each phase of a calculation in this process (build, equilibrium, Hessians per
     /// element kind, mass matrix, modes, and optionally noise): median and minimum over
     /// repetitions.
@@ -106,6 +111,7 @@ fn run(cli: Cli) -> Result<String, CliError> {
         Command::Report(a) => report::run(a),
         Command::Sensitivity(a) => sensitivity::run(a),
         Command::Bench(a) => Ok(bench::run(a)?),
+        Command::Fit(a) => fit::run(a),
         Command::Tradeoff(a) => tradeoff::run(a),
         Command::Params(a) => params::run(a),
         Command::ChainFile(a) => params::chain_file(a),

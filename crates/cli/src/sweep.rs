@@ -202,39 +202,7 @@ pub fn match_modes(
     new_shapes: &DMatrix<f64>,
     new_mass: &DMatrix<f64>,
 ) -> Vec<(usize, f64)> {
-    let mean = (old_mass + new_mass) * 0.5;
-    let cross = old_shapes.transpose() * &mean * new_shapes;
-    let norm = |u: &DMatrix<f64>| -> Vec<f64> {
-        (0..u.ncols())
-            .map(|j| {
-                let c = u.column(j);
-                (c.transpose() * &mean * c)[(0, 0)].abs().sqrt()
-            })
-            .collect()
-    };
-    let (old_norm, new_norm) = (norm(old_shapes), norm(new_shapes));
-    let mut pairs: Vec<(usize, usize, f64)> = Vec::with_capacity(cross.len());
-    for i in 0..cross.nrows() {
-        for j in 0..cross.ncols() {
-            let scale = old_norm[i] * new_norm[j];
-            let overlap = if scale > 0.0 {
-                cross[(i, j)].abs() / scale
-            } else {
-                0.0
-            };
-            pairs.push((i, j, overlap));
-        }
-    }
-    pairs.sort_by(|a, b| b.2.total_cmp(&a.2).then(a.0.cmp(&b.0)).then(a.1.cmp(&b.1)));
-    let mut taken_old = vec![false; cross.nrows()];
-    let mut matched = vec![None; cross.ncols()];
-    for (i, j, overlap) in pairs {
-        if !taken_old[i] && matched[j].is_none() {
-            taken_old[i] = true;
-            matched[j] = Some((i, overlap));
-        }
-    }
-    matched
+    pendkit::pair_modes_by_overlap(old_shapes, old_mass, new_shapes, new_mass)
         .into_iter()
         .enumerate()
         .map(|(j, m)| m.unwrap_or((j, 0.0)))

@@ -58,6 +58,7 @@
 //! version-matched dependencies of its own.
 
 mod describe;
+pub mod fit;
 mod parameters;
 pub mod sensitivity;
 mod state_space;
@@ -108,6 +109,10 @@ pub use pendkit_noise::{NoiseOptions, ThermalNoise};
 pub use pendkit_params::Resolved;
 
 pub use describe::{DOF_FAMILIES, OTHER_FAMILY, unit_ratio, unit_slug};
+pub use fit::{
+    FitError, FitOptions, FitResult, MeasuredModes, MeasuredTf, fit, mode_jacobian,
+    pair_modes_by_overlap,
+};
 pub use parameters::{ParameterRow, parameter_table};
 pub use sensitivity::{Sensitivities, SensitivityRequest, sensitivities};
 pub use state_space::NamedStateSpace;
@@ -209,6 +214,9 @@ pub enum Error {
     /// A benchmark asked to repeat nothing, or too often.
     #[error("--repeat must be from 1 to {MAX_REPEAT}")]
     ZeroRepeat,
+    /// Measurements that cannot be read, or a fit that cannot be made.
+    #[error(transparent)]
+    Fit(#[from] fit::FitError),
     /// A result that came out NaN or infinite (never returned as a success).
     #[error("{what} is not finite at {f_hz} Hz")]
     NotFinite {

@@ -104,6 +104,35 @@ fn set_strings(set: Option<&Bound<'_, PyAny>>) -> PyResult<Vec<String>> {
         .collect()
 }
 
+/// A path given as a str or an os.PathLike.
+fn fspath(path: &Bound<'_, PyAny>) -> PyResult<String> {
+    path.py()
+        .import("os")?
+        .call_method1("fspath", (path,))
+        .and_then(|p| p.extract::<String>())
+        .map_err(|_| error("expected a path (str or os.PathLike)"))
+}
+
+/// Measured modes from a CSV file's path, or from a list of `(label, hz, sigma_hz[,
+/// shape])` tuples (checked as the file's lines are, item k being line k).
+fn measured_modes(modes: &Bound<'_, PyAny>) -> PyResult<pendkit::MeasuredModes> {
+    if modes.is_instance_of::<PyString>() || modes.hasattr("__fspath__")? {
+        return pendkit::MeasuredModes::read(Path::new(&fspath(modes)?)).map_err(error);
+    }
+    let mut text = String::new();
+    for item in modes.try_iter().map_err(|_| {
+        error("modes: expected a file path or a list of (label, hz, sigma_hz[, shape]) tuples")
+    })? {
+        let fields: Vec<String> = item?
+            .try_iter()?
+            .map(|f| f.and_then(|f| f.str()?.extract::<String>()))
+            .collect::<PyResult<_>>()?;
+        text += &fields.join(",");
+        text.push('\n');
+    }
+    pendkit::MeasuredModes::parse(Path::new("modes"), &text).map_err(error)
+}
+
 impl Model {
     fn open(source: Source, sets: Vec<String>) -> Result<Model, Error> {
         let case = match &source {
@@ -223,6 +252,57 @@ impl Model {
             parameters(case, &resolved)
         })
         .map_err(error)
+    }
+
+    /// Fits the parameters named in `free` (a list of names) to measured mode frequencies,
+    /// starting from this model's values, as `pendkit fit`: `modes` is the path of a
+    /// measured-modes CSV file (`label,hz,sigma_hz[,shape]`) or a list of tuples
+    /// `(label, hz, sigma_hz)` or `(label, hz, sigma_hz, shape)`; `tf` the path of a
+    /// measured |TF| file. Returns a dict: `parameters` (name, unit, start, value,
+    /// uncertainty: None when undetermined), `correlation`, `modes` (residuals), `tf`,
+    /// `chi_squared`, `dof`, `reduced_chi_squared`, `singular_values`, `undetermined`
+    /// (combinations), `iterations`, `solves`, and `case_file` (the text of the fitted
+    /// case file when the model is a bundled one, else None).
+    #[pyo3(signature = (modes, free, *, tf = None, stage = None))]
+    fn fit<'py>(
+        &self,
+        py: Python<'py>,
+        modes: &Bound<'py, PyAny>,
+        free: Vec<String>,
+        tf: Option<&Bound<'py, PyAny>>,
+        stage: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let stage = match stage {
+            None => Stage::S2,
+            Some(s) => s
+                .str()?
+                .extract::<String>()?
+                .parse::<Stage>()
+                .map_err(error)?,
+        };
+        let measured = measured_modes(modes)?;
+        let tf = match tf {
+            None => None,
+            Some(path) => {
+                Some(pendkit::MeasuredTf::read(Path::new(&fspath(path)?)).map_err(error)?)
+            }
+        };
+        let case = self.case.clone();
+        let options = pendkit::FitOptions {
+            stage,
+            ..pendkit::FitOptions::default()
+        };
+        let result = py
+            .detach(|| pendkit::fit(&case, &measured, tf.as_ref(), &free, &options))
+            .map_err(error)?;
+        let case_file = match &self.source {
+            Source::Bundled(name) => Some(result.case_file(name, &case)),
+            Source::CaseFile { .. } => None,
+        };
+        let text = serde_json::to_string(&result).map_err(error)?;
+        let dict = py.import("json")?.call_method1("loads", (text,))?;
+        dict.set_item("case_file", case_file)?;
+        Ok(dict)
     }
 
     /// Builds the model and runs `stage` (`"0a"`, `"0b"`, `"1a"`, `"1b"` or `"2"`; default

@@ -55,6 +55,16 @@ class Model:
         """This model with more overrides applied after its own."""
     def parameters(self) -> List[Parameter]:
         """Every numeric parameter as resolved."""
+    def fit(
+        self,
+        modes: Union[str, "os.PathLike[str]", Sequence[Tuple[Any, ...]]],
+        free: List[str],
+        *,
+        tf: Union[str, "os.PathLike[str]", None] = None,
+        stage: Union[str, int, None] = None,
+    ) -> Dict[str, Any]:
+        """Fits the `free` parameters to measured modes (a CSV path or (label, hz,
+        sigma_hz[, shape]) tuples), as `pendkit fit`; a dict of the result."""
     def run(self, stage: Union[str, int, None] = None) -> "Result":
         """Builds the model and runs a stage ("0a", "0b", "1a", "1b", "2"; default "2")."""
     def sensitivities(

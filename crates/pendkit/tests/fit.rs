@@ -1,0 +1,315 @@
+//! The fit against synthetic measurements: mode frequencies of the quad solved with known
+//! parameter offsets (an independent solve of the same model at the true values, not the
+//! fit's output), plus Gaussian noise of known σ from a fixed seed. The fit starts from the
+//! nominal values and must land within 3 of its stated uncertainties of the truth, with a
+//! χ²/dof the noise makes plausible.
+
+use std::path::Path;
+
+use pendkit::fit::{MeasuredMode, MeasuredModes};
+use pendkit::{Case, Error, FitError, FitOptions, Stage, fit, run_stage};
+
+/// SplitMix64 and Box–Muller: a reproducible standard normal sequence.
+struct Normal(u64);
+
+impl Normal {
+    fn uniform(&mut self) -> f64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^= z >> 31;
+        // in (0, 1]: never ln(0)
+        ((z >> 11) as f64 + 1.0) / (1u64 << 53) as f64
+    }
+    fn sample(&mut self) -> f64 {
+        let (u, v) = (self.uniform(), self.uniform());
+        (-2.0 * u.ln()).sqrt() * (2.0 * std::f64::consts::PI * v).cos()
+    }
+}
+
+/// The modes of the quad with `sets` (the truth), each labelled by its dominant coordinate
+/// with its three largest coordinates as the shape, with σ = `relative_sigma` × f and
+/// Gaussian noise of that σ.
+fn synthetic(sets: &[&str], relative_sigma: f64, seed: u64) -> MeasuredModes {
+    let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
+    let case = Case::model("quad").unwrap().with_sets(&sets).unwrap();
+    let r = run_stage(case.build().unwrap().0, Stage::S2).unwrap();
+    let mut rng = Normal(seed);
+    let modes = r
+        .modes
+        .modes
+        .iter()
+        .enumerate()
+        .map(|(k, m)| {
+            let mut order: Vec<usize> = (0..m.energy_fractions.len()).collect();
+            order.sort_by(|&a, &b| m.energy_fractions[b].total_cmp(&m.energy_fractions[a]));
+            let sigma = relative_sigma * m.hz;
+            MeasuredMode {
+                label: m.label.clone(),
+                hz: m.hz + sigma * rng.sample(),
+                sigma_hz: sigma,
+                shape: order[..3]
+                    .iter()
+                    .map(|&c| r.modes.coordinates[c].clone())
+                    .collect(),
+                line: k + 2,
+            }
+        })
+        .collect();
+    MeasuredModes {
+        path: "synthetic.csv".into(),
+        modes,
+    }
+}
+
+fn names(list: &[&str]) -> Vec<String> {
+    list.iter().map(|s| s.to_string()).collect()
+}
+
+#[test]
+fn recovers_five_quad_parameters_and_leaves_a_loss_angle_undetermined() {
+    // truth: UIM and PUM masses and three wire lengths off by 1-3 %
+    let truth = [
+        ("m1", 22.011 * 1.03),
+        ("m2", 39.6 * 0.98),
+        ("l1", 0.3085 * 1.02),
+        ("l2", 0.341 * 0.985),
+        ("l3", 0.6 * 1.01),
+    ];
+    let sets: Vec<String> = truth.iter().map(|(n, v)| format!("{n}={v}")).collect();
+    let set_refs: Vec<&str> = sets.iter().map(String::as_str).collect();
+    let measured = synthetic(&set_refs, 2e-4, 15);
+    // a sixth free parameter no mode frequency depends on: the silica loss angle (it sets
+    // the fibres' imaginary stiffness only; the modes use the real stiffness)
+    let free = names(&["m1", "m2", "l1", "l2", "l3", "silica_phi"]);
+    let case = Case::model("quad").unwrap();
+    let result = fit(&case, &measured, None, &free, &FitOptions::default()).unwrap();
+
+    for (p, (name, value)) in result.parameters.iter().zip(truth) {
+        assert_eq!(p.name, name);
+        let sigma = p.uncertainty.expect("determined");
+        assert!(sigma > 0.0 && sigma < 0.01 * value, "{name}: σ = {sigma}");
+        // 3 σ: a 0.3 % chance per parameter for a correct fit with correct uncertainties
+        assert!(
+            (p.value - value).abs() < 3.0 * sigma,
+            "{name}: fitted {} ± {sigma}, true {value}; {:#?}",
+            p.value,
+            result.modes
+        );
+    }
+    let phi = &result.parameters[5];
+    assert_eq!(
+        phi.value, phi.start,
+        "an undetermined parameter is not stepped"
+    );
+    assert_eq!(phi.uncertainty, None);
+    assert_eq!(result.undetermined.len(), 1);
+    let combination = &result.undetermined[0].combination;
+    assert_eq!(combination.len(), 1, "{combination:?}");
+    assert_eq!(combination[0].0, "silica_phi");
+    assert!((combination[0].1 - 1.0).abs() < 1e-9);
+    // 24 modes, 5 determined directions: 19 degrees of freedom; χ²_19/19 lies between
+    // 0.285 and 2.306 with probability 99.8 % (scipy.stats.chi2.ppf(0.001 / 0.999, 19)/19)
+    assert_eq!(result.dof, 19);
+    let reduced = result.reduced_chi_squared.unwrap();
+    assert!((0.285..2.306).contains(&reduced), "χ²/dof = {reduced}");
+    // every measured mode is matched to the mode it was generated from
+    for (m, r) in measured.modes.iter().zip(&result.modes) {
+        assert_eq!(m.label, r.model_label);
+        assert!(r.normalized.abs() < 4.0, "{r:?}");
+    }
+}
+
+#[test]
+fn matching_by_shape_survives_a_mode_crossing() {
+    // The UIM's pitch mode (3.3436 Hz) sits 1.2 mHz above its transverse mode (3.3424 Hz,
+    // labelled y1); a 4 % larger UIM pitch inertia I1y moves it below. Check the crossing
+    // independently first, then fit I1y (and m1) from the start value across it.
+    let hz = |sets: &[String]| -> (f64, f64) {
+        let case = Case::model("quad").unwrap().with_sets(sets).unwrap();
+        let r = run_stage(case.build().unwrap().0, Stage::S2).unwrap();
+        let find = |label: &str| r.modes.modes.iter().find(|m| m.label == label).unwrap().hz;
+        (find("pitch1"), find("y1"))
+    };
+    let true_i1y = 0.0598 * 1.04;
+    let (pitch_start, y_start) = hz(&[]);
+    let (pitch_true, y_true) = hz(&[format!("I1y={true_i1y}")]);
+    assert!(pitch_start > y_start && pitch_true < y_true, "no crossing");
+
+    let measured = synthetic(&[&format!("I1y={true_i1y}")], 1e-4, 7);
+    let free = names(&["I1y", "m1"]);
+    let case = Case::model("quad").unwrap();
+    let result = fit(&case, &measured, None, &free, &FitOptions::default()).unwrap();
+    let i1y = &result.parameters[0];
+    let sigma = i1y.uncertainty.unwrap();
+    assert!((i1y.value - true_i1y).abs() < 3.0 * sigma, "{i1y:?}");
+    let m1 = &result.parameters[1];
+    assert!(
+        (m1.value - 22.011).abs() < 3.0 * m1.uncertainty.unwrap(),
+        "{m1:?}"
+    );
+    // the pitch1 measurement is matched to the pitch1 mode, now below y1 in frequency
+    let pitch = result.modes.iter().find(|r| r.label == "pitch1").unwrap();
+    let y = result.modes.iter().find(|r| r.label == "y1").unwrap();
+    assert_eq!(pitch.model_label, "pitch1");
+    assert!(pitch.mode < y.mode, "{pitch:?} {y:?}");
+    assert!(pitch.normalized.abs() < 4.0 && y.normalized.abs() < 4.0);
+}
+
+fn fit_error(text: &str, free: &[&str]) -> String {
+    let measured = match MeasuredModes::parse(Path::new("measured.csv"), text) {
+        Ok(m) => m,
+        Err(e) => return e.to_string(),
+    };
+    let case = Case::model("quad").unwrap();
+    match fit(&case, &measured, None, &names(free), &FitOptions::default()) {
+        Ok(_) => "no error".into(),
+        Err(e) => e.to_string(),
+    }
+}
+
+#[test]
+fn bad_measurements_are_refused_with_file_and_line() {
+    let cases = [
+        (
+            "label,hz,sigma_hz\nx3,0.43,0.001\n\nz3,0.67,0\n",
+            "measured.csv:4: sigma_hz must be positive",
+        ),
+        ("x3,0.43,-1\n", "measured.csv:1: sigma_hz must be positive"),
+        (
+            "# comment\nx3,nan,0.001\n",
+            "measured.csv:2: hz must be positive and finite",
+        ),
+        ("x3,abc,0.001\n", "measured.csv:1: hz 'abc' is not a number"),
+        (
+            "x3,0.43\n",
+            "measured.csv:1: expected label,hz,sigma_hz[,shape], got 2 fields",
+        ),
+        ("x3,0.43,0.001,yaw1+\n", "measured.csv:1: shape"),
+        ("# nothing\n", "measured.csv: no measured modes"),
+    ];
+    for (text, expected) in cases {
+        let message = fit_error(text, &["m1"]);
+        assert!(message.starts_with(expected), "{message}");
+    }
+}
+
+#[test]
+fn fits_that_cannot_be_made_say_why() {
+    let modes = "x3,0.4328,0.001\ny3,0.4681,0.001\npitch3,0.4919,0.001\n";
+    let cases: [(&str, &[&str], &str); 6] = [
+        (
+            modes,
+            &["m9"],
+            "free parameter 'm9': not a parameter of model 'quad'",
+        ),
+        (modes, &["m1", "m1"], "free parameter 'm1': listed twice"),
+        (
+            modes,
+            &["m1", "m2", "m3"],
+            "3 measurements for 3 free parameters",
+        ),
+        (
+            "x3,0.4328,0.001\nbanana,1,0.1\n",
+            &["m1"],
+            "measured.csv:2: 'banana' is neither a variable",
+        ),
+        (
+            "x3,0.4328,0.001\nY,0.6,0.001\n",
+            &["m1"],
+            "measured.csv:2: label 'Y' is a mode family",
+        ),
+        // x3 moves mostly in modes 1 and 7 (64 % and 26 %): a third x3 finds no mode left
+        // with a tenth of its energy there
+        (
+            "x3,0.4328,0.001\nx3,0.98,0.001\nx3,2,0.001\n",
+            &["m1"],
+            "measured.csv:3: no model mode left that moves x3",
+        ),
+    ];
+    for (text, free, expected) in cases {
+        let message = fit_error(text, free);
+        assert!(message.starts_with(expected), "{message}");
+    }
+    // a family label with a shape: the yaw mode that moves yaw1 most
+    let ok = fit_error("x3,0.4328,0.001\nY,3.05,0.001,yaw1\n", &["m1"]);
+    assert_eq!(ok, "no error");
+}
+
+#[test]
+fn a_fit_out_of_iterations_says_so_with_its_last_state() {
+    let measured = synthetic(&["m1=23"], 1e-4, 3);
+    let case = Case::model("quad").unwrap();
+    let options = FitOptions {
+        max_iterations: 0,
+        ..FitOptions::default()
+    };
+    let err = fit(&case, &measured, None, &names(&["m1"]), &options).unwrap_err();
+    assert!(matches!(err, Error::Fit(FitError::NotConverged { .. })));
+    let message = err.to_string();
+    assert!(
+        message.contains("did not converge") && message.contains("m1="),
+        "{message}"
+    );
+}
+
+#[test]
+fn a_measured_transfer_function_joins_the_modes() {
+    // truth: fibres 1 % longer and a 2 % heavier test mass; measured: three test-mass modes
+    // and |x3/x00| at five frequencies between the resonances, from an independent solve
+    let sets = ["l3=0.606".to_string(), "m3=40.392".to_string()];
+    let case = Case::model("quad").unwrap().with_sets(&sets).unwrap();
+    let r = run_stage(case.build().unwrap().0, Stage::S2).unwrap();
+    let freqs = [0.2, 0.75, 1.6, 5.0, 20.0];
+    let h = r.transfer("x00", "x3", &freqs).unwrap();
+    let mut rng = Normal(11);
+    let mut text = String::from("# input = x00\n# output = x3\nfreq_hz,abs,sigma_abs\n");
+    for (f, z) in freqs.iter().zip(&h) {
+        let sigma = 1e-3 * z.norm();
+        text += &format!("{f},{},{sigma}\n", z.norm() + sigma * rng.sample());
+    }
+    let tf = pendkit::MeasuredTf::parse(Path::new("tf.csv"), &text).unwrap();
+    let all = synthetic(&["l3=0.606", "m3=40.392"], 1e-4, 5);
+    let keep = ["x3", "pitch3", "z3"];
+    let measured = MeasuredModes {
+        path: all.path.clone(),
+        modes: all
+            .modes
+            .into_iter()
+            .filter(|m| keep.contains(&m.label.as_str()))
+            .collect(),
+    };
+    assert_eq!(measured.modes.len(), 3);
+    let result = fit(
+        &Case::model("quad").unwrap(),
+        &measured,
+        Some(&tf),
+        &names(&["l3", "m3"]),
+        &FitOptions::default(),
+    )
+    .unwrap();
+    assert_eq!(result.tf.len(), 5);
+    for (p, truth) in result.parameters.iter().zip([0.606, 40.392]) {
+        let sigma = p.uncertainty.unwrap();
+        assert!((p.value - truth).abs() < 3.0 * sigma, "{p:?} {result:#?}");
+    }
+    // 8 measurements, 2 parameters
+    assert_eq!(result.dof, 6);
+}
+
+#[test]
+fn a_transfer_function_file_names_its_input_and_output() {
+    let err = pendkit::MeasuredTf::parse(Path::new("tf.csv"), "freq_hz,abs,sigma_abs\n1,2,0.1\n")
+        .unwrap_err()
+        .to_string();
+    assert_eq!(err, "tf.csv: no '# input = NAME' line before the data");
+    let err =
+        pendkit::MeasuredTf::parse(Path::new("tf.csv"), "# input = x00\n# output = x3\n1,2\n")
+            .unwrap_err()
+            .to_string();
+    assert_eq!(
+        err,
+        "tf.csv:3: expected freq_hz,abs,sigma_abs, got 2 fields"
+    );
+}
