@@ -494,12 +494,13 @@ fn finish(
     })
 }
 
-/// The floats that no term of this stage holds or couples: every Hessian entry on their
-/// rows, tension on and off, is exactly zero (a violin bead's joint rotations before the
-/// stage that adds bending: only the bending term turns them). Such a float carries no
-/// energy in the stage and moves nothing, so leaving it out is the exact elimination;
-/// keeping it would make the float block singular. A float that some term couples but
-/// nothing holds (a mistake in a model) is still reported by the elimination.
+/// The pinned floats (held at their start in the equilibrium) that no term of this stage
+/// holds or couples: every Hessian entry on their rows, tension on and off, is exactly
+/// zero (a violin bead's joint rotations before the stage that adds bending: only the
+/// bending term turns them). Such a float carries no energy in the stage and moves
+/// nothing, so leaving it out is the exact elimination; keeping it would make the float
+/// block singular. A free float that nothing holds (a mistake in a model, e.g. the toy's
+/// junction between two springs of zero stiffness) is still reported by the elimination.
 fn idle_floats(system: &System, terms: &[TermMatrices]) -> Vec<usize> {
     let mut touched = vec![false; system.coords.len()];
     for t in terms {
@@ -519,7 +520,7 @@ fn idle_floats(system: &System, terms: &[TermMatrices]) -> Vec<usize> {
     system
         .coords_of(CoordKind::Float)
         .into_iter()
-        .filter(|&g| !touched[g])
+        .filter(|&g| !touched[g] && system.coords[g].pinned)
         .collect()
 }
 
