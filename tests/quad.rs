@@ -148,8 +148,32 @@ fn violin_modes_of_v5_follow_the_loaded_string() {
             n + 1,
             modes.iter().map(|m| m.hz).collect::<Vec<_>>()
         );
-        let x = modes.iter().filter(|m| m.label.starts_with('x')).count();
-        assert_eq!(x, 4, "violin modes come in x and y");
+        // four of the eight modes swing the beads along x and four along y: the beads'
+        // kinetic energy over the group is 4 in x and 4 in y, a sum that does not depend on
+        // how the solver picks a basis in the near-degenerate group (the beads' x also
+        // couples to the test mass's yaw through each fibre's end, so modes may mix x and y
+        // beads; what is not in the beads, a few 1e-5, moves the masses)
+        let share = |prefix: &str| -> f64 {
+            modes
+                .iter()
+                .map(|m| {
+                    r.modes
+                        .coordinates
+                        .iter()
+                        .zip(&m.energy_fractions)
+                        .filter(|(c, _)| c.starts_with(prefix))
+                        .map(|(_, f)| f)
+                        .sum::<f64>()
+                })
+                .sum()
+        };
+        for prefix in ["xf", "yf"] {
+            let beads = share(prefix);
+            assert!(
+                (beads - 4.0).abs() < 1e-3,
+                "violin modes come in x and y: {prefix} share {beads}"
+            );
+        }
     }
 }
 

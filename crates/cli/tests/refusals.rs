@@ -342,11 +342,16 @@ fn named_output_with_every_coefficient_zero_is_refused() {
 
 #[test]
 fn switch_parameter_other_than_0_or_1_is_refused() {
-    // hinged_bottom = -1 was read as "hinged" (anything non-zero), in the bundled model
-    // and in its suspension file alike
+    // hinged_bottom = -1 was read as "hinged" (anything non-zero); the bundled model is its
+    // suspension file, so the error names the file's line and field
     refused(
         &["modes", "pendulum", "--set", "hinged_bottom=-1"],
-        &["hinged_bottom", "0", "1"],
+        &[
+            "pendulum.toml",
+            "hinged",
+            "-1",
+            "must be 0 (clamped) or 1 (hinged)",
+        ],
     );
     let file = concat!(
         env!("CARGO_MANIFEST_DIR"),
@@ -363,11 +368,16 @@ fn poisson_ratio_outside_its_physical_range_is_refused() {
     // G = E / (2 (1 + ν)): ν = 1e300 gave a shear modulus of ~0 and torsion-free fibres
     refused(
         &["modes", "pendulum", "--set", "nu_fibre=1e300"],
-        &["nu_fibre", "Poisson's ratio"],
+        &[
+            "pendulum.toml",
+            "poisson_ratio",
+            "Poisson's ratio 1e300",
+            "(-1, 0.5)",
+        ],
     );
     refused(
         &["modes", "quad", "--set", "nu_silica=0.6"],
-        &["nu_silica", "(-1, 0.5)"],
+        &["ligo-materials.toml", "poisson_ratio", "0.6", "(-1, 0.5)"],
     );
     let file = concat!(
         env!("CARGO_MANIFEST_DIR"),
