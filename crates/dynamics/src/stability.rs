@@ -418,6 +418,10 @@ pub struct TermRounding {
     unknowns: usize,
 }
 
+/// Largest number of unknowns for which [`TermRounding::new`] looks slots up in a dense
+/// table (4 bytes per entry: 16 MB at the limit).
+const DENSE_SLOT_TABLE_LIMIT: usize = 2000;
+
 /// Two sets of non-negative weights on one sparsity pattern (compressed rows), for the forms
 /// Σ w_rc |z_r| |z_c|: the rounding of the stored entries, Σ_t (|H_off s + G| + |H_off s|)
 /// (s: the tag's storage multiplier ε'(0) if above 1; G = H_on − H_off), and the bound,
@@ -487,6 +491,21 @@ impl TermRounding {
         let mut unstored_entries = Vec::new();
         let mut slot_in_row = Vec::new();
         let mut storages: Vec<(&str, f64)> = Vec::new();
+        // the slot of every (row, column) among the unknowns in one dense table, so that
+        // each term's entries find theirs in one read (a binary search per entry was most
+        // of this function's time); up to a few million entries, beyond that the search
+        let table: Option<Vec<u32>> = (unknowns <= DENSE_SLOT_TABLE_LIMIT).then(|| {
+            let mut table = vec![u32::MAX; unknowns * unknowns];
+            for r in 0..unknowns {
+                let (start, end) = (stored.row_start[r], stored.row_start[r + 1]);
+                for (s, &c) in (start..end).zip(&stored.cols[start..end]) {
+                    if c < unknowns {
+                        table[r * unknowns + c] = s as u32;
+                    }
+                }
+            }
+            table
+        });
         for t in &assembled.terms {
             let size = t.coords.len();
             // (local index, master position) of the term's coordinates that are unknowns
@@ -534,7 +553,14 @@ impl TermRounding {
             let mut local_geometric = Vec::with_capacity(positions.len() * positions.len());
             for &(a, pa) in &positions {
                 slot_in_row.clear();
-                slot_in_row.extend(positions.iter().map(|&(_, pb)| stored.slot(pa, pb)));
+                slot_in_row.extend(positions.iter().map(|&(_, pb)| {
+                    match &table {
+                        Some(table) => table
+                            .get(pa * unknowns + pb)
+                            .and_then(|&s| (s != u32::MAX).then_some(s as usize)),
+                        None => stored.slot(pa, pb),
+                    }
+                }));
                 for (&(b, pb), slot) in positions.iter().zip(&slot_in_row) {
                     let k = a * size + b;
                     let off = off_at(k);

@@ -15,7 +15,7 @@ from pendkit import PendkitError
 def synthetic_modes(truth):
     """(label, hz, sigma_hz, shape) of every mode of the quad at `truth`, sigma 1e-4
     relative, the shape its three largest kinetic-energy coordinates."""
-    modes = pendkit.Model("quad", set=truth).run().modes
+    modes = pendkit.Model("quad", set=truth).run().modes()
     rows = []
     for k, hz in enumerate(modes.frequencies):
         top = np.argsort(modes.energy_fractions[k])[::-1][:3]
