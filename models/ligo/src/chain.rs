@@ -1,13 +1,10 @@
-//! Building blocks shared by the quad and the triple: blade tips in each variant, wires
-//! between bodies, violin-mode beads on fibres, and material damping.
-
-use std::collections::BTreeMap;
+//! Building blocks of the Rust `quad-aligo` model (the other bundled models are files):
+//! blade tips, wires between bodies, and violin-mode beads on tapered fibres.
 
 use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
 use pendkit_energy::{BodyId, EndDirection, SpringEnd, Wire, WireEnd, WireSection, WireTags};
 use pendkit_model::beads::{BeadJoints, BeadedFibre, add_beaded_fibre};
-use pendkit_model::losses::{LossMaterial, WireLoss};
-use pendkit_model::{BodySpec, BuildError, DampingSpec, FibreProfile, Shape, SystemBuilder};
+use pendkit_model::{BodySpec, BuildError, FibreProfile, Shape, SystemBuilder};
 use pendkit_params::Resolved;
 
 /// How blade tips are modelled (T020205 §6.3–§6.4).
@@ -326,37 +323,4 @@ pub fn beads_mass(
             p.mass() - 0.5 * ends
         }
     }
-}
-
-/// Damping of a wire set from its material: structural φ on stretch, bending and torsion,
-/// plus the thermoelastic peak on bending (docs/reference-values.md §7, with the stress term):
-/// Δ = (Y T/ρC)(α − σβ/Y)², τ = ρ C d² / (2.16 · 2π · κ), σ = tension / area; no surface
-/// loss (the 2005 models' convention). `material` prefixes the material parameters
-/// (`<m>_phi`, `<m>_rho`, ...); `tension` and `radius`, `youngs` name the wire set's
-/// parameters. See [`pendkit_model::losses`] for the general form.
-pub fn wire_damping(
-    set: &str,
-    material: &str,
-    tension: &str,
-    radius: &str,
-    youngs: &str,
-) -> Vec<(String, DampingSpec)> {
-    WireLoss {
-        set,
-        material: LossMaterial::parameters(material),
-        tension,
-        youngs,
-        clamp_radius: radius,
-        surface: None,
-        temperature: "temperature",
-        dilution_scale: None,
-    }
-    .damping()
-}
-
-/// Collects damping entries into the map a model returns.
-pub fn damping_map(
-    entries: impl IntoIterator<Item = (String, DampingSpec)>,
-) -> BTreeMap<String, DampingSpec> {
-    entries.into_iter().collect()
 }
