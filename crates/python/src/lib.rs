@@ -104,6 +104,19 @@ fn set_strings(set: Option<&Bound<'_, PyAny>>) -> PyResult<Vec<String>> {
         .collect()
 }
 
+/// A stage given as `"0a"` … `"2"` (any object whose `str()` is one), or stage 2, the
+/// complete model, when none is given (as the command line).
+fn stage_or_complete(stage: Option<&Bound<'_, PyAny>>) -> PyResult<Stage> {
+    match stage {
+        None => Ok(Stage::S2),
+        Some(s) => s
+            .str()?
+            .extract::<String>()?
+            .parse::<Stage>()
+            .map_err(error),
+    }
+}
+
 /// A path given as a str or an os.PathLike.
 fn fspath(path: &Bound<'_, PyAny>) -> PyResult<String> {
     path.py()
@@ -272,14 +285,7 @@ impl Model {
         tf: Option<&Bound<'py, PyAny>>,
         stage: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyAny>> {
-        let stage = match stage {
-            None => Stage::S2,
-            Some(s) => s
-                .str()?
-                .extract::<String>()?
-                .parse::<Stage>()
-                .map_err(error)?,
-        };
+        let stage = stage_or_complete(stage)?;
         let measured = measured_modes(modes)?;
         let tf = match tf {
             None => None,
@@ -310,14 +316,7 @@ impl Model {
     /// normal mode. Returns a `Result`.
     #[pyo3(signature = (stage = None))]
     fn run(&self, py: Python<'_>, stage: Option<&Bound<'_, PyAny>>) -> PyResult<StageRun> {
-        let stage = match stage {
-            None => Stage::S2,
-            Some(s) => s
-                .str()?
-                .extract::<String>()?
-                .parse::<Stage>()
-                .map_err(error)?,
-        };
+        let stage = stage_or_complete(stage)?;
         let case = self.case.clone();
         let run = py
             .detach(move || -> std::result::Result<Run, Error> {
@@ -354,14 +353,7 @@ impl Model {
         parameters: Option<Vec<String>>,
         allow_unstable: bool,
     ) -> PyResult<Sensitivities> {
-        let stage = match stage {
-            None => Stage::S2,
-            Some(s) => s
-                .str()?
-                .extract::<String>()?
-                .parse::<Stage>()
-                .map_err(error)?,
-        };
+        let stage = stage_or_complete(stage)?;
         let freqs = match freqs {
             Some(f) => frequencies(f)?,
             None => Vec::new(),
