@@ -35,7 +35,7 @@ fn rust_model(name: &str) -> &'static dyn Model {
 }
 
 fn file_model(name: &str) -> &'static dyn Model {
-    use pendkit::suspension::{Library as _, Suspension};
+    use pendkit::suspension::Suspension;
     if let Some(m) = pendkit_models::models()
         .into_iter()
         .find(|m| m.name() == name)
@@ -43,9 +43,7 @@ fn file_model(name: &str) -> &'static dyn Model {
         return m;
     }
     // a bundled file whose name still loads the Rust model (quad-aligo)
-    let (path, text) = pendkit_models::Bundled.file(name).unwrap();
-    let s = Suspension::from_text(&path, text, &pendkit_models::Bundled)
-        .unwrap_or_else(|e| panic!("{e}"));
+    let s = Suspension::bundled(name, &pendkit_models::Bundled).unwrap_or_else(|e| panic!("{e}"));
     Box::leak(Box::new(s))
 }
 

@@ -82,7 +82,10 @@ pub fn chain_file(a: ChainArgs) -> Result<String, CliError> {
             a.stages
         )));
     }
-    Ok(pendkit::suspension::generate::chain(a.stages))
+    Ok(pendkit::suspension::generate::chain(a.stages)
+        .source
+        .text
+        .clone())
 }
 
 /// Arguments of `pendkit model-file`.
@@ -100,7 +103,7 @@ pub fn model_file(a: ModelFileArgs) -> Result<String, CliError> {
     use pendkit::suspension::Library as _;
     pendkit::bundled_files::Bundled
         .file(&a.model)
-        .map(|(_, text)| text.to_string())
+        .map(|file| file.text.to_string())
         .ok_or_else(|| {
             let known: Vec<&str> = pendkit::bundled_files::files()
                 .map(|(name, _, _)| name.trim_end_matches(".toml"))

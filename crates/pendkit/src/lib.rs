@@ -40,12 +40,12 @@
 //!
 //! | feature | adds | pulls in |
 //! |---|---|---|
-//! | `files` | [`Case::from_file`], and [`Case::open`] taking a case-file path | `pendkit-files` (a TOML parser) |
+//! | `files` | [`Case::from_file`], [`Case::open`] taking a path, [`load_suspension`]: case files and suspension files read at run time | `pendkit-files`, `pendkit-suspension/toml` (a TOML parser) |
 //! | `export` | [`StageResult::write_state_space`]: the state space to `.mat`, `.npz` or JSON, with units and provenance | `pendkit-export` (zip) |
 //!
-//! Neither is on by default; the `pendkit` command-line program enables both. Suspension
-//! files need no feature: every bundled model is one (embedded, [`bundled_files`]), so the
-//! library always reads them ([`suspension`], [`load_suspension`]).
+//! Neither is on by default; the `pendkit` command-line program enables both. The bundled
+//! models need no feature: each is a suspension file embedded already read (its tree packed
+//! at build time, [`bundled_files`]), so the library carries no TOML parser by default.
 //!
 //! # What it links
 //!
@@ -62,6 +62,7 @@ pub mod fit;
 mod parameters;
 pub mod sensitivity;
 mod state_space;
+#[cfg(feature = "files")]
 mod suspension_files;
 pub mod tradeoff;
 
@@ -116,7 +117,8 @@ pub use fit::{
 pub use parameters::{ParameterRow, parameter_table};
 pub use sensitivity::{Sensitivities, SensitivityRequest, sensitivities};
 pub use state_space::NamedStateSpace;
-pub use suspension_files::load_suspension;
+#[cfg(feature = "files")]
+pub use suspension_files::{load_suspension, suspension_from_text};
 
 /// pendkit's version, recorded in exports and reports.
 pub const VERSION: &str = env!("CARGO_PKG_VERSION");
@@ -311,7 +313,7 @@ impl Case {
             return Ok(Case {
                 name,
                 description: None,
-                model: load_suspension(path)?,
+                model: suspension_from_text(path, text)?,
                 overrides: Overrides::default(),
             });
         }

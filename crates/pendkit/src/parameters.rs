@@ -65,15 +65,14 @@ pub fn parameter_table(case: &Case) -> Result<Vec<ParameterRow>, Error> {
 /// that is a bundled model written in Rust (nothing otherwise, or if the file does not take
 /// the case's overrides).
 fn twin_info(case: &Case) -> Vec<ParameterInfo> {
-    use pendkit_suspension::{Library as _, Suspension};
+    use pendkit_suspension::Suspension;
     let rust = pendkit_models::find(case.model.name()).is_none()
         && crate::models()
             .into_iter()
             .any(|m| std::ptr::addr_eq(m, case.model));
     let file = rust
-        .then(|| pendkit_models::Bundled.file(case.model.name()))
-        .flatten()
-        .and_then(|(path, text)| Suspension::from_text(&path, text, &pendkit_models::Bundled).ok());
+        .then(|| Suspension::bundled(case.model.name(), &pendkit_models::Bundled).ok())
+        .flatten();
     let Some(file) = file else {
         return Vec::new();
     };

@@ -4,13 +4,16 @@
 //! the line and the field, and interpreted into a `pendkit_model::Model`.
 //!
 //! The format's reference is `docs/suspension-files.md`. A file is read in four steps:
-//! its TOML becomes a tree of nodes that remember their place ([`tree`]), the files it
+//! its TOML becomes a tree of nodes that remember their place ([`tree`]; read at run time
+//! with the feature `toml`, packed at build time for the bundled files ([`packed`]), or
+//! written with the text for generated files ([`writer`])), the files it
 //! `extends` are merged under it, the merged tree is read into a typed description
 //! ([`spec`]), and each build evaluates that description against the resolved parameters
 //! ([`build`]), deriving the nominal geometry, tensions and preloads as the source's models
 //! do.
 //!
 //! ```
+//! # #[cfg(feature = "toml")] {
 //! use pendkit_model::{Model, Overrides, build_with};
 //! use pendkit_suspension::{NoLibrary, Suspension};
 //! let text = r#"
@@ -41,6 +44,7 @@
 //! let (system, _) = build_with(&pendulum, &Overrides::default())?;
 //! assert_eq!(system.wires.len(), 4);
 //! assert_eq!(system.coords.iter().find(|c| c.name == "z1").map(|c| c.start), Some(-0.6));
+//! # }
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
@@ -49,9 +53,9 @@ pub mod damping;
 pub mod generate;
 pub mod read;
 pub mod signals;
-pub mod source;
 pub mod spec;
-pub mod tree;
+
+pub use pendkit_source::{packed, source, tree, writer};
 
 use std::cell::RefCell;
 use std::collections::BTreeMap;
@@ -69,19 +73,40 @@ pub use spec::Spec;
 
 use crate::build::{Ctx, evaluate_shape};
 use crate::tree::{Node, Value};
+use crate::writer::Written;
+
+/// A file embedded in the program, read at build time.
+#[derive(Clone, Copy, Debug)]
+pub struct BundledFile {
+    /// How errors name it: its path in the repository, e.g. `models/ligo/quad.toml`.
+    pub path: &'static str,
+    /// Its text.
+    pub text: &'static str,
+    /// Its tree, packed ([`packed`]).
+    pub packed: &'static str,
+}
+
+impl BundledFile {
+    /// Its text as a source and its tree.
+    pub fn read(&self) -> Result<(Arc<Source>, Node), FileError> {
+        let source = Source::new(self.path, None, self.text);
+        let root = packed::unpack(&source, self.packed)?;
+        Ok((source, root))
+    }
+}
 
 /// Where `extends` finds files that are not on disk: the bundled ones.
 pub trait Library: Sync {
     /// The bundled file called `name` (a model name such as `quad`, or a file name such as
-    /// `ligo-materials.toml`): how errors name it, and its text.
-    fn file(&self, name: &str) -> Option<(String, &'static str)>;
+    /// `ligo-materials.toml`).
+    fn file(&self, name: &str) -> Option<BundledFile>;
 }
 
 /// A library with no files: `extends` can only name files on disk.
 pub struct NoLibrary;
 
 impl Library for NoLibrary {
-    fn file(&self, _: &str) -> Option<(String, &'static str)> {
+    fn file(&self, _: &str) -> Option<BundledFile> {
         None
     }
 }
@@ -117,8 +142,8 @@ pub struct Generator {
     pub range: (usize, usize),
     /// The count the file was written for.
     pub default: usize,
-    /// Writes the file for a count.
-    pub write: fn(usize) -> String,
+    /// Writes the file for a count: its text and its tree.
+    pub write: fn(usize) -> Written,
     /// The bundled model's one-line summary (the written file's says how many).
     pub summary: &'static str,
 }
@@ -146,6 +171,7 @@ impl std::fmt::Debug for Suspension {
 impl Suspension {
     /// Reads the suspension file at `path`; `extends` names files relative to it, or
     /// bundled models by name through `library`.
+    #[cfg(feature = "toml")]
     pub fn load(path: &Path, library: &dyn Library) -> Result<Suspension, FileError> {
         let name = path.display().to_string();
         let text = std::fs::read_to_string(path)
@@ -155,6 +181,7 @@ impl Suspension {
 
     /// Reads a suspension from `text`, called `name` in errors (its stem is the default
     /// model name); `extends` can only name bundled files through `library`.
+    #[cfg(feature = "toml")]
     pub fn from_text(
         name: &str,
         text: &str,
@@ -163,26 +190,49 @@ impl Suspension {
         Suspension::from_source(Source::new(name, None, text), library)
     }
 
-    /// A bundled suspension whose file is written by `generator` (for its default count).
+    /// Reads a suspension from a source (its text parsed as TOML); a source with a path
+    /// finds the files it `extends` beside it.
+    #[cfg(feature = "toml")]
+    pub fn from_source(
+        source: Arc<Source>,
+        library: &dyn Library,
+    ) -> Result<Suspension, FileError> {
+        let root = tree::parse(&source)?;
+        Suspension::from_tree(source, root, library)
+    }
+
+    /// The bundled file called `name` in `library` (a model name or a file name), read from
+    /// its packed tree.
+    pub fn bundled(name: &str, library: &dyn Library) -> Result<Suspension, FileError> {
+        let file = library
+            .file(name)
+            .ok_or_else(|| FileError::file(name, "no bundled file of this name"))?;
+        let (source, root) = file.read()?;
+        Suspension::from_tree(source, root, library)
+    }
+
+    /// A bundled suspension whose file is written by `generator` (for its default count),
+    /// called `name` in errors.
     pub fn generated(
         name: &str,
         generator: Generator,
         library: &dyn Library,
     ) -> Result<Suspension, FileError> {
-        let text = (generator.write)(generator.default);
-        let mut s = Suspension::from_text(name, &text, library)?;
+        let Written { source, root } = (generator.write)(generator.default).named(name);
+        let mut s = Suspension::from_tree(source, root, library)?;
         s.summary = generator.summary.to_string();
         s.generator = Some(generator);
         Ok(s)
     }
 
-    /// Reads a suspension from a source.
-    pub fn from_source(
+    /// Reads a suspension from the tree `root` read from `source`'s text.
+    pub fn from_tree(
         source: Arc<Source>,
+        root: Node,
         library: &dyn Library,
     ) -> Result<Suspension, FileError> {
         let mut chain = Vec::new();
-        let root = load_tree(source.clone(), library, &mut chain)?;
+        let root = load_tree(&source, root, library, &mut chain)?;
         let at = At {
             origin: root.origin.clone(),
             path: String::new(),
@@ -238,13 +288,12 @@ impl Suspension {
         if n == g.default {
             return Ok(std::borrow::Cow::Borrowed(&self.spec));
         }
-        let text = (g.write)(n);
-        let other = Suspension::from_text(&self.source_name, &text, &NoLibrary).map_err(|e| {
-            BuildError::Invalid {
+        let Written { source, root } = (g.write)(n).named(&self.source_name);
+        let other =
+            Suspension::from_tree(source, root, &NoLibrary).map_err(|e| BuildError::Invalid {
                 item: format!("generated {} with {n} {}", self.name, g.parameter),
                 message: e.to_string(),
-            }
-        })?;
+            })?;
         Ok(std::borrow::Cow::Owned(other.spec))
     }
 
@@ -306,9 +355,11 @@ fn check_parameters(spec: &Spec) -> Result<(), FileError> {
     }
 }
 
-/// Reads `source` and the files it extends, merged (the extending file's values win).
+/// The tree `node` of `source` merged over the files it extends (the extending file's values
+/// win).
 fn load_tree(
-    source: Arc<Source>,
+    source: &Arc<Source>,
+    mut node: Node,
     library: &dyn Library,
     chain: &mut Vec<String>,
 ) -> Result<Node, FileError> {
@@ -320,7 +371,6 @@ fn load_tree(
         ));
     }
     chain.push(source.name.clone());
-    let mut node = tree::parse(&source)?;
     let Value::Table(table) = &mut node.value else {
         return Ok(node);
     };
@@ -334,18 +384,15 @@ fn load_tree(
     let Value::Str(target) = &extends.value else {
         return Err(at.error("expected the name of a file or of a bundled model"));
     };
-    let base_source = if target.ends_with(".toml") && source.path.is_some() {
+    let (base_source, base) = if target.ends_with(".toml") && source.path.is_some() {
         let dir = source
             .path
             .as_ref()
             .and_then(|p| p.parent())
             .unwrap_or_else(|| Path::new(""));
-        let path = dir.join(target);
-        let text = std::fs::read_to_string(&path)
-            .map_err(|e| at.error(format!("cannot read {}: {e}", path.display())))?;
-        Source::new(path.display().to_string(), Some(&path), text)
+        read_beside(&dir.join(target), &at)?
     } else {
-        let (name, text) = library.file(target).ok_or_else(|| {
+        let file = library.file(target).ok_or_else(|| {
             at.error(format!(
                 "no file '{target}'{}",
                 if target.ends_with(".toml") {
@@ -355,9 +402,9 @@ fn load_tree(
                 }
             ))
         })?;
-        Source::new(name, None, text)
+        file.read()?
     };
-    let mut base = load_tree(base_source, library, chain)?;
+    let mut base = load_tree(&base_source, base, library, chain)?;
     let Value::Table(base_table) = &mut base.value else {
         return Ok(node);
     };
@@ -372,6 +419,26 @@ fn load_tree(
         value: base.value,
         origin: node.origin,
     })
+}
+
+/// The file at `path` that an `extends` at `at` names, read.
+#[cfg(feature = "toml")]
+fn read_beside(path: &Path, at: &At) -> Result<(Arc<Source>, Node), FileError> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| at.error(format!("cannot read {}: {e}", path.display())))?;
+    let source = Source::new(path.display().to_string(), Some(path), text);
+    let root = tree::parse(&source)?;
+    Ok((source, root))
+}
+
+/// Without a TOML reader only bundled files can be extended (files on disk come with one:
+/// their `Source` has a path only when `Suspension::load` read them).
+#[cfg(not(feature = "toml"))]
+fn read_beside(path: &Path, at: &At) -> Result<(Arc<Source>, Node), FileError> {
+    Err(at.error(format!(
+        "cannot read {}: reading suspension files needs the `toml` feature of pendkit-suspension",
+        path.display()
+    )))
 }
 
 /// A parameter that an extending file gives in the short form (`n_beads = 5`) keeps the

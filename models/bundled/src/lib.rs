@@ -9,47 +9,17 @@ use pendkit_energy::System;
 use pendkit_model::{BuildError, DampingSpec, DefaultsCache, Model, ParameterInfo};
 use pendkit_params::{ParamError, ParamSet, Resolved};
 use pendkit_suspension::generate::{MAX_CHAIN_STAGES, chain};
-use pendkit_suspension::{FileError, Generator, Library, Suspension};
+use pendkit_suspension::{BundledFile, FileError, Generator, Library, Suspension};
 
-/// A bundled file: its name (what `extends` says), its path in the repository (what errors
-/// say), and its text.
+/// A bundled file: its name (what `extends` says) and the file (its path in the repository,
+/// its text and its packed tree).
 struct File {
     name: &'static str,
-    path: &'static str,
-    text: &'static str,
+    file: BundledFile,
 }
 
-macro_rules! file {
-    ($dir:literal, $name:literal) => {
-        File {
-            name: $name,
-            path: concat!("models/", $dir, "/", $name),
-            text: include_str!(concat!("../../", $dir, "/", $name)),
-        }
-    };
-}
-
-/// Every bundled file.
-static FILES: [File; 17] = [
-    file!("basic", "toy.toml"),
-    file!("basic", "pendulum.toml"),
-    file!("basic", "double-pendulum.toml"),
-    file!("basic", "rigid-body.toml"),
-    file!("basic", "chain.toml"),
-    file!("ligo", "ligo-materials.toml"),
-    file!("ligo", "quad.toml"),
-    file!("ligo", "quad-lite.toml"),
-    file!("ligo", "quad-full.toml"),
-    file!("ligo", "quad-lateral.toml"),
-    file!("ligo", "quad-v5.toml"),
-    // not yet a bundled model (see MODELS): read by tests and `extends`
-    file!("ligo", "quad-aligo.toml"),
-    file!("ligo", "triple.toml"),
-    file!("ligo", "triple-lite.toml"),
-    file!("ligo", "triple-full.toml"),
-    file!("ligo", "triple-lateral.toml"),
-    file!("ligo", "triple-v5.toml"),
-];
+// `static FILES: [File; N]`, written by build.rs from its list of files
+include!(concat!(env!("OUT_DIR"), "/files.rs"));
 
 /// The bundled models, in the order `pendkit models` lists them: each is the file of its
 /// name (`chain` is written by its generator for its parameter `n_stages`). `quad-aligo`'s
@@ -87,16 +57,13 @@ pub const CHAIN: Generator = Generator {
 pub struct Bundled;
 
 impl Library for Bundled {
-    fn file(&self, name: &str) -> Option<(String, &'static str)> {
+    fn file(&self, name: &str) -> Option<BundledFile> {
         let file_name = if name.ends_with(".toml") {
             name.to_string()
         } else {
             format!("{name}.toml")
         };
-        FILES
-            .iter()
-            .find(|f| f.name == file_name)
-            .map(|f| (f.path.to_string(), f.text))
+        FILES.iter().find(|f| f.name == file_name).map(|f| f.file)
     }
 }
 
@@ -115,10 +82,7 @@ impl BundledModel {
                 if self.name == "chain" {
                     return Suspension::generated("models/basic/chain.toml", CHAIN, &Bundled);
                 }
-                let (path, text) = Bundled
-                    .file(self.name)
-                    .ok_or_else(|| FileError::file(self.name, "no bundled file for this model"))?;
-                Suspension::from_text(&path, text, &Bundled)
+                Suspension::bundled(self.name, &Bundled)
             })
             .as_ref()
             .map_err(Clone::clone)
@@ -198,7 +162,7 @@ pub fn names() -> &'static [&'static str] {
 
 /// The bundled files (name, repository path, text), for tests and tools.
 pub fn files() -> impl Iterator<Item = (&'static str, &'static str, &'static str)> {
-    FILES.iter().map(|f| (f.name, f.path, f.text))
+    FILES.iter().map(|f| (f.name, f.file.path, f.file.text))
 }
 
 #[cfg(test)]
@@ -209,8 +173,26 @@ mod tests {
     /// the file and generating it agree.
     #[test]
     fn chain_file_is_the_generators() {
-        let (_, text) = Bundled.file("chain").unwrap();
-        assert_eq!(text, chain(CHAIN.default));
+        let file = Bundled.file("chain").unwrap();
+        assert_eq!(file.text, chain(CHAIN.default).source.text);
+    }
+
+    /// Each bundled model read from its packed tree is the model its text reads as: the same
+    /// parameters and the same system (the text parsed here by the TOML reader, with the
+    /// same files to extend).
+    #[test]
+    fn packed_files_read_as_their_text() {
+        use pendkit_model::{Overrides, build_with};
+        for name in names().iter().filter(|n| **n != "chain") {
+            let file = Bundled.file(name).unwrap();
+            let packed = Suspension::bundled(name, &Bundled).unwrap();
+            let text = Suspension::from_text(file.path, file.text, &Bundled).unwrap();
+            let (a, pa) = build_with(&packed, &Overrides::default()).unwrap();
+            let (b, pb) = build_with(&text, &Overrides::default()).unwrap();
+            let values = |r: &Resolved| format!("{:?}", r.iter().collect::<Vec<_>>());
+            assert_eq!(values(&pa), values(&pb), "{name}");
+            assert_eq!(format!("{a:?}"), format!("{b:?}"), "{name}");
+        }
     }
 
     /// Every bundled file reads (a broken file would only show when its model is built).

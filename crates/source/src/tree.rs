@@ -1,12 +1,17 @@
 //! A file's TOML as a tree of nodes that remember their source and span, so that values from
 //! a file and the files it extends can be merged and still be traced to their line.
 
+#[cfg(feature = "toml")]
 use std::sync::Arc;
 
+#[cfg(feature = "toml")]
 use toml::Spanned;
+#[cfg(feature = "toml")]
 use toml::de::{DeTable, DeValue};
 
-use crate::source::{FileError, Origin, Source};
+use crate::source::Origin;
+#[cfg(feature = "toml")]
+use crate::source::{FileError, Source};
 
 /// A TOML value with its origin.
 #[derive(Clone, Debug)]
@@ -31,9 +36,17 @@ pub enum Value {
     Array(Vec<Node>),
     /// A table.
     Table(Table),
-    /// A value no field takes (a date, an infinite or NaN float), named by its TOML type.
+    /// A value no field takes (a date, an infinite or NaN float), named by its TOML type: one
+    /// of [`OTHER_KINDS`].
     Other(&'static str),
 }
+
+/// The values a file can write that no field takes, by how messages name them.
+pub const OTHER_KINDS: [&str; 3] = [
+    "a date",
+    "an integer out of range",
+    "an infinite or NaN number",
+];
 
 impl Value {
     /// The TOML type's name for messages.
@@ -94,6 +107,7 @@ impl Table {
 }
 
 /// Parses `source` into a table of nodes. A TOML syntax error names the file and line.
+#[cfg(feature = "toml")]
 pub fn parse(source: &Arc<Source>) -> Result<Node, FileError> {
     let table = DeTable::parse(&source.text).map_err(|e| FileError {
         file: source.name.clone(),
@@ -111,6 +125,7 @@ pub fn parse(source: &Arc<Source>) -> Result<Node, FileError> {
     })
 }
 
+#[cfg(feature = "toml")]
 fn table_of(source: &Arc<Source>, table: &DeTable) -> Table {
     let mut entries: Vec<(String, Origin, Node)> = table
         .iter()
@@ -131,6 +146,7 @@ fn table_of(source: &Arc<Source>, table: &DeTable) -> Table {
     Table { entries }
 }
 
+#[cfg(feature = "toml")]
 fn node_of(source: &Arc<Source>, value: &Spanned<DeValue>) -> Node {
     let origin = Origin {
         source: source.clone(),
@@ -145,7 +161,7 @@ fn node_of(source: &Arc<Source>, value: &Spanned<DeValue>) -> Node {
             } else {
                 match i64::from_str_radix(&digits, i.radix()) {
                     Ok(v) => Value::Num(v.to_string()),
-                    Err(_) => Value::Other("an integer out of range"),
+                    Err(_) => Value::Other(OTHER_KINDS[1]),
                 }
             }
         }
@@ -154,18 +170,18 @@ fn node_of(source: &Arc<Source>, value: &Spanned<DeValue>) -> Node {
             let text = text.trim_start_matches('+');
             match text.parse::<f64>() {
                 Ok(v) if v.is_finite() => Value::Num(text.to_string()),
-                _ => Value::Other("an infinite or NaN number"),
+                _ => Value::Other(OTHER_KINDS[2]),
             }
         }
         DeValue::Boolean(b) => Value::Bool(*b),
-        DeValue::Datetime(_) => Value::Other("a date"),
+        DeValue::Datetime(_) => Value::Other(OTHER_KINDS[0]),
         DeValue::Array(a) => Value::Array(a.iter().map(|v| node_of(source, v)).collect()),
         DeValue::Table(t) => Value::Table(table_of(source, t)),
     };
     Node { value, origin }
 }
 
-#[cfg(test)]
+#[cfg(all(test, feature = "toml"))]
 mod tests {
     use super::*;
 
