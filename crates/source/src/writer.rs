@@ -65,7 +65,9 @@ impl Written {
 pub struct Writer {
     text: String,
     root: Table,
-    section: Vec<String>,
+    // the current section, as entry indices from the root (a long file's entries find
+    // their table without comparing names)
+    section: Vec<usize>,
     // every origin points here until `finish` knows the whole text
     pending: Arc<Source>,
 }
@@ -119,10 +121,12 @@ impl Writer {
         self.text.push_str("]\n");
         let pending = self.pending.clone();
         let mut table = &mut self.root;
+        self.section.clear();
         for (key, span) in path.iter().zip(spans) {
-            table = table_in(table, key, &pending, span);
+            let (i, inner) = table_in(table, key, &pending, span);
+            self.section.push(i);
+            table = inner;
         }
-        self.section = path.iter().map(|k| k.to_string()).collect();
     }
 
     /// `key = value` in the current section.
@@ -135,8 +139,8 @@ impl Writer {
         self.text.push('\n');
         let pending = self.pending.clone();
         let mut table = &mut self.root;
-        for name in &self.section {
-            table = table_in(table, name, &pending, 0..0);
+        for &i in &self.section {
+            table = table_at(table, i);
         }
         table.entries.retain(|(k, _, _)| k != key);
         table.entries.push((
@@ -223,14 +227,14 @@ impl Writer {
     }
 }
 
-/// The table `key` of `table`, created if missing (a non-table value there is replaced: the
-/// writer's caller decides what the file says).
+/// The table `key` of `table` and its index, created if missing (a non-table value there is
+/// replaced: the writer's caller decides what the file says).
 fn table_in<'t>(
     table: &'t mut Table,
     key: &str,
     pending: &Arc<Source>,
     span: Range<usize>,
-) -> &'t mut Table {
+) -> (usize, &'t mut Table) {
     let i = match table.entries.iter().position(|(k, _, _)| k == key) {
         Some(i) => i,
         None => {
@@ -253,9 +257,14 @@ fn table_in<'t>(
     if !matches!(node.value, Value::Table(_)) {
         node.value = Value::Table(Table::default());
     }
-    match &mut node.value {
+    (i, table_at(table, i))
+}
+
+/// The table at entry `i` of `table` (a section's table, which `table_in` made a table).
+fn table_at(table: &mut Table, i: usize) -> &mut Table {
+    match &mut table.entries[i].2.value {
         Value::Table(t) => t,
-        _ => unreachable!("set to a table just above"),
+        _ => unreachable!("sections are tables"),
     }
 }
 

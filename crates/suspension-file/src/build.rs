@@ -1038,7 +1038,8 @@ impl<'s, 'c> Interpreter<'s, 'c> {
     /// blade tips on them and the beads below them.
     fn hung_weight(&self, plan: &PlannedStage, plans: &[Option<PlannedStage>]) -> f64 {
         let names = subtree(self.spec, &plan.stage.body);
-        let inside = |b: usize| names.contains(&self.spec.bodies[b].name.as_str());
+        let hung: std::collections::HashSet<&str> = names.iter().copied().collect();
+        let inside = |b: usize| hung.contains(self.spec.bodies[b].name.as_str());
         let mut bodies = 0.0;
         for name in &names {
             bodies += self.bodies[self.index[name]].2;

@@ -3,7 +3,7 @@
 //! material with thermal constants the thermoelastic peak on bending, with the stress term),
 //! and `[damping.<tag>]` tables replace the fields they give.
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, HashMap, HashSet};
 
 use pendkit_model::DampingSpec;
 use pendkit_model::fibre_inverse_radius;
@@ -239,16 +239,26 @@ fn blade_damping(fields: &BladeFields, m: &MaterialSpec) -> Result<Option<Dampin
 
 /// The bodies hung from `body`, itself first, depth first in the order of the stages.
 pub fn subtree<'s>(spec: &'s Spec, body: &'s str) -> Vec<&'s str> {
+    // each body's children, in the order of the stages: one pass over the stages, so that a
+    // long chain costs O(n) per call and not O(n²)
+    let mut children: HashMap<&str, Vec<&str>> = HashMap::new();
+    for stage in &spec.stages {
+        children
+            .entry(stage.from.value.as_str())
+            .or_default()
+            .push(&stage.body);
+    }
     let mut out = Vec::new();
+    let mut seen = HashSet::new();
     let mut visit = vec![body];
     while let Some(b) = visit.pop() {
-        if out.contains(&b) {
+        if !seen.insert(b) {
             continue; // a cycle, reported by the build
         }
         out.push(b);
         // children pushed in reverse so that the first stage is visited first
-        for stage in spec.stages.iter().rev().filter(|s| s.from.value == b) {
-            visit.push(&stage.body);
+        if let Some(below) = children.get(b) {
+            visit.extend(below.iter().rev());
         }
     }
     out
@@ -257,9 +267,10 @@ pub fn subtree<'s>(spec: &'s Spec, body: &'s str) -> Vec<&'s str> {
 /// The static tension of one wire of `set` at the nominal geometry, as an expression of the
 /// parameters: (Σ masses hung) g / (wires in the stage) · l / vertical extent.
 fn nominal_tension(spec: &Spec, stage: &StageFile, set: &WireSet) -> String {
+    let bodies: HashMap<&str, _> = spec.bodies.iter().map(|b| (b.name.as_str(), b)).collect();
     let masses: Vec<String> = subtree(spec, &stage.body)
         .into_iter()
-        .filter_map(|b| spec.bodies.iter().find(|x| x.name == b))
+        .filter_map(|b| bodies.get(b))
         .filter_map(|b| b.mass.as_ref().map(Ex::paren))
         .collect();
     let wires: usize = stage.wire_sets().map(|s| point_count(&s.lower)).sum();
