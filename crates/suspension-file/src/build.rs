@@ -21,7 +21,7 @@ use pendkit_model::beads::{BeadedFibre, add_beaded_fibre};
 use pendkit_model::{BodySpec, BuildError, FibreProfile, Shape, SystemBuilder};
 use pendkit_params::Resolved;
 
-use crate::damping::{blade_tag, find_material, subtree};
+use crate::damping::{Hanging, blade_tag, find_material};
 use crate::read::Ex;
 use crate::signals::{linear_form, point_form};
 use crate::source::{At, Located};
@@ -324,6 +324,8 @@ struct Interpreter<'s, 'c> {
     /// Index of each body in `spec.bodies`.
     index: HashMap<&'s str, usize>,
     plans: Vec<Option<PlannedStage<'s>>>,
+    /// Which bodies hang from which.
+    hanging: Hanging<'s>,
 }
 
 impl<'s, 'c> Interpreter<'s, 'c> {
@@ -377,6 +379,7 @@ impl<'s, 'c> Interpreter<'s, 'c> {
             stage_of,
             index,
             plans: Vec::new(),
+            hanging: Hanging::new(spec),
         })
     }
 
@@ -1037,7 +1040,7 @@ impl<'s, 'c> Interpreter<'s, 'c> {
     /// Weight (N) hung from stage `plan`'s wires: the bodies from its hung body down, the
     /// blade tips on them and the beads below them.
     fn hung_weight(&self, plan: &PlannedStage, plans: &[Option<PlannedStage>]) -> f64 {
-        let names = subtree(self.spec, &plan.stage.body);
+        let names = self.hanging.subtree(&plan.stage.body);
         let hung: std::collections::HashSet<&str> = names.iter().copied().collect();
         let inside = |b: usize| hung.contains(self.spec.bodies[b].name.as_str());
         let mut bodies = 0.0;

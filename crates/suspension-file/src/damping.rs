@@ -237,38 +237,50 @@ fn blade_damping(fields: &BladeFields, m: &MaterialSpec) -> Result<Option<Dampin
     )))
 }
 
-/// The bodies hung from `body`, itself first, depth first in the order of the stages.
-pub fn subtree<'s>(spec: &'s Spec, body: &'s str) -> Vec<&'s str> {
-    // each body's children, in the order of the stages: one pass over the stages, so that a
-    // long chain costs O(n) per call and not O(n²)
-    let mut children: HashMap<&str, Vec<&str>> = HashMap::new();
-    for stage in &spec.stages {
-        children
-            .entry(stage.from.value.as_str())
-            .or_default()
-            .push(&stage.body);
-    }
-    let mut out = Vec::new();
-    let mut seen = HashSet::new();
-    let mut visit = vec![body];
-    while let Some(b) = visit.pop() {
-        if !seen.insert(b) {
-            continue; // a cycle, reported by the build
+/// Which bodies hang from which: each body's children in the order of the stages (one pass
+/// over the stages, so that walking a long chain costs O(n) and not O(n²)).
+pub struct Hanging<'s> {
+    children: HashMap<&'s str, Vec<&'s str>>,
+}
+
+impl<'s> Hanging<'s> {
+    /// The hierarchy of `spec`'s stages.
+    pub fn new(spec: &'s Spec) -> Self {
+        let mut children: HashMap<&str, Vec<&str>> = HashMap::new();
+        for stage in &spec.stages {
+            children
+                .entry(stage.from.value.as_str())
+                .or_default()
+                .push(&stage.body);
         }
-        out.push(b);
-        // children pushed in reverse so that the first stage is visited first
-        if let Some(below) = children.get(b) {
-            visit.extend(below.iter().rev());
-        }
+        Hanging { children }
     }
-    out
+
+    /// The bodies hung from `body`, itself first, depth first in the order of the stages.
+    pub fn subtree(&self, body: &'s str) -> Vec<&'s str> {
+        let mut out = Vec::new();
+        let mut seen = HashSet::new();
+        let mut visit = vec![body];
+        while let Some(b) = visit.pop() {
+            if !seen.insert(b) {
+                continue; // a cycle, reported by the build
+            }
+            out.push(b);
+            // children pushed in reverse so that the first stage is visited first
+            if let Some(below) = self.children.get(b) {
+                visit.extend(below.iter().rev());
+            }
+        }
+        out
+    }
 }
 
 /// The static tension of one wire of `set` at the nominal geometry, as an expression of the
 /// parameters: (Σ masses hung) g / (wires in the stage) · l / vertical extent.
 fn nominal_tension(spec: &Spec, stage: &StageFile, set: &WireSet) -> String {
     let bodies: HashMap<&str, _> = spec.bodies.iter().map(|b| (b.name.as_str(), b)).collect();
-    let masses: Vec<String> = subtree(spec, &stage.body)
+    let masses: Vec<String> = Hanging::new(spec)
+        .subtree(&stage.body)
         .into_iter()
         .filter_map(|b| bodies.get(b))
         .filter_map(|b| b.mass.as_ref().map(Ex::paren))

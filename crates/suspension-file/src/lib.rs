@@ -231,13 +231,7 @@ impl Suspension {
         root: Node,
         library: &dyn Library,
     ) -> Result<Suspension, FileError> {
-        let mut chain = Vec::new();
-        let root = load_tree(&source, root, library, &mut chain)?;
-        let at = At {
-            origin: root.origin.clone(),
-            path: String::new(),
-        };
-        let spec = spec::read(&root, at)?;
+        let spec = read_spec(&source, root, library)?;
         let stem = Path::new(&source.name)
             .file_stem()
             .map(|s| s.to_string_lossy().into_owned())
@@ -289,12 +283,12 @@ impl Suspension {
             return Ok(std::borrow::Cow::Borrowed(&self.spec));
         }
         let Written { source, root } = (g.write)(n).named(&self.source_name);
-        let other =
-            Suspension::from_tree(source, root, &NoLibrary).map_err(|e| BuildError::Invalid {
-                item: format!("generated {} with {n} {}", self.name, g.parameter),
-                message: e.to_string(),
-            })?;
-        Ok(std::borrow::Cow::Owned(other.spec))
+        // the description only: the damping and the parameters are the bundled file's
+        let other = read_spec(&source, root, &NoLibrary).map_err(|e| BuildError::Invalid {
+            item: format!("generated {} with {n} {}", self.name, g.parameter),
+            message: e.to_string(),
+        })?;
+        Ok(std::borrow::Cow::Owned(other))
     }
 
     /// The drawing shape of each body that gives one, at `params` (sizes in m).
@@ -327,6 +321,17 @@ impl Suspension {
         }
         Ok((system, reads.into_inner()))
     }
+}
+
+/// The description read from the tree `root` of `source`, merged over the files it extends.
+fn read_spec(source: &Arc<Source>, root: Node, library: &dyn Library) -> Result<Spec, FileError> {
+    let mut chain = Vec::new();
+    let root = load_tree(source, root, library, &mut chain)?;
+    let at = At {
+        origin: root.origin.clone(),
+        path: String::new(),
+    };
+    spec::read(&root, at)
 }
 
 /// Defines the file's parameters and resolves them, reporting a problem at the parameter it
