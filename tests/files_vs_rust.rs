@@ -230,8 +230,7 @@ fn compare_systems(label: &str, rust: &System, file: &System) {
 }
 
 /// quad-aligo's file (tapered fibres, surface loss, blade thermoelastic loss, per-set
-/// temperatures and given dilutions written as file fields) against the Rust model, without
-/// violin beads (files do not carry them on tapered fibres yet).
+/// temperatures and given dilutions written as file fields) against the Rust model.
 #[test]
 fn quad_aligo() {
     compare("quad-aligo", &[]);
@@ -275,4 +274,23 @@ fn response_tolerance_clears_one_ulp_of_geometry() {
         largest > 1e-14 && largest < RESPONSE_TOLERANCE / 3.0,
         "one ulp of height moves the transfer function by {largest:e}"
     );
+}
+
+/// quad-aligo with violin beads on its tapered fibres: the file's beads (each segment the
+/// slice of the profile it spans, bead masses from the profile, the weight of the beads on
+/// the wires above) against the Rust model's, for 1 and 5 beads (0 is `quad_aligo`), with
+/// clamped joints (the default; the Rust model has no other).
+#[test]
+fn quad_aligo_with_beads() {
+    for (beads, count) in [("n_beads=1", 1), ("n_beads=5", 5)] {
+        compare("quad-aligo", &[beads]);
+        // the beads are there: 4 fibres of `count` beads, x y z each
+        let (file, _) = build_with(file_model("quad-aligo"), &overrides(&[beads])).unwrap();
+        let bead_coords = file
+            .coords
+            .iter()
+            .filter(|c| ["xf", "yf", "zf"].iter().any(|p| c.name.starts_with(p)))
+            .count();
+        assert_eq!(bead_coords, 12 * count, "{beads}: bead coordinates");
+    }
 }

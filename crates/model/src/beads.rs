@@ -169,6 +169,29 @@ pub fn add_beaded_fibre(
     Ok(())
 }
 
+/// Mass (kg) of the beads of one fibre of `length` (m) with `beads` beads, as
+/// [`add_beaded_fibre`] places them: N/(N + 1) of a uniform fibre's mass, or with a
+/// `profile`, the whole mass less half of the two end segments' (which the end bodies
+/// carry). What the wires above the fibre carry besides the bodies.
+pub fn beads_mass(
+    section: &WireSection,
+    profile: Option<&FibreProfile>,
+    length: f64,
+    beads: usize,
+) -> f64 {
+    if beads == 0 {
+        return 0.0;
+    }
+    match profile {
+        None => section.linear_density * length * beads as f64 / (beads + 1) as f64,
+        Some(p) => {
+            let segment = length / (beads + 1) as f64;
+            let ends = p.slice(0.0, segment).mass() + p.slice(length - segment, length).mass();
+            p.mass() - 0.5 * ends
+        }
+    }
+}
+
 /// Bead `k` (from 0, top down) of `f` with `mass` (kg): the bead body and, with clamped
 /// joints, its joint body; returns the end the segments attach to.
 fn bead(

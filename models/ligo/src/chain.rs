@@ -302,25 +302,3 @@ pub fn cylinder_along_x(radius: f64, length: f64) -> Shape {
         axis: 0,
     }
 }
-
-/// Mass (kg) of the beads of one fibre: N/(N + 1) of a uniform fibre's mass, or with a
-/// `profile`, the whole mass less half of the two end segments' (which the end bodies
-/// carry, as in [`add_beaded_fibre`]).
-pub fn beads_mass(
-    section: &WireSection,
-    profile: Option<&FibreProfile>,
-    length: f64,
-    beads: usize,
-) -> f64 {
-    if beads == 0 {
-        return 0.0;
-    }
-    match profile {
-        None => section.linear_density * length * beads as f64 / (beads + 1) as f64,
-        Some(p) => {
-            let segment = length / (beads + 1) as f64;
-            let ends = p.slice(0.0, segment).mass() + p.slice(length - segment, length).mass();
-            p.mass() - 0.5 * ends
-        }
-    }
-}

@@ -328,7 +328,7 @@ impl Model for Quad {
         );
         profile.check("the fibres (l3, l3_neck, r3_neck, r3)")?;
         let profile = Some(profile);
-        let m_beads = 4.0 * chain::beads_mass(&sec_3, profile.as_ref(), l3, beads);
+        let m_beads = 4.0 * pendkit_model::beads::beads_mass(&sec_3, profile.as_ref(), l3, beads);
 
         // nominal geometry: centre-of-mass heights from the wire lengths (the derived tl*)
         let vert_n = vertical(v("ln")?, v("nn0")? - v("nn1")?);
