@@ -1,5 +1,5 @@
-//! Fibres carrying violin-mode beads: the one construction of a beaded fibre, shared by the
-//! Rust-table models and the suspension files.
+//! Fibres carrying violin-mode beads: the one construction of a beaded fibre, which the
+//! suspension files build (uniform wires and tapered fibres alike).
 //!
 //! A fibre with N beads is N + 1 straight segments (tensioned beams, the wire elements)
 //! with a point mass at each joint: the lumped-mass discretisation of the continuum, whose

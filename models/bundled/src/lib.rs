@@ -42,7 +42,6 @@ static FILES: [File; 17] = [
     file!("ligo", "quad-full.toml"),
     file!("ligo", "quad-lateral.toml"),
     file!("ligo", "quad-v5.toml"),
-    // not yet a bundled model (see MODELS): read by tests and `extends`
     file!("ligo", "quad-aligo.toml"),
     file!("ligo", "triple.toml"),
     file!("ligo", "triple-lite.toml"),
@@ -52,10 +51,8 @@ static FILES: [File; 17] = [
 ];
 
 /// The bundled models, in the order `pendkit models` lists them: each is the file of its
-/// name (`chain` is written by its generator for its parameter `n_stages`). `quad-aligo`'s
-/// file is bundled but the name still loads the Rust model (`pendkit-models-ligo`) until
-/// files carry violin beads on tapered fibres, which its tests use.
-const MODELS: [&str; 15] = [
+/// name (`chain` is written by its generator for its parameter `n_stages`).
+const MODELS: [&str; 16] = [
     "toy",
     "pendulum",
     "double-pendulum",
@@ -66,6 +63,7 @@ const MODELS: [&str; 15] = [
     "quad-full",
     "quad-lateral",
     "quad-v5",
+    "quad-aligo",
     "triple",
     "triple-lite",
     "triple-full",
