@@ -20,10 +20,11 @@
 //!   Stages: before 1B nothing turns a joint's pitch and roll. In 0A and 0B no term touches
 //!   the joint angles at all and the assembly leaves them out of the stage (exact: they
 //!   carry no energy). In 1A the torsion holds the yaw and, on a vertical fibre, touches
-//!   pitch and roll with exact zeros, so they are left out too; on a slanted fibre the
-//!   twist axis is not vertical, torsion couples pitch or roll without holding them, and
-//!   stage 1A stops with the singular-float error naming the joint angle (1B and 2, the
-//!   complete model, are unaffected; hinged beads avoid it).
+//!   pitch and roll with exact zeros, so they are left out too. On a slanted fibre the
+//!   twist axis is not vertical: torsion holds the joint's rotation about the fibre and
+//!   nothing holds the others (the kink the beads' weight puts at a joint holds one of
+//!   them with ε² of the twist's stiffness), and the assembly holds those at zero in 1A
+//!   (crates/assembly/src/redundant.rs): before bending, a joint turns about its fibre.
 //! - [`BeadJoints::Hinged`]: the segments are hinged at the beads (no moment carried, the
 //!   loaded string of the 2005 violin model): too soft once a segment is shorter than a
 //!   few bending lengths (kept for the loaded-string reference values).
