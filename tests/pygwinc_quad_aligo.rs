@@ -6,7 +6,11 @@
 //! needs network access to PyPI once), then runs `tests/python/pygwinc_quad_aligo.py`,
 //! which prints pygwinc's total suspension thermal noise (ASD, m/√Hz, of the test mass
 //! along the beam: the horizontal joints plus θ² times the vertical ones) and the peaks of
-//! its horizontal and vertical transfer functions.
+//! its horizontal and vertical transfer functions, or (`--ifo`) the numbers of aLIGO's
+//! `ifo.yaml` that `quad-aligo` takes as parameters. These tests are the independent
+//! references of `quad-aligo` (a suspension file, `models/ligo/quad-aligo.toml`): its
+//! parameters and stage separations, its noise, its resonances, and its beaded fibres
+//! against pygwinc's continuum fibres.
 //!
 //! What pygwinc has and pendkit's `quad-aligo` does not, and the reverse, bounds each
 //! tolerance (README, "quad-aligo against pygwinc", measures every effect by switching it):
@@ -173,5 +177,113 @@ fn resonances_match_pygwinc() {
     assert_eq!(ours.len(), 4, "{ours:?}");
     for (a, b) in ours.iter().zip(&theirs) {
         assert!((a / b - 1.0).abs() <= 0.02, "longitudinal {a} vs {b} Hz");
+    }
+}
+
+/// Resolved parameter `name` of `quad-aligo` (with `sets`).
+fn parameter(sets: &[&str], name: &str) -> f64 {
+    let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
+    let case = pendkit::Case::model("quad-aligo")
+        .and_then(|c| c.with_sets(&sets))
+        .expect("case");
+    pendkit::parameter_table(&case)
+        .expect("parameters")
+        .into_iter()
+        .find(|row| row.name == name)
+        .unwrap_or_else(|| panic!("quad-aligo has no parameter {name}"))
+        .value
+}
+
+#[test]
+fn parameters_are_pygwincs_ifo_yaml() {
+    // every number quad-aligo takes from aLIGO's ifo.yaml (masses, wire and fibre radii,
+    // the fibres' profile, blade stiffnesses and thicknesses, materials, temperature, arm
+    // length), read by pygwinc itself: the same decimal numbers, so equal to rounding
+    let reference = pygwinc(&["--ifo"]);
+    assert_eq!(reference["version"], "0.6.2");
+    let fields = reference.as_object().expect("a JSON object");
+    let mut compared = 0;
+    for (name, value) in fields {
+        let Some(theirs) = value.as_f64() else {
+            continue;
+        };
+        let ours = parameter(&[], name);
+        assert!(
+            (ours - theirs).abs() <= 1e-15 * theirs.abs(),
+            "{name}: quad-aligo {ours}, ifo.yaml {theirs}"
+        );
+        compared += 1;
+    }
+    assert_eq!(compared, 41, "numbers compared");
+    // the wires of each stage (ifo.yaml's NWires, top to bottom), counted in the built model
+    let (system, _) = pendkit::Case::model("quad-aligo")
+        .expect("case")
+        .build()
+        .expect("builds");
+    let counts: Vec<f64> = ["wn", "w1", "w2", "fibre"]
+        .iter()
+        .map(|set| {
+            let tag = format!("{set}_stretch");
+            system
+                .wires
+                .iter()
+                .filter(|w| w.tags.stretch == tag)
+                .count() as f64
+        })
+        .collect();
+    assert_eq!(counts, numbers(&reference, "nw"));
+    // the steel stages' centre-of-mass separations (ifo.yaml's stage Length, given to the
+    // millimetre) against the equilibrium's body heights: the 2005 geometry with the as-built
+    // masses and wires puts them within half a millimetre
+    let r = run("quad-aligo", &[], Stage::S0A);
+    let z = |n: &str| r.assembled.equilibrium.coords[r.system.coord(n).expect(n)];
+    let ours = [-z("z0"), z("z0") - z("z1"), z("z1") - z("z2")];
+    for (a, b) in ours.iter().zip(numbers(&reference, "separations")) {
+        assert!((a - b).abs() <= 0.5e-3, "separation {a} vs {b} m");
+    }
+}
+
+#[test]
+fn beaded_fibres_converge_to_pygwincs_continuum_fibres() {
+    // pygwinc's fibres are continuum springs with mass, of the middle's section along their
+    // whole length; with uniform fibres (the necks' radius set to the middle's in both
+    // codes) those are the fibres quad-aligo's beads discretise, each segment the slice of
+    // the (here uniform) profile it spans. With pygwinc's given dilutions the two codes
+    // agree to 1e-4 at 30–100 Hz once both fibres are massless (as measured by
+    // `with_massless_fibres_and_given_dilution_the_two_codes_agree_closely`), so what is
+    // left is the fibres' mass: without beads pendkit is high by the whole fibre-mass term
+    // (measured +3.0 % at 100 Hz: asserted above 2 %, so that the comparison can tell), and
+    // as beads are added it falls towards pygwinc's continuum at every frequency (measured
+    // at 100 Hz: +0.91 %, +0.51 %, +0.29 % with 10, 20, 40 beads, about 1/N: each clamped
+    // segment resolves the fibre's ~1 mm bending length at the clamps only in its effective
+    // section). Asserted: each doubling of the beads gets closer, and 40 beads are within
+    // 0.4 % over 20–100 Hz.
+    let theirs = numbers(&pygwinc(&["--uniform-fibres"]), "asd");
+    let error = |beads: usize| -> Vec<f64> {
+        let beads = format!("n_beads={beads}");
+        let mut sets = GIVEN_DILUTION.to_vec();
+        sets.extend(["r3_neck=r3", beads.as_str()]);
+        pendkit_asd(&sets)
+            .iter()
+            .zip(&theirs)
+            .map(|(a, b)| a / b - 1.0)
+            .collect()
+    };
+    let massless = error(0);
+    assert!(massless[FREQS.len() - 1] > 0.02, "{massless:?}");
+    let mut previous = massless;
+    for beads in [10, 20, 40] {
+        let e = error(beads);
+        for ((f, now), before) in FREQS.iter().zip(&e).zip(&previous) {
+            eprintln!("{beads:3} beads {f:5} Hz  pendkit/pygwinc − 1 = {now:+.5}");
+            assert!(
+                now.abs() < before.abs(),
+                "{beads} beads, {f} Hz: {now} vs {before}"
+            );
+        }
+        previous = e;
+    }
+    for (f, e) in FREQS.iter().zip(&previous) {
+        assert!(e.abs() <= 4e-3, "40 beads, {f} Hz: {e}");
     }
 }

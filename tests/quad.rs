@@ -11,7 +11,14 @@ const G: f64 = 9.81;
 
 #[test]
 fn equilibrium_is_the_nominal_geometry_to_a_micrometre() {
-    for model in ["quad", "quad-lite", "quad-full", "quad-lateral", "quad-v5"] {
+    for model in [
+        "quad",
+        "quad-lite",
+        "quad-full",
+        "quad-lateral",
+        "quad-v5",
+        "quad-aligo",
+    ] {
         assert_nominal_equilibrium(model);
     }
 }

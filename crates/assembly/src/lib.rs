@@ -11,6 +11,7 @@
 
 mod equilibrium;
 mod evaluate;
+mod redundant;
 mod timing;
 
 use std::collections::BTreeMap;
@@ -475,7 +476,17 @@ fn finish(
             }
         })
         .collect();
-    let idle = idle_floats(system, &matrices);
+    let mut idle = idle_floats(system, &matrices);
+    // pinned floats the stage holds about some axes only (a clamped bead joint on a slanted
+    // fibre before bending turns about the fibre only): the rest is held at zero
+    // (redundant.rs)
+    let held: Vec<usize> = system
+        .coords_of(CoordKind::Float)
+        .into_iter()
+        .filter(|g| system.coords[*g].pinned && !idle.contains(g))
+        .collect();
+    idle.extend(redundant::redundant_floats(&matrices, &held));
+    idle.sort_unstable();
     let matrices = if idle.is_empty() {
         matrices
     } else {

@@ -175,7 +175,7 @@ fn params_lists_every_parameter() {
     let m3 = table.lines().find(|l| l.starts_with("m3 ")).unwrap();
     assert!(m3.contains(" kg ") && m3.contains("test mass"), "{m3}");
     assert!(table.contains("read by: bodies.testmass.mass"), "{table}");
-    // quad-aligo, still a Rust model: descriptions and readers from its bundled file
+    // quad-aligo: a tapered fibre's profile names its parameters too
     let (ok, table, stderr) = pendkit(&["params", "quad-aligo"]);
     assert!(ok, "{stderr}");
     let neck = table.lines().find(|l| l.starts_with("r3_neck ")).unwrap();

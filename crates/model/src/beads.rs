@@ -1,5 +1,5 @@
-//! Fibres carrying violin-mode beads: the one construction of a beaded fibre, shared by the
-//! Rust-table models and the suspension files.
+//! Fibres carrying violin-mode beads: the one construction of a beaded fibre, which the
+//! suspension files build (uniform wires and tapered fibres alike).
 //!
 //! A fibre with N beads is N + 1 straight segments (tensioned beams, the wire elements)
 //! with a point mass at each joint: the lumped-mass discretisation of the continuum, whose
@@ -20,10 +20,11 @@
 //!   Stages: before 1B nothing turns a joint's pitch and roll. In 0A and 0B no term touches
 //!   the joint angles at all and the assembly leaves them out of the stage (exact: they
 //!   carry no energy). In 1A the torsion holds the yaw and, on a vertical fibre, touches
-//!   pitch and roll with exact zeros, so they are left out too; on a slanted fibre the
-//!   twist axis is not vertical, torsion couples pitch or roll without holding them, and
-//!   stage 1A stops with the singular-float error naming the joint angle (1B and 2, the
-//!   complete model, are unaffected; hinged beads avoid it).
+//!   pitch and roll with exact zeros, so they are left out too. On a slanted fibre the
+//!   twist axis is not vertical: torsion holds the joint's rotation about the fibre and
+//!   nothing holds the others (the kink the beads' weight puts at a joint holds one of
+//!   them with ε² of the twist's stiffness), and the assembly holds those at zero in 1A
+//!   (crates/assembly/src/redundant.rs): before bending, a joint turns about its fibre.
 //! - [`BeadJoints::Hinged`]: the segments are hinged at the beads (no moment carried, the
 //!   loaded string of the 2005 violin model): too soft once a segment is shorter than a
 //!   few bending lengths (kept for the loaded-string reference values).
@@ -167,6 +168,29 @@ pub fn add_beaded_fibre(
         above = below;
     }
     Ok(())
+}
+
+/// Mass (kg) of the beads of one fibre of `length` (m) with `beads` beads, as
+/// [`add_beaded_fibre`] places them: N/(N + 1) of a uniform fibre's mass, or with a
+/// `profile`, the whole mass less half of the two end segments' (which the end bodies
+/// carry). What the wires above the fibre carry besides the bodies.
+pub fn beads_mass(
+    section: &WireSection,
+    profile: Option<&FibreProfile>,
+    length: f64,
+    beads: usize,
+) -> f64 {
+    if beads == 0 {
+        return 0.0;
+    }
+    match profile {
+        None => section.linear_density * length * beads as f64 / (beads + 1) as f64,
+        Some(p) => {
+            let segment = length / (beads + 1) as f64;
+            let ends = p.slice(0.0, segment).mass() + p.slice(length - segment, length).mass();
+            p.mass() - 0.5 * ends
+        }
+    }
 }
 
 /// Bead `k` (from 0, top down) of `f` with `mass` (kg): the bead body and, with clamped

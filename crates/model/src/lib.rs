@@ -689,29 +689,6 @@ impl SystemBuilder {
         Ok(())
     }
 
-    /// Names an output: the combination Σ cᵢ qᵢ of the variables `terms` = (name, cᵢ),
-    /// e.g. `[("x3", 1.0), ("z3", theta)]`; all of them should share a unit. A shorthand
-    /// for [`SystemBuilder::named_signal`] with coordinate terms.
-    pub fn named_output(&mut self, name: &str, terms: &[(&str, f64)]) -> Result<(), BuildError> {
-        let context = format!("output '{name}'");
-        if self.coord_ids.contains_key(name) {
-            return Err(BuildError::Duplicate {
-                what: "output",
-                name: name.to_string(),
-            });
-        }
-        let mut signal = NamedSignal {
-            name: name.to_string(),
-            force: false,
-            terms: Vec::with_capacity(terms.len()),
-        };
-        for &(coord, c) in terms {
-            let id = self.coord_id(&context, coord)?;
-            signal.terms.push((c, SignalTerm::Coordinate(id)));
-        }
-        self.named_signal(signal, true)
-    }
-
     /// The finished model.
     pub fn build(self) -> Result<System, BuildError> {
         check_finite("model", "gravity", self.system.gravity, "m/s^2")?;

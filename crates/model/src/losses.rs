@@ -47,25 +47,6 @@ pub struct LossMaterial {
     pub youngs: String,
 }
 
-impl LossMaterial {
-    /// The material whose constants are the parameters `<prefix>_phi`, `<prefix>_rho`,
-    /// `<prefix>_C`, `<prefix>_K`, `<prefix>_alpha`, `<prefix>_dlnE_dT`,
-    /// `<prefix>_dissdepth` and `<prefix>_Y` (the LIGO models' materials table).
-    pub fn parameters(prefix: &str) -> Self {
-        let p = |column: &str| format!("{prefix}_{column}");
-        LossMaterial {
-            phi: p("phi"),
-            rho: p("rho"),
-            specific_heat: p("C"),
-            conductivity: p("K"),
-            alpha: p("alpha"),
-            dlne_dt: p("dlnE_dT"),
-            dissipation_depth: p("dissdepth"),
-            youngs: p("Y"),
-        }
-    }
-}
-
 /// The deformations of a wire and the inputs of their loss angles; each field is an
 /// expression over the model's parameters.
 #[derive(Clone, Debug)]
@@ -181,6 +162,22 @@ mod tests {
     use super::*;
     use pendkit_params::ParamSet;
 
+    /// The material whose constants are the parameters `<prefix>_phi`, `<prefix>_rho`, ...
+    /// (as `params` names them).
+    fn material(prefix: &str) -> LossMaterial {
+        let p = |column: &str| format!("{prefix}_{column}");
+        LossMaterial {
+            phi: p("phi"),
+            rho: p("rho"),
+            specific_heat: p("C"),
+            conductivity: p("K"),
+            alpha: p("alpha"),
+            dlne_dt: p("dlnE_dT"),
+            dissipation_depth: p("dissdepth"),
+            youngs: p("Y"),
+        }
+    }
+
     /// pygwinc's aLIGO materials (ifo.yaml `Suspension.Silica`, `MaragingSteel`).
     fn params() -> pendkit_params::Resolved {
         let mut p = ParamSet::new();
@@ -217,7 +214,7 @@ mod tests {
         let p = params();
         let loss = WireLoss {
             set: "fibre",
-            material: LossMaterial::parameters("silica"),
+            material: material("silica"),
             tension: "T3",
             youngs: "silica_Y",
             clamp_radius: "r_neck",
@@ -250,7 +247,7 @@ mod tests {
     fn blade_loss_matches_pygwinc_formula_and_carries_its_temperature() {
         // pygwinc bladeTELoss: τ = ρ C t²/(K π²), Δ = Y α² T/(ρ C)
         let p = params();
-        let spec = blade_loss(&LossMaterial::parameters("maraging"), "4200e-6", "cold");
+        let spec = blade_loss(&material("maraging"), "4200e-6", "cold");
         assert_eq!(spec.temperature.as_deref(), Some("cold"));
         let (rho, c, k, alpha, y, t) = (7800.0, 460.0, 20.0, 11e-6, 187e9, 4200e-6);
         let tau = rho * c * t * t / (k * std::f64::consts::PI.powi(2));
@@ -260,7 +257,7 @@ mod tests {
         let (_, im) = spec.resolve("b", &p).unwrap().at(30.0);
         assert!((im / expected - 1.0).abs() < 1e-12);
         assert!(
-            blade_loss(&LossMaterial::parameters("maraging"), "t", "temperature")
+            blade_loss(&material("maraging"), "t", "temperature")
                 .temperature
                 .is_none()
         );

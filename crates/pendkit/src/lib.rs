@@ -235,13 +235,7 @@ pub const MAX_REPEAT: usize = 100_000;
 /// Every bundled model: each is a suspension file under `models/`, embedded in the
 /// program ([`bundled_files`]).
 pub fn models() -> Vec<&'static dyn Model> {
-    let mut all = pendkit_models::models();
-    all.extend(
-        pendkit_models_ligo::models()
-            .into_iter()
-            .filter(|m| m.name() == "quad-aligo"),
-    );
-    all
+    pendkit_models::models()
 }
 
 /// The bundled model called `name`.

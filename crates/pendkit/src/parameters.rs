@@ -1,7 +1,7 @@
 //! What `pendkit params` lists: every parameter of a case with its value, unit, description
 //! and the parts of the model that read it.
 
-use pendkit_model::{Defaults, Model as _, ParameterInfo, parameters_with};
+use pendkit_model::{Defaults, ParameterInfo, parameters_with};
 
 use crate::{Case, Error};
 
@@ -25,19 +25,12 @@ pub struct ParameterRow {
 
 /// Every parameter of `case`, in definition order: value with the case's overrides, unit,
 /// definition, and what the model says about it ([`pendkit_model::Model::parameter_info`]).
-/// The bundled models are suspension files, which say all of it; `quad-aligo`, still a Rust
-/// model that says only its units, takes descriptions and readers from its bundled file
-/// (the same model: tests/files_vs_rust.rs).
+/// The bundled models are suspension files, which say all of it.
 pub fn parameter_table(case: &Case) -> Result<Vec<ParameterRow>, Error> {
     let defaults = Defaults::of(case.model)?;
     let (params, resolved) = parameters_with(&defaults, &case.overrides)?;
     let info = case.model.parameter_info(&resolved)?;
-    let twin = twin_info(case);
-    let about = |name: &str| -> Option<&ParameterInfo> {
-        info.iter()
-            .find(|i| i.name == name && !(i.description.is_empty() && i.read_by.is_empty()))
-            .or_else(|| twin.iter().find(|i| i.name == name))
-    };
+    let about = |name: &str| -> Option<&ParameterInfo> { info.iter().find(|i| i.name == name) };
     Ok(resolved
         .iter()
         .map(|(name, value)| {
@@ -59,25 +52,4 @@ pub fn parameter_table(case: &Case) -> Result<Vec<ParameterRow>, Error> {
             }
         })
         .collect())
-}
-
-/// What the bundled file of the same name says about the parameters of `case`'s model, when
-/// that is a bundled model written in Rust (nothing otherwise, or if the file does not take
-/// the case's overrides).
-fn twin_info(case: &Case) -> Vec<ParameterInfo> {
-    use pendkit_suspension::Suspension;
-    let rust = pendkit_models::find(case.model.name()).is_none()
-        && crate::models()
-            .into_iter()
-            .any(|m| std::ptr::addr_eq(m, case.model));
-    let file = rust
-        .then(|| Suspension::bundled(case.model.name(), &pendkit_models::Bundled).ok())
-        .flatten();
-    let Some(file) = file else {
-        return Vec::new();
-    };
-    Defaults::of(&file)
-        .and_then(|d| parameters_with(&d, &case.overrides))
-        .and_then(|(_, resolved)| file.parameter_info(&resolved))
-        .unwrap_or_default()
 }

@@ -17,7 +17,7 @@ use pendkit_energy::{
     WireEnd, WireSection, WireTags,
 };
 use pendkit_expr::Expr;
-use pendkit_model::beads::{BeadedFibre, add_beaded_fibre};
+use pendkit_model::beads::{BeadedFibre, add_beaded_fibre, beads_mass};
 use pendkit_model::{BodySpec, BuildError, FibreProfile, Shape, SystemBuilder};
 use pendkit_params::Resolved;
 
@@ -251,7 +251,8 @@ struct PlannedSet<'s> {
     length: f64,
     section: WireSection,
     beads: usize,
-    /// A tapered fibre's profile (`profile`): each wire is one effective wire of it.
+    /// A tapered fibre's profile (`profile`): each wire is one effective wire of it, or
+    /// with beads, each segment the slice of it that it spans.
     profile: Option<FibreProfile>,
 }
 
@@ -291,17 +292,10 @@ impl PlannedStage<'_> {
     fn beads_mass(&self) -> f64 {
         self.sets
             .iter()
-            .map(|s| s.wires.len() as f64 * beads_mass(&s.section, s.length, s.beads))
+            .map(|s| {
+                s.wires.len() as f64 * beads_mass(&s.section, s.profile.as_ref(), s.length, s.beads)
+            })
             .sum()
-    }
-}
-
-/// Mass (kg) of the beads of one wire: N of the N + 1 segments' masses.
-fn beads_mass(section: &WireSection, length: f64, beads: usize) -> f64 {
-    if beads == 0 {
-        0.0
-    } else {
-        section.linear_density * length * beads as f64 / (beads + 1) as f64
     }
 }
 
@@ -799,7 +793,7 @@ impl<'s, 'c> Interpreter<'s, 'c> {
                 None => 0,
             };
             let section = self.section(set, names_first.as_deref())?;
-            let profile = self.profile(set, &section, length, beads)?;
+            let profile = self.profile(set, &section, length)?;
             // read here so that a bad value is reported by the build (the damping reads them)
             for ex in [&set.temperature, &set.dilution].into_iter().flatten() {
                 ctx.positive(ex, "")?;
@@ -910,7 +904,6 @@ impl<'s, 'c> Interpreter<'s, 'c> {
         set: &WireSet,
         section: &WireSection,
         length: f64,
-        beads: usize,
     ) -> Result<Option<FibreProfile>, BuildError> {
         let (Some(p), Some(radius)) = (&set.profile, &set.radius) else {
             return Ok(None);
@@ -919,12 +912,6 @@ impl<'s, 'c> Interpreter<'s, 'c> {
         let neck_length = ctx.positive(&p.neck_length, "m")?;
         let neck_radius = ctx.positive(&p.neck_radius, "m")?;
         let middle = ctx.positive(radius, "m")?;
-        if beads > 0 {
-            return Err(invalid(
-                &p.at,
-                "violin beads on a tapered fibre are not supported by suspension files yet (beads: 0)",
-            ));
-        }
         let density = section.linear_density / section.area;
         let profile = FibreProfile::tapered(
             length,
@@ -1096,23 +1083,7 @@ impl<'s, 'c> Interpreter<'s, 'c> {
                 } else {
                     share * set.length / w.vertical
                 };
-                match &set.profile {
-                    Some(profile) => {
-                        let end = |(body, point), direction: &EndDirection| WireEnd {
-                            body,
-                            point,
-                            direction: direction.clone(),
-                        };
-                        let ends = [
-                            end(upper_end, &set.ends[0]),
-                            end((lower, w.lower), &set.ends[1]),
-                        ];
-                        self.b
-                            .wire(profile.wire(w.name.clone(), ends, tension, tags.clone()))
-                            .map_err(placed(&set.set.at))?;
-                    }
-                    None => self.wire(set, w, upper_end, (lower, w.lower), tension, &tags)?,
-                }
+                self.wire(set, w, upper_end, (lower, w.lower), tension, &tags)?;
             }
         }
         Ok(())
@@ -1232,9 +1203,10 @@ impl<'s, 'c> Interpreter<'s, 'c> {
         Ok(tip)
     }
 
-    /// Adds one wire of a set: with beads, the shared beaded fibre
-    /// ([`add_beaded_fibre`]), its segments joined at the beads as the set says; each
-    /// segment carries the tension of the lowest plus the weight of the beads below it.
+    /// Adds one wire of a set, the shared beaded fibre ([`add_beaded_fibre`]): without beads
+    /// one wire (of the profile, if the set has one); with beads its segments joined at the
+    /// beads as the set says, each the slice of the profile it spans and carrying the
+    /// tension of the lowest plus the weight of the beads below it.
     fn wire(
         &mut self,
         set: &PlannedSet,
@@ -1262,7 +1234,7 @@ impl<'s, 'c> Interpreter<'s, 'c> {
                 g: self.g,
                 beads: set.beads,
                 joints: set.set.bead_joints,
-                profile: None,
+                profile: set.profile.as_ref(),
             },
             tags,
         )

@@ -22,10 +22,8 @@ struct File {
 include!(concat!(env!("OUT_DIR"), "/files.rs"));
 
 /// The bundled models, in the order `pendkit models` lists them: each is the file of its
-/// name (`chain` is written by its generator for its parameter `n_stages`). `quad-aligo`'s
-/// file is bundled but the name still loads the Rust model (`pendkit-models-ligo`) until
-/// files carry violin beads on tapered fibres, which its tests use.
-const MODELS: [&str; 15] = [
+/// name (`chain` is written by its generator for its parameter `n_stages`).
+const MODELS: [&str; 16] = [
     "toy",
     "pendulum",
     "double-pendulum",
@@ -36,6 +34,7 @@ const MODELS: [&str; 15] = [
     "quad-full",
     "quad-lateral",
     "quad-v5",
+    "quad-aligo",
     "triple",
     "triple-lite",
     "triple-full",
