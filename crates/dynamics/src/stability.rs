@@ -414,6 +414,10 @@ pub struct TermRounding {
     unstored: AbsWeights,
     /// The terms with a geometric part.
     geometric: Vec<GeometricPart>,
+    /// `geometric_terms[geometric_start[p]..geometric_start[p + 1]]`: the geometric terms at
+    /// unknown p, ascending (a mode's refined estimate visits the terms at its block only).
+    geometric_start: Vec<usize>,
+    geometric_terms: Vec<usize>,
     floats: FloatMap,
     unknowns: usize,
 }
@@ -461,6 +465,35 @@ impl AbsWeights {
         let mut sum = 0.0;
         for (r, &zr) in z.iter().enumerate().take(unknowns) {
             let (Some(&start), Some(&end)) = (self.row_start.get(r), self.row_start.get(r + 1))
+            else {
+                break;
+            };
+            if zr == 0.0 {
+                continue;
+            }
+            let mut row = 0.0;
+            for (&c, w) in self.cols[start..end].iter().zip(&weights[start..end]) {
+                if c < unknowns
+                    && let Some(zc) = z.get(c)
+                {
+                    row += w * zc.abs();
+                }
+            }
+            sum += zr.abs() * row;
+        }
+        sum
+    }
+}
+
+impl AbsWeights {
+    /// [`AbsWeights::form`] over the listed `rows` only (ascending), for a `z` that is zero
+    /// on every other row: the same sum in the same order.
+    fn form_rows(&self, bound: bool, unknowns: usize, z: &[f64], rows: &[usize]) -> f64 {
+        let weights = if bound { &self.bound } else { &self.entries };
+        let mut sum = 0.0;
+        for &r in rows.iter().take_while(|&&r| r < unknowns) {
+            let (Some(&zr), Some(&start), Some(&end)) =
+                (z.get(r), self.row_start.get(r), self.row_start.get(r + 1))
             else {
                 break;
             };
@@ -596,13 +629,61 @@ impl TermRounding {
                 unstored.bound[s] += bound;
             }
         }
+        // for each unknown, the geometric terms at it (ascending), in compressed rows
+        let mut geometric_start = vec![0usize; unknowns + 1];
+        for part in &geometric {
+            for &p in &part.positions {
+                geometric_start[p + 1] += 1;
+            }
+        }
+        for p in 0..unknowns {
+            geometric_start[p + 1] += geometric_start[p];
+        }
+        let mut next = geometric_start.clone();
+        let mut geometric_terms = vec![0usize; geometric_start[unknowns]];
+        for (t, part) in geometric.iter().enumerate() {
+            for &p in &part.positions {
+                geometric_terms[next[p]] = t;
+                next[p] += 1;
+            }
+        }
         TermRounding {
             stored,
             unstored,
             geometric,
+            geometric_start,
+            geometric_terms,
             floats: FloatMap::new(model, damping),
             unknowns,
         }
+    }
+
+    /// The forms over the listed `rows` (ascending, every row where `z` is non-zero among
+    /// them): [`TermRounding::bound_unknowns`] (`bound`) or
+    /// [`TermRounding::error_unknowns`], the same values at the cost of the rows' entries
+    /// and terms.
+    fn on_rows(&self, bound: bool, z: &[f64], rows: &[usize]) -> f64 {
+        let forms = self.stored.form_rows(bound, self.unknowns, z, rows)
+            + self.unstored.form_rows(bound, self.unknowns, z, rows);
+        if bound {
+            return ROUNDING * f64::EPSILON * forms;
+        }
+        // the geometric terms at the rows, each once, in ascending order (as the sum over
+        // all terms adds them; the others add exact zeros)
+        let mut terms: Vec<usize> = rows
+            .iter()
+            .filter_map(|&r| {
+                Some(*self.geometric_start.get(r)?..*self.geometric_start.get(r + 1)?)
+            })
+            .flat_map(|range| self.geometric_terms[range].iter().copied())
+            .collect();
+        terms.sort_unstable();
+        terms.dedup();
+        let geometric: f64 = terms
+            .iter()
+            .map(|&t| self.geometric[t].amplification * self.geometric[t].form(z))
+            .sum();
+        ROUNDING * f64::EPSILON * (forms + geometric)
     }
 
     /// Σ over both patterns' weights (`bound` or entries).
@@ -654,6 +735,24 @@ impl StiffnessRounding for TermRounding {
             bound
         } else {
             self.error_unknowns(&z)
+        }
+    }
+
+    fn estimate_on(&self, v: &[f64], support: &[usize], keep_bound: &dyn Fn(f64) -> bool) -> f64 {
+        let z = self.floats.extend(v);
+        // the rows where z can be non-zero: the support, then the floats that move
+        let nx = self.floats.nx;
+        let rows: Vec<usize> = support
+            .iter()
+            .copied()
+            .filter(|&i| i < nx)
+            .chain((nx..z.len()).filter(|&f| z[f] != 0.0))
+            .collect();
+        let bound = self.on_rows(true, &z, &rows);
+        if keep_bound(bound) {
+            bound
+        } else {
+            self.on_rows(false, &z, &rows)
         }
     }
 }
