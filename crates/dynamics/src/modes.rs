@@ -273,21 +273,31 @@ impl SparseColumns {
     /// returned at the support's rows: the entries of A that couple the support only to
     /// itself (a block of exactly decoupled variables). Sums in the order of
     /// [`SparseColumns::times`].
-    pub(crate) fn times_on(&self, support: &[usize], x: &[f64]) -> Vec<f64> {
-        let mut y = vec![0.0; self.entries.len()];
+    /// `scratch` is n zeros, and is left so.
+    pub(crate) fn times_on(&self, support: &[usize], x: &[f64], scratch: &mut [f64]) -> Vec<f64> {
         for (&j, &xj) in support.iter().zip(x) {
             if xj != 0.0
                 && let Some(column) = self.entries.get(j)
             {
                 for &(i, v) in column {
-                    y[i] += v * xj;
+                    scratch[i] += v * xj;
                 }
             }
         }
-        support
+        let y = support
             .iter()
-            .map(|&i| y.get(i).copied().unwrap_or(0.0))
-            .collect()
+            .map(|&i| scratch.get(i).copied().unwrap_or(0.0))
+            .collect();
+        for (&j, &xj) in support.iter().zip(x) {
+            if xj != 0.0
+                && let Some(column) = self.entries.get(j)
+            {
+                for &(i, _) in column {
+                    scratch[i] = 0.0;
+                }
+            }
+        }
+        y
     }
 
     /// [`SparseColumns::abs_form`] of an `x` (over all n) that is zero outside `support`
@@ -609,11 +619,12 @@ pub(crate) fn finish(
     names: &[String],
     rounding: &dyn StiffnessRounding,
 ) -> Vec<Mode> {
+    let mut scratch = vec![0.0; mass.entries.len()];
     let mut modes: Vec<(Mode, usize)> = raw
         .into_iter()
         .map(|r| {
             let support: &[usize] = blocks.get(r.block).map_or(&[], Vec::as_slice);
-            let mu = mass.times_on(support, &r.vector);
+            let mu = mass.times_on(support, &r.vector, &mut scratch);
             let mut mode = Mode::from_vector(r.omega_squared, &r.vector, &mu, support, names);
             let w2 = mode.omega_squared;
             let mass_part =
