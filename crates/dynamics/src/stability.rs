@@ -532,7 +532,15 @@ impl TermRounding {
         let mut first_local = Vec::with_capacity(assembled.terms.len() + 1);
         first_local.push(0);
         let mut locals: Vec<(usize, usize)> = Vec::new();
-        let zeros = vec![0.0; assembled.terms.iter().map(|t| t.on.len()).max().unwrap_or(0)];
+        let zeros = vec![
+            0.0;
+            assembled
+                .terms
+                .iter()
+                .map(|t| t.on.len())
+                .max()
+                .unwrap_or(0)
+        ];
         for t in &assembled.terms {
             let size = t.coords.len();
             let start = locals.len();
@@ -676,9 +684,7 @@ impl TermRounding {
                 }
             }
             unstored.row_start.push(unstored.cols.len());
-            unstored_within
-                .row_start
-                .push(unstored_within.cols.len());
+            unstored_within.row_start.push(unstored_within.cols.len());
         }
         // for each unknown, the geometric terms at it (ascending), in compressed rows
         let mut geometric_start = vec![0usize; unknowns + 1];
@@ -734,9 +740,7 @@ impl TermRounding {
         // all terms adds them; the others add exact zeros)
         let mut terms: Vec<usize> = rows
             .iter()
-            .filter_map(|&r| {
-                Some(*self.geometric_start.get(r)?..*self.geometric_start.get(r + 1)?)
-            })
+            .filter_map(|&r| Some(*self.geometric_start.get(r)?..*self.geometric_start.get(r + 1)?))
             .flat_map(|range| self.geometric_terms[range].iter().copied())
             .collect();
         terms.sort_unstable();
