@@ -112,7 +112,11 @@ impl StiffnessRounding for EntryRounding {
 
     fn estimate_on(&self, v: &[f64], support: &[usize], keep_bound: &dyn Fn(f64) -> bool) -> f64 {
         // the sums over the support alone, in the same order (the zeros add nothing)
-        let squares: f64 = support.iter().map(|&i| v[i] * v[i]).sum();
+        let squares: f64 = support
+            .iter()
+            .filter_map(|&i| v.get(i))
+            .map(|x| x * x)
+            .sum();
         let bound = ROUNDING * f64::EPSILON * self.norm * squares;
         if keep_bound(bound) {
             bound
