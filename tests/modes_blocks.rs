@@ -12,7 +12,7 @@
 
 use nalgebra::DMatrix;
 use pendkit::StageResult;
-use pendkit_dynamics::{Mode, eliminate_floats};
+use pendkit_dynamics::{EntryRounding, Mode, StiffnessRounding, TermRounding, eliminate_floats};
 use pendkit_energy::Stage;
 use pendkit_tests::{TWO_PI, run};
 
@@ -163,6 +163,48 @@ fn blocks_follow_the_exact_zeros() {
         counts[b] += 1;
     }
     assert_eq!(counts, [8, 12, 4]);
+}
+
+#[test]
+fn a_modes_rounding_over_its_block_equals_the_estimate_over_all_variables() {
+    // The modes cost each mode's rounding estimate over its block only
+    // (`StiffnessRounding::estimate_on`); the reference is the same estimate over all n
+    // variables (`estimate`), which visits every row and every term. The zeros outside the
+    // block add nothing, so the two must agree bit for bit, for the bound and for the
+    // term-by-term figure alike, and with the support being the whole set of variables
+    // (several blocks: the Lanczos modes' case) as well as the mode's non-zeros. The quad
+    // has floats (the blade tips, whose motion the float map adds), the chain four blocks.
+    for (model, sets, stage) in [
+        ("quad", &[][..], Stage::S0A),
+        ("quad", &[], Stage::S2),
+        ("quad-v5", &[], Stage::S2),
+        ("chain", &["n_stages=12"], Stage::S2),
+    ] {
+        let r = run(model, sets, stage);
+        let terms = TermRounding::new(&r.model, &r.assembled, &r.system.damping);
+        let entries = EntryRounding::new(&k_eff(&r));
+        let all: Vec<usize> = (0..r.modes.coordinates.len()).collect();
+        for mode in &r.modes.modes {
+            let v = &mode.vector;
+            let nonzero: Vec<usize> = (0..v.len()).filter(|&i| v[i] != 0.0).collect();
+            for keep in [true, false] {
+                let keep_bound = |_: f64| keep;
+                let rounding: [&dyn StiffnessRounding; 2] = [&terms, &entries];
+                for rounding in rounding {
+                    let full = rounding.estimate(v, &keep_bound);
+                    for support in [&nonzero, &all] {
+                        let on = rounding.estimate_on(v, support, &keep_bound);
+                        assert_eq!(
+                            on.to_bits(),
+                            full.to_bits(),
+                            "{model} {stage} {} Hz (bound {keep}): {on:e} against {full:e}",
+                            mode.hz
+                        );
+                    }
+                }
+            }
+        }
+    }
 }
 
 #[test]

@@ -358,7 +358,7 @@ impl StageModel {
             .collect();
         Ok(Modes {
             coordinates: self.variables.clone(),
-            modes: finish(raw, &mass, &self.variables, rounding),
+            modes: finish(raw, &[(0..nx).collect()], &mass, &self.variables, rounding),
         })
     }
 }

@@ -62,6 +62,14 @@ pub trait StiffnessRounding {
             self.error(v)
         }
     }
+
+    /// [`StiffnessRounding::estimate`] for a `v` that is exactly zero outside `support`
+    /// (ascending variable indices: a mode's block). The same value; implementations use
+    /// the support to cost the block's entries instead of all n variables.
+    fn estimate_on(&self, v: &[f64], support: &[usize], keep_bound: &dyn Fn(f64) -> bool) -> f64 {
+        let _ = support;
+        self.estimate(v, keep_bound)
+    }
 }
 
 /// Rounding of a matrix given entry by entry: each entry known to a few ulps of itself,
@@ -101,6 +109,21 @@ impl StiffnessRounding for EntryRounding {
         // |v|ᵀ |K| |v| ≤ ‖|K|‖₂ ‖v‖² (and the 1-norm/∞-norm product bounds the 2-norm)
         ROUNDING * f64::EPSILON * self.norm * v.iter().map(|x| x * x).sum::<f64>()
     }
+
+    fn estimate_on(&self, v: &[f64], support: &[usize], keep_bound: &dyn Fn(f64) -> bool) -> f64 {
+        // the sums over the support alone, in the same order (the zeros add nothing)
+        let squares: f64 = support
+            .iter()
+            .filter_map(|&i| v.get(i))
+            .map(|x| x * x)
+            .sum();
+        let bound = ROUNDING * f64::EPSILON * self.norm * squares;
+        if keep_bound(bound) {
+            bound
+        } else {
+            ROUNDING * f64::EPSILON * self.columns.abs_form_on(v, support)
+        }
+    }
 }
 
 /// A mode's error is taken from [`StiffnessRounding::bound`] when that bound puts its
@@ -130,24 +153,35 @@ impl Mode {
         }
     }
 
-    /// A mode from its eigenvalue ω² (rad²/s²) and an eigenvector `u` (any scale) over the
-    /// variables: normalised to uᵀ M u = 1 with `mass_times` = M u, labelled by the largest
-    /// kinetic-energy fraction. Its errors are set to zero; [`finish`] estimates them.
+    /// A mode from its eigenvalue ω² (rad²/s²) and an eigenvector `u` (any scale) given at
+    /// the `support` variables (ascending; zero at the other of the `n` variables):
+    /// normalised to uᵀ M u = 1 with `mass_times` = M u at the support, labelled by the
+    /// largest kinetic-energy fraction. Its errors are set to zero; [`finish`] estimates
+    /// them.
     pub(crate) fn from_vector(
         omega_squared: f64,
         u: &[f64],
         mass_times: &[f64],
+        support: &[usize],
         names: &[String],
     ) -> Mode {
+        let n = names.len();
         let norm2: f64 = u.iter().zip(mass_times).map(|(a, b)| a * b).sum();
         let scale = 1.0 / norm2.sqrt();
-        let vector: Vec<f64> = u.iter().map(|x| x * scale).collect();
-        let energy_fractions: Vec<f64> = u
+        let mut vector = vec![0.0; n];
+        let mut energy_fractions = vec![0.0; n];
+        for ((&g, &a), &b) in support.iter().zip(u).zip(mass_times) {
+            if let (Some(v), Some(e)) = (vector.get_mut(g), energy_fractions.get_mut(g)) {
+                *v = a * scale;
+                *e = a * b / norm2;
+            }
+        }
+        // the fractions sum to 1, so the largest is at the support (ties: the last, as a
+        // scan over all variables would find)
+        let dominant = support
             .iter()
-            .zip(mass_times)
-            .map(|(a, b)| a * b / norm2)
-            .collect();
-        let dominant = (0..u.len())
+            .copied()
+            .filter(|&i| i < n)
             .max_by(|&i, &j| energy_fractions[i].total_cmp(&energy_fractions[j]))
             .unwrap_or(0);
         let mut mode = Mode {
@@ -237,6 +271,54 @@ impl SparseColumns {
             }
         }
         y
+    }
+
+    /// A x at the `support` columns (ascending) for an `x` given there (zero elsewhere),
+    /// returned at the support's rows: the entries of A that couple the support only to
+    /// itself (a block of exactly decoupled variables). Sums in the order of
+    /// [`SparseColumns::times`].
+    /// `scratch` is n zeros, and is left so.
+    pub(crate) fn times_on(&self, support: &[usize], x: &[f64], scratch: &mut [f64]) -> Vec<f64> {
+        for (&j, &xj) in support.iter().zip(x) {
+            if xj != 0.0
+                && let Some(column) = self.entries.get(j)
+            {
+                for &(i, v) in column {
+                    scratch[i] += v * xj;
+                }
+            }
+        }
+        let y = support
+            .iter()
+            .map(|&i| scratch.get(i).copied().unwrap_or(0.0))
+            .collect();
+        for (&j, &xj) in support.iter().zip(x) {
+            if xj != 0.0
+                && let Some(column) = self.entries.get(j)
+            {
+                for &(i, _) in column {
+                    scratch[i] = 0.0;
+                }
+            }
+        }
+        y
+    }
+
+    /// [`SparseColumns::abs_form`] of an `x` (over all n) that is zero outside `support`
+    /// (ascending): the same sum over the support's columns.
+    pub(crate) fn abs_form_on(&self, x: &[f64], support: &[usize]) -> f64 {
+        let mut sum = 0.0;
+        for &j in support {
+            let (Some(column), Some(&xj)) = (self.entries.get(j), x.get(j)) else {
+                continue;
+            };
+            if xj != 0.0 {
+                for &(i, v) in column {
+                    sum += x.get(i).map_or(0.0, |xi| xi.abs()) * v.abs() * xj.abs();
+                }
+            }
+        }
+        sum
     }
 
     /// Σ |x_i| |A_ij| |x_j|.
@@ -516,12 +598,14 @@ fn block_modes(
     })
 }
 
-/// A mode as an eigensolver found it: ω², the method's error, a vector (any scale) over
-/// all variables, and the block it belongs to.
+/// A mode as an eigensolver found it: ω², the method's error, and a vector (any scale)
+/// over the variables of its block (exactly zero at every other variable).
 pub(crate) struct RawMode {
     pub(crate) omega_squared: f64,
     pub(crate) error: f64,
+    /// The vector at the block's variables, in their (ascending) order.
     pub(crate) vector: Vec<f64>,
+    /// Index of the block in `finish`'s `blocks`.
     pub(crate) block: usize,
 }
 
@@ -529,26 +613,32 @@ pub(crate) struct RawMode {
 /// mode's ω² error (the method's plus the first-order effect of rounding K's entries,
 /// `rounding`, and M's, ε |ω²| Σ |v_i| |M_ij| |v_j|); ω² within that error of zero set to
 /// exactly zero (neutral: its sign is not determined); the vector error from the gap to the
-/// nearest mode of the same block; sorted ascending.
+/// nearest mode of the same block; sorted ascending. `blocks` lists each block's variables
+/// (ascending); a mode's products and forms run over its block only (the matrices couple
+/// nothing outside it), so each mode costs its block's entries, not all n².
 pub(crate) fn finish(
     raw: Vec<RawMode>,
+    blocks: &[Vec<usize>],
     mass: &SparseColumns,
     names: &[String],
     rounding: &dyn StiffnessRounding,
 ) -> Vec<Mode> {
+    let mut scratch = vec![0.0; mass.entries.len()];
     let mut modes: Vec<(Mode, usize)> = raw
         .into_iter()
         .map(|r| {
-            let mu = mass.times(&r.vector);
-            let mut mode = Mode::from_vector(r.omega_squared, &r.vector, &mu, names);
+            let support: &[usize] = blocks.get(r.block).map_or(&[], Vec::as_slice);
+            let mu = mass.times_on(support, &r.vector, &mut scratch);
+            let mut mode = Mode::from_vector(r.omega_squared, &r.vector, &mu, support, names);
             let w2 = mode.omega_squared;
-            let mass_part = ROUNDING * f64::EPSILON * w2.abs() * mass.abs_form(&mode.vector);
+            let mass_part =
+                ROUNDING * f64::EPSILON * w2.abs() * mass.abs_form_on(&mode.vector, support);
             let others = r.error + mass_part;
             let keep_bound = |bound: f64| {
                 let coarse = others + bound;
                 coarse.is_finite() && coarse <= 2.0 * REFINE_ABOVE * w2.abs()
             };
-            let error = others + rounding.estimate(&mode.vector, &keep_bound);
+            let error = others + rounding.estimate_on(&mode.vector, support, &keep_bound);
             mode.omega_squared_error = if error.is_finite() { error } else { f64::MAX };
             if w2.abs() <= mode.omega_squared_error {
                 mode.set_omega_squared(0.0);
@@ -557,16 +647,20 @@ pub(crate) fn finish(
         })
         .collect();
     modes.sort_by(|a, b| a.0.omega_squared.total_cmp(&b.0.omega_squared));
-    let gaps: Vec<f64> = (0..modes.len())
-        .map(|i| {
-            modes
-                .iter()
-                .enumerate()
-                .filter(|&(j, (_, b))| j != i && *b == modes[i].1)
-                .map(|(_, (m, _))| (m.omega_squared - modes[i].0.omega_squared).abs())
-                .fold(f64::INFINITY, f64::min)
-        })
-        .collect();
+    // the nearest mode of the same block is a neighbour in that block's ascending list
+    let mut gaps = vec![f64::INFINITY; modes.len()];
+    let mut last_of_block: Vec<Option<usize>> = vec![None; blocks.len()];
+    for i in 0..modes.len() {
+        let Some(last) = last_of_block.get_mut(modes[i].1) else {
+            continue;
+        };
+        if let Some(j) = *last {
+            let gap = (modes[j].0.omega_squared - modes[i].0.omega_squared).abs();
+            gaps[i] = gaps[i].min(gap);
+            gaps[j] = gaps[j].min(gap);
+        }
+        *last = Some(i);
+    }
     modes
         .into_iter()
         .zip(gaps)
@@ -644,10 +738,13 @@ pub fn normal_modes_with_rounding(
         });
     }
     let (label, count) = dense_components(n, &[k_eff.as_slice(), mass.as_slice()]);
+    let mut blocks: Vec<Vec<usize>> = vec![Vec::new(); count];
+    for (i, &b) in label.iter().enumerate() {
+        blocks[b].push(i);
+    }
     let mass_columns = SparseColumns::new(n, |i, j| mass[(i, j)]);
     let mut raw: Vec<RawMode> = Vec::with_capacity(n);
-    for b in 0..count {
-        let idx: Vec<usize> = (0..n).filter(|&i| label[i] == b).collect();
+    for (b, idx) in blocks.iter().enumerate() {
         let kb = Mat::from_fn(idx.len(), idx.len(), |i, j| k_eff[(idx[i], idx[j])]);
         let mb = Mat::from_fn(idx.len(), idx.len(), |i, j| mass[(idx[i], idx[j])]);
         let weakest = || {
@@ -660,21 +757,17 @@ pub fn normal_modes_with_rounding(
         };
         let block = block_modes(&kb, &mb, weakest)?;
         for (k, (&w2, &error)) in block.omega_squared.iter().zip(&block.errors).enumerate() {
-            let mut vector = vec![0.0; n];
-            for (i, &g) in idx.iter().enumerate() {
-                vector[g] = block.vectors[(i, k)];
-            }
             raw.push(RawMode {
                 omega_squared: w2,
                 error,
-                vector,
+                vector: block.vectors.col(k).iter().copied().collect(),
                 block: b,
             });
         }
     }
     Ok(Modes {
         coordinates: names.to_vec(),
-        modes: finish(raw, &mass_columns, names, rounding),
+        modes: finish(raw, &blocks, &mass_columns, names, rounding),
     })
 }
 

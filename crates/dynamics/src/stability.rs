@@ -412,15 +412,31 @@ pub struct TermRounding {
     /// The same at positions the pattern does not store (the terms there sum to an exact
     /// zero, each term's own entries need not be zero).
     unstored: AbsWeights,
+    /// `unstored` without the positions that join two of the pattern's exactly decoupled
+    /// blocks: a vector within one block (a mode with its floats) meets only these, the
+    /// others multiply its exact zeros.
+    unstored_within: AbsWeights,
+    /// The block of each unknown (the pattern's connected components).
+    block_of: Vec<usize>,
     /// The terms with a geometric part.
     geometric: Vec<GeometricPart>,
+    /// `geometric_terms[geometric_start[p]..geometric_start[p + 1]]`: the geometric terms at
+    /// unknown p, ascending (a mode's refined estimate visits the terms at its block only).
+    geometric_start: Vec<usize>,
+    geometric_terms: Vec<usize>,
     floats: FloatMap,
     unknowns: usize,
 }
 
-/// Largest number of unknowns for which [`TermRounding::new`] looks slots up in a dense
-/// table (4 bytes per entry: 16 MB at the limit).
-const DENSE_SLOT_TABLE_LIMIT: usize = 2000;
+/// A term's tension-off Hessian (row-major, as `on`); `zeros` (at least as long as `on`)
+/// stands for an exact zero one, or one of the wrong size.
+fn off_values<'a>(off: &'a OffHessian, on: &'a [f64], zeros: &'a [f64]) -> &'a [f64] {
+    match off {
+        OffHessian::Same => on,
+        OffHessian::Matrix(m) if m.len() == on.len() => m,
+        _ => &zeros[..on.len().min(zeros.len())],
+    }
+}
 
 /// Two sets of non-negative weights on one sparsity pattern (compressed rows), for the forms
 /// Σ w_rc |z_r| |z_c|: the rounding of the stored entries, Σ_t (|H_off s + G| + |H_off s|)
@@ -445,13 +461,6 @@ impl AbsWeights {
             entries: vec![0.0; pattern.len()],
             bound: vec![0.0; pattern.len()],
         }
-    }
-
-    /// The slot of (r, c), if stored.
-    fn slot(&self, r: usize, c: usize) -> Option<usize> {
-        let (start, end) = (*self.row_start.get(r)?, *self.row_start.get(r + 1)?);
-        let k = self.cols[start..end].binary_search(&c).ok()?;
-        Some(start + k)
     }
 
     /// Σ w_rc |z_r| |z_c| over rows and columns below `unknowns` (`bound`: the bound's
@@ -481,55 +490,77 @@ impl AbsWeights {
     }
 }
 
+impl AbsWeights {
+    /// [`AbsWeights::form`] over the listed `rows` only (ascending), for a `z` that is zero
+    /// on every other row: the same sum in the same order.
+    fn form_rows(&self, bound: bool, unknowns: usize, z: &[f64], rows: &[usize]) -> f64 {
+        let weights = if bound { &self.bound } else { &self.entries };
+        let mut sum = 0.0;
+        for &r in rows.iter().take_while(|&&r| r < unknowns) {
+            let (Some(&zr), Some(&start), Some(&end)) =
+                (z.get(r), self.row_start.get(r), self.row_start.get(r + 1))
+            else {
+                break;
+            };
+            if zr == 0.0 {
+                continue;
+            }
+            let mut row = 0.0;
+            for (&c, w) in self.cols[start..end].iter().zip(&weights[start..end]) {
+                if c < unknowns
+                    && let Some(zc) = z.get(c)
+                {
+                    row += w * zc.abs();
+                }
+            }
+            sum += zr.abs() * row;
+        }
+        sum
+    }
+}
+
 impl TermRounding {
     /// The rounding of `assembled`'s terms on `model` (the stage built from it).
     pub fn new(model: &StageModel, assembled: &Assembled, damping: &Damping) -> Self {
         let unknowns = model.unknowns();
         let mut stored = AbsWeights::on(&model.pattern);
         let mut geometric = Vec::new();
-        // (row, column, entries part, bound part) of the positions the pattern lacks
-        let mut unstored_entries = Vec::new();
-        let mut slot_in_row = Vec::new();
         let mut storages: Vec<(&str, f64)> = Vec::new();
-        // the slot of every (row, column) among the unknowns in one dense table, so that
-        // each term's entries find theirs in one read (a binary search per entry was most
-        // of this function's time); up to a few million entries, beyond that the search
-        let table: Option<Vec<u32>> = (unknowns <= DENSE_SLOT_TABLE_LIMIT).then(|| {
-            let mut table = vec![u32::MAX; unknowns * unknowns];
-            for r in 0..unknowns {
-                let (start, end) = (stored.row_start[r], stored.row_start[r + 1]);
-                for (s, &c) in (start..end).zip(&stored.cols[start..end]) {
-                    if c < unknowns {
-                        table[r * unknowns + c] = s as u32;
-                    }
-                }
-            }
-            table
-        });
+        // per term: its storage multiplier, amplification, and (local index, master
+        // position) of its coordinates that are unknowns, flat
+        let mut scales: Vec<(f64, f64)> = Vec::with_capacity(assembled.terms.len());
+        let mut first_local = Vec::with_capacity(assembled.terms.len() + 1);
+        first_local.push(0);
+        let mut locals: Vec<(usize, usize)> = Vec::new();
+        let zeros = vec![
+            0.0;
+            assembled
+                .terms
+                .iter()
+                .map(|t| t.on.len())
+                .max()
+                .unwrap_or(0)
+        ];
         for t in &assembled.terms {
             let size = t.coords.len();
-            // (local index, master position) of the term's coordinates that are unknowns
-            let positions: Vec<(usize, usize)> = t
-                .coords
-                .iter()
-                .enumerate()
-                .filter_map(|(a, &g)| {
+            let start = locals.len();
+            if t.on.len() == size * size {
+                locals.extend(t.coords.iter().enumerate().filter_map(|(a, &g)| {
                     let p = *assembled.layout.position.get(g)?;
                     (p < unknowns).then_some((a, p))
-                })
-                .collect();
-            if positions.is_empty() || t.on.len() != size * size {
+                }));
+            }
+            first_local.push(locals.len());
+            let positions = &locals[start..];
+            if positions.is_empty() {
+                scales.push((1.0, 1.0));
                 continue;
             }
-            let off_at = |k: usize| match &t.off {
-                OffHessian::Zero => 0.0,
-                OffHessian::Same => t.on[k],
-                OffHessian::Matrix(m) => m.get(k).copied().unwrap_or(0.0),
-            };
+            let off = off_values(&t.off, &t.on, &zeros);
             let (mut off_max, mut g_max) = (0.0f64, 0.0f64);
-            for k in 0..size * size {
-                off_max = off_max.max(off_at(k).abs());
-                g_max = g_max.max((t.on[k] - off_at(k)).abs());
+            for (&on, &off) in t.on.iter().zip(off) {
+                off_max = off_max.max(off.abs());
+                g_max = g_max.max((on - off).abs());
             }
             let amplification = if g_max > 0.0 {
                 (off_max / g_max).clamp(1.0, 1.0 / f64::EPSILON)
@@ -550,59 +581,175 @@ impl TermRounding {
                     storage
                 }
             };
-            let mut local_geometric = Vec::with_capacity(positions.len() * positions.len());
-            for &(a, pa) in &positions {
-                slot_in_row.clear();
-                slot_in_row.extend(positions.iter().map(|&(_, pb)| {
-                    match &table {
-                        Some(table) => table
-                            .get(pa * unknowns + pb)
-                            .and_then(|&s| (s != u32::MAX).then_some(s as usize)),
-                        None => stored.slot(pa, pb),
-                    }
-                }));
-                for (&(b, pb), slot) in positions.iter().zip(&slot_in_row) {
-                    let k = a * size + b;
-                    let off = off_at(k);
-                    let g = t.on[k] - off;
-                    local_geometric.push(g);
-                    let entries = (off * storage + g).abs() + (off * storage).abs();
-                    let bound = entries + amplification * g.abs();
-                    match *slot {
-                        Some(s) => {
-                            stored.entries[s] += entries;
-                            stored.bound[s] += bound;
-                        }
-                        None if bound != 0.0 => unstored_entries.push((pa, pb, entries, bound)),
-                        None => {}
+            scales.push((storage, amplification));
+            if g_max > 0.0 {
+                let mut values = Vec::with_capacity(positions.len() * positions.len());
+                for &(a, _) in positions {
+                    for &(b, _) in positions {
+                        let k = a * size + b;
+                        values.push(t.on[k] - off[k]);
                     }
                 }
-            }
-            if g_max > 0.0 {
                 geometric.push(GeometricPart {
                     positions: positions.iter().map(|&(_, p)| p).collect(),
-                    values: local_geometric,
+                    values,
                     amplification,
                 });
             }
         }
-        let mut unstored = AbsWeights::on(&Pattern::from_positions(
-            unknowns,
-            unstored_entries.iter().map(|&(r, c, _, _)| (r, c)),
-        ));
-        for (r, c, entries, bound) in unstored_entries {
-            if let Some(s) = unstored.slot(r, c) {
-                unstored.entries[s] += entries;
-                unstored.bound[s] += bound;
+        // the terms' rows by unknown, in term order: (term, index among its unknowns)
+        let mut row_start = vec![0usize; unknowns + 1];
+        for &(_, p) in &locals {
+            row_start[p + 1] += 1;
+        }
+        for p in 0..unknowns {
+            row_start[p + 1] += row_start[p];
+        }
+        let mut next = row_start.clone();
+        let mut row_terms = vec![(0usize, 0usize); locals.len()];
+        for (t, w) in first_local.windows(2).enumerate() {
+            for (i, &(_, p)) in locals[w[0]..w[1]].iter().enumerate() {
+                row_terms[next[p]] = (t, i);
+                next[p] += 1;
+            }
+        }
+        // row by row: the stored slot of each column (tagged by the row it was set for,
+        // so nothing is reset), and the positions the pattern lacks (the terms there sum
+        // to an exact zero, each term's own entries need not be zero) gathered per row.
+        // Each slot receives the terms in term order, as a pass over the terms would add
+        // them.
+        const NONE: usize = usize::MAX;
+        let mut slot_of_column = vec![(NONE, 0usize); unknowns];
+        let mut unstored_at = vec![(NONE, 0usize); unknowns];
+        let empty = || AbsWeights {
+            row_start: vec![0],
+            cols: Vec::new(),
+            entries: Vec::new(),
+            bound: Vec::new(),
+        };
+        let (mut unstored, mut unstored_within) = (empty(), empty());
+        let block_of: Vec<usize> = (0..unknowns)
+            .map(|p| model.blocks.get(p).copied().unwrap_or(p))
+            .collect();
+        let mut row_unstored: Vec<(usize, f64, f64)> = Vec::new();
+        for pa in 0..unknowns {
+            let (start, end) = (stored.row_start[pa], stored.row_start[pa + 1]);
+            for (s, &c) in (start..end).zip(&stored.cols[start..end]) {
+                if c < unknowns {
+                    slot_of_column[c] = (pa, s);
+                }
+            }
+            row_unstored.clear();
+            for &(t, i) in &row_terms[row_start[pa]..row_start[pa + 1]] {
+                let term = &assembled.terms[t];
+                let size = term.coords.len();
+                let (storage, amplification) = scales[t];
+                let positions = &locals[first_local[t]..first_local[t + 1]];
+                let a = positions[i].0;
+                let on = &term.on[a * size..(a + 1) * size];
+                let off = &off_values(&term.off, &term.on, &zeros)[a * size..(a + 1) * size];
+                for &(b, pb) in positions {
+                    let (on, off) = (on[b], off[b]);
+                    let g = on - off;
+                    let entries = (off * storage + g).abs() + (off * storage).abs();
+                    let bound = entries + amplification * g.abs();
+                    match slot_of_column[pb] {
+                        (row, s) if row == pa => {
+                            stored.entries[s] += entries;
+                            stored.bound[s] += bound;
+                        }
+                        _ if bound != 0.0 => match unstored_at[pb] {
+                            (row, u) if row == pa => {
+                                row_unstored[u].1 += entries;
+                                row_unstored[u].2 += bound;
+                            }
+                            _ => {
+                                unstored_at[pb] = (pa, row_unstored.len());
+                                row_unstored.push((pb, entries, bound));
+                            }
+                        },
+                        _ => {}
+                    }
+                }
+            }
+            row_unstored.sort_unstable_by_key(|&(c, _, _)| c);
+            for &(c, entries, bound) in &row_unstored {
+                unstored.cols.push(c);
+                unstored.entries.push(entries);
+                unstored.bound.push(bound);
+                if block_of[c] == block_of[pa] {
+                    unstored_within.cols.push(c);
+                    unstored_within.entries.push(entries);
+                    unstored_within.bound.push(bound);
+                }
+            }
+            unstored.row_start.push(unstored.cols.len());
+            unstored_within.row_start.push(unstored_within.cols.len());
+        }
+        // for each unknown, the geometric terms at it (ascending), in compressed rows
+        let mut geometric_start = vec![0usize; unknowns + 1];
+        for part in &geometric {
+            for &p in &part.positions {
+                geometric_start[p + 1] += 1;
+            }
+        }
+        for p in 0..unknowns {
+            geometric_start[p + 1] += geometric_start[p];
+        }
+        let mut next = geometric_start.clone();
+        let mut geometric_terms = vec![0usize; geometric_start[unknowns]];
+        for (t, part) in geometric.iter().enumerate() {
+            for &p in &part.positions {
+                geometric_terms[next[p]] = t;
+                next[p] += 1;
             }
         }
         TermRounding {
             stored,
             unstored,
+            unstored_within,
+            block_of,
             geometric,
+            geometric_start,
+            geometric_terms,
             floats: FloatMap::new(model, damping),
             unknowns,
         }
+    }
+
+    /// The forms over the listed `rows` (ascending, every row where `z` is non-zero among
+    /// them): [`TermRounding::bound_unknowns`] (`bound`) or
+    /// [`TermRounding::error_unknowns`], the same values at the cost of the rows' entries
+    /// and terms.
+    fn on_rows(&self, bound: bool, z: &[f64], rows: &[usize]) -> f64 {
+        // rows within one block meet only the unstored positions within it (the others
+        // add exact zeros, so the sum is the same)
+        let first_block = rows.first().and_then(|&r| self.block_of.get(r));
+        let one_block = rows.iter().all(|&r| self.block_of.get(r) == first_block);
+        let unstored = if one_block {
+            &self.unstored_within
+        } else {
+            &self.unstored
+        };
+        let forms = self.stored.form_rows(bound, self.unknowns, z, rows)
+            + unstored.form_rows(bound, self.unknowns, z, rows);
+        if bound {
+            return ROUNDING * f64::EPSILON * forms;
+        }
+        // the geometric terms at the rows, each once, in ascending order (as the sum over
+        // all terms adds them; the others add exact zeros)
+        let mut terms: Vec<usize> = rows
+            .iter()
+            .filter_map(|&r| Some(*self.geometric_start.get(r)?..*self.geometric_start.get(r + 1)?))
+            .flat_map(|range| self.geometric_terms[range].iter().copied())
+            .collect();
+        terms.sort_unstable();
+        terms.dedup();
+        let geometric: f64 = terms
+            .iter()
+            .map(|&t| self.geometric[t].amplification * self.geometric[t].form(z))
+            .sum();
+        ROUNDING * f64::EPSILON * (forms + geometric)
     }
 
     /// Σ over both patterns' weights (`bound` or entries).
@@ -654,6 +801,24 @@ impl StiffnessRounding for TermRounding {
             bound
         } else {
             self.error_unknowns(&z)
+        }
+    }
+
+    fn estimate_on(&self, v: &[f64], support: &[usize], keep_bound: &dyn Fn(f64) -> bool) -> f64 {
+        let z = self.floats.extend(v);
+        // the rows where z can be non-zero: the support, then the floats that move
+        let nx = self.floats.nx;
+        let rows: Vec<usize> = support
+            .iter()
+            .copied()
+            .filter(|&i| i < nx)
+            .chain((nx..z.len()).filter(|&f| z[f] != 0.0))
+            .collect();
+        let bound = self.on_rows(true, &z, &rows);
+        if keep_bound(bound) {
+            bound
+        } else {
+            self.on_rows(false, &z, &rows)
         }
     }
 }
