@@ -208,6 +208,345 @@ impl Schedule {
     }
 }
 
+/// The elimination of one fixed, structurally symmetric pattern of a complex symmetric
+/// matrix (A = Aᵀ without conjugation, as the dynamic stiffness E(f) = P(f) − ω² M is),
+/// worked out once: A = L D Lᵀ with L unit lower triangular and no row exchanges. Step k
+/// lists the entries of column k of L below the diagonal (the pattern's and the fill) and
+/// the indices of the lower-triangle entries it updates, a_ij −= l_ik a_jk for every i ≥ j
+/// of that column. Only the lower triangle is read or written: half the arithmetic of an
+/// LU. A sweep solves the same pattern at every frequency, so the factorisation per point
+/// only walks these lists, in storage the caller lays out ([`SymmetricSchedule::from_filled`]).
+///
+/// [`SymmetricSchedule::factor`] checks at each step whether partial pivoting would keep
+/// the diagonal pivot (no stored entry below it is larger in magnitude; the others are exact
+/// zeros). If it would at every step, the elimination is the one a partial-pivoting LU
+/// performs on the same matrix in the same order, up to rounding (U = D Lᵀ), with the same
+/// backward stability ([`Pivots::Kept`]). If not, the factorisation goes on and says so
+/// ([`Pivots::Exceeded`]): [`SymmetricSchedule::solve_refined`] then checks the solution by
+/// its residual and refines it, and the caller uses a pivoting LU when that is refused.
+///
+/// The dense blocks (the quad's x–pitch block) keep the LU [`Schedule`]: it performs the
+/// operations of the pivoting LU [`factor`] exactly, whereas L D Lᵀ, though as accurate,
+/// rounds differently, and on a point output of the quad at 0.77 Hz (where E(f) amplifies
+/// rounding by ~1e3) that moved the noise by 1.03e-12 of the reference, over the 1e-12 that
+/// tests/fast_responses.rs allows.
+#[derive(Clone, Debug)]
+pub(crate) struct SymmetricSchedule {
+    steps: Vec<Step>,
+    /// (row i, index of a_ik) of the entries below the diagonal, step by step, i ascending.
+    below: Vec<(usize, usize)>,
+    /// The entries each step updates, step by step: for the rows r_0 < r_1 < … of the
+    /// step's column, for p = 0, 1, …, the indices of (r_q, r_p) for q = p, p + 1, ….
+    targets: Vec<usize>,
+    /// The step's column before scaling (a_ik) and after (l_ik = a_ik / a_kk).
+    column: Vec<c64>,
+    scaled: Vec<c64>,
+    /// The right-hand side and the residual of [`SymmetricSchedule::solve_refined`].
+    rhs: Vec<c64>,
+    residual: Vec<c64>,
+    scale: Vec<f64>,
+}
+
+/// How a factorisation by a [`SymmetricSchedule`] went.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Pivots {
+    /// Partial pivoting would have kept every pivot: the factors are those of a pivoting
+    /// LU, up to rounding, and as backward stable.
+    Kept,
+    /// Some entry below a pivot was larger than it: solve with
+    /// [`SymmetricSchedule::solve_refined`], which checks the result.
+    Exceeded,
+    /// A pivot was zero or not finite.
+    Failed,
+}
+
+/// Largest componentwise backward error accepted from a factorisation without row
+/// exchanges ([`SymmetricSchedule::solve_refined`]): a few units of rounding, what a backward-stable
+/// solve gives.
+pub(crate) const BACKWARD_ERROR: f64 = 4.0 * f64::EPSILON;
+
+/// Most steps of iterative refinement tried before a pivoting LU is used instead.
+pub(crate) const REFINEMENTS: usize = 2;
+
+/// One step of a [`SymmetricSchedule`].
+#[derive(Clone, Debug)]
+struct Step {
+    /// Index of the pivot a_kk.
+    diag: usize,
+    /// Its entries in `below`.
+    below: std::ops::Range<usize>,
+    /// Where its entries of `targets` start.
+    targets: usize,
+}
+
+impl SymmetricSchedule {
+    /// The schedule of the factor whose columns hold below the diagonal the rows `filled`
+    /// (as [`fill`] gives them), with entry (i, j), i ≥ j, of the lower triangle at
+    /// `index(i, j)` in the values. `index` is called once per stored entry of the factor.
+    pub(crate) fn from_filled(
+        filled: &[Vec<usize>],
+        index: impl Fn(usize, usize) -> usize,
+    ) -> Self {
+        let n = filled.len();
+        let mut steps = Vec::with_capacity(n);
+        let mut below = Vec::new();
+        let mut len = 0;
+        for (k, rows) in filled.iter().enumerate() {
+            let start = below.len();
+            below.extend(rows.iter().map(|&i| (i, index(i, k))));
+            steps.push(Step {
+                diag: index(k, k),
+                below: start..below.len(),
+                targets: len,
+            });
+            len += rows.len() * (rows.len() + 1) / 2;
+        }
+        // column by column: the indices of column j's entries, then every step k whose
+        // column holds row j writes its updates of column j (rows j and below); j comes in
+        // ascending order, so it is the next row of each such column
+        let mut steps_at_row: Vec<Vec<usize>> = vec![Vec::new(); n];
+        for (k, rows) in filled.iter().enumerate() {
+            for &i in rows {
+                steps_at_row[i].push(k);
+            }
+        }
+        let mut targets = vec![0; len];
+        let mut next = vec![0; n];
+        let mut at = vec![0; n];
+        for (j, steps_j) in steps_at_row.iter().enumerate() {
+            at[j] = index(j, j);
+            for &i in &filled[j] {
+                at[i] = index(i, j);
+            }
+            for &k in steps_j {
+                let rows = &filled[k];
+                let (p, r) = (next[k], rows.len());
+                next[k] += 1;
+                debug_assert_eq!(rows[p], j);
+                // the updates of the columns r_0 … r_(p−1) come first
+                let start = steps[k].targets + p * r - p * p.saturating_sub(1) / 2;
+                for (t, &i) in targets[start..].iter_mut().zip(&rows[p..]) {
+                    *t = at[i];
+                }
+            }
+        }
+        let widest = filled.iter().map(Vec::len).max().unwrap_or(0);
+        SymmetricSchedule {
+            steps,
+            below,
+            targets,
+            column: vec![c64::new(0.0, 0.0); widest],
+            scaled: vec![c64::new(0.0, 0.0); widest],
+            rhs: Vec::new(),
+            residual: Vec::new(),
+            scale: Vec::new(),
+        }
+    }
+
+    /// Number of updates a_ij −= l_ik a_jk per factorisation (the arithmetic's measure).
+    #[cfg(test)]
+    pub(crate) fn updates(&self) -> usize {
+        self.targets.len()
+    }
+
+    /// Factorises `a` in place as L D Lᵀ (D on the diagonal, L below it, the upper triangle
+    /// untouched), and says whether partial pivoting would have kept every pivot. A zero or
+    /// non-finite pivot stops it ([`Pivots::Failed`]: `a` is spoilt, factorise a fresh copy
+    /// with a pivoting LU, which also reports a singular matrix).
+    pub(crate) fn factor(&mut self, a: &mut [c64]) -> Pivots {
+        let SymmetricSchedule {
+            steps,
+            below,
+            targets,
+            column,
+            scaled,
+            ..
+        } = self;
+        let mut pivots = Pivots::Kept;
+        for step in steps.iter() {
+            let pivot = a[step.diag];
+            let size = pivot.norm_sqr();
+            if size == 0.0 || !size.is_finite() {
+                return Pivots::Failed;
+            }
+            let below = &below[step.below.clone()];
+            let r = below.len();
+            for (c, &(_, idx)) in column.iter_mut().zip(below) {
+                *c = a[idx];
+                if c.norm_sqr() > size {
+                    pivots = Pivots::Exceeded;
+                }
+            }
+            let inv = pivot.inv();
+            for ((s, c), &(_, idx)) in scaled.iter_mut().zip(column.iter()).zip(below) {
+                *s = c * inv;
+                a[idx] = *s;
+            }
+            let mut t = step.targets;
+            for p in 0..r {
+                let u = column[p];
+                let entries = &targets[t..t + r - p];
+                t += r - p;
+                if u == c64::new(0.0, 0.0) {
+                    continue;
+                }
+                for (&target, &l) in entries.iter().zip(&scaled[p..r]) {
+                    a[target] -= l * u;
+                }
+            }
+        }
+        pivots
+    }
+
+    /// Solves A x = b in place (`x` holds b on entry) by the factors `factors` of a
+    /// factorisation that exchanged no rows although partial pivoting would have
+    /// ([`Pivots::Exceeded`]), made as accurate as a pivoting LU's or refused: the residual
+    /// r = b − A x is computed with the matrix `a` itself, and while the componentwise
+    /// backward error max_i |r_i| / (|A| |x| + |b|)_i is above [`BACKWARD_ERROR`] a step of
+    /// iterative refinement (x += A⁻¹ r with the same factors) follows, at most
+    /// [`REFINEMENTS`] of them (Higham, Accuracy and Stability of Numerical Algorithms,
+    /// §7.1 and ch. 12: one step in working precision already makes the solution
+    /// componentwise backward stable unless the factors are very poor). False (x spoilt)
+    /// when the error stays above: the caller solves by a pivoting LU instead.
+    pub(crate) fn solve_refined(&mut self, factors: &[c64], a: &[c64], x: &mut [c64]) -> bool {
+        let mut b = std::mem::take(&mut self.rhs);
+        let mut r = std::mem::take(&mut self.residual);
+        let mut scale = std::mem::take(&mut self.scale);
+        b.clear();
+        b.extend_from_slice(x);
+        r.resize(x.len(), c64::new(0.0, 0.0));
+        self.solve(factors, x);
+        let mut accepted = false;
+        for step in 0..=REFINEMENTS {
+            let error = self.backward_error(a, x, &b, &mut r, &mut scale);
+            if error <= BACKWARD_ERROR {
+                accepted = true;
+                break;
+            }
+            if step < REFINEMENTS {
+                self.solve(factors, &mut r);
+                for (x, d) in x.iter_mut().zip(&r) {
+                    *x += d;
+                }
+            }
+        }
+        (self.rhs, self.residual, self.scale) = (b, r, scale);
+        accepted
+    }
+
+    /// The residual r = b − A x into `r` and the componentwise backward error of x,
+    /// max_i |r_i| / (|A| |x| + |b|)_i, with A given by its lower triangle in `a` (the
+    /// layout of the schedule; the fill entries are zero there) and |z| = |Re z| + |Im z|.
+    fn backward_error(
+        &self,
+        a: &[c64],
+        x: &[c64],
+        b: &[c64],
+        r: &mut [c64],
+        scale: &mut Vec<f64>,
+    ) -> f64 {
+        let abs = |z: c64| z.re.abs() + z.im.abs();
+        scale.clear();
+        scale.extend(b.iter().map(|&b| abs(b)));
+        r.copy_from_slice(b);
+        for (k, step) in self.steps.iter().enumerate() {
+            let d = a[step.diag];
+            r[k] -= d * x[k];
+            scale[k] += abs(d) * abs(x[k]);
+            for &(i, idx) in &self.below[step.below.clone()] {
+                let v = a[idx];
+                r[i] -= v * x[k];
+                r[k] -= v * x[i];
+                scale[i] += abs(v) * abs(x[k]);
+                scale[k] += abs(v) * abs(x[i]);
+            }
+        }
+        r.iter()
+            .zip(scale.iter())
+            .map(|(&r, &s)| {
+                if s > 0.0 {
+                    abs(r) / s
+                } else if abs(r) > 0.0 {
+                    f64::INFINITY
+                } else {
+                    0.0
+                }
+            })
+            .fold(0.0, f64::max)
+    }
+
+    /// Solves A x = b in place with the factors from [`SymmetricSchedule::factor`].
+    pub(crate) fn solve(&self, a: &[c64], b: &mut [c64]) {
+        // L y = b, column by column
+        for (k, step) in self.steps.iter().enumerate() {
+            let y = b[k];
+            if y == c64::new(0.0, 0.0) {
+                continue;
+            }
+            for &(i, idx) in &self.below[step.below.clone()] {
+                b[i] -= a[idx] * y;
+            }
+        }
+        // Lᵀ x = D⁻¹ y, row by row from the last
+        for (k, step) in self.steps.iter().enumerate().rev() {
+            let mut x = b[k] / a[step.diag];
+            for &(i, idx) in &self.below[step.below.clone()] {
+                x -= a[idx] * b[i];
+            }
+            b[k] = x;
+        }
+    }
+}
+
+/// The rows below the diagonal of each column of L in A = L D Lᵀ, for a structurally
+/// symmetric A whose column k has below the diagonal the rows `lower[k]` (ascending): its
+/// own rows and the fill. Column k of L holds A's rows and those of every column c whose
+/// first row below the diagonal (its parent in the elimination tree) is k, less k itself;
+/// one merge per column.
+pub(crate) fn fill(lower: Vec<Vec<usize>>) -> Vec<Vec<usize>> {
+    let n = lower.len();
+    let mut from_children: Vec<Vec<usize>> = vec![Vec::new(); n];
+    let mut filled = Vec::with_capacity(n);
+    for (k, own) in lower.into_iter().enumerate() {
+        let column = union(&own, &std::mem::take(&mut from_children[k]));
+        if let Some((&parent, rest)) = column.split_first() {
+            from_children[parent] = union(&from_children[parent], rest);
+        }
+        filled.push(column);
+    }
+    filled
+}
+
+/// The union of two ascending lists, ascending and without repeats.
+fn union(a: &[usize], b: &[usize]) -> Vec<usize> {
+    let mut out = Vec::with_capacity(a.len() + b.len());
+    let (mut i, mut j) = (0, 0);
+    while i < a.len() || j < b.len() {
+        let next = match (a.get(i), b.get(j)) {
+            (Some(&x), Some(&y)) if x == y => {
+                i += 1;
+                j += 1;
+                x
+            }
+            (Some(&x), Some(&y)) if x < y => {
+                i += 1;
+                x
+            }
+            (_, Some(&y)) => {
+                j += 1;
+                y
+            }
+            (Some(&x), None) => {
+                i += 1;
+                x
+            }
+            (None, None) => break,
+        };
+        out.push(next);
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -288,6 +627,21 @@ mod tests {
         let mut f = a.clone();
         assert!(factor(&mut f, n, &mut pivots));
         assert_eq!(pivots[0], 1);
+    }
+
+    #[test]
+    fn the_fill_follows_the_elimination_tree() {
+        // a ring 0–1–2–3–0 eliminated in order: removing 0 joins 1 and 3, removing 1 then
+        // joins 2 and 3 (already joined); by hand, L has rows {1, 3}, {2, 3}, {3}, {}
+        let lower = vec![vec![1, 3], vec![2], vec![3], vec![]];
+        assert_eq!(fill(lower), vec![vec![1, 3], vec![2, 3], vec![3], vec![]]);
+        // an arrow pointing at 0 (0 coupled to all) fills everything below it
+        let arrow = vec![vec![1, 2, 3], vec![], vec![], vec![]];
+        assert_eq!(
+            fill(arrow),
+            vec![vec![1, 2, 3], vec![2, 3], vec![3], vec![]]
+        );
+        assert_eq!(union(&[1, 4, 6], &[2, 4, 7]), vec![1, 2, 4, 6, 7]);
     }
 
     #[test]

@@ -12,11 +12,17 @@
 //!   small ones), so only the unknowns of components touched by both are solved, with no
 //!   approximation (the quad's x3 with input x00: the 8 unknowns of the x–pitch block).
 //! - Solvers by size: up to [`DENSE_LIMIT`] unknowns a dense complex LU in the sweep's own
-//!   storage; above, faer's sparse LU with the symbolic analysis (fill-reducing ordering)
-//!   done once per sweep and the numeric factorisation per frequency, which costs O(n) per
-//!   point for chain-like suspensions (beads, chains of stages).
+//!   storage; above, E(f) (complex symmetric) is factorised as L D Lᵀ by a schedule worked
+//!   out once per sweep in an approximate-minimum-degree order, which keeps the fill within
+//!   each fibre's chain of beads: O(n) per point for chain-like suspensions (beads, chains
+//!   of stages), with no search or allocation per point. Where partial pivoting would have
+//!   exchanged rows (for beads, at every frequency: massless joint angles next to beads
+//!   whose −ω²m outweighs them) the solution is checked by its residual against E(f) and
+//!   refined to a componentwise backward error of a few ε, or solved by faer's pivoting
+//!   sparse LU when that fails (about one point in ten with 50 beads per fibre).
 //! - [`Solver::DenseReference`] is the straightforward path kept to check the others:
-//!   P(f) summed densely over the whole master matrix and one dense LU over all unknowns.
+//!   P(f) summed densely over the whole master matrix and one dense LU over all unknowns,
+//!   with one step of iterative refinement.
 
 use faer::linalg::solvers::Solve;
 use faer::{Mat, c64};
@@ -24,8 +30,8 @@ use pendkit_energy::Damping;
 use pendkit_expr::Compiled;
 
 use crate::DynamicsError;
-use crate::lu;
-use crate::sparse_lu::SparseLu;
+use crate::lu::{self, Pivots};
+use crate::sparse_lu::SymmetricSparse;
 use crate::stage::{Input, Output, StageModel, TWO_PI};
 
 /// Largest number of unknowns solved by the dense LU; above it the sparse LU is used.
@@ -33,7 +39,8 @@ use crate::stage::{Input, Output, StageModel, TWO_PI};
 /// overhead that pays once the blocks are a few dozen unknowns: measured on the quad with
 /// one bead per fibre (42 unknowns, all coupled) 13.5 µs per point dense against 12.4 µs
 /// sparse, and with two (54) 23 µs against 19 µs; the 8-unknown x–pitch block of the quad
-/// factorises densely in well under a microsecond.
+/// factorises densely in well under a microsecond. (Those sparse figures are faer's LU,
+/// measured before the scheduled L D Lᵀ replaced it; the limit was not measured again.)
 pub const DENSE_LIMIT: usize = 40;
 
 /// How a response is solved.
@@ -144,16 +151,19 @@ enum Part {
     Varying(usize),
 }
 
-/// The factorisation of E(f) over the solved unknowns.
+/// The factorisation of E(f) over the solved unknowns: L D Lᵀ by a schedule worked out once
+/// per sweep while no row exchange is needed (E is complex symmetric), a pivoting LU
+/// otherwise.
 enum Factor {
-    /// Dense column-major n × n (the values array is the matrix), eliminated by the
-    /// pattern's schedule while no row exchange is needed, by the pivoting LU otherwise.
+    /// Dense column-major n × n (the values array is the matrix), eliminated in the natural
+    /// order; the fallback is the dense pivoting LU.
     Dense {
         schedule: lu::Schedule,
         pivots: Vec<usize>,
     },
-    /// Compressed columns with a symbolic analysis done once.
-    Sparse(Box<SparseLu<c64>>),
+    /// The lower triangle of the matrix permuted to a fill-reducing order, with its fill;
+    /// the fallback is faer's sparse LU.
+    Sparse(Box<SymmetricSparse>),
 }
 
 const NONE: usize = usize::MAX;
@@ -166,7 +176,10 @@ struct Fast {
     out: Linear,
     direct: Linear,
     factor: Factor,
+    /// E(f) on the pattern, factorised in place.
     values: Vec<c64>,
+    /// E(f) unfactorised, for checking a solve without row exchanges.
+    original: Vec<c64>,
     scalar: Vec<c64>,
 }
 
@@ -374,7 +387,7 @@ impl Fast {
             }
         } else {
             let (col_ptr, row_idx) = model.pattern.restricted_columns(unknowns, local);
-            Factor::Sparse(Box::new(SparseLu::new(col_ptr, row_idx)?))
+            Factor::Sparse(Box::new(SymmetricSparse::new(col_ptr, row_idx)?))
         };
         let len = match &factor {
             Factor::Dense { .. } => n * n,
@@ -496,6 +509,7 @@ impl Fast {
         }
         Ok(Fast {
             values: vec![c64::new(0.0, 0.0); len],
+            original: vec![c64::new(0.0, 0.0); len],
             scalar: vec![c64::new(0.0, 0.0); 1],
             matrix,
             mass,
@@ -506,33 +520,66 @@ impl Fast {
         })
     }
 
+    /// E(f) = P(f) − ω² M into `values`.
+    fn assemble(
+        matrix: &Linear,
+        mass: &[(usize, f64)],
+        varying: &[c64],
+        w2: f64,
+        values: &mut [c64],
+    ) {
+        matrix.evaluate(varying, values);
+        for &(k, m) in mass {
+            values[k].re -= w2 * m;
+        }
+    }
+
     /// Assembles E(f), factorises, solves into `z` and returns the output value.
     fn solve(&mut self, varying: &[c64], w2: f64, z: &mut [c64]) -> Option<c64> {
-        self.matrix.evaluate(varying, &mut self.values);
-        for &(k, m) in &self.mass {
-            self.values[k].re -= w2 * m;
-        }
-        self.rhs.evaluate(varying, z);
-        let solved = match &mut self.factor {
+        let Fast {
+            matrix,
+            mass,
+            values,
+            original,
+            factor,
+            rhs,
+            ..
+        } = self;
+        Self::assemble(matrix, mass, varying, w2, values);
+        rhs.evaluate(varying, z);
+        let solved = match factor {
             Factor::Dense { schedule, pivots } => {
-                let n = schedule.len();
-                if !schedule.factor(&mut self.values) {
+                if schedule.factor(values) {
+                    schedule.solve(values, z);
+                    true
+                } else {
                     // a row exchange is needed: the general LU on the matrix afresh
-                    self.matrix.evaluate(varying, &mut self.values);
-                    for &(k, m) in &self.mass {
-                        self.values[k].re -= w2 * m;
-                    }
-                    let ok = lu::factor(&mut self.values, n, pivots);
+                    Self::assemble(matrix, mass, varying, w2, values);
+                    let n = schedule.len();
+                    let ok = lu::factor(values, n, pivots);
                     if ok {
-                        lu::solve(&self.values, n, pivots, z);
+                        lu::solve(values, n, pivots, z);
                     }
                     ok
-                } else {
-                    schedule.solve(&self.values, z);
-                    true
                 }
             }
-            Factor::Sparse(s) => s.factor(&self.values) && s.solve(z),
+            Factor::Sparse(s) => {
+                let solved = match s.factor(values) {
+                    Pivots::Kept => s.solve(values, z),
+                    Pivots::Failed => false,
+                    Pivots::Exceeded => {
+                        // checked against E itself, refined, or refused
+                        Self::assemble(matrix, mass, varying, w2, original);
+                        s.solve_refined(values, original, z)
+                    }
+                };
+                if !solved {
+                    // faer's pivoting LU on the matrix afresh
+                    rhs.evaluate(varying, z);
+                    Self::assemble(matrix, mass, varying, w2, values);
+                }
+                solved || (s.factor_pivoting(values) && s.solve(values, z))
+            }
         };
         if !solved {
             return None;
@@ -578,7 +625,15 @@ impl Reference {
             Input::Force(force) => c64::new(force.as_slice().get(i).copied().unwrap_or(0.0), 0.0),
             Input::Displacement(s) => -(0..ns).map(|k| pc(i, n + k) * s[k]).sum::<c64>(),
         });
-        let x = a.partial_piv_lu().solve(&rhs);
+        // one step of iterative refinement in working precision (Higham, Accuracy and
+        // Stability of Numerical Algorithms, §12.2): the solution becomes componentwise
+        // backward stable, so the reference's rounding is that of its backward error and
+        // not of the pivoting LU's growth (which reached 1e-12 of the noise of a point on
+        // quad-v5's test mass, whose own per-term sum agreed with the refined value)
+        let lu = a.partial_piv_lu();
+        let mut x = lu.solve(&rhs);
+        let residual = &rhs - &a * &x;
+        x += lu.solve(&residual);
         for (i, zi) in z.iter_mut().enumerate() {
             *zi = x[(i, 0)];
         }

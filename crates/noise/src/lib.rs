@@ -175,10 +175,24 @@ pub fn thermal_noise_with(
     let input = Input::Force(v.clone());
     let output = Output::Displacement(v.clone());
     let mut sweep = Sweep::new(model, damping, &input, &output, options.solver)?;
+    // a tag without damping, or whose loss is the constant zero, never dissipates: its form
+    // stays empty, so its products are neither computed nor summed per frequency
+    let lossy: Vec<bool> = model
+        .by_tag
+        .iter()
+        .map(|(name, _)| {
+            damping
+                .get(name)
+                .is_some_and(|d| d.imag.as_const() != Some(0.0))
+        })
+        .collect();
     // per-tag forms over the solved unknowns, from the tags' values on the pattern
     let mut tag_forms = Forms::default();
-    for (_, values) in &model.by_tag {
+    for ((_, values), &lossy) in model.by_tag.iter().zip(&lossy) {
         tag_forms.begin();
+        if !lossy {
+            continue;
+        }
         for (slot, &p) in values.iter().enumerate() {
             let (r, c) = model.pattern.position(slot);
             if let (Some(i), Some(j), true) = (sweep.local(r), sweep.local(c), p != 0.0) {
@@ -194,14 +208,16 @@ pub fn thermal_noise_with(
     let mut term_tags = Vec::new();
     if per_term {
         for t in &model.terms {
-            term_tags.push(
-                model
-                    .by_tag
-                    .iter()
-                    .position(|(name, _)| *name == t.tag)
-                    .unwrap_or(0),
-            );
+            let tag = model
+                .by_tag
+                .iter()
+                .position(|(name, _)| *name == t.tag)
+                .unwrap_or(0);
+            term_tags.push(tag);
             term_forms.begin();
+            if !lossy.get(tag).copied().unwrap_or(true) {
+                continue;
+            }
             let m = t.positions.len();
             for (a, &pa) in t.positions.iter().enumerate() {
                 for (b, &pb) in t.positions.iter().enumerate() {
