@@ -705,7 +705,8 @@ impl StageResult {
             .bodies
             .get(body)?
             .frame
-            .jacobian(&self.assembled.equilibrium.coords, point);
+            .try_jacobian(&self.assembled.equilibrium.coords, point)
+            .ok()?;
         let d = direction.normalize();
         let layout = &self.assembled.layout;
         let along = |ids: &[usize]| {
