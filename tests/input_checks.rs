@@ -317,3 +317,28 @@ fn mass_and_inertia_ratios_past_what_doubles_resolve_are_refused_naming_the_body
         .and_then(|c| c.build());
     assert!(within.is_ok());
 }
+
+#[test]
+fn wires_stiffer_than_1e12_times_their_pendulum_stiffness_are_refused() {
+    // k l / T = l0 / (l − l0) at the equilibrium: for the double pendulum's steel wires
+    // (T ≈ 785 N and 392 N, E A = 2.12e11 × π (5e-4)² N) about 2e5 nominal, so E × 1e12 is
+    // past the limit and E × 1e4 well within it
+    use pendkit::dynamics::DynamicsError;
+    let run = |set: &str| {
+        let (system, _) = Case::model("double-pendulum")
+            .unwrap()
+            .with_sets(&[set.to_string()])
+            .unwrap()
+            .build()
+            .unwrap();
+        run_stage(system, Stage::S2)
+    };
+    match run("E_wire=scale(1e12)") {
+        Err(pendkit::Error::Dynamics(DynamicsError::StiffWire { wire, ratio, .. })) => {
+            assert!(wire.starts_with("wire"), "{wire}");
+            assert!(ratio > 1e12 && ratio < 1e16, "{ratio}");
+        }
+        other => panic!("{:?}", other.map(|_| ())),
+    }
+    assert!(run("E_wire=scale(1e4)").is_ok());
+}

@@ -169,6 +169,16 @@ pub struct SystemBuilder {
     spring_names: HashSet<String>,
 }
 
+/// A number for an error message: as written when of ordinary size, in exponent form when
+/// huge or tiny (a value of 1e300 is not printed as 300 digits).
+fn readable(v: f64) -> String {
+    if v == 0.0 || (1e-4..1e6).contains(&v.abs()) {
+        v.to_string()
+    } else {
+        format!("{v:e}")
+    }
+}
+
 /// `item` is formatted only for the error.
 fn check_finite(
     item: impl std::fmt::Display,
@@ -414,7 +424,7 @@ impl SystemBuilder {
                 item,
                 message: format!(
                     "zero-length wire: unstretched length {} m must be positive",
-                    spec.unstretched_length
+                    readable(spec.unstretched_length)
                 ),
             });
         }
@@ -424,7 +434,7 @@ impl SystemBuilder {
                 item,
                 message: format!(
                     "stiffness {} N/m must be positive (check the wire's radius, Young's modulus and length)",
-                    spec.stiffness
+                    readable(spec.stiffness)
                 ),
             });
         }
@@ -806,11 +816,7 @@ pub fn shear_modulus(
             item: item.to_string(),
             message: format!(
                 "Poisson's ratio {} must lie in (-1, 0.5) for an isotropic material",
-                if poisson_ratio.abs() < 1e6 {
-                    poisson_ratio.to_string()
-                } else {
-                    format!("{poisson_ratio:e}")
-                }
+                readable(poisson_ratio)
             ),
         })
     }

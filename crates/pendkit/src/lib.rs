@@ -565,6 +565,7 @@ pub fn run_stage_with(
     }
     pendkit_energy::check_registrations()?;
     let assembled = assemble_with(&system, stage, &options.assembly, times.as_deref_mut())?;
+    pendkit_dynamics::validate::check_wire_stretch(&system, &assembled.equilibrium.coords)?;
     let model = timed(&mut times, "stage-model", 1, || {
         StageModel::new(&system, &assembled)
     });
@@ -670,9 +671,13 @@ impl StageResult {
                 }
             };
             let (p, d) = (nums(point, "point")?, nums(dir, "direction")?);
-            if !(d.norm() > 0.0 && d.norm().is_finite()) {
+            // scaled by its largest component first: a tiny or huge (finite) direction
+            // would otherwise underflow or overflow in its norm
+            let largest = d.amax();
+            if largest == 0.0 {
                 return Err(bad("the direction is zero"));
             }
+            let d = d / largest;
             let b = self.system.body(body).ok_or_else(|| Error::Name {
                 name: spec.to_string(),
                 message: format!(
