@@ -428,6 +428,9 @@ fn wires_whose_stretch_is_lost_in_rounding_are_refused_not_read_as_neutral_modes
             &["wire '", "pendulum stiffness", "1e12"],
         );
     }
+    // a massless test mass leaves its fibres without tension: refused for the missing
+    // inertia (what the user changed), not for the fibres' stiffness ratio
+    refused(&["modes", "quad", "--set", "m3=0"], &["x3", "no inertia"]);
     // r_wire × 1e4 (k l / T ≈ 4e10) still answers, stating its accuracy
     let (ok, stdout, stderr) = pendkit(&["modes", "double-pendulum", "--set", "r_wire=scale(1e4)"]);
     assert!(ok, "{stderr}");

@@ -565,7 +565,6 @@ pub fn run_stage_with(
     }
     pendkit_energy::check_registrations()?;
     let assembled = assemble_with(&system, stage, &options.assembly, times.as_deref_mut())?;
-    pendkit_dynamics::validate::check_wire_stretch(&system, &assembled.equilibrium.coords)?;
     let model = timed(&mut times, "stage-model", 1, || {
         StageModel::new(&system, &assembled)
     });
@@ -601,6 +600,9 @@ pub fn run_stage_with(
             modes
         }
     };
+    // after the modes, so that a model the modes refuse outright (a massless body, whose
+    // wires then carry no tension) is refused for that
+    pendkit_dynamics::validate::check_wire_stretch(&system, &assembled.equilibrium.coords)?;
     let stability = timed(&mut times, "stability", 1, || {
         let floats = runaway_floats(&model, &system.damping, Some(&rounding))?;
         let inverted = inverted_bodies(&system, &assembled.equilibrium.coords);
