@@ -403,9 +403,15 @@ fn mass_and_inertia_ratios_past_1e12_are_refused_not_read_as_neutral_modes() {
         &["modes", "quad", "--set", "I3x=1e-30"],
         &["testmass", "moment of inertia", "1e12"],
     );
-    // within the limit (ratio 4e10) the modes answer, with their accuracy where it is
-    // worse than 1e-6
-    let (ok, stdout, stderr) = pendkit(&["modes", "quad", "--set", "m3=1e-9"]);
+    // m3 = 1e-9 kg passes the mass check (ratio 4e10) but its fibres then hold 1e-8 N,
+    // stretched by 2.8e-13 of their length: k l / T = 3.6e12, past the wire limit
+    refused(
+        &["modes", "quad", "--set", "m3=1e-9"],
+        &["wire 'f1'", "pendulum stiffness"],
+    );
+    // within both limits (mass ratio 4e7; the fibres, holding 1e-5 N, at k l / T ≈ 4e9)
+    // the modes answer, with their accuracy where it is worse than 1e-6
+    let (ok, stdout, stderr) = pendkit(&["modes", "quad", "--set", "m3=1e-6"]);
     assert!(ok, "{stderr}");
     assert!(
         !stdout.contains("neutral") && !stdout.contains("NaN"),
