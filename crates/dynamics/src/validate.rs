@@ -41,7 +41,7 @@ pub fn check_wire_stretch(system: &System, x_eq: &[f64]) -> Result<(), DynamicsE
         let l0 = wire.unstretched_length;
         let stretch = (p1 - p0).norm() - l0;
         let ratio = l0 / stretch.abs();
-        if !(ratio <= MAX_WIRE_STIFFNESS_RATIO) {
+        if ratio.is_nan() || ratio > MAX_WIRE_STIFFNESS_RATIO {
             return Err(DynamicsError::StiffWire {
                 wire: wire.name.clone(),
                 strain: stretch / l0,
