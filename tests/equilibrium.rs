@@ -20,7 +20,7 @@ fn net_forces(system: &System, x: &[f64]) -> Vec<f64> {
     let reference = Reference { system, coords: x };
     for kind in registry() {
         for term in kind.terms(&reference).unwrap() {
-            let d = term.derivatives(x);
+            let d = term.derivatives(x).unwrap();
             for (a, &i) in term.coords.iter().enumerate() {
                 g[i] += d.gradient[a];
             }

@@ -201,3 +201,144 @@ fn named_points_on_the_support_carry_the_support_motion() {
     let free = r.transfer("support@0,0,0/1,0,0", "x1", &[0.01]).unwrap()[0];
     assert!((h - free).norm() <= 1e-12, "{h} vs {free}");
 }
+
+#[test]
+fn terms_given_a_short_coordinate_vector_are_errors_not_panics() {
+    // every public Term entry that reads the full coordinate vector checks its length
+    // once; the quad's first wire-stretch term reads coordinates far past index 3
+    use pendkit_energy::{EnergyError, Reference, find_kind};
+    let (system, _) = Case::model("quad").unwrap().build().unwrap();
+    let x = system.start();
+    let terms = find_kind("wire-stretch")
+        .unwrap()
+        .terms(&Reference {
+            system: &system,
+            coords: &x,
+        })
+        .unwrap();
+    let term = &terms[0];
+    let short = &x[..3];
+    assert!(term.needs() > 3 && term.needs() <= x.len());
+    let is_length = |e: EnergyError| matches!(e, EnergyError::Length { given: 3, .. });
+    assert!(is_length(term.local(short).unwrap_err()));
+    assert!(is_length(term.energy(short).unwrap_err()));
+    assert!(is_length(term.derivatives(short).unwrap_err()));
+    assert!(is_length(term.reference_derivatives(short).unwrap_err()));
+    assert!(is_length(term.hessians(short, true).unwrap_err()));
+    assert!(is_length(term.tension_off(short).err().unwrap()));
+    // the full vector works
+    assert!(term.energy(&x).unwrap().is_finite());
+    assert_eq!(term.local(&x).unwrap().len(), term.coords.len());
+}
+
+#[test]
+fn assembly_of_a_hand_built_system_with_out_of_range_ids_is_an_error() {
+    // A System's fields are public, so a hand-built one can name bodies and coordinates
+    // that do not exist: every assembly entry refuses it before indexing anything.
+    use pendkit_assembly::{AssemblyError, Layout, assemble_at, mass_matrix, solve_equilibrium};
+    use pendkit_energy::EnergyError;
+    let (system, _) = Case::model("pendulum").unwrap().build().unwrap();
+    let good = solve_equilibrium(&system, &Default::default()).unwrap();
+    let is_index = |e: AssemblyError| matches!(e, AssemblyError::Energy(EnergyError::Index { .. }));
+    // a wire end on a body past the end of the list
+    let mut bad = system.clone();
+    bad.wires[0].ends[1].body = bad.bodies.len();
+    assert!(is_index(
+        solve_equilibrium(&bad, &Default::default()).unwrap_err()
+    ));
+    assert!(is_index(
+        assemble_at(&bad, Stage::S2, good.clone()).unwrap_err()
+    ));
+    // a body posed by coordinates the system does not have
+    let mut bad = system.clone();
+    bad.coords.truncate(1);
+    assert!(is_index(
+        solve_equilibrium(&bad, &Default::default()).unwrap_err()
+    ));
+    // an output reading a coordinate that does not exist
+    let mut bad = system.clone();
+    bad.outputs.push(pendkit_energy::NamedSignal {
+        name: "ghost".into(),
+        force: false,
+        terms: vec![(1.0, pendkit_energy::SignalTerm::Coordinate(99))],
+    });
+    assert!(is_index(
+        solve_equilibrium(&bad, &Default::default()).unwrap_err()
+    ));
+    // an equilibrium, and a mass-matrix point, of the wrong length
+    let mut short = good.clone();
+    short.coords.pop();
+    assert!(matches!(
+        assemble_at(&system, Stage::S2, short).unwrap_err(),
+        AssemblyError::Length { .. }
+    ));
+    let layout = Layout::new(&system);
+    assert!(matches!(
+        mass_matrix(&system, &layout, &good.coords[1..]).unwrap_err(),
+        AssemblyError::Length { .. }
+    ));
+    // a layout of another system
+    let other = Layout::new(&Case::model("quad").unwrap().build().unwrap().0);
+    assert!(mass_matrix(&system, &other, &good.coords).is_err());
+    // and the real thing still works
+    assert!(mass_matrix(&system, &layout, &good.coords).is_ok());
+    assert!(assemble_at(&system, Stage::S2, good).is_ok());
+}
+
+#[test]
+fn mass_and_inertia_ratios_past_what_doubles_resolve_are_refused_naming_the_body() {
+    // MAX_INERTIA_RATIO is 1e12: the quad's heaviest masses are 39.6 kg and its largest
+    // principal moment 0.4558 kg m^2 (quad.toml), so m3 = 1e-20 kg and I3x = 1e-30 kg m^2
+    // are far past it, m3 = 1e-9 kg (ratio 4e10) is within it.
+    let refused = |set: &str| {
+        let e = Case::model("quad")
+            .unwrap()
+            .with_sets(&[set.to_string()])
+            .and_then(|c| c.build())
+            .map(|_| ())
+            .unwrap_err()
+            .to_string();
+        assert!(!e.contains('\n'), "{e}");
+        e
+    };
+    for (set, body) in [
+        ("m3=1e-300", "testmass"),
+        ("m3=1e-20", "testmass"),
+        ("I3x=1e-30", "testmass"),
+    ] {
+        let e = refused(set);
+        assert!(e.contains(body) && e.contains("1e12"), "{set}: {e}");
+    }
+    assert!(refused("m3=1e-20").contains("mass"));
+    assert!(refused("I3x=1e-30").contains("moment of inertia"));
+    let within = Case::model("quad")
+        .unwrap()
+        .with_sets(&["m3=1e-9".to_string()])
+        .and_then(|c| c.build());
+    assert!(within.is_ok());
+}
+
+#[test]
+fn wires_stiffer_than_1e12_times_their_pendulum_stiffness_are_refused() {
+    // k l / T = l0 / (l − l0) at the equilibrium: for the double pendulum's steel wires
+    // (T ≈ 785 N and 392 N, E A = 2.12e11 × π (5e-4)² N) about 2e5 nominal, so E × 1e12 is
+    // past the limit and E × 1e4 well within it
+    use pendkit::dynamics::DynamicsError;
+    let run = |set: &str| {
+        let (system, _) = Case::model("double-pendulum")
+            .unwrap()
+            .with_sets(&[set.to_string()])
+            .unwrap()
+            .build()
+            .unwrap();
+        run_stage(system, Stage::S2)
+    };
+    match run("E_wire=scale(1e12)") {
+        Err(pendkit::Error::Dynamics(DynamicsError::StiffWire { wire, ratio, .. })) => {
+            assert!(wire.starts_with("wire"), "{wire}");
+            assert!(ratio > 1e12 && ratio < 1e16, "{ratio}");
+        }
+        other => panic!("{:?}", other.map(|_| ())),
+    }
+    assert!(run("E_wire=scale(1e4)").is_ok());
+}

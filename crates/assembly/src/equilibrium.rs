@@ -112,7 +112,8 @@ fn hessian_sum(ev: &Evaluator, slot: &[Option<usize>], out: &mut Evaluation) {
 }
 
 fn total_energy(terms: &[Term], x: &[f64]) -> f64 {
-    terms.iter().map(|t| t.energy(x)).sum()
+    // every term reads coordinates of `x` (checked at the entry); NaN would end the search
+    terms.iter().map(|t| t.energy(x).unwrap_or(f64::NAN)).sum()
 }
 
 /// Solves (H + μ D) dx = -g with the smallest μ (from 0 up) for which the shifted matrix is
@@ -149,6 +150,24 @@ pub fn find_equilibrium(
     start: &[f64],
     options: &EquilibriumOptions,
 ) -> Result<Equilibrium, AssemblyError> {
+    system.check_indices()?;
+    let n = system.coords.len();
+    if start.len() != n {
+        return Err(AssemblyError::Length {
+            function: "find_equilibrium",
+            argument: "start",
+            expected: n,
+            given: start.len(),
+        });
+    }
+    if let Some(t) = terms.iter().find(|t| t.needs() > n) {
+        return Err(AssemblyError::Energy(pendkit_energy::EnergyError::Index {
+            item: format!("term '{}'", t.label),
+            what: "coordinate",
+            index: t.needs() - 1,
+            len: n,
+        }));
+    }
     let mut evaluator = Evaluator::new(system, DerivativePath::Fast);
     evaluator.extend(terms.iter().cloned());
     newton(&mut evaluator, system, start, options)

@@ -10,8 +10,8 @@ use std::collections::HashMap;
 use std::time::{Duration, Instant};
 
 use pendkit_energy::{
-    Derivatives, FrameAt, JetPoint, OffForm, OffHessian, PartOff, Scratch, System, TensionOff,
-    Term, on_stack,
+    Derivatives, FrameAt, JetPoint, LocalDerivatives, OffForm, OffHessian, PartOff, Scratch,
+    System, TensionOff, Term, on_stack,
 };
 use pendkit_geometry::{FrameJet, JetOrder};
 
@@ -242,10 +242,12 @@ impl<'s> Evaluator<'s> {
     /// and Hessians at one point share it).
     pub(crate) fn jet(&mut self, b: usize) -> &FrameJet {
         if !self.jet_ready[b] {
-            self.system.bodies[b]
+            // cannot fail: the point has one entry per coordinate and the assembly checked
+            // the system's indices at its entry
+            self.jet_ready[b] = self.system.bodies[b]
                 .frame
-                .jet(&self.point, JetOrder::Second, &mut self.jets[b]);
-            self.jet_ready[b] = true;
+                .jet(&self.point, JetOrder::Second, &mut self.jets[b])
+                .is_ok();
         }
         &self.jets[b]
     }
@@ -269,12 +271,11 @@ impl<'s> Evaluator<'s> {
                 if let Some(frames) = self.terms[t].frames() {
                     for &b in &frames.bodies {
                         if !self.jet_ready[b] {
-                            self.system.bodies[b].frame.jet(
-                                &self.point,
-                                JetOrder::Second,
-                                &mut self.jets[b],
-                            );
-                            self.jet_ready[b] = true;
+                            // cannot fail, as in `Evaluator::jet`
+                            self.jet_ready[b] = self.system.bodies[b]
+                                .frame
+                                .jet(&self.point, JetOrder::Second, &mut self.jets[b])
+                                .is_ok();
                         }
                     }
                 }
@@ -359,7 +360,15 @@ impl<'s> Evaluator<'s> {
         for &(t, part) in group.members.iter() {
             let term = &self.terms[t];
             if !already {
-                let d = term.reference_derivatives(&self.point);
+                // the point has one entry per coordinate, which the terms read; were it not
+                // so, NaN here makes the search stop with `NotFinite`
+                let d =
+                    term.reference_derivatives(&self.point)
+                        .unwrap_or_else(|_| LocalDerivatives {
+                            value: f64::NAN,
+                            gradient: vec![f64::NAN; n],
+                            hessian: vec![f64::NAN; n * n],
+                        });
                 self.values[group.value_at + part] = d.value;
                 let at = group.gradient_at + part * n;
                 self.gradients[at..at + n].copy_from_slice(&d.gradient);
@@ -373,13 +382,16 @@ impl<'s> Evaluator<'s> {
                 group.on[part * n * n..(part + 1) * n * n].copy_from_slice(&d.hessian);
             }
             if hessians {
-                self.reference_off[t] = Some(match term.tension_off(&self.point) {
-                    TensionOff::Unchanged => OffHessian::Same,
-                    TensionOff::Vanishes => OffHessian::Zero,
-                    TensionOff::Replaced(off) => {
-                        OffHessian::Matrix(off.reference_derivatives(&self.point).hessian)
-                    }
-                });
+                // the point has one entry per coordinate, which the terms read
+                self.reference_off[t] = match term.tension_off(&self.point) {
+                    Ok(TensionOff::Unchanged) => Some(OffHessian::Same),
+                    Ok(TensionOff::Vanishes) => Some(OffHessian::Zero),
+                    Ok(TensionOff::Replaced(off)) => off
+                        .reference_derivatives(&self.point)
+                        .ok()
+                        .map(|d| OffHessian::Matrix(d.hessian)),
+                    Err(_) => None,
+                };
             }
         }
     }

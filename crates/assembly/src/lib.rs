@@ -66,6 +66,18 @@ pub enum AssemblyError {
         /// Coordinates there.
         coords: Vec<(String, f64)>,
     },
+    /// A coordinate vector of the wrong length for the system it is used with.
+    #[error("{function}: {argument} has {given} entries, the system has {expected} coordinates")]
+    Length {
+        /// The function called, e.g. `mass_matrix`.
+        function: &'static str,
+        /// The argument of the wrong length.
+        argument: &'static str,
+        /// The system's number of coordinates.
+        expected: usize,
+        /// The length given.
+        given: usize,
+    },
     /// A float moves a body with mass or inertia (floats must be massless).
     #[error("float '{float}' moves body '{body}', which has mass: make it a variable")]
     MassiveFloat {
@@ -301,6 +313,7 @@ fn terms_before(
     path: DerivativePath,
     early: bool,
 ) -> Result<(Evaluator<'_>, Before), AssemblyError> {
+    system.check_indices()?;
     check_plugin_kinds(system)?;
     let start = system.start();
     let shared = SharedBodies::new();
@@ -404,6 +417,12 @@ pub fn assemble_at_with(
     equilibrium: Equilibrium,
     path: DerivativePath,
 ) -> Result<Assembled, AssemblyError> {
+    check_length(
+        system,
+        "assemble_at",
+        "equilibrium.coords",
+        &equilibrium.coords,
+    )?;
     let early = system.early_wire_terms == EarlyWireTerms::Yes;
     let (evaluator, before) = terms_before(system, path, early)?;
     finish(system, stage, evaluator, before, equilibrium, None)
@@ -571,13 +590,66 @@ pub fn mass_matrix(
     layout: &Layout,
     x: &[f64],
 ) -> Result<DMatrix<f64>, AssemblyError> {
+    check_length(system, "mass_matrix", "x", x)?;
+    system.check_indices()?;
+    check_layout(system, layout)?;
     let mut jet = FrameJet::new();
     mass_from(system, layout, |b, columns| {
-        system.bodies[b]
+        // cannot fail: every frame reads coordinates of `x` (checked above)
+        match system.bodies[b]
             .frame
-            .jet(x, pendkit_geometry::JetOrder::First, &mut jet);
-        jet_columns(&jet, &system.bodies[b].centre_of_mass, columns);
+            .jet(x, pendkit_geometry::JetOrder::First, &mut jet)
+        {
+            Ok(()) => jet_columns(&jet, &system.bodies[b].centre_of_mass, columns),
+            Err(_) => columns.clear(),
+        }
     })
+}
+
+/// `x`, argument `argument` of `function`, has one entry per coordinate of `system`.
+fn check_length(
+    system: &System,
+    function: &'static str,
+    argument: &'static str,
+    x: &[f64],
+) -> Result<(), AssemblyError> {
+    if x.len() != system.coords.len() {
+        return Err(AssemblyError::Length {
+            function,
+            argument,
+            expected: system.coords.len(),
+            given: x.len(),
+        });
+    }
+    Ok(())
+}
+
+/// `layout` is one of `system`: a row for every coordinate, and variables of the system.
+fn check_layout(system: &System, layout: &Layout) -> Result<(), AssemblyError> {
+    let n = system.coords.len();
+    if layout.position.len() != n {
+        return Err(AssemblyError::Length {
+            function: "mass_matrix",
+            argument: "layout.position",
+            expected: n,
+            given: layout.position.len(),
+        });
+    }
+    if let Some(&bad) = layout
+        .variables
+        .iter()
+        .chain(&layout.floats)
+        .chain(&layout.parameters)
+        .find(|&&g| g >= n)
+    {
+        return Err(AssemblyError::Energy(EnergyError::Index {
+            item: "layout".into(),
+            what: "coordinate",
+            index: bad,
+            len: n,
+        }));
+    }
+    Ok(())
 }
 
 /// The velocity columns (∂p_com/∂q_i, ω_B per unit rate) of a body from its jet, in the
@@ -602,8 +674,11 @@ fn mass_at(
     mass_from(system, layout, |b, columns| {
         let body = &system.bodies[b];
         if reference {
-            let jac = body.frame.reference_jacobian(x, &body.centre_of_mass);
             columns.clear();
+            // cannot fail: the equilibrium has one entry per coordinate of the checked system
+            let Ok(jac) = body.frame.reference_jacobian(x, &body.centre_of_mass) else {
+                return;
+            };
             columns.extend(body.frame.var_list().iter().map(|&g| {
                 [
                     jac.position.column(g).into_owned(),

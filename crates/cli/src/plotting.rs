@@ -177,7 +177,7 @@ pub fn mode_shape(run: &Run, number: usize) -> Result<ModeShapePlot, CliError> {
         .wires
         .iter()
         .flat_map(|w| [w.top[2], w.bottom[2]])
-        .chain((0..r.system.bodies.len()).map(|b| r.body_centre(b).z))
+        .chain((0..r.system.bodies.len()).filter_map(|b| Some(r.body_centre(b)?.z)))
         .collect();
     let extent = heights.iter().copied().fold(f64::NEG_INFINITY, f64::max)
         - heights.iter().copied().fold(f64::INFINITY, f64::min);

@@ -238,7 +238,8 @@ fn model_section(page: &mut Page, run: &Run) -> Result<(), CliError> {
         .filter(|(_, b)| b.mass > 0.0)
         .map(|(k, b)| {
             let i = b.inertia;
-            let centre = r.body_centre(k);
+            // every body of the model has a centre
+            let centre = r.body_centre(k).unwrap_or_default();
             vec![
                 run.body(&b.name),
                 fixed(b.mass, 4, 0),

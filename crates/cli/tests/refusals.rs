@@ -388,3 +388,106 @@ fn poisson_ratio_outside_its_physical_range_is_refused() {
         &["poisson_ratio", "(-1, 0.5)"],
     );
 }
+
+#[test]
+fn mass_and_inertia_ratios_past_1e12_are_refused_not_read_as_neutral_modes() {
+    // m3 = 1e-300 kg next to the 39.6 kg PUM reported the pendulum modes "neutral" with
+    // exit status 0: the mass matrix spans 4e301, far past what doubles resolve
+    for set in ["m3=1e-300", "m3=1e-20"] {
+        refused(
+            &["modes", "quad", "--set", set],
+            &["testmass", "mass", "1e12"],
+        );
+    }
+    refused(
+        &["modes", "quad", "--set", "I3x=1e-30"],
+        &["testmass", "moment of inertia", "1e12"],
+    );
+    // m3 = 1e-9 kg passes the mass check (ratio 4e10) but its fibres then hold 1e-8 N,
+    // stretched by 2.8e-13 of their length: k l / T = 3.6e12, past the wire limit
+    refused(
+        &["modes", "quad", "--set", "m3=1e-9"],
+        &["wire 'f1'", "pendulum stiffness"],
+    );
+    // within both limits (mass ratio 4e7; the fibres, holding 1e-5 N, at k l / T ≈ 4e9)
+    // the modes answer, with their accuracy where it is worse than 1e-6
+    let (ok, stdout, stderr) = pendkit(&["modes", "quad", "--set", "m3=1e-6"]);
+    assert!(ok, "{stderr}");
+    assert!(
+        !stdout.contains("neutral") && !stdout.contains("NaN"),
+        "{stdout}"
+    );
+}
+
+#[test]
+fn wires_whose_stretch_is_lost_in_rounding_are_refused_not_read_as_neutral_modes() {
+    // E_wire × 1e16 left the wires' static stretch (T/k ≈ 1e-19 m) below the rounding of
+    // their lengths (1e-16 m), and the pendulum modes came out "neutral" with exit status
+    // 0; the check refuses past k l / T = 1e12
+    for (model, set) in [
+        ("double-pendulum", "E_wire=scale(1e16)"),
+        ("double-pendulum", "r_wire=scale(1e5)"),
+        ("quad", "Y3=scale(1e16)"),
+    ] {
+        refused(
+            &["modes", model, "--set", set],
+            &["wire '", "pendulum stiffness", "1e12"],
+        );
+    }
+    // a massless test mass leaves its fibres without tension: refused for the missing
+    // inertia (what the user changed), not for the fibres' stiffness ratio
+    refused(&["modes", "quad", "--set", "m3=0"], &["x3", "no inertia"]);
+    // r_wire × 1e4 (k l / T ≈ 4e10) still answers, stating its accuracy
+    let (ok, stdout, stderr) = pendkit(&["modes", "double-pendulum", "--set", "r_wire=scale(1e4)"]);
+    assert!(ok, "{stderr}");
+    assert!(
+        stdout.contains("accuracy") && !stdout.contains("neutral"),
+        "{stdout}"
+    );
+}
+
+#[test]
+fn point_directions_of_tiny_or_huge_size_are_normalised_not_called_zero() {
+    // 1e-300 along x underflowed in the norm and was refused as "the direction is zero";
+    // the same direction scaled gives the same transfer function
+    let tf = |dir: &str| {
+        let (ok, stdout, stderr) = pendkit(&[
+            "tf",
+            "quad",
+            "--input",
+            "x00",
+            "--output",
+            &format!("testmass@0,0,0/{dir}"),
+            "--freqs",
+            "1",
+            "--csv",
+        ]);
+        assert!(ok, "{dir}: {stderr}");
+        finite_csv(&stdout);
+        stdout.lines().nth(1).unwrap().to_string()
+    };
+    let unit = tf("1,0,0");
+    assert_eq!(tf("1e-300,0,0"), unit);
+    assert_eq!(tf("1e300,0,0"), unit);
+    refused(
+        &[
+            "tf",
+            "quad",
+            "--input",
+            "x00",
+            "--output",
+            "testmass@0,0,0/0,0,0",
+        ],
+        &["direction is zero"],
+    );
+}
+
+#[test]
+fn huge_lengths_in_errors_are_printed_in_exponent_form() {
+    // g = 1e300 gave an unstretched length printed as 300 digits
+    let e = refused(
+        &["modes", "quad", "--set", "g=1e300"],
+        &["unstretched length", "e"],
+    );
+    assert!(e.len() < 300, "{e}");
+}

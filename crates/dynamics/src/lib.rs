@@ -78,6 +78,18 @@ pub enum DynamicsError {
         /// The value given (Hz).
         f_hz: f64,
     },
+    /// A wire so stiff that its static stretch is lost in the rounding of its length.
+    #[error(
+        "wire '{wire}': stretched by {strain:.1e} of its length, its stiffness is {ratio:.1e} times its pendulum stiffness T/l: beyond the ratio 1e12 that double precision resolves (its tension would carry a relative error of about 2.2e-16 x ratio)"
+    )]
+    StiffWire {
+        /// The wire.
+        wire: String,
+        /// Its static strain (l − l0) / l0 at the equilibrium.
+        strain: f64,
+        /// k l0 / |T| = l0 / |l − l0|.
+        ratio: f64,
+    },
     /// A frequency grid with more points than allowed.
     #[error("{0} frequencies: at most 1000000 points per grid")]
     TooManyPoints(usize),

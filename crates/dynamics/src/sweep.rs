@@ -75,7 +75,9 @@ impl Coefficient {
     fn at(&self, f_hz: f64) -> f64 {
         match self {
             Coefficient::Constant(x) => *x,
-            Coefficient::OfFrequency(e) => e.eval(&[f_hz]),
+            // an expression of f alone (`TagDamping`); NaN otherwise, refused by the
+            // damping check every sweep makes first
+            Coefficient::OfFrequency(e) => e.eval(&[f_hz]).unwrap_or(f64::NAN),
         }
     }
 
@@ -83,7 +85,11 @@ impl Coefficient {
     fn over(&self, freqs: &[f64], out: &mut [f64]) {
         match self {
             Coefficient::Constant(x) => out.fill(*x),
-            Coefficient::OfFrequency(e) => e.eval_points(&[freqs], out),
+            Coefficient::OfFrequency(e) => {
+                if e.eval_points(&[freqs], out).is_err() {
+                    out.fill(f64::NAN);
+                }
+            }
         }
     }
 }

@@ -1,8 +1,8 @@
 //! Checks of what a calculation is given before it runs: frequencies within documented
-//! limits, and damping multipliers that are finite with a non-negative loss at every
-//! frequency used.
+//! limits, damping multipliers that are finite with a non-negative loss at every frequency
+//! used, and wires whose static stretch double precision resolves.
 
-use pendkit_energy::Damping;
+use pendkit_energy::{Damping, System};
 
 use crate::DynamicsError;
 
@@ -13,6 +13,49 @@ pub const MIN_FREQUENCY: f64 = 1e-9;
 /// Highest frequency (Hz) any calculation accepts (ω² stays far from overflow, and no
 /// suspension has dynamics there).
 pub const MAX_FREQUENCY: f64 = 1e9;
+
+/// Largest ratio of a wire's axial stiffness k to its pendulum stiffness T/l (T its
+/// tension, l its length) that a calculation accepts: l0 / |l − l0| at the equilibrium.
+///
+/// The tension is k (l − l0), a difference of two lengths each rounded to ε l (ε = 2.2e-16),
+/// so it carries a relative error of about ε l / |l − l0| = ε × ratio: 2e-4 at 1e12 (the
+/// range issue 11 states for stiffness ratios); past 1/ε ≈ 4.5e15 the tension, and with it
+/// the pendulum stiffness of every stage below, is rounding noise, and modes read from it
+/// come out "neutral" or at any frequency.
+pub const MAX_WIRE_STIFFNESS_RATIO: f64 = 1e12;
+
+/// Every wire of `system` is stretched at the equilibrium `x_eq` by more than
+/// 1/[`MAX_WIRE_STIFFNESS_RATIO`] of its unstretched length, or a one-line error naming the
+/// first that is not, its strain and its ratio (not checked without gravity, g = 0).
+pub fn check_wire_stretch(system: &System, x_eq: &[f64]) -> Result<(), DynamicsError> {
+    // Without gravity nothing loads the wires: a zero stretch is then exact (a fibre is a
+    // plain cantilever), not a tension lost in rounding.
+    if system.gravity == 0.0 {
+        return Ok(());
+    }
+    for wire in &system.wires {
+        let end = |k: usize| {
+            let e = &wire.ends[k];
+            let body = system.bodies.get(e.body)?;
+            Some(body.frame.try_eval(x_eq).ok()?.point(&e.point))
+        };
+        // ends that cannot be placed were refused by the assembly already
+        let (Some(p0), Some(p1)) = (end(0), end(1)) else {
+            continue;
+        };
+        let l0 = wire.unstretched_length;
+        let stretch = (p1 - p0).norm() - l0;
+        let ratio = l0 / stretch.abs();
+        if ratio.is_nan() || ratio > MAX_WIRE_STIFFNESS_RATIO {
+            return Err(DynamicsError::StiffWire {
+                wire: wire.name.clone(),
+                strain: stretch / l0,
+                ratio,
+            });
+        }
+    }
+    Ok(())
+}
 
 /// Most points a frequency grid may have.
 pub const MAX_POINTS: usize = 1_000_000;

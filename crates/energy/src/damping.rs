@@ -15,10 +15,13 @@ pub struct TagDamping {
 }
 
 impl TagDamping {
-    /// The multiplier (ε', ε'') at frequency `f_hz`.
+    /// The multiplier (ε', ε'') at frequency `f_hz`. Both are expressions of `f` alone;
+    /// one that reads more variables gives NaN, which every calculation refuses
+    /// (`pendkit_dynamics::check_damping`).
     pub fn at(&self, f_hz: f64) -> (f64, f64) {
         let f = [f_hz];
-        (self.real.eval(&f), self.imag.eval(&f))
+        let value = |e: &Compiled| e.eval(&f).unwrap_or(f64::NAN);
+        (value(&self.real), value(&self.imag))
     }
 }
 

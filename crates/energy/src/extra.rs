@@ -14,7 +14,8 @@ struct ExpressionEnergy {
 
 impl Potential for ExpressionEnergy {
     fn energy<D: Real>(&self, x: &[D]) -> D {
-        self.energy.eval(x)
+        // compiled over the term's own coordinates, which `x` holds
+        self.energy.eval(x).unwrap_or(D::from(f64::NAN))
     }
 }
 

@@ -5,6 +5,7 @@
 //! the general fallback that differentiates an energy written over frames by hyper-dual
 //! numbers whose frames are taken from the jets instead of re-evaluating pose expressions.
 
+use crate::EnergyError;
 use nalgebra::{Matrix3, Vector3};
 use num_dual::HyperDual64;
 use pendkit_geometry::{Frame, FrameJet};
@@ -134,18 +135,64 @@ impl Attached<'_> {
     }
 }
 
+/// One more than the highest local coordinate `frame` maps to, checked against the
+/// length `given` of `function`'s argument `argument` (one check per call, so the loops
+/// below read without checks of their own).
+fn check_local(
+    frame: &FrameAt,
+    function: &'static str,
+    argument: &'static str,
+    given: usize,
+) -> Result<(), EnergyError> {
+    let expected = frame.local.iter().max().map_or(0, |&l| l + 1);
+    if given < expected {
+        return Err(EnergyError::Length {
+            function,
+            argument,
+            expected,
+            given,
+        });
+    }
+    Ok(())
+}
+
 /// Adds `sign` times the Jacobian of an attached vector over the local coordinates into
-/// `columns` (one 3-vector per local coordinate).
-pub fn add_jacobian(frame: &FrameAt, what: Attached, sign: f64, columns: &mut [Vector3<f64>]) {
+/// `columns` (one 3-vector per local coordinate); `columns` shorter than the frame's local
+/// coordinates is an error (and nothing is added).
+pub fn add_jacobian(
+    frame: &FrameAt,
+    what: Attached,
+    sign: f64,
+    columns: &mut [Vector3<f64>],
+) -> Result<(), EnergyError> {
+    check_local(frame, "add_jacobian", "columns", columns.len())?;
     for (i, &l) in frame.local.iter().enumerate() {
         columns[l] += what.first(frame.jet, i) * sign;
     }
+    Ok(())
 }
 
 /// Adds Σ_k w_k ∂²v_k/∂q_a∂q_b of an attached vector v into the n × n matrix `h`
 /// (row-major): the "gradient times second derivative of the input" half of the chain
 /// rule H = Jᵀ H_in J + Σ_k g_k ∇²in_k, with `w` the energy's gradient with respect to v.
-pub fn add_curvature(frame: &FrameAt, what: Attached, w: &Vector3<f64>, h: &mut [f64], n: usize) {
+/// An `n` that leaves out a local coordinate of the frame, or an `h` shorter than n × n, is
+/// an error (and nothing is added).
+pub fn add_curvature(
+    frame: &FrameAt,
+    what: Attached,
+    w: &Vector3<f64>,
+    h: &mut [f64],
+    n: usize,
+) -> Result<(), EnergyError> {
+    check_local(frame, "add_curvature", "n", n)?;
+    if h.len() < n * n {
+        return Err(EnergyError::Length {
+            function: "add_curvature",
+            argument: "h (n x n, row-major)",
+            expected: n * n,
+            given: h.len(),
+        });
+    }
     let local = frame.local;
     for (i, &a) in local.iter().enumerate() {
         for (j, &b) in local.iter().enumerate().skip(i) {
@@ -156,6 +203,7 @@ pub fn add_curvature(frame: &FrameAt, what: Attached, w: &Vector3<f64>, h: &mut 
             }
         }
     }
+    Ok(())
 }
 
 /// Most energy parts a hyper-dual fallback evaluation handles at once.

@@ -70,4 +70,28 @@ pub enum EnergyError {
         /// What is wrong.
         message: String,
     },
+    /// An index of a hand-built [`System`] past the end of its list.
+    #[error("{item}: {what} index {index} is out of range (the system has {len})")]
+    Index {
+        /// What holds the index, e.g. `wire 'w1'`.
+        item: String,
+        /// "body" or "coordinate".
+        what: &'static str,
+        /// The index.
+        index: usize,
+        /// How many there are.
+        len: usize,
+    },
+    /// A coordinate vector too short for the term it is given to.
+    #[error("{function}: {argument} has {given} entries, the term reads up to index {} (needs {expected})", expected - 1)]
+    Length {
+        /// The function called, e.g. `Term::energy`.
+        function: &'static str,
+        /// The argument that is too short.
+        argument: &'static str,
+        /// The length it needs.
+        expected: usize,
+        /// The length it has.
+        given: usize,
+    },
 }

@@ -414,6 +414,71 @@ impl NameScheme {
 }
 
 impl System {
+    /// Every index the system holds is in range: each body's frame reads only coordinates
+    /// of [`System::coords`], and every wire, spring, plug-in element, constraint and
+    /// named signal refers to an existing body or coordinate. The model builder guarantees
+    /// this; the assembly checks it once at each entry for systems put together by hand, so
+    /// that what follows indexes without checks.
+    pub fn check_indices(&self) -> Result<(), crate::EnergyError> {
+        let (n_coords, n_bodies) = (self.coords.len(), self.bodies.len());
+        let out_of_range = |item: String, what: &'static str, index: usize, len: usize| {
+            Err(crate::EnergyError::Index {
+                item,
+                what,
+                index,
+                len,
+            })
+        };
+        for body in &self.bodies {
+            if body.frame.needs() > n_coords {
+                return out_of_range(
+                    format!("body '{}' (its pose)", body.name),
+                    "coordinate",
+                    body.frame.needs() - 1,
+                    n_coords,
+                );
+            }
+        }
+        let bodies = self
+            .wires
+            .iter()
+            .flat_map(|w| {
+                w.ends
+                    .iter()
+                    .map(move |e| (format!("wire '{}'", w.name), e.body))
+            })
+            .chain(self.springs.iter().flat_map(|s| {
+                s.ends
+                    .iter()
+                    .map(move |e| (format!("spring '{}'", s.name), e.body))
+            }))
+            .chain(self.plugin_elements.iter().flat_map(|p| {
+                p.bodies
+                    .iter()
+                    .map(move |&b| (format!("element '{}'", p.name), b))
+            }));
+        for (item, b) in bodies {
+            if b >= n_bodies {
+                return out_of_range(item, "body", b, n_bodies);
+            }
+        }
+        if let Some((&c, _)) = self.constraint_stiffness.range(n_coords..).next() {
+            return out_of_range("constraint".into(), "coordinate", c, n_coords);
+        }
+        for signal in self.inputs.iter().chain(&self.outputs) {
+            for (_, term) in &signal.terms {
+                let (what, index, len) = match term {
+                    SignalTerm::Coordinate(c) => ("coordinate", *c, n_coords),
+                    SignalTerm::Point { body, .. } => ("body", *body, n_bodies),
+                };
+                if index >= len {
+                    return out_of_range(format!("signal '{}'", signal.name), what, index, len);
+                }
+            }
+        }
+        Ok(())
+    }
+
     /// Index of the coordinate called `name`.
     pub fn coord(&self, name: &str) -> Option<CoordId> {
         self.coords.iter().position(|c| c.name == name)

@@ -15,8 +15,8 @@ use num_dual::HyperDual64;
 use pendkit_geometry::{FrameJet, JetOrder};
 use pendkit_rotations::Real;
 
-use crate::LocalFrames;
 use crate::fast::{Derivatives, FrameAt, JetPoint, OffForm, Scratch, on_stack};
+use crate::{EnergyError, LocalFrames};
 
 /// The energy of one term as a function of its own (local) coordinate vector, written once
 /// for every scalar type.
@@ -317,20 +317,54 @@ impl Term {
         }
     }
 
-    /// This term's coordinates picked out of a full coordinate vector.
-    pub fn local(&self, x_global: &[f64]) -> Vec<f64> {
+    /// The shortest full coordinate vector the term can read: one more than its highest
+    /// global coordinate index.
+    pub fn needs(&self) -> usize {
+        self.coords.iter().max().map_or(0, |&i| i + 1)
+    }
+
+    /// `x_global`, the argument of `function`, covers every coordinate of the term: checked
+    /// once at each public entry so that the reads below need no checks.
+    fn check_length(&self, function: &'static str, x_global: &[f64]) -> Result<(), EnergyError> {
+        let expected = self.needs();
+        if x_global.len() < expected {
+            return Err(EnergyError::Length {
+                function,
+                argument: "x_global (coordinates)",
+                expected,
+                given: x_global.len(),
+            });
+        }
+        Ok(())
+    }
+
+    /// The term's coordinates picked out of `x_global`, which covers them.
+    fn gather(&self, x_global: &[f64]) -> Vec<f64> {
         self.coords.iter().map(|&i| x_global[i]).collect()
     }
 
+    /// This term's coordinates picked out of a full coordinate vector.
+    pub fn local(&self, x_global: &[f64]) -> Result<Vec<f64>, EnergyError> {
+        self.check_length("Term::local", x_global)?;
+        Ok(self.gather(x_global))
+    }
+
     /// Energy (J) at the full coordinate vector `x_global`.
-    pub fn energy(&self, x_global: &[f64]) -> f64 {
-        self.body.value(&self.local(x_global))
+    pub fn energy(&self, x_global: &[f64]) -> Result<f64, EnergyError> {
+        self.check_length("Term::energy", x_global)?;
+        Ok(self.body.value(&self.gather(x_global)))
     }
 
     /// Value, gradient and Hessian over the term's own coordinates, at the full coordinate
     /// vector `x_global`, by one hyper-dual evaluation per entry of the upper triangle: the
     /// reference every fast path is checked against.
-    pub fn reference_derivatives(&self, x_global: &[f64]) -> LocalDerivatives {
+    pub fn reference_derivatives(&self, x_global: &[f64]) -> Result<LocalDerivatives, EnergyError> {
+        self.check_length("Term::reference_derivatives", x_global)?;
+        Ok(self.reference_at(x_global))
+    }
+
+    /// [`Term::reference_derivatives`] at an `x_global` that covers the term.
+    fn reference_at(&self, x_global: &[f64]) -> LocalDerivatives {
         let n = self.coords.len();
         let mut x: Vec<HyperDual64> = self
             .coords
@@ -339,7 +373,7 @@ impl Term {
             .collect();
         let mut parts = Vec::new();
         let mut out = LocalDerivatives {
-            value: self.body.value(&self.local(x_global)),
+            value: self.body.value(&self.gather(x_global)),
             gradient: vec![0.0; n],
             hessian: vec![0.0; n * n],
         };
@@ -363,19 +397,26 @@ impl Term {
     /// Value, gradient and Hessian over the term's own coordinates at `x_global`: by the
     /// term's fast path when it has one (computing its frames' jets here), otherwise by
     /// [`Term::reference_derivatives`].
-    pub fn derivatives(&self, x_global: &[f64]) -> LocalDerivatives {
+    pub fn derivatives(&self, x_global: &[f64]) -> Result<LocalDerivatives, EnergyError> {
+        self.check_length("Term::derivatives", x_global)?;
         let (n, part) = (self.coords.len(), self.body_parts().2);
-        self.standalone_fast(x_global, |b, _| LocalDerivatives {
-            value: b.values[part],
-            gradient: b.gradients[part * n..(part + 1) * n].to_vec(),
-            hessian: b.on[part * n * n..(part + 1) * n * n].to_vec(),
-        })
-        .unwrap_or_else(|| self.reference_derivatives(x_global))
+        Ok(self
+            .standalone_fast(x_global, |b, _| LocalDerivatives {
+                value: b.values[part],
+                gradient: b.gradients[part * n..(part + 1) * n].to_vec(),
+                hessian: b.on[part * n * n..(part + 1) * n * n].to_vec(),
+            })
+            .unwrap_or_else(|| self.reference_at(x_global)))
     }
 
     /// Hessians with the tension on and off at `x_global`, the off term built there, by
     /// the fast path (`fast`) when the term has one, or by the reference path.
-    pub fn hessians(&self, x_global: &[f64], fast: bool) -> (Vec<f64>, OffHessian) {
+    pub fn hessians(
+        &self,
+        x_global: &[f64],
+        fast: bool,
+    ) -> Result<(Vec<f64>, OffHessian), EnergyError> {
+        self.check_length("Term::hessians", x_global)?;
         let (n, part) = (self.coords.len(), self.body_parts().2);
         let read = |b: &Buffers, form: OffForm| {
             let on = b.on[part * n * n..(part + 1) * n * n].to_vec();
@@ -390,16 +431,14 @@ impl Term {
             (on, off)
         };
         if fast && let Some(result) = self.standalone_fast(x_global, read) {
-            return result;
+            return Ok(result);
         }
-        let off = match self.tension_off(x_global) {
+        let off = match self.off_at(x_global) {
             TensionOff::Unchanged => OffHessian::Same,
             TensionOff::Vanishes => OffHessian::Zero,
-            TensionOff::Replaced(t) => {
-                OffHessian::Matrix(t.reference_derivatives(x_global).hessian)
-            }
+            TensionOff::Replaced(t) => OffHessian::Matrix(t.reference_at(x_global).hessian),
         };
-        (self.reference_derivatives(x_global).hessian, off)
+        Ok((self.reference_at(x_global).hessian, off))
     }
 
     /// The tension-off form of a shared body's part (None for a term with its own body).
@@ -441,7 +480,8 @@ impl Term {
             b.x.extend(self.coords.iter().map(|&i| x_global[i]));
             b.jets.resize_with(frames.frames.len(), FrameJet::new);
             for (f, jet) in frames.frames.iter().zip(b.jets.iter_mut()) {
-                f.jet(&b.x, JetOrder::Second, jet);
+                // the local frames read the local vector, which covers them by construction
+                f.jet(&b.x, JetOrder::Second, jet).ok()?;
             }
             for (v, len) in [
                 (&mut b.values, parts),
@@ -479,7 +519,13 @@ impl Term {
     }
 
     /// The term with static tensions switched off, at the equilibrium `x_eq_global`.
-    pub fn tension_off(&self, x_eq_global: &[f64]) -> TensionOff<Term> {
+    pub fn tension_off(&self, x_eq_global: &[f64]) -> Result<TensionOff<Term>, EnergyError> {
+        self.check_length("Term::tension_off", x_eq_global)?;
+        Ok(self.off_at(x_eq_global))
+    }
+
+    /// [`Term::tension_off`] at an `x_eq_global` that covers the term.
+    fn off_at(&self, x_eq_global: &[f64]) -> TensionOff<Term> {
         let replaced = match &self.body {
             Body::Part { off, .. } => {
                 return match off {
@@ -487,7 +533,7 @@ impl Term {
                     PartOff::Vanishes => TensionOff::Vanishes,
                 };
             }
-            Body::Own(p) => match p.tension_off(&self.local(x_eq_global)) {
+            Body::Own(p) => match p.tension_off(&self.gather(x_eq_global)) {
                 TensionOff::Unchanged => return TensionOff::Unchanged,
                 TensionOff::Vanishes => return TensionOff::Vanishes,
                 TensionOff::Replaced(body) => body,
@@ -524,8 +570,8 @@ mod tests {
         let t = Term::new("cubic", "test", "none", vec![2, 0], Cubic { a: 1.5 });
         // local (x, y) = (global[2], global[0])
         let (x, y) = (0.3, -0.7);
-        let d = t.derivatives(&[y, 99.0, x]);
-        assert_eq!(d, t.reference_derivatives(&[y, 99.0, x]));
+        let d = t.derivatives(&[y, 99.0, x]).unwrap();
+        assert_eq!(d, t.reference_derivatives(&[y, 99.0, x]).unwrap());
         let a = 1.5;
         let g = [
             2.0 * a * x * y + x.cos() * y.powi(3),
@@ -574,14 +620,17 @@ mod tests {
         );
         let product = Term::part("xy", "b", "t", frames, body, 1, PartOff::Vanishes);
         let x = [2.0, 3.0];
-        assert_eq!(square.energy(&x), 4.0);
-        assert_eq!(product.energy(&x), 6.0);
+        assert_eq!(square.energy(&x), Ok(4.0));
+        assert_eq!(product.energy(&x), Ok(6.0));
         assert_eq!(
-            product.reference_derivatives(&x).hessian,
+            product.reference_derivatives(&x).unwrap().hessian,
             vec![0.0, 1.0, 1.0, 0.0]
         );
         assert_eq!(square.body_parts().0, product.body_parts().0);
-        assert!(matches!(product.tension_off(&x), TensionOff::Vanishes));
-        assert!(matches!(square.hessians(&x, true).1, OffHessian::Same));
+        assert!(matches!(product.tension_off(&x), Ok(TensionOff::Vanishes)));
+        assert!(matches!(
+            square.hessians(&x, true).unwrap().1,
+            OffHessian::Same
+        ));
     }
 }

@@ -22,6 +22,10 @@ pub enum Slot {
 #[derive(Debug, Clone, PartialEq)]
 pub struct Compiled {
     node: Node,
+    /// How many variables an evaluation must pass: one more than the highest variable
+    /// index (0 for a constant), checked once per call so that the tree walk reads
+    /// variables without checks of its own.
+    arity: usize,
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -41,9 +45,7 @@ impl Expr {
     /// [`ExprError::UnknownSymbol`]; a call with a wrong argument count gives
     /// [`ExprError::WrongArity`].
     pub fn compile(&self, slot: &dyn Fn(&str) -> Option<Slot>) -> Result<Compiled, ExprError> {
-        Ok(Compiled {
-            node: compile_node(self, slot)?,
-        })
+        Ok(Compiled::from_node(compile_node(self, slot)?))
     }
 }
 
@@ -77,6 +79,7 @@ fn compile_node(expr: &Expr, slot: &dyn Fn(&str) -> Option<Slot>) -> Result<Node
             let node = Node::Call(*func, args.collect::<Result<_, _>>()?);
             match &node {
                 Node::Call(_, args) if args.iter().all(Node::is_const) => {
+                    // a call of constants reads no variable
                     Node::Const(node.eval::<f64>(&[]))
                 }
                 _ => node,
@@ -111,7 +114,8 @@ impl Node {
     fn eval<D: DualNum<Primitive = f64> + Copy>(&self, vars: &[D]) -> D {
         match self {
             Node::Const(x) => D::from(*x),
-            Node::Var(i) => vars.get(*i).copied().unwrap_or(D::from(f64::NAN)),
+            // in range: `Compiled::eval` checked the length against the arity
+            Node::Var(i) => vars[*i],
             Node::Neg(e) => -e.eval(vars),
             Node::Binary(op, l, r) => binary(*op, l.eval(vars), r, vars),
             Node::Call(func, args) => func
@@ -129,15 +133,9 @@ impl Node {
     fn eval_points(&self, columns: &[&[f64]], out: &mut [f64], spare: &mut Vec<Vec<f64>>) {
         match self {
             Node::Const(x) => out.fill(*x),
-            Node::Var(i) => {
-                for (k, y) in out.iter_mut().enumerate() {
-                    *y = columns
-                        .get(*i)
-                        .and_then(|c| c.get(k))
-                        .copied()
-                        .unwrap_or(f64::NAN);
-                }
-            }
+            // in range: `Compiled::eval_points` checked the columns against the arity and
+            // the number of points
+            Node::Var(i) => out.copy_from_slice(&columns[*i][..out.len()]),
             Node::Neg(e) => {
                 e.eval_points(columns, out, spare);
                 out.iter_mut().for_each(|y| *y = -*y);
@@ -206,21 +204,62 @@ impl Node {
 }
 
 impl Compiled {
+    fn from_node(node: Node) -> Self {
+        let mut arity = 0;
+        node.visit_vars(&mut |i| arity = arity.max(i + 1));
+        Compiled { node, arity }
+    }
+
+    /// How many variables [`Compiled::eval`] must be given: one more than the highest
+    /// variable index the expression reads (0 when it reads none).
+    pub fn arity(&self) -> usize {
+        self.arity
+    }
+
     /// Evaluates with variable `i` taking the value `vars[i]`.
     ///
-    /// Every variable index used must be `< vars.len()`; an out-of-range index evaluates to
-    /// NaN rather than panicking.
-    pub fn eval<D: DualNum<Primitive = f64> + Copy>(&self, vars: &[D]) -> D {
-        self.node.eval(vars)
+    /// `vars` must hold at least [`Compiled::arity`] values (more are ignored); fewer give
+    /// [`ExprError::Length`].
+    pub fn eval<D: DualNum<Primitive = f64> + Copy>(&self, vars: &[D]) -> Result<D, ExprError> {
+        self.check_length("Compiled::eval", "vars", vars.len())?;
+        Ok(self.node.eval(vars))
     }
 
     /// Evaluates at many points with one walk of the expression tree: variable `i` takes
     /// `columns[i][k]` at point k and `out[k]` receives the value there, the same number
     /// [`Compiled::eval`] gives (the same operations in the same order), for curves over a
-    /// grid such as damping multipliers over a frequency sweep. A variable without a column
-    /// or a point beyond its column evaluates to NaN, as in [`Compiled::eval`].
-    pub fn eval_points(&self, columns: &[&[f64]], out: &mut [f64]) {
+    /// grid such as damping multipliers over a frequency sweep. Fewer than
+    /// [`Compiled::arity`] columns, or a column the expression reads shorter than `out`,
+    /// give [`ExprError::Length`].
+    pub fn eval_points(&self, columns: &[&[f64]], out: &mut [f64]) -> Result<(), ExprError> {
+        self.check_length("Compiled::eval_points", "columns", columns.len())?;
+        if let Some(short) = columns[..self.arity].iter().find(|c| c.len() < out.len()) {
+            return Err(ExprError::Length {
+                function: "Compiled::eval_points",
+                argument: "a column of `columns` (one value per point of `out`)",
+                expected: out.len(),
+                given: short.len(),
+            });
+        }
         self.node.eval_points(columns, out, &mut Vec::new());
+        Ok(())
+    }
+
+    fn check_length(
+        &self,
+        function: &'static str,
+        argument: &'static str,
+        given: usize,
+    ) -> Result<(), ExprError> {
+        if given < self.arity {
+            return Err(ExprError::Length {
+                function,
+                argument,
+                expected: self.arity,
+                given,
+            });
+        }
+        Ok(())
     }
 
     /// The value, if the expression does not depend on any variable.
@@ -250,8 +289,6 @@ impl Compiled {
 
     /// Renumbers the variables: variable `i` becomes variable `map(i)`.
     pub fn remap(&self, map: &dyn Fn(usize) -> usize) -> Compiled {
-        Compiled {
-            node: self.node.remap(map),
-        }
+        Compiled::from_node(self.node.remap(map))
     }
 }

@@ -266,6 +266,18 @@ pub enum ExprError {
         /// The symbol name.
         name: String,
     },
+    /// A compiled expression given fewer values than it reads.
+    #[error("{function}: {argument} has {given} entries, the expression needs {expected}")]
+    Length {
+        /// The function called, e.g. `Compiled::eval`.
+        function: &'static str,
+        /// The argument that is too short.
+        argument: &'static str,
+        /// The length it needs.
+        expected: usize,
+        /// The length it has.
+        given: usize,
+    },
 }
 
 impl FromStr for Expr {

@@ -142,7 +142,7 @@ fn analytic_derivatives() {
             _ => None,
         })
         .unwrap();
-    let (cv, cd) = first_derivative(|x: Dual64| c.eval(&[x]), x0);
+    let (cv, cd) = first_derivative(|x: Dual64| c.eval(&[x]).unwrap(), x0);
     assert!(close(cv, 3.0 * v));
     assert!(close(cd, 3.0 * d));
     // Integer power of a negative base keeps a finite derivative.
@@ -150,7 +150,7 @@ fn analytic_derivatives() {
         .unwrap()
         .compile(&|_| Some(Slot::Var(0)))
         .unwrap();
-    let (_, pd) = first_derivative(|x: Dual64| p.eval(&[x]), -2.0);
+    let (_, pd) = first_derivative(|x: Dual64| p.eval(&[x]).unwrap(), -2.0);
     assert!(close(pd, 12.0));
 }
 
@@ -348,7 +348,7 @@ fn compile_folds_constants() {
     let c = parse("a*0 + x").unwrap().compile(&slots).unwrap();
     assert_eq!(c.as_const(), None);
     assert_eq!(c.as_var(), None);
-    assert_eq!(c.eval(&[5.0]), 5.0);
+    assert_eq!(c.eval(&[5.0]), Ok(5.0));
     let x = parse("x").unwrap().compile(&slots).unwrap();
     assert_eq!(x.as_var(), Some(0));
     assert_eq!(x.as_const(), None);
@@ -360,12 +360,21 @@ fn compile_folds_constants() {
 
     let c = parse("a*x + y^2").unwrap().compile(&slots).unwrap();
     assert_eq!(c.vars(), BTreeSet::from([0, 3]));
-    assert_eq!(c.eval(&[1.0, 0.0, 0.0, 3.0]), 11.0);
-    // Out-of-range variables give NaN instead of panicking.
-    assert!(c.eval(&[1.0f64]).is_nan());
+    assert_eq!(c.arity(), 4);
+    assert_eq!(c.eval(&[1.0, 0.0, 0.0, 3.0]), Ok(11.0));
+    // Too few values is an error naming the function and both lengths, not a panic or NaN.
+    assert_eq!(
+        c.eval(&[1.0f64]),
+        Err(ExprError::Length {
+            function: "Compiled::eval",
+            argument: "vars",
+            expected: 4,
+            given: 1
+        })
+    );
     let r = c.remap(&|i| if i == 3 { 1 } else { 0 });
     assert_eq!(r.vars(), BTreeSet::from([0, 1]));
-    assert_eq!(r.eval(&[1.0, 3.0]), 11.0);
+    assert_eq!(r.eval(&[1.0, 3.0]), Ok(11.0));
 
     let e = parse("a + q").unwrap().compile(&slots);
     assert_eq!(e, Err(ExprError::UnknownSymbol { name: "q".into() }));
@@ -397,8 +406,10 @@ fn compiled_matches_direct_evaluation() {
             _ => None,
         })
         .unwrap();
-    assert_eq!(c.eval(&[1.7, 0.3]), direct);
-    let dual = c.eval(&[Dual64::from(1.7), Dual64::from(0.3).derivative()]);
+    assert_eq!(c.eval(&[1.7, 0.3]), Ok(direct));
+    let dual = c
+        .eval(&[Dual64::from(1.7), Dual64::from(0.3).derivative()])
+        .unwrap();
     assert_eq!(dual.re, direct);
 }
 
@@ -435,17 +446,17 @@ proptest! {
         let a = [0.1, 1.0, 7.5, 1e3, 0.0, -3.0];
         let b = [2.0, 0.5, -1.0, 1e-9, 4.0, 3.0];
         let mut out = [0.0; 6];
-        c.eval_points(&[&a, &b], &mut out);
+        c.eval_points(&[&a, &b], &mut out).unwrap();
         for k in 0..a.len() {
-            let one = c.eval(&[a[k], b[k]]);
+            let one = c.eval(&[a[k], b[k]]).unwrap();
             prop_assert!(out[k] == one || (out[k].is_nan() && one.is_nan()), "{} at {}: {} vs {}", e, k, out[k], one);
         }
-        // a missing column is NaN, as a missing variable is
+        // a missing column is an error, as a missing variable is; so is a short column
         if !c.vars().is_empty() {
             let mut short = [0.0; 6];
-            c.eval_points(&[], &mut short);
-            let one = c.eval::<f64>(&[]);
-            prop_assert!(short[0] == one || (short[0].is_nan() && one.is_nan()));
+            prop_assert!(c.eval_points(&[], &mut short).is_err());
+            prop_assert!(c.eval::<f64>(&[]).is_err());
+            prop_assert!(c.eval_points(&[&a[..2], &b[..2]], &mut short).is_err());
         }
     }
 }

@@ -64,16 +64,10 @@ pub(crate) struct Shape {
 }
 
 impl PoseShape {
-    /// The six pose entries at `x`, reading the frame's coordinate `i` at `x[index[i]]`
-    /// (NaN where `x` is too short).
+    /// The six pose entries at `x`, reading the frame's coordinate `i` at `x[index[i]]`;
+    /// the caller has checked that `x` covers every index.
     pub(crate) fn eval<D: Real>(&self, x: &[D], index: &[usize]) -> [D; 6] {
-        let read = |at: usize| {
-            index
-                .get(at)
-                .and_then(|&i| x.get(i))
-                .copied()
-                .unwrap_or(D::from(f64::NAN))
-        };
+        let read = |at: usize| x[index[at]];
         std::array::from_fn(|m| match &self.entries[m] {
             Entry::Const(v) => D::from(*v),
             Entry::Var { at } => read(*at),
@@ -82,11 +76,13 @@ impl PoseShape {
                 for (o, &a) in own.iter_mut().zip(at) {
                     *o = read(a);
                 }
-                expr.eval(&own[..at.len()])
+                // the entry was renumbered to its own coordinates 0..at.len(), so the
+                // length always fits
+                expr.eval(&own[..at.len()]).unwrap_or(D::from(f64::NAN))
             }
             Entry::General { expr, at } => {
                 let own: Vec<D> = at.iter().map(|&a| read(a)).collect();
-                expr.eval(&own)
+                expr.eval(&own).unwrap_or(D::from(f64::NAN))
             }
         })
     }
@@ -292,8 +288,16 @@ impl FrameJet {
 
 impl crate::FrameMap {
     /// The frame and its derivatives with respect to [`crate::FrameMap::var_list`] at
-    /// coordinates `x`, written into `out` (whose buffers are reused).
-    pub fn jet(&self, x: &[f64], order: JetOrder, out: &mut FrameJet) {
+    /// coordinates `x`, written into `out` (whose buffers are reused). `x` must cover every
+    /// coordinate the frame reads ([`crate::FrameMap::needs`]); a shorter one is an error
+    /// and leaves `out` as it was.
+    pub fn jet(
+        &self,
+        x: &[f64],
+        order: JetOrder,
+        out: &mut FrameJet,
+    ) -> Result<(), crate::GeometryError> {
+        self.check_length("FrameMap::jet", x.len())?;
         let shape = &*self.shape;
         let index = &*self.index;
         let k = shape.vars.len();
@@ -327,6 +331,7 @@ impl crate::FrameMap {
             main.rotation = Matrix3::identity();
             main.reset(k, second);
         }
+        Ok(())
     }
 }
 
@@ -340,13 +345,8 @@ fn pose_derivs(
     out: &mut Derivs,
 ) {
     let k = index.len();
-    let read = |at: usize| {
-        index
-            .get(at)
-            .and_then(|&i| x.get(i))
-            .copied()
-            .unwrap_or(f64::NAN)
-    };
+    // in range: `FrameMap::jet` checked `x` against every index
+    let read = |at: usize| x[index[at]];
     if shape.linear {
         linear_pose_derivs(shape, &read, k, second, out);
         return;
@@ -378,13 +378,16 @@ fn pose_derivs(
             Entry::General { expr, at } => {
                 hyper.clear();
                 hyper.extend(at.iter().map(|&a| HyperDual64::from_re(read(a))));
-                values[m] = expr.eval(hyper.as_slice()).re;
+                // renumbered to its own coordinates 0..at.len(): the length always fits
+                values[m] = expr.eval(hyper.as_slice()).map_or(f64::NAN, |v| v.re);
                 for a in 0..at.len() {
                     hyper[a].eps1 = 1.0;
                     let last = if second { at.len() } else { a + 1 };
                     for b in a..last {
                         hyper[b].eps2 = 1.0;
-                        let r = expr.eval(hyper.as_slice());
+                        let r = expr
+                            .eval(hyper.as_slice())
+                            .unwrap_or(HyperDual64::from_re(f64::NAN));
                         hyper[b].eps2 = 0.0;
                         if b == a {
                             g[at[a]] = r.eps1;
@@ -582,7 +585,7 @@ mod tests {
     fn direct<D: pendkit_rotations::Real>(chain: &[PoseMap], x: &[D]) -> Frame<D> {
         chain
             .iter()
-            .map(|p| Frame::from_pose(std::array::from_fn(|i| p.entries[i].eval(x))))
+            .map(|p| Frame::from_pose(std::array::from_fn(|i| p.entries[i].eval(x).unwrap())))
             .reduce(|parent, local| parent.compose(&local))
             .unwrap_or_else(Frame::identity)
     }
@@ -604,7 +607,7 @@ mod tests {
         let g = shifted.eval(&y);
         assert!((g.origin - d.origin).norm() < 1e-15 && (g.rotation - d.rotation).norm() < 1e-15);
         let mut jet = FrameJet::new();
-        map.jet(x, JetOrder::Second, &mut jet);
+        map.jet(x, JetOrder::Second, &mut jet).unwrap();
         let vars = jet.vars().to_vec();
         let a = Vector3::new(0.03, -0.2, 0.11);
         let scale = 1.0 + jet.point(&a).norm();
@@ -664,8 +667,8 @@ mod tests {
         let map = FrameMap::root(pose(&names, ["x", "y", "z", "yaw", "pitch", "roll"]));
         let x = [0.1, 0.2, -0.3, 0.4, -0.5, 0.6];
         let (mut a, mut b) = (FrameJet::new(), FrameJet::new());
-        map.jet(&x, JetOrder::First, &mut a);
-        map.jet(&x, JetOrder::Second, &mut b);
+        map.jet(&x, JetOrder::First, &mut a).unwrap();
+        map.jet(&x, JetOrder::Second, &mut b).unwrap();
         assert!(!a.has_second() && b.has_second());
         for i in 0..6 {
             assert_eq!(a.d_rotation(i), b.d_rotation(i));

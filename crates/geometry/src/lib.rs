@@ -21,6 +21,21 @@ use pendkit_rotations::{
 
 pub use jet::{FrameJet, JetOrder};
 
+/// A coordinate vector (or a Jacobian's column count) too short for the frame it is used
+/// with: the function, the argument, the length needed and the length given.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("{function}: {argument} has {given} entries, the frame needs {expected}")]
+pub struct GeometryError {
+    /// The function called, e.g. `FrameMap::jet`.
+    pub function: &'static str,
+    /// The argument that is too short.
+    pub argument: &'static str,
+    /// The length it needs.
+    pub expected: usize,
+    /// The length it has.
+    pub given: usize,
+}
+
 /// A frame in space: origin (m) and rotation from frame axes to lab axes.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Frame<D> {
@@ -104,6 +119,9 @@ pub struct FrameMap {
     /// Where in the coordinate vector each of the frame's coordinates is read, in the order
     /// of `shape.vars` (the global indices themselves, or a term's local indices).
     index: Arc<[usize]>,
+    /// One more than the highest entry of `index`: the shortest coordinate vector the frame
+    /// can be evaluated at, checked once per evaluation so that reads need no checks.
+    needs: usize,
 }
 
 /// Velocity Jacobians of a body-fixed point, with respect to every coordinate (columns).
@@ -120,10 +138,34 @@ pub struct PointJacobian {
 impl FrameMap {
     fn from_chain(chain: Vec<PoseMap>) -> Self {
         let shape = jet::Shape::new(chain);
+        FrameMap::with_index(Arc::new(shape.vars.clone()), Arc::new(shape))
+    }
+
+    fn with_index(index: Arc<Vec<usize>>, shape: Arc<jet::Shape>) -> Self {
         FrameMap {
-            index: shape.vars.clone().into(),
-            shape: Arc::new(shape),
+            needs: index.iter().max().map_or(0, |&i| i + 1),
+            index: index.as_slice().into(),
+            shape,
         }
+    }
+
+    /// The shortest coordinate vector the frame can be evaluated at: one more than the
+    /// highest index it reads (0 for a frame fixed in the lab).
+    pub fn needs(&self) -> usize {
+        self.needs
+    }
+
+    /// `given` (the length of argument `x` of `function`) covers every coordinate read.
+    fn check_length(&self, function: &'static str, given: usize) -> Result<(), GeometryError> {
+        if given < self.needs {
+            return Err(GeometryError {
+                function,
+                argument: "x (coordinates)",
+                expected: self.needs,
+                given,
+            });
+        }
+        Ok(())
     }
 
     /// A frame posed directly in the lab.
@@ -163,15 +205,28 @@ impl FrameMap {
             .collect()
     }
 
-    /// Evaluates the frame at coordinates `x` (any scalar: values or dual numbers).
+    /// Evaluates the frame at coordinates `x` (any scalar: values or dual numbers). `x`
+    /// must hold at least [`FrameMap::needs`] values; a shorter one gives a frame of NaN,
+    /// which energy bodies (whose coordinate vectors are sized when the term is built)
+    /// never see. [`FrameMap::try_eval`] says so as an error.
     pub fn eval<D: Real>(&self, x: &[D]) -> Frame<D> {
+        self.try_eval(x).unwrap_or_else(|_| Frame {
+            origin: Vector3::from_element(c(f64::NAN)),
+            rotation: Matrix3::from_element(c(f64::NAN)),
+        })
+    }
+
+    /// [`FrameMap::eval`], with a coordinate vector shorter than [`FrameMap::needs`] an
+    /// error naming both lengths.
+    pub fn try_eval<D: Real>(&self, x: &[D]) -> Result<Frame<D>, GeometryError> {
+        self.check_length("FrameMap::eval", x.len())?;
         let mut frames = self
             .shape
             .poses
             .iter()
             .map(|p| Frame::from_pose(p.eval(x, &self.index)));
         let first = frames.next().unwrap_or_else(Frame::identity);
-        frames.fold(first, |parent, local| parent.compose(&local))
+        Ok(frames.fold(first, |parent, local| parent.compose(&local)))
     }
 
     /// Indices of the coordinates this frame depends on.
@@ -187,30 +242,43 @@ impl FrameMap {
 
     /// The same map with coordinates renumbered (global index -> a term's local index).
     pub fn remap(&self, map: &dyn Fn(usize) -> usize) -> FrameMap {
-        FrameMap {
-            shape: self.shape.clone(),
-            index: self.index.iter().map(|&i| map(i)).collect(),
-        }
+        FrameMap::with_index(
+            Arc::new(self.index.iter().map(|&i| map(i)).collect()),
+            self.shape.clone(),
+        )
     }
 
     /// Jacobians of the body-fixed point `p` (m, frame coordinates) and of the frame's
-    /// angular velocity, at coordinates `x`, from the frame's first-order jet.
+    /// angular velocity, at coordinates `x`, from the frame's first-order jet: one column
+    /// per entry of `x`. An `x` shorter than [`FrameMap::needs`] gives columns of NaN;
+    /// [`FrameMap::try_jacobian`] says so as an error.
     pub fn jacobian(&self, x: &[f64], p: &Vector3<f64>) -> PointJacobian {
+        self.try_jacobian(x, p)
+            .unwrap_or_else(|_| PointJacobian::filled(x.len(), f64::NAN))
+    }
+
+    /// [`FrameMap::jacobian`], with a coordinate vector shorter than [`FrameMap::needs`]
+    /// an error naming both lengths.
+    pub fn try_jacobian(
+        &self,
+        x: &[f64],
+        p: &Vector3<f64>,
+    ) -> Result<PointJacobian, GeometryError> {
         let mut jet = FrameJet::new();
-        self.jet(x, JetOrder::First, &mut jet);
+        self.jet(x, JetOrder::First, &mut jet)?;
         jet.jacobian(x.len(), p)
     }
 
     /// [`FrameMap::jacobian`] computed independently of the jets: one forward-mode dual
     /// evaluation of the pose expressions per coordinate the frame depends on (the
     /// reference the jets are checked against).
-    pub fn reference_jacobian(&self, x: &[f64], p: &Vector3<f64>) -> PointJacobian {
-        let n = x.len();
-        let mut jac = PointJacobian {
-            position: Matrix3xX::zeros(n),
-            omega_body: Matrix3xX::zeros(n),
-            omega_space: Matrix3xX::zeros(n),
-        };
+    pub fn reference_jacobian(
+        &self,
+        x: &[f64],
+        p: &Vector3<f64>,
+    ) -> Result<PointJacobian, GeometryError> {
+        self.check_length("FrameMap::reference_jacobian", x.len())?;
+        let mut jac = PointJacobian::filled(x.len(), 0.0);
         let mut xd: Vec<Dual64> = x.iter().map(|&v| Dual64::from(v)).collect();
         for &j in self.var_list() {
             xd[j].eps = 1.0;
@@ -223,7 +291,18 @@ impl FrameMap {
             jac.omega_body.set_column(j, &vee(&(r.transpose() * dr)));
             jac.omega_space.set_column(j, &vee(&(dr * r.transpose())));
         }
-        jac
+        Ok(jac)
+    }
+}
+
+impl PointJacobian {
+    /// `n` columns of `value`.
+    fn filled(n: usize, value: f64) -> Self {
+        PointJacobian {
+            position: Matrix3xX::from_element(n, value),
+            omega_body: Matrix3xX::from_element(n, value),
+            omega_space: Matrix3xX::from_element(n, value),
+        }
     }
 }
 
@@ -241,20 +320,26 @@ impl FrameJet {
     }
 
     /// The velocity Jacobians of the body-fixed point `a` over all `n` coordinates of the
-    /// vector the jet was evaluated at (zero columns for coordinates the frame ignores).
-    pub fn jacobian(&self, n: usize, a: &Vector3<f64>) -> PointJacobian {
-        let mut jac = PointJacobian {
-            position: Matrix3xX::zeros(n),
-            omega_body: Matrix3xX::zeros(n),
-            omega_space: Matrix3xX::zeros(n),
-        };
+    /// vector the jet was evaluated at (zero columns for coordinates the frame ignores);
+    /// an `n` that leaves out a coordinate of the jet is an error.
+    pub fn jacobian(&self, n: usize, a: &Vector3<f64>) -> Result<PointJacobian, GeometryError> {
+        let needs = self.vars().iter().max().map_or(0, |&g| g + 1);
+        if n < needs {
+            return Err(GeometryError {
+                function: "FrameJet::jacobian",
+                argument: "n (columns)",
+                expected: needs,
+                given: n,
+            });
+        }
+        let mut jac = PointJacobian::filled(n, 0.0);
         for (i, &g) in self.vars().iter().enumerate() {
             let [dp, wb, ws] = self.velocity(i, a);
             jac.position.set_column(g, &dp);
             jac.omega_body.set_column(g, &wb);
             jac.omega_space.set_column(g, &ws);
         }
-        jac
+        Ok(jac)
     }
 }
 
@@ -328,7 +413,7 @@ mod tests {
             assert!((jac.omega_space.column(3 + k) - omega_s.column(k)).norm() < 1e-14);
         }
         // and the jet route agrees with the dual-number one
-        let dual = map.reference_jacobian(&x, &p);
+        let dual = map.reference_jacobian(&x, &p).unwrap();
         assert!((dual.position - &jac.position).norm() < 1e-15);
         assert!((dual.omega_body - &jac.omega_body).norm() < 1e-15);
         assert!((dual.omega_space - &jac.omega_space).norm() < 1e-15);

@@ -114,7 +114,8 @@ impl DampingSpec {
                 context: which.clone(),
                 message: e.to_string(),
             })?;
-        let value: f64 = compiled.eval(&[]);
+        // every symbol is a parameter's value, so nothing is read; NaN is refused below
+        let value: f64 = compiled.eval(&[]).unwrap_or(f64::NAN);
         if value.is_finite() && value > 0.0 {
             Ok(Some(value))
         } else {

@@ -208,12 +208,15 @@ impl StageResult {
             .map_or_else(|| OTHER_FAMILY.to_string(), |(f, _)| f)
     }
 
-    /// Lab position (m) of body `b`'s centre of mass at the equilibrium.
-    pub fn body_centre(&self, b: BodyId) -> Vector3<f64> {
-        let body = &self.system.bodies[b];
-        body.frame
-            .eval(&self.assembled.equilibrium.coords)
-            .point(&body.centre_of_mass)
+    /// Lab position (m) of body `b`'s centre of mass at the equilibrium; `None` for an
+    /// index past the model's bodies.
+    pub fn body_centre(&self, b: BodyId) -> Option<Vector3<f64>> {
+        let body = self.system.bodies.get(b)?;
+        let frame = body
+            .frame
+            .try_eval(&self.assembled.equilibrium.coords)
+            .ok()?;
+        Some(frame.point(&body.centre_of_mass))
     }
 
     /// The support: the body with the most pose coordinates that are parameters (the
@@ -254,7 +257,9 @@ impl StageResult {
                 let body = &self.system.bodies[b];
                 body.mass > 0.0 && own(body) == most && most > 0
             })
-            .min_by(|&a, &b| self.body_centre(a).z.total_cmp(&self.body_centre(b).z))
+            .filter_map(|b| Some((b, self.body_centre(b)?.z)))
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .map(|(b, _)| b)
     }
 
     /// The standard transfer functions, as (input, output) names: from the support's

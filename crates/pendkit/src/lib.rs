@@ -596,6 +596,9 @@ pub fn run_stage_with(
             modes
         }
     };
+    // after the modes, so that a model the modes refuse outright (a massless body, whose
+    // wires then carry no tension) is refused for that
+    pendkit_dynamics::validate::check_wire_stretch(&system, &assembled.equilibrium.coords)?;
     let stability = timed(&mut times, "stability", 1, || {
         let floats = runaway_floats(&model, &system.damping, Some(&rounding))?;
         let inverted = inverted_bodies(&system, &assembled.equilibrium.coords);
@@ -666,9 +669,13 @@ impl StageResult {
                 }
             };
             let (p, d) = (nums(point, "point")?, nums(dir, "direction")?);
-            if !(d.norm() > 0.0 && d.norm().is_finite()) {
+            // scaled by its largest component first: a tiny or huge (finite) direction
+            // would otherwise underflow or overflow in its norm
+            let largest = d.amax();
+            if largest == 0.0 {
                 return Err(bad("the direction is zero"));
             }
+            let d = d / largest;
             let b = self.system.body(body).ok_or_else(|| Error::Name {
                 name: spec.to_string(),
                 message: format!(
@@ -701,7 +708,8 @@ impl StageResult {
             .bodies
             .get(body)?
             .frame
-            .jacobian(&self.assembled.equilibrium.coords, point);
+            .try_jacobian(&self.assembled.equilibrium.coords, point)
+            .ok()?;
         let d = direction.normalize();
         let layout = &self.assembled.layout;
         let along = |ids: &[usize]| {

@@ -284,15 +284,21 @@ impl WireBeam {
         // columns: ∇c, then ∇t_0, ∇t_1 (zero for a hinged end, whose coefficients vanish)
         let columns = out.scratch.zero_vectors(3 * n);
         let (dc, slopes) = columns.split_at_mut(n);
-        add_jacobian(f1, Attached::Point(&self.points[1]), 1.0, dc);
-        add_jacobian(f0, Attached::Point(&self.points[0]), -1.0, dc);
+        // on an error (buffers that do not fit the frames) the reference path answers
+        if add_jacobian(f1, Attached::Point(&self.points[1]), 1.0, dc).is_err()
+            || add_jacobian(f0, Attached::Point(&self.points[0]), -1.0, dc).is_err()
+        {
+            return false;
+        }
         for k in 0..2 {
             let Some(d) = &self.directions[k] else {
                 continue;
             };
             let tangent = d * if k == 0 { 1.0 } else { -1.0 };
             let dt = &mut slopes[k * n..(k + 1) * n];
-            add_jacobian(frames[k], Attached::Direction(&tangent), 1.0, dt);
+            if add_jacobian(frames[k], Attached::Direction(&tangent), 1.0, dt).is_err() {
+                return false;
+            }
             for (t, c) in dt.iter_mut().zip(dc.iter()) {
                 let v = *t - c / l;
                 *t = v - u * u.dot(&v);
