@@ -469,24 +469,38 @@ impl AbsWeights {
         let weights = if bound { &self.bound } else { &self.entries };
         let mut sum = 0.0;
         for (r, &zr) in z.iter().enumerate().take(unknowns) {
-            let (Some(&start), Some(&end)) = (self.row_start.get(r), self.row_start.get(r + 1))
-            else {
+            let Some(range) = self.row_range(r) else {
                 break;
             };
-            if zr == 0.0 {
-                continue;
+            if zr != 0.0 {
+                sum += zr.abs() * self.row_form(weights, range, unknowns, z);
             }
-            let mut row = 0.0;
-            for (&c, w) in self.cols[start..end].iter().zip(&weights[start..end]) {
-                if c < unknowns
-                    && let Some(zc) = z.get(c)
-                {
-                    row += w * zc.abs();
-                }
-            }
-            sum += zr.abs() * row;
         }
         sum
+    }
+
+    /// Where row `r`'s entries are stored, if it is stored.
+    fn row_range(&self, r: usize) -> Option<std::ops::Range<usize>> {
+        Some(*self.row_start.get(r)?..*self.row_start.get(r + 1)?)
+    }
+
+    /// Σ_c w_rc |z_c| over the stored `range` of one row, columns below `unknowns`.
+    fn row_form(
+        &self,
+        weights: &[f64],
+        range: std::ops::Range<usize>,
+        unknowns: usize,
+        z: &[f64],
+    ) -> f64 {
+        let mut row = 0.0;
+        for (&c, w) in self.cols[range.clone()].iter().zip(&weights[range]) {
+            if c < unknowns
+                && let Some(zc) = z.get(c)
+            {
+                row += w * zc.abs();
+            }
+        }
+        row
     }
 }
 
@@ -497,23 +511,12 @@ impl AbsWeights {
         let weights = if bound { &self.bound } else { &self.entries };
         let mut sum = 0.0;
         for &r in rows.iter().take_while(|&&r| r < unknowns) {
-            let (Some(&zr), Some(&start), Some(&end)) =
-                (z.get(r), self.row_start.get(r), self.row_start.get(r + 1))
-            else {
+            let (Some(&zr), Some(range)) = (z.get(r), self.row_range(r)) else {
                 break;
             };
-            if zr == 0.0 {
-                continue;
+            if zr != 0.0 {
+                sum += zr.abs() * self.row_form(weights, range, unknowns, z);
             }
-            let mut row = 0.0;
-            for (&c, w) in self.cols[start..end].iter().zip(&weights[start..end]) {
-                if c < unknowns
-                    && let Some(zc) = z.get(c)
-                {
-                    row += w * zc.abs();
-                }
-            }
-            sum += zr.abs() * row;
         }
         sum
     }
