@@ -198,6 +198,15 @@ fn positive(field: &str, what: &str) -> Result<f64, String> {
     }
 }
 
+/// An error at a line of the file at `path`.
+fn line_error(path: &Path) -> impl Fn(usize, String) -> FitError + '_ {
+    move |line, message| FitError::Line {
+        path: path.to_path_buf(),
+        line,
+        message,
+    }
+}
+
 fn read_text(path: &Path) -> Result<String, FitError> {
     std::fs::read_to_string(path).map_err(|e| FitError::File {
         path: path.to_path_buf(),
@@ -213,11 +222,7 @@ impl MeasuredModes {
 
     /// Parses the text of a measured modes file read from `path`.
     pub fn parse(path: &Path, text: &str) -> Result<MeasuredModes, FitError> {
-        let at = |line: usize, message: String| FitError::Line {
-            path: path.to_path_buf(),
-            line,
-            message,
-        };
+        let at = line_error(path);
         let mut modes = Vec::new();
         for (line, fields) in data_lines(text, "label") {
             if !(3..=4).contains(&fields.len()) {
@@ -274,11 +279,7 @@ impl MeasuredTf {
 
     /// Parses the text of a measured transfer-function file read from `path`.
     pub fn parse(path: &Path, text: &str) -> Result<MeasuredTf, FitError> {
-        let at = |line: usize, message: String| FitError::Line {
-            path: path.to_path_buf(),
-            line,
-            message,
-        };
+        let at = line_error(path);
         let (mut input, mut output) = (None, None);
         for raw in text.lines() {
             let directive = raw.trim().strip_prefix('#').map(str::trim);

@@ -16,6 +16,7 @@ use crate::spec::{BladeFields, MaterialSpec, Points, Spec, StageFile, WireSet};
 /// Every tag's default damping: material defaults, then the file's own tables merged in.
 pub fn damping(spec: &Spec) -> Result<BTreeMap<String, DampingSpec>, FileError> {
     let mut out: BTreeMap<String, DampingSpec> = BTreeMap::new();
+    let hanging = Hanging::new(spec);
     let mut insert = |tag: String, d: DampingSpec, at: &crate::source::At| {
         match out.get(&tag) {
             Some(existing) if *existing != d => Err(at.error(format!(
@@ -31,7 +32,7 @@ pub fn damping(spec: &Spec) -> Result<BTreeMap<String, DampingSpec>, FileError> 
         for set in stage.wire_sets() {
             let Some(name) = &set.material else { continue };
             let material = find_material(spec, &name.value, &name.at)?;
-            for (tag, d) in wire_damping(spec, stage, set, material)? {
+            for (tag, d) in wire_damping(spec, &hanging, stage, set, material)? {
                 insert(tag, d, &set.tags.at)?;
             }
         }
@@ -128,6 +129,7 @@ fn loss_material(m: &MaterialSpec, youngs: Option<&Ex>) -> Option<LossMaterial> 
 /// scales the bending loss by (computed dilution)/(given).
 fn wire_damping(
     spec: &Spec,
+    hanging: &Hanging,
     stage: &StageFile,
     set: &WireSet,
     m: &MaterialSpec,
@@ -187,7 +189,7 @@ fn wire_damping(
             )
         }
     });
-    let tension = format!("({})", nominal_tension(spec, stage, set));
+    let tension = format!("({})", nominal_tension(spec, hanging, stage, set));
     let youngs = material.youngs.clone();
     // the dilution a wire clamped at both ends has, l/λ, λ = √(Y π r⁴/4 / T)
     let dilution_scale = set.dilution.as_ref().map(|given| {
@@ -277,9 +279,9 @@ impl<'s> Hanging<'s> {
 
 /// The static tension of one wire of `set` at the nominal geometry, as an expression of the
 /// parameters: (Σ masses hung) g / (wires in the stage) · l / vertical extent.
-fn nominal_tension(spec: &Spec, stage: &StageFile, set: &WireSet) -> String {
+fn nominal_tension(spec: &Spec, hanging: &Hanging, stage: &StageFile, set: &WireSet) -> String {
     let bodies: HashMap<&str, _> = spec.bodies.iter().map(|b| (b.name.as_str(), b)).collect();
-    let masses: Vec<String> = Hanging::new(spec)
+    let masses: Vec<String> = hanging
         .subtree(&stage.body)
         .into_iter()
         .filter_map(|b| bodies.get(b))
