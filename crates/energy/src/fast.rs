@@ -167,7 +167,7 @@ fn check_local(
     argument: &'static str,
     given: usize,
 ) -> Result<(), EnergyError> {
-    let expected = frame.local.iter().max().map_or(0, |&l| l + 1);
+    let expected = frame.local.iter().max().map_or(0, |&l| l.saturating_add(1));
     if given < expected {
         return Err(EnergyError::Length {
             function,

@@ -143,7 +143,9 @@ impl FrameMap {
 
     fn with_index(index: Arc<Vec<usize>>, shape: Arc<jet::Shape>) -> Self {
         FrameMap {
-            needs: index.iter().max().map_or(0, |&i| i + 1),
+            // saturating: an index of usize::MAX (e.g. remapped to it) needs more than any
+            // vector holds, where wrapping would make it need nothing
+            needs: index.iter().max().map_or(0, |&i| i.saturating_add(1)),
             index: index.as_slice().into(),
             shape,
         }
@@ -338,7 +340,7 @@ impl FrameJet {
     /// vector the jet was evaluated at (zero columns for coordinates the frame ignores);
     /// an `n` that leaves out a coordinate of the jet is an error.
     pub fn jacobian(&self, n: usize, a: &Vector3<f64>) -> Result<PointJacobian, GeometryError> {
-        let needs = self.vars().iter().max().map_or(0, |&g| g + 1);
+        let needs = self.vars().iter().max().map_or(0, |&g| g.saturating_add(1));
         if n < needs {
             return Err(GeometryError {
                 function: "FrameJet::jacobian",

@@ -137,3 +137,17 @@ fn jet_derivatives_at_out_of_range_indices_are_errors_naming_the_index() {
     assert!(empty.d_point(0, &a).is_err() && empty.d_rotation(0).is_err());
     assert_eq!(empty.d_points(&a).len(), 0);
 }
+
+#[test]
+fn a_frame_remapped_to_the_largest_index_needs_more_than_any_vector_not_nothing() {
+    let (_, tip) = body_and_tip();
+    let far = tip.remap(&|_| usize::MAX);
+    // one more than usize::MAX saturates: were it to wrap to 0, every vector would pass
+    // the length check and the reads would run past its end
+    assert_eq!(far.needs(), usize::MAX);
+    let x = [0.0_f64; 10];
+    assert!(far.try_eval(&x).is_err());
+    assert!(far.eval(&x).origin.iter().all(|v| v.is_nan()));
+    let mut jet = FrameJet::new();
+    assert!(far.jet(&x, JetOrder::First, &mut jet).is_err());
+}
