@@ -600,3 +600,54 @@ fn mode_pairing_and_fit_jacobians_of_mismatched_sizes_are_errors_naming_the_argu
             .starts_with("mode_jacobian: relative_step is 0")
     );
 }
+
+#[test]
+fn the_hyper_dual_fallback_refuses_frames_whose_local_indices_do_not_match_their_jets() {
+    use pendkit_energy::{
+        Derivatives, FrameAt, JetPoint, OffForm, Scratch, hyper_dual_over_frames,
+    };
+    let r = quad();
+    let jet = test_mass_jet(&r);
+    let k = jet.vars().len();
+    let run = |local: &[usize]| {
+        let n = k + 1;
+        let (mut values, mut gradients, mut scales) = (vec![0.0; 1], vec![0.0; n], vec![0.0; n]);
+        let (mut on, mut off) = (vec![0.0; n * n], vec![0.0; n * n]);
+        let mut scratch = Scratch::default();
+        let mut out = Derivatives {
+            n,
+            hessian: true,
+            values: &mut values,
+            gradients: &mut gradients,
+            force_scales: &mut scales,
+            on: &mut on,
+            off: &mut off,
+            off_form: OffForm::Same,
+            scratch: &mut scratch,
+        };
+        let x = vec![0.0; n];
+        let frames = [FrameAt { jet: &jet, local }];
+        let at = JetPoint {
+            x: &x,
+            frames: &frames,
+        };
+        // the height of a body-fixed point: any energy over the frame will do
+        let done = hyper_dual_over_frames::<1>(&at, 1, &mut out, |[f], e| {
+            e[0] = f.origin[2];
+        });
+        (done, gradients)
+    };
+    // one local index per jet coordinate: computed, the gradient is ∂z/∂q of the jet
+    let matching: Vec<usize> = (0..k).collect();
+    let (done, gradients) = run(&matching);
+    assert!(done);
+    let a = nalgebra::Vector3::zeros();
+    for (g, dp) in gradients.iter().zip(jet.d_points(&a)) {
+        assert_eq!(*g, dp[2]);
+    }
+    // one local index more than the jet has: refused, nothing written
+    let long: Vec<usize> = (0..=k).collect();
+    let (done, gradients) = run(&long);
+    assert!(!done);
+    assert!(gradients.iter().all(|&g| g == 0.0));
+}
