@@ -96,8 +96,8 @@ fn rounding_bound(r: &StageResult, input: &Input, output: &Output, f: f64) -> f6
     let w2 = (2.0 * std::f64::consts::PI * f).powi(2);
     let mut abs = DMatrix::<f64>::zeros(dim, dim);
     let mut add = |values: &[f64], weight: f64| {
-        for (slot, v) in values.iter().enumerate() {
-            abs[m.pattern.position(slot)] += weight * v.abs();
+        for (v, position) in values.iter().zip(m.pattern.positions()) {
+            abs[position] += weight * v.abs();
         }
     };
     add(&m.lossless, 1.0);

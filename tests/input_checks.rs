@@ -342,3 +342,312 @@ fn wires_stiffer_than_1e12_times_their_pendulum_stiffness_are_refused() {
     }
     assert!(run("E_wire=scale(1e4)").is_ok());
 }
+
+/// The quad's test mass (the last body with six own coordinates), its frame's jet at the
+/// equilibrium (second order) and the equilibrium coordinates.
+fn test_mass_jet(r: &StageResult) -> pendkit::geometry::FrameJet {
+    let tm = r.test_mass().unwrap();
+    let mut jet = pendkit::geometry::FrameJet::new();
+    r.system.bodies[tm]
+        .frame
+        .jet(
+            &r.assembled.equilibrium.coords,
+            pendkit::geometry::JetOrder::Second,
+            &mut jet,
+        )
+        .unwrap();
+    jet
+}
+
+#[test]
+fn frame_jet_derivatives_past_the_jets_coordinates_are_errors_naming_function_and_index() {
+    let r = quad();
+    let jet = test_mass_jet(&r);
+    let k = jet.vars().len();
+    assert!(k >= 6, "the test mass moves in six coordinates at least");
+    let a = nalgebra::Vector3::new(0.0, 0.17, 0.0);
+    // the last coordinate works, one past it is an error naming function, argument, index
+    assert!(jet.d_point(k - 1, &a).is_ok());
+    let message = |e: pendkit::geometry::JetError| e.to_string();
+    assert_eq!(
+        message(jet.d_point(k, &a).unwrap_err()),
+        format!("FrameJet::d_point: i = {k} is out of range, the jet has {k} coordinates")
+    );
+    assert!(message(jet.d_rotation(k).unwrap_err()).starts_with("FrameJet::d_rotation: i = "));
+    assert!(message(jet.dd_point(k, 0, &a).unwrap_err()).starts_with("FrameJet::dd_point: i = "));
+    // j = k would alias the pair (i + 1, 0) of the k × k storage: refused
+    assert!(message(jet.dd_rotation(0, k).unwrap_err()).starts_with("FrameJet::dd_rotation: j = "));
+    assert!(message(jet.velocity(k, &a).unwrap_err()).starts_with("FrameJet::velocity: i = "));
+    assert!(
+        message(jet.hyper_dual(Some(0), Some(usize::MAX)).unwrap_err())
+            .starts_with("FrameJet::hyper_dual: e2 = ")
+    );
+    // the loop forms have one entry per coordinate, the same numbers as the indexed ones
+    assert_eq!(jet.d_points(&a).len(), k);
+    assert_eq!(jet.d_points(&a).last(), jet.d_point(k - 1, &a).ok());
+    assert_eq!(jet.velocities(&a).last(), jet.velocity(k - 1, &a).ok());
+}
+
+#[test]
+fn fast_path_helpers_given_a_frame_whose_local_indices_do_not_match_its_jet_are_errors() {
+    use pendkit_energy::{Attached, FrameAt, add_curvature, add_jacobian};
+    let r = quad();
+    let jet = test_mass_jet(&r);
+    let k = jet.vars().len();
+    let a = nalgebra::Vector3::new(0.0, 0.17, 0.0);
+    // one local index too many: the last would read a jet coordinate that does not exist
+    let long: Vec<usize> = (0..=k).collect();
+    let frame = FrameAt {
+        jet: &jet,
+        local: &long,
+    };
+    let mut columns = vec![nalgebra::Vector3::zeros(); k + 1];
+    let e = add_jacobian(&frame, Attached::Point(&a), 1.0, &mut columns).unwrap_err();
+    assert!(
+        e.to_string().starts_with("add_jacobian: frame.local"),
+        "{e}"
+    );
+    assert!(
+        columns.iter().all(|c| *c == nalgebra::Vector3::zeros()),
+        "nothing added"
+    );
+    let n = k + 1;
+    let mut h = vec![0.0; n * n];
+    let w = nalgebra::Vector3::new(0.0, 0.0, 1.0);
+    let e = add_curvature(&frame, Attached::Direction(&a), &w, &mut h, n).unwrap_err();
+    assert!(
+        e.to_string().starts_with("add_curvature: frame.local"),
+        "{e}"
+    );
+    assert!(h.iter().all(|&v| v == 0.0), "nothing added");
+    // the matching frame works; a first-order jet has no curvature to add
+    let local: Vec<usize> = (0..k).collect();
+    let frame = FrameAt {
+        jet: &jet,
+        local: &local,
+    };
+    assert!(add_jacobian(&frame, Attached::Point(&a), 1.0, &mut columns).is_ok());
+    let mut first = pendkit::geometry::FrameJet::new();
+    let tm = r.test_mass().unwrap();
+    r.system.bodies[tm]
+        .frame
+        .jet(
+            &r.assembled.equilibrium.coords,
+            pendkit::geometry::JetOrder::First,
+            &mut first,
+        )
+        .unwrap();
+    let frame = FrameAt {
+        jet: &first,
+        local: &local,
+    };
+    let e = add_curvature(&frame, Attached::Point(&a), &w, &mut h, n).unwrap_err();
+    assert!(e.to_string().contains("no second derivatives"), "{e}");
+}
+
+#[test]
+fn pattern_lookups_past_the_pattern_are_none_not_panics() {
+    let r = quad();
+    let p = &r.model.pattern;
+    let (dim, len) = (p.dim(), p.len());
+    assert!(p.get_position(len - 1).is_some());
+    assert_eq!(p.get_position(len), None);
+    assert_eq!(p.slot(dim, 0), None);
+    assert_eq!(p.slot(0, dim), None);
+    assert_eq!(p.slot(usize::MAX, 0), None);
+    // every stored position is in range and finds its own slot again
+    assert_eq!(p.positions().len(), len);
+    for (s, (i, j)) in p.positions().enumerate() {
+        assert_eq!(p.slot(i, j), Some(s));
+    }
+}
+
+#[test]
+fn eliminating_floats_from_a_master_matrix_of_the_wrong_size_is_an_error() {
+    let r = quad();
+    let n = r.model.pattern.dim();
+    let e = pendkit::dynamics::eliminate_floats(
+        &DMatrix::zeros(n, n - 1),
+        &r.assembled.layout,
+        &r.system,
+    )
+    .unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        format!(
+            "eliminate_floats: p (master matrix, per side) has {} entries, expected {n}",
+            n - 1
+        )
+    );
+}
+
+#[test]
+fn tradeoff_comparisons_of_answers_that_do_not_fit_are_errors_naming_the_argument() {
+    use pendkit::tradeoff::{Answer, compare, match_modes};
+    let answer = |coordinates: usize, mass: usize, points: usize| Answer {
+        coordinates: (0..coordinates).map(|i| format!("x{i}")).collect(),
+        modes: Vec::new(),
+        mass: DMatrix::identity(mass, mass),
+        noise_asd: vec![1.0; points],
+        transfer: None,
+    };
+    // a mass matrix smaller than the coordinates it is indexed by
+    let e = match_modes(&answer(3, 2, 4), &answer(3, 3, 4), 10.0).unwrap_err();
+    assert_eq!(
+        e,
+        "match_modes: reference.mass is 2 x 2, its 3 coordinates need 3 x 3"
+    );
+    // curves over different numbers of points: not compared by their common part
+    let e = compare(&answer(3, 3, 4), &answer(3, 3, 5), 10.0).unwrap_err();
+    assert_eq!(
+        e,
+        "compare: variant.noise_asd has 5 points, the reference's has 4"
+    );
+    // matching answers compare, with zero error against themselves
+    let errors = compare(&answer(3, 3, 4), &answer(3, 3, 4), 10.0).unwrap();
+    assert_eq!((errors.modes, errors.noise), (0.0, 0.0));
+}
+
+#[test]
+fn a_beaded_fibre_with_more_beads_than_the_limit_is_an_error_not_an_overflow() {
+    use pendkit::model::beads::{BeadJoints, BeadedFibre, MAX_BEADS, add_beaded_fibre, beads_mass};
+    use pendkit_energy::{EndDirection, WireEnd, WireSection, WireTags};
+    let section = WireSection::round(1e-4, 2e11, 8e10, 7800.0);
+    let end = |body| WireEnd {
+        body,
+        point: nalgebra::Vector3::zeros(),
+        direction: EndDirection::Auto,
+    };
+    let mut b = pendkit::model::SystemBuilder::new(9.81);
+    let support = b.body(pendkit::model::BodySpec::new("support")).unwrap();
+    let fibre = |beads| BeadedFibre {
+        name: "f",
+        upper: end(support),
+        lower: end(support),
+        nominal: [
+            nalgebra::Vector3::zeros(),
+            nalgebra::Vector3::new(0.0, 0.0, -1.0),
+        ],
+        section: &section,
+        length: 1.0,
+        tension: 10.0,
+        g: 9.81,
+        beads,
+        joints: BeadJoints::Clamped,
+        profile: None,
+    };
+    let tags = WireTags {
+        stretch: "stretch".into(),
+        bending: "bending".into(),
+        torsion: "torsion".into(),
+    };
+    for beads in [MAX_BEADS + 1, usize::MAX] {
+        let e = add_beaded_fibre(&mut b, &fibre(beads), &tags).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            format!("fibre 'f': add_beaded_fibre: beads is {beads}, at most {MAX_BEADS}")
+        );
+    }
+    // the beads' mass for any count, without overflow: N/(N + 1) of the fibre's mass
+    let whole = section.linear_density * 1.0;
+    assert!((beads_mass(&section, None, 1.0, usize::MAX) - whole).abs() <= 1e-15 * whole);
+    assert_eq!(beads_mass(&section, None, 1.0, 1), 0.5 * whole);
+}
+
+#[test]
+fn mode_pairing_and_fit_jacobians_of_mismatched_sizes_are_errors_naming_the_argument() {
+    use pendkit::fit::MatchedModes;
+    let (i2, i3) = (DMatrix::identity(2, 2), DMatrix::identity(3, 3));
+    // two modes over two coordinates against masses and shapes over three
+    let e = pendkit::pair_modes_by_overlap(&i2, &i2, &i2, &i3).unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        "pair_modes_by_overlap: new_mass is 3 x 3, expected over old_shapes' 2 coordinates"
+    );
+    let e = pendkit::pair_modes_by_overlap(&i2, &i3, &i2, &i2).unwrap_err();
+    assert!(
+        e.to_string()
+            .starts_with("pair_modes_by_overlap: old_mass is 3 x 3")
+    );
+    let e = pendkit::pair_modes_by_overlap(&i2, &i2, &DMatrix::identity(3, 2), &i2).unwrap_err();
+    assert!(
+        e.to_string()
+            .starts_with("pair_modes_by_overlap: new_shapes (rows) is 3 x 2")
+    );
+    // the same shapes pair with themselves, overlap 1 (mass-normalised columns of I)
+    let pairs = pendkit::pair_modes_by_overlap(&i2, &i2, &i2, &i2).unwrap();
+    assert_eq!(pairs, [Some((0, 1.0)), Some((1, 1.0))]);
+    // a Jacobian with one value for two free parameters, or a zero step
+    let case = Case::model("toy").unwrap();
+    let matched = MatchedModes {
+        indices: vec![0],
+        hz: vec![1.0],
+        labels: vec!["q".into()],
+        shapes: DMatrix::zeros(1, 1),
+        mass: DMatrix::identity(1, 1),
+        overlaps: vec![1.0],
+    };
+    let free = ["k1".to_string(), "m".to_string()];
+    let e = pendkit::mode_jacobian(&case, Stage::S2, &free, &[1.0], &matched, 1e-4).unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        "mode_jacobian: values is 1, expected one value per free parameter (2)"
+    );
+    let e =
+        pendkit::mode_jacobian(&case, Stage::S2, &free[..1], &[1.0], &matched, 0.0).unwrap_err();
+    assert!(
+        e.to_string()
+            .starts_with("mode_jacobian: relative_step is 0")
+    );
+}
+
+#[test]
+fn the_hyper_dual_fallback_refuses_frames_whose_local_indices_do_not_match_their_jets() {
+    use pendkit_energy::{
+        Derivatives, FrameAt, JetPoint, OffForm, Scratch, hyper_dual_over_frames,
+    };
+    let r = quad();
+    let jet = test_mass_jet(&r);
+    let k = jet.vars().len();
+    let run = |local: &[usize]| {
+        let n = k + 1;
+        let (mut values, mut gradients, mut scales) = (vec![0.0; 1], vec![0.0; n], vec![0.0; n]);
+        let (mut on, mut off) = (vec![0.0; n * n], vec![0.0; n * n]);
+        let mut scratch = Scratch::default();
+        let mut out = Derivatives {
+            n,
+            hessian: true,
+            values: &mut values,
+            gradients: &mut gradients,
+            force_scales: &mut scales,
+            on: &mut on,
+            off: &mut off,
+            off_form: OffForm::Same,
+            scratch: &mut scratch,
+        };
+        let x = vec![0.0; n];
+        let frames = [FrameAt { jet: &jet, local }];
+        let at = JetPoint {
+            x: &x,
+            frames: &frames,
+        };
+        // the height of a body-fixed point: any energy over the frame will do
+        let done = hyper_dual_over_frames::<1>(&at, 1, &mut out, |[f], e| {
+            e[0] = f.origin[2];
+        });
+        (done, gradients)
+    };
+    // one local index per jet coordinate: computed, the gradient is ∂z/∂q of the jet
+    let matching: Vec<usize> = (0..k).collect();
+    let (done, gradients) = run(&matching);
+    assert!(done);
+    let a = nalgebra::Vector3::zeros();
+    for (g, dp) in gradients.iter().zip(jet.d_points(&a)) {
+        assert_eq!(*g, dp[2]);
+    }
+    // one local index more than the jet has: refused, nothing written
+    let long: Vec<usize> = (0..=k).collect();
+    let (done, gradients) = run(&long);
+    assert!(!done);
+    assert!(gradients.iter().all(|&g| g == 0.0));
+}

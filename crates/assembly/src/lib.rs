@@ -656,10 +656,7 @@ fn check_layout(system: &System, layout: &Layout) -> Result<(), AssemblyError> {
 /// order of its frame's coordinates.
 fn jet_columns(jet: &FrameJet, com: &Vector3<f64>, columns: &mut Vec<[Vector3<f64>; 2]>) {
     columns.clear();
-    columns.extend((0..jet.vars().len()).map(|i| {
-        let [p, w, _] = jet.velocity(i, com);
-        [p, w]
-    }));
+    columns.extend(jet.velocities(com).map(|[p, w, _]| [p, w]));
 }
 
 /// The mass matrix at the evaluator's equilibrium: from the shared jets on the fast path,

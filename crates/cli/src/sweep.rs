@@ -201,12 +201,14 @@ pub fn match_modes(
     old_mass: &DMatrix<f64>,
     new_shapes: &DMatrix<f64>,
     new_mass: &DMatrix<f64>,
-) -> Vec<(usize, f64)> {
-    pendkit::pair_modes_by_overlap(old_shapes, old_mass, new_shapes, new_mass)
-        .into_iter()
-        .enumerate()
-        .map(|(j, m)| m.unwrap_or((j, 0.0)))
-        .collect()
+) -> Result<Vec<(usize, f64)>, pendkit::Error> {
+    Ok(
+        pendkit::pair_modes_by_overlap(old_shapes, old_mass, new_shapes, new_mass)?
+            .into_iter()
+            .enumerate()
+            .map(|(j, m)| m.unwrap_or((j, 0.0)))
+            .collect(),
+    )
 }
 
 /// The unit the model declares for parameter `name` (empty if none).
@@ -341,7 +343,7 @@ pub fn run(a: Args) -> Result<String, CliError> {
                             "sweep: the model's variables change at {step_name}; modes can only be tracked over a fixed set of variables"
                         )));
                     }
-                    let matched = match_modes(&old.shapes, &old.mass, &modes.shapes, &modes.mass);
+                    let matched = match_modes(&old.shapes, &old.mass, &modes.shapes, &modes.mass)?;
                     (
                         matched.iter().map(|&(i, _)| ids[q][i]).collect(),
                         matched.iter().map(|&(_, o)| o).collect(),
@@ -535,7 +537,7 @@ mod tests {
         let new = DMatrix::from_row_slice(2, 2, &[0.0, 0.9, -0.4, 0.0]);
         let m_old = DMatrix::from_row_slice(2, 2, &[1.0, 0.0, 0.0, 4.0]);
         let m_new = DMatrix::from_row_slice(2, 2, &[1.2, 0.0, 0.0, 5.0]);
-        let matched = match_modes(&old, &m_old, &new, &m_new);
+        let matched = match_modes(&old, &m_old, &new, &m_new).unwrap();
         assert_eq!(matched[0].0, 1);
         assert_eq!(matched[1].0, 0);
         assert!((matched[0].1 - 1.0).abs() < 1e-15 && (matched[1].1 - 1.0).abs() < 1e-15);

@@ -168,9 +168,9 @@ pub fn eliminate_floats(
     let n = nx + nq + ns;
     if p.nrows() != n || p.ncols() != n {
         return Err(DynamicsError::Length {
-            what: "master matrix",
+            what: "eliminate_floats: p (master matrix, per side)",
             expected: n,
-            got: p.nrows(),
+            got: if p.nrows() != n { p.nrows() } else { p.ncols() },
         });
     }
     let kept: Vec<usize> = (0..nx).chain(nx + nq..n).collect();

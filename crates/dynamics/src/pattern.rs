@@ -17,9 +17,13 @@ pub struct Pattern {
 }
 
 impl Pattern {
-    /// The pattern holding every `(row, column)` of `positions` (duplicates allowed), and
-    /// the transposed positions too, so that it is symmetric.
-    pub fn from_positions(dim: usize, positions: impl IntoIterator<Item = (usize, usize)>) -> Self {
+    /// The pattern holding every `(row, column)` of `positions` (duplicates allowed, each
+    /// below `dim`: the caller guarantees it), and the transposed positions too, so that it
+    /// is symmetric.
+    pub(crate) fn from_positions(
+        dim: usize,
+        positions: impl IntoIterator<Item = (usize, usize)>,
+    ) -> Self {
         let mut rows: Vec<Vec<usize>> = vec![Vec::new(); dim];
         for (i, j) in positions {
             rows[i].push(j);
@@ -59,23 +63,38 @@ impl Pattern {
         self.cols.is_empty()
     }
 
-    /// Slots of row `i`.
-    pub fn row_slots(&self, i: usize) -> Range<usize> {
+    /// Slots of row `i` (below [`Pattern::dim`]: crate-internal, callers loop over rows
+    /// they own).
+    pub(crate) fn row_slots(&self, i: usize) -> Range<usize> {
         self.row_start[i]..self.row_start[i + 1]
     }
 
-    /// Columns stored in row `i`, ascending.
-    pub fn row(&self, i: usize) -> &[usize] {
+    /// Columns stored in row `i` (below [`Pattern::dim`]), ascending.
+    pub(crate) fn row(&self, i: usize) -> &[usize] {
         &self.cols[self.row_slots(i)]
     }
 
-    /// (row, column) of a slot.
-    pub fn position(&self, slot: usize) -> (usize, usize) {
+    /// (row, column) of a slot (below [`Pattern::len`]: crate-internal; outside, see
+    /// [`Pattern::positions`] and [`Pattern::get_position`]).
+    pub(crate) fn position(&self, slot: usize) -> (usize, usize) {
         (self.row_of[slot], self.cols[slot])
     }
 
-    /// The slot of (i, j), if stored.
+    /// (row, column) of a slot, or `None` for a slot past [`Pattern::len`].
+    pub fn get_position(&self, slot: usize) -> Option<(usize, usize)> {
+        Some((*self.row_of.get(slot)?, *self.cols.get(slot)?))
+    }
+
+    /// (row, column) of every slot, in slot order: zip it with values on the pattern.
+    pub fn positions(&self) -> impl ExactSizeIterator<Item = (usize, usize)> + '_ {
+        self.row_of.iter().copied().zip(self.cols.iter().copied())
+    }
+
+    /// The slot of (i, j), if stored (`None` for a row or column past [`Pattern::dim`]).
     pub fn slot(&self, i: usize, j: usize) -> Option<usize> {
+        if i >= self.dim {
+            return None;
+        }
         let range = self.row_slots(i);
         self.cols[range.clone()]
             .binary_search(&j)
@@ -137,9 +156,13 @@ impl Pattern {
 
     /// The compressed columns (column pointers, row indices) of the square sub-pattern over
     /// `nodes` (ascending), numbered by `local` (the position of each node among `nodes`,
-    /// `usize::MAX` for nodes left out). Rows stay ascending in each column because the
-    /// numbering keeps the order.
-    pub fn restricted_columns(&self, nodes: &[usize], local: &[usize]) -> (Vec<usize>, Vec<usize>) {
+    /// `usize::MAX` for nodes left out; every node below [`Pattern::dim`]). Rows stay
+    /// ascending in each column because the numbering keeps the order.
+    pub(crate) fn restricted_columns(
+        &self,
+        nodes: &[usize],
+        local: &[usize],
+    ) -> (Vec<usize>, Vec<usize>) {
         let mut col_ptr = Vec::with_capacity(nodes.len() + 1);
         let mut row_idx = Vec::new();
         col_ptr.push(0);
@@ -158,7 +181,7 @@ impl Pattern {
     /// Connected components of the graph over the nodes `0..n` (n ≤ dim) whose edges are
     /// the stored positions with both ends below n: a label per node, numbered from 0 in
     /// order of each component's lowest node, and the number of components.
-    pub fn components(&self, n: usize) -> (Vec<usize>, usize) {
+    pub(crate) fn components(&self, n: usize) -> (Vec<usize>, usize) {
         const NONE: usize = usize::MAX;
         let mut label = vec![NONE; n];
         let mut count = 0;
@@ -220,6 +243,21 @@ mod tests {
         let (rows, cols): (Vec<_>, Vec<_>) = (0..p.len()).map(|s| p.position(s)).unzip();
         assert_eq!(rows, [0, 1, 2, 2, 3, 4]);
         assert_eq!(cols, [2, 3, 0, 2, 1, 4]);
+    }
+
+    #[test]
+    fn out_of_range_rows_and_slots_are_none_not_panics() {
+        let p = Pattern::from_positions(3, [(0, 2), (1, 1)]);
+        // (0, 2), (1, 1), (2, 0): three slots in a 3 × 3 pattern
+        assert_eq!(p.len(), 3);
+        assert_eq!(p.get_position(2), Some((2, 0)));
+        assert_eq!(p.get_position(3), None);
+        assert_eq!(p.get_position(usize::MAX), None);
+        assert_eq!(p.slot(3, 0), None);
+        assert_eq!(p.slot(0, 3), None);
+        assert_eq!(p.slot(usize::MAX, usize::MAX), None);
+        let all: Vec<_> = p.positions().collect();
+        assert_eq!(all, [(0, 2), (1, 1), (2, 0)]);
     }
 
     #[test]

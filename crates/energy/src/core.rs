@@ -41,10 +41,17 @@ impl Potential for GravityEnergy {
         let [frame] = at.frames else {
             return false;
         };
+        // a frame whose local indices do not match its jet: the reference path answers
+        if frame
+            .check_jet("GravityEnergy::fast_derivatives", false)
+            .is_err()
+        {
+            return false;
+        }
         let (jet, a, n) = (frame.jet, &self.centre_of_mass, out.n);
         out.values[0] = jet.point(a)[2] * self.weight;
-        for (i, &li) in frame.local.iter().enumerate() {
-            out.gradients[li] += jet.d_point(i, a)[2] * self.weight;
+        for (&li, dp) in frame.local.iter().zip(jet.d_points(a)) {
+            out.gradients[li] += dp[2] * self.weight;
         }
         if out.hessian {
             // on an error (buffers that do not fit the frame) the reference path answers
@@ -301,6 +308,13 @@ impl SpringEnergy {
             rotation(y, p, r)
         });
         let frames = [f0, f1];
+        // frames whose local indices do not match their jets: the reference path answers
+        if frames
+            .iter()
+            .any(|f| f.check_jet("SpringEnergy::jets", out.hessian).is_err())
+        {
+            return false;
+        }
         // attachment frames at the point
         let attach = |k: usize| frames[k].jet.rotation() * turn[k];
         let (a0, a1) = (attach(0), attach(1));
@@ -326,9 +340,14 @@ impl SpringEnergy {
         for k in 0..2 {
             let f = frames[k];
             let sign = if k == 0 { -1.0 } else { 1.0 };
-            for (i, &l) in f.local.iter().enumerate() {
-                da[k * n + l] = f.jet.d_rotation(i) * turn[k];
-                dd[l] += f.jet.d_point(i, &self.ends[k].point) * sign;
+            let derivatives = f
+                .jet
+                .d_rotations()
+                .iter()
+                .zip(f.jet.d_points(&self.ends[k].point));
+            for (&l, (dr, dp)) in f.local.iter().zip(derivatives) {
+                da[k * n + l] = dr * turn[k];
+                dd[l] += dp * sign;
             }
         }
         for l in 0..n {
@@ -386,15 +405,27 @@ impl SpringEnergy {
                 // second derivatives of r = A0ᵀ d and M = A0ᵀ A1 at (a, b), product rule
                 let mut ddr = Vector3::zeros();
                 let mut ddm = Matrix3::zeros();
+                // positions among `local`, which was checked against the jets above
                 if let (Some(i), Some(j)) = (at_a[0], at_b[0]) {
-                    let dda0 = f0.jet.dd_rotation(i, j) * turn[0];
-                    ddr += dda0.transpose() * d
-                        - a0.transpose() * f0.jet.dd_point(i, j, &self.ends[0].point);
+                    let (Ok(dd_r0), Ok(dd_o0)) = (
+                        f0.jet.dd_rotation(i, j),
+                        f0.jet.dd_point(i, j, &self.ends[0].point),
+                    ) else {
+                        return false;
+                    };
+                    let dda0 = dd_r0 * turn[0];
+                    ddr += dda0.transpose() * d - a0.transpose() * dd_o0;
                     ddm += dda0.transpose() * a1;
                 }
                 if let (Some(i), Some(j)) = (at_a[1], at_b[1]) {
-                    ddr += a0.transpose() * f1.jet.dd_point(i, j, &self.ends[1].point);
-                    ddm += a0.transpose() * (f1.jet.dd_rotation(i, j) * turn[1]);
+                    let (Ok(dd_r1), Ok(dd_o1)) = (
+                        f1.jet.dd_rotation(i, j),
+                        f1.jet.dd_point(i, j, &self.ends[1].point),
+                    ) else {
+                        return false;
+                    };
+                    ddr += a0.transpose() * dd_o1;
+                    ddm += a0.transpose() * (dd_r1 * turn[1]);
                 }
                 if at_a[0].is_some() {
                     ddr += da[a].transpose() * dd[b];

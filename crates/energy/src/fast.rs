@@ -8,7 +8,7 @@
 use crate::EnergyError;
 use nalgebra::{Matrix3, Vector3};
 use num_dual::HyperDual64;
-use pendkit_geometry::{Frame, FrameJet};
+use pendkit_geometry::{Frame, FrameJet, JetError};
 
 /// One frame a term reads, at the evaluation point: the body's jet and, for each of the
 /// jet's coordinates, its index in the term's local coordinate vector.
@@ -21,6 +21,29 @@ pub struct FrameAt<'a> {
 }
 
 impl FrameAt<'_> {
+    /// `local` names one term-local index per coordinate of the jet (and, with `second`,
+    /// the jet has second derivatives): then every position among `local` is a valid index
+    /// of the jet, which `function` checks once here instead of per derivative.
+    pub(crate) fn check_jet(
+        &self,
+        function: &'static str,
+        second: bool,
+    ) -> Result<(), EnergyError> {
+        let k = self.jet.vars().len();
+        if self.local.len() != k {
+            return Err(EnergyError::Length {
+                function,
+                argument: "frame.local (one entry per jet coordinate)",
+                expected: k,
+                given: self.local.len(),
+            });
+        }
+        if second && !self.jet.has_second() && k > 0 {
+            return Err(pendkit_geometry::JetError::NoSecond { function }.into());
+        }
+        Ok(())
+    }
+
     /// The position of term-local coordinate `l` among the jet's coordinates, if the frame
     /// depends on it.
     pub fn position(&self, l: usize) -> Option<usize> {
@@ -112,17 +135,17 @@ pub enum Attached<'v> {
 }
 
 impl Attached<'_> {
-    fn first(&self, jet: &FrameJet, i: usize) -> Vector3<f64> {
+    fn first(&self, jet: &FrameJet, i: usize) -> Result<Vector3<f64>, JetError> {
         match self {
             Attached::Point(a) => jet.d_point(i, a),
-            Attached::Direction(v) => jet.d_rotation(i) * *v,
+            Attached::Direction(v) => Ok(jet.d_rotation(i)? * *v),
         }
     }
 
-    fn second(&self, jet: &FrameJet, i: usize, j: usize) -> Vector3<f64> {
+    fn second(&self, jet: &FrameJet, i: usize, j: usize) -> Result<Vector3<f64>, JetError> {
         match self {
             Attached::Point(a) => jet.dd_point(i, j, a),
-            Attached::Direction(v) => jet.dd_rotation(i, j) * *v,
+            Attached::Direction(v) => Ok(jet.dd_rotation(i, j)? * *v),
         }
     }
 
@@ -144,7 +167,7 @@ fn check_local(
     argument: &'static str,
     given: usize,
 ) -> Result<(), EnergyError> {
-    let expected = frame.local.iter().max().map_or(0, |&l| l + 1);
+    let expected = frame.local.iter().max().map_or(0, |&l| l.saturating_add(1));
     if given < expected {
         return Err(EnergyError::Length {
             function,
@@ -158,7 +181,8 @@ fn check_local(
 
 /// Adds `sign` times the Jacobian of an attached vector over the local coordinates into
 /// `columns` (one 3-vector per local coordinate); `columns` shorter than the frame's local
-/// coordinates is an error (and nothing is added).
+/// coordinates, or a frame whose `local` does not name one index per jet coordinate, is an
+/// error (and nothing is added).
 pub fn add_jacobian(
     frame: &FrameAt,
     what: Attached,
@@ -166,8 +190,9 @@ pub fn add_jacobian(
     columns: &mut [Vector3<f64>],
 ) -> Result<(), EnergyError> {
     check_local(frame, "add_jacobian", "columns", columns.len())?;
+    frame.check_jet("add_jacobian", false)?;
     for (i, &l) in frame.local.iter().enumerate() {
-        columns[l] += what.first(frame.jet, i) * sign;
+        columns[l] += what.first(frame.jet, i)? * sign;
     }
     Ok(())
 }
@@ -175,7 +200,8 @@ pub fn add_jacobian(
 /// Adds Σ_k w_k ∂²v_k/∂q_a∂q_b of an attached vector v into the n × n matrix `h`
 /// (row-major): the "gradient times second derivative of the input" half of the chain
 /// rule H = Jᵀ H_in J + Σ_k g_k ∇²in_k, with `w` the energy's gradient with respect to v.
-/// An `n` that leaves out a local coordinate of the frame, or an `h` shorter than n × n, is
+/// An `n` that leaves out a local coordinate of the frame, an `h` shorter than n × n, a
+/// frame whose `local` does not name one index per jet coordinate, or a first-order jet, is
 /// an error (and nothing is added).
 pub fn add_curvature(
     frame: &FrameAt,
@@ -193,10 +219,11 @@ pub fn add_curvature(
             given: h.len(),
         });
     }
+    frame.check_jet("add_curvature", true)?;
     let local = frame.local;
     for (i, &a) in local.iter().enumerate() {
         for (j, &b) in local.iter().enumerate().skip(i) {
-            let v = what.second(frame.jet, i, j).dot(w);
+            let v = what.second(frame.jet, i, j)?.dot(w);
             h[a * n + b] += v;
             if i != j {
                 h[b * n + a] += v;
@@ -215,7 +242,8 @@ pub const MAX_PARTS: usize = 4;
 /// from their pose expressions. `energy` writes the energy of each part. Exact to rounding
 /// at any configuration; costs n(n+1)/2 evaluations, so kinds use it where no structure
 /// is exact. Needs second-order jets when Hessians are wanted. Returns false (nothing
-/// written) for more than [`MAX_PARTS`] parts.
+/// written) for more than [`MAX_PARTS`] parts, or frames whose `local` does not name one
+/// index per jet coordinate (or first-order jets when Hessians are wanted).
 pub fn hyper_dual_over_frames<const F: usize>(
     at: &JetPoint,
     parts: usize,
@@ -225,23 +253,40 @@ pub fn hyper_dual_over_frames<const F: usize>(
     if parts > MAX_PARTS || at.frames.len() != F {
         return false;
     }
+    // checked once: then every position below is an index the jets have
+    let jets_fit = at
+        .frames
+        .iter()
+        .all(|f| f.check_jet("hyper_dual_over_frames", out.hessian).is_ok());
+    if !jets_fit {
+        return false;
+    }
     let n = out.n;
     let mut e = [HyperDual64::from_re(0.0); MAX_PARTS];
-    let frames_at = |i: Option<usize>, j: Option<usize>| -> [Frame<HyperDual64>; F] {
-        std::array::from_fn(|k| {
-            let f = &at.frames[k];
-            f.jet
+    let frames_at = |i: Option<usize>, j: Option<usize>| {
+        let mut frames: [Frame<HyperDual64>; F] = std::array::from_fn(|_| Frame::identity());
+        for (frame, f) in frames.iter_mut().zip(at.frames) {
+            *frame = f
+                .jet
                 .hyper_dual(i.and_then(|i| f.position(i)), j.and_then(|j| f.position(j)))
-        })
+                .ok()?;
+        }
+        Some(frames)
     };
-    energy(&frames_at(None, None), &mut e[..parts]);
+    let Some(frames) = frames_at(None, None) else {
+        return false;
+    };
+    energy(&frames, &mut e[..parts]);
     for (p, v) in e[..parts].iter().enumerate() {
         out.values[p] = v.re;
     }
     for i in 0..n {
         let last = if out.hessian { n } else { i + 1 };
         for j in i..last {
-            energy(&frames_at(Some(i), Some(j)), &mut e[..parts]);
+            let Some(frames) = frames_at(Some(i), Some(j)) else {
+                return false;
+            };
+            energy(&frames, &mut e[..parts]);
             for (p, v) in e[..parts].iter().enumerate() {
                 if j == i {
                     out.gradients[p * n + i] = v.eps1;

@@ -82,6 +82,9 @@ pub enum EnergyError {
         /// How many there are.
         len: usize,
     },
+    /// A frame jet asked for a derivative it does not have (see [`FrameAt`]).
+    #[error(transparent)]
+    Jet(#[from] pendkit_geometry::JetError),
     /// A coordinate vector too short for the term it is given to.
     #[error("{function}: {argument} has {given} entries, the term reads up to index {} (needs {expected})", expected - 1)]
     Length {

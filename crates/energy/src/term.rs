@@ -320,7 +320,7 @@ impl Term {
     /// The shortest full coordinate vector the term can read: one more than its highest
     /// global coordinate index.
     pub fn needs(&self) -> usize {
-        self.coords.iter().max().map_or(0, |&i| i + 1)
+        self.coords.iter().max().map_or(0, |&i| i.saturating_add(1))
     }
 
     /// `x_global`, the argument of `function`, covers every coordinate of the term: checked

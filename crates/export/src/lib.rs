@@ -416,7 +416,11 @@ pub fn to_json(matrices: &[Matrix], names: &[Names]) -> Value {
     for m in matrices {
         let rows = (0..m.rows)
             .map(|r| {
-                let row = m.data.get(r * m.cols..(r + 1) * m.cols).unwrap_or_default();
+                // checked: a hand-made `rows`/`cols` must not overflow the row's bounds
+                let row = r
+                    .checked_mul(m.cols)
+                    .and_then(|start| m.data.get(start..start.checked_add(m.cols)?))
+                    .unwrap_or_default();
                 Value::from(row.to_vec())
             })
             .collect();

@@ -226,14 +226,57 @@ impl FrameJet {
         &self.main.rotation
     }
 
-    /// ∂R/∂q_i (per unit of coordinate `vars()[i]`).
-    pub fn d_rotation(&self, i: usize) -> &Matrix3<f64> {
-        &self.main.d_rotation[i]
+    /// `i` checked against the jet's coordinates, for `function`'s argument `argument`.
+    fn first_index(
+        &self,
+        function: &'static str,
+        argument: &'static str,
+        i: usize,
+    ) -> Result<usize, JetError> {
+        let len = self.main.d_rotation.len();
+        if i >= len {
+            return Err(JetError::Index {
+                function,
+                argument,
+                index: i,
+                len,
+            });
+        }
+        Ok(i)
     }
 
-    /// ∂²R/∂q_i∂q_j (needs [`JetOrder::Second`]).
-    pub fn dd_rotation(&self, i: usize, j: usize) -> &Matrix3<f64> {
-        &self.main.dd_rotation[i * self.vars.len() + j]
+    /// The slot of the pair (`i`, `j`) among the second derivatives, both checked against
+    /// the jet's coordinates (a `j` past the end would otherwise alias another pair's
+    /// slot), and the second derivatives checked present.
+    fn pair_index(&self, function: &'static str, i: usize, j: usize) -> Result<usize, JetError> {
+        let k = self.main.d_rotation.len();
+        self.first_index(function, "i", i)?;
+        self.first_index(function, "j", j)?;
+        let ij = i * k + j;
+        if ij >= self.main.dd_rotation.len() {
+            return Err(JetError::NoSecond { function });
+        }
+        Ok(ij)
+    }
+
+    /// ∂R/∂q_i (per unit of coordinate `vars()[i]`); `i` past [`FrameJet::vars`] is an
+    /// error.
+    pub fn d_rotation(&self, i: usize) -> Result<&Matrix3<f64>, JetError> {
+        let i = self.first_index("FrameJet::d_rotation", "i", i)?;
+        Ok(&self.main.d_rotation[i])
+    }
+
+    /// ∂R/∂q_i for every coordinate, in the order of [`FrameJet::vars`]: the loop form of
+    /// [`FrameJet::d_rotation`], with nothing to check.
+    pub fn d_rotations(&self) -> &[Matrix3<f64>] {
+        &self.main.d_rotation
+    }
+
+    /// ∂²R/∂q_i∂q_j; `i` or `j` past [`FrameJet::vars`], or a jet computed with
+    /// [`JetOrder::First`], is an error.
+    pub fn dd_rotation(&self, i: usize, j: usize) -> Result<&Matrix3<f64>, JetError> {
+        let ij = self.pair_index("FrameJet::dd_rotation", i, j)?;
+        Ok(&self.main.dd_rotation[ij])
     }
 
     /// Lab position (m) of the body-fixed point `a` (m, frame coordinates): X + R a.
@@ -241,37 +284,65 @@ impl FrameJet {
         self.main.origin + self.main.rotation * a
     }
 
-    /// ∂(X + R a)/∂q_i (m per unit of coordinate `vars()[i]`).
-    pub fn d_point(&self, i: usize, a: &Vector3<f64>) -> Vector3<f64> {
-        self.main.d_origin[i] + self.main.d_rotation[i] * a
+    /// ∂(X + R a)/∂q_i (m per unit of coordinate `vars()[i]`); `i` past
+    /// [`FrameJet::vars`] is an error.
+    pub fn d_point(&self, i: usize, a: &Vector3<f64>) -> Result<Vector3<f64>, JetError> {
+        let i = self.first_index("FrameJet::d_point", "i", i)?;
+        Ok(self.main.d_origin[i] + self.main.d_rotation[i] * a)
     }
 
-    /// ∂²(X + R a)/∂q_i∂q_j (needs [`JetOrder::Second`]).
-    pub fn dd_point(&self, i: usize, j: usize, a: &Vector3<f64>) -> Vector3<f64> {
-        let ij = i * self.vars.len() + j;
-        self.main.dd_origin[ij] + self.main.dd_rotation[ij] * a
+    /// ∂(X + R a)/∂q_i for every coordinate, in the order of [`FrameJet::vars`] (m per
+    /// unit of coordinate): the loop form of [`FrameJet::d_point`], with nothing to check.
+    pub fn d_points<'s>(
+        &'s self,
+        a: &'s Vector3<f64>,
+    ) -> impl ExactSizeIterator<Item = Vector3<f64>> + 's {
+        self.main
+            .d_origin
+            .iter()
+            .zip(&self.main.d_rotation)
+            .map(move |(dx, dr)| dx + dr * a)
+    }
+
+    /// ∂²(X + R a)/∂q_i∂q_j (m per unit of both coordinates); `i` or `j` past
+    /// [`FrameJet::vars`], or a jet computed with [`JetOrder::First`], is an error.
+    pub fn dd_point(&self, i: usize, j: usize, a: &Vector3<f64>) -> Result<Vector3<f64>, JetError> {
+        let ij = self.pair_index("FrameJet::dd_point", i, j)?;
+        Ok(self.main.dd_origin[ij] + self.main.dd_rotation[ij] * a)
     }
 
     /// The frame as hyper-dual numbers whose first infinitesimal is a unit change of
     /// coordinate `e1` and whose second is a unit change of `e2` (positions in `vars()`,
     /// `None` for a coordinate the frame does not depend on). This is exactly what
     /// evaluating the frame's pose expressions over those hyper-dual coordinates gives,
-    /// without evaluating them. Needs [`JetOrder::Second`] when both are given.
-    pub fn hyper_dual(&self, e1: Option<usize>, e2: Option<usize>) -> Frame<HyperDual64> {
+    /// without evaluating them. A position past [`FrameJet::vars`] is an error, and so is
+    /// giving both to a jet computed with [`JetOrder::First`].
+    pub fn hyper_dual(
+        &self,
+        e1: Option<usize>,
+        e2: Option<usize>,
+    ) -> Result<Frame<HyperDual64>, JetError> {
+        const FUNCTION: &str = "FrameJet::hyper_dual";
         let d = &self.main;
-        let k = self.vars.len();
-        let pick = |e: Option<usize>, f: &dyn Fn(usize) -> f64| e.map_or(0.0, f);
-        let both = |f: &dyn Fn(usize) -> f64| match (e1, e2) {
-            (Some(i), Some(j)) => f(i * k + j),
-            _ => 0.0,
+        let e1 = e1
+            .map(|i| self.first_index(FUNCTION, "e1", i))
+            .transpose()?;
+        let e2 = e2
+            .map(|j| self.first_index(FUNCTION, "e2", j))
+            .transpose()?;
+        let e12 = match (e1, e2) {
+            (Some(i), Some(j)) => Some(self.pair_index(FUNCTION, i, j)?),
+            _ => None,
         };
-        Frame {
+        // every index below was checked above
+        let pick = |e: Option<usize>, f: &dyn Fn(usize) -> f64| e.map_or(0.0, f);
+        Ok(Frame {
             origin: Vector3::from_fn(|r, _| {
                 HyperDual64::new(
                     d.origin[r],
                     pick(e1, &|i| d.d_origin[i][r]),
                     pick(e2, &|i| d.d_origin[i][r]),
-                    both(&|ij| d.dd_origin[ij][r]),
+                    pick(e12, &|ij| d.dd_origin[ij][r]),
                 )
             }),
             rotation: Matrix3::from_fn(|r, c| {
@@ -279,11 +350,56 @@ impl FrameJet {
                     d.rotation[(r, c)],
                     pick(e1, &|i| d.d_rotation[i][(r, c)]),
                     pick(e2, &|i| d.d_rotation[i][(r, c)]),
-                    both(&|ij| d.dd_rotation[ij][(r, c)]),
+                    pick(e12, &|ij| d.dd_rotation[ij][(r, c)]),
                 )
             }),
+        })
+    }
+}
+
+impl JetError {
+    /// The same error reported as coming from `function` (for a public function that
+    /// checks through another).
+    pub(crate) fn renamed(self, function: &'static str) -> Self {
+        match self {
+            JetError::Index {
+                argument,
+                index,
+                len,
+                ..
+            } => JetError::Index {
+                function,
+                argument,
+                index,
+                len,
+            },
+            JetError::NoSecond { .. } => JetError::NoSecond { function },
         }
     }
+}
+
+/// An index a [`FrameJet`] does not have: past its coordinates, or a second derivative of
+/// a jet computed with [`JetOrder::First`].
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum JetError {
+    /// An index past the jet's coordinates.
+    #[error("{function}: {argument} = {index} is out of range, the jet has {len} coordinates")]
+    Index {
+        /// The function called, e.g. `FrameJet::d_point`.
+        function: &'static str,
+        /// The argument out of range.
+        argument: &'static str,
+        /// Its value.
+        index: usize,
+        /// The number of coordinates of the jet (valid indices are below it).
+        len: usize,
+    },
+    /// A second derivative asked of a first-order jet.
+    #[error("{function}: the jet has no second derivatives (it was computed with JetOrder::First)")]
+    NoSecond {
+        /// The function called.
+        function: &'static str,
+    },
 }
 
 impl crate::FrameMap {
@@ -620,12 +736,16 @@ mod tests {
                 let p = f.point(&a);
                 let r = f.rotation;
                 assert!((p.map(|e| e.re) - jet.point(&a)).norm() < 1e-15 * scale);
-                assert!((p.map(|e| e.eps1) - jet.d_point(i, &a)).norm() < 1e-14 * scale);
-                assert!((p.map(|e| e.eps1eps2) - jet.dd_point(i, j, &a)).norm() < 1e-14 * scale);
-                assert!((r.map(|e| e.eps1) - jet.d_rotation(i)).norm() < 1e-14);
-                assert!((r.map(|e| e.eps1eps2) - jet.dd_rotation(i, j)).norm() < 1e-14);
+                assert!((p.map(|e| e.eps1) - jet.d_point(i, &a).unwrap()).norm() < 1e-14 * scale);
+                assert_eq!(jet.d_points(&a).nth(i), jet.d_point(i, &a).ok());
+                assert!(
+                    (p.map(|e| e.eps1eps2) - jet.dd_point(i, j, &a).unwrap()).norm()
+                        < 1e-14 * scale
+                );
+                assert!((r.map(|e| e.eps1) - jet.d_rotation(i).unwrap()).norm() < 1e-14);
+                assert!((r.map(|e| e.eps1eps2) - jet.dd_rotation(i, j).unwrap()).norm() < 1e-14);
                 // the hyper-dual frame rebuilt from the jet is the same number
-                let h = jet.hyper_dual(Some(i), Some(j));
+                let h = jet.hyper_dual(Some(i), Some(j)).unwrap();
                 assert!(
                     (h.origin.map(|e| e.eps1eps2) - f.origin.map(|e| e.eps1eps2)).norm()
                         < 1e-14 * scale

@@ -19,7 +19,7 @@ use pendkit_rotations::{
     Real, c, mul, mul_const, mul_const_vec, mul_vec, rotation, tr_mul, tr_mul_vec, vee,
 };
 
-pub use jet::{FrameJet, JetOrder};
+pub use jet::{FrameJet, JetError, JetOrder};
 
 /// A coordinate vector (or a Jacobian's column count) too short for the frame it is used
 /// with: the function, the argument, the length needed and the length given.
@@ -143,7 +143,9 @@ impl FrameMap {
 
     fn with_index(index: Arc<Vec<usize>>, shape: Arc<jet::Shape>) -> Self {
         FrameMap {
-            needs: index.iter().max().map_or(0, |&i| i + 1),
+            // saturating: an index of usize::MAX (e.g. remapped to it) needs more than any
+            // vector holds, where wrapping would make it need nothing
+            needs: index.iter().max().map_or(0, |&i| i.saturating_add(1)),
             index: index.as_slice().into(),
             shape,
         }
@@ -309,21 +311,36 @@ impl PointJacobian {
 impl FrameJet {
     /// Velocity of the body-fixed point `a` (m, frame coordinates) and angular velocity of
     /// the frame per unit rate of coordinate `vars()[i]`: (∂p/∂q_i, ω_B, ω_S), with
-    /// ω̂_B = Rᵀ ∂R/∂q_i and ω̂_S = ∂R/∂q_i Rᵀ.
-    pub fn velocity(&self, i: usize, a: &Vector3<f64>) -> [Vector3<f64>; 3] {
-        let (r, dr) = (self.rotation(), self.d_rotation(i));
-        [
-            self.d_point(i, a),
-            vee(&(r.transpose() * dr)),
-            vee(&(dr * r.transpose())),
-        ]
+    /// ω̂_B = Rᵀ ∂R/∂q_i and ω̂_S = ∂R/∂q_i Rᵀ. An `i` past [`FrameJet::vars`] is an error.
+    pub fn velocity(&self, i: usize, a: &Vector3<f64>) -> Result<[Vector3<f64>; 3], JetError> {
+        let dp = self
+            .d_point(i, a)
+            .map_err(|e| e.renamed("FrameJet::velocity"))?;
+        Ok(self.velocity_of(dp, self.d_rotations()[i]))
+    }
+
+    /// [`FrameJet::velocity`] for every coordinate, in the order of [`FrameJet::vars`]:
+    /// the loop form, with nothing to check.
+    pub fn velocities<'s>(
+        &'s self,
+        a: &'s Vector3<f64>,
+    ) -> impl ExactSizeIterator<Item = [Vector3<f64>; 3]> + 's {
+        self.d_points(a)
+            .zip(self.d_rotations())
+            .map(|(dp, dr)| self.velocity_of(dp, *dr))
+    }
+
+    /// (∂p/∂q_i, ω_B, ω_S) from ∂p/∂q_i and ∂R/∂q_i.
+    fn velocity_of(&self, dp: Vector3<f64>, dr: Matrix3<f64>) -> [Vector3<f64>; 3] {
+        let r = self.rotation();
+        [dp, vee(&(r.transpose() * dr)), vee(&(dr * r.transpose()))]
     }
 
     /// The velocity Jacobians of the body-fixed point `a` over all `n` coordinates of the
     /// vector the jet was evaluated at (zero columns for coordinates the frame ignores);
     /// an `n` that leaves out a coordinate of the jet is an error.
     pub fn jacobian(&self, n: usize, a: &Vector3<f64>) -> Result<PointJacobian, GeometryError> {
-        let needs = self.vars().iter().max().map_or(0, |&g| g + 1);
+        let needs = self.vars().iter().max().map_or(0, |&g| g.saturating_add(1));
         if n < needs {
             return Err(GeometryError {
                 function: "FrameJet::jacobian",
@@ -333,8 +350,7 @@ impl FrameJet {
             });
         }
         let mut jac = PointJacobian::filled(n, 0.0);
-        for (i, &g) in self.vars().iter().enumerate() {
-            let [dp, wb, ws] = self.velocity(i, a);
+        for (&g, [dp, wb, ws]) in self.vars().iter().zip(self.velocities(a)) {
             jac.position.set_column(g, &dp);
             jac.omega_body.set_column(g, &wb);
             jac.omega_space.set_column(g, &ws);

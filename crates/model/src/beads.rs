@@ -88,16 +88,30 @@ pub struct BeadedFibre<'a> {
     pub profile: Option<&'a FibreProfile>,
 }
 
+/// Largest number of violin beads per fibre: dense linear algebra, and 200 beads on each
+/// of four fibres is already ~2400 degrees of freedom.
+pub const MAX_BEADS: usize = 200;
+
 /// Adds `f` split into `beads + 1` segments of equal length with point-mass beads between
 /// them, each bead carrying one segment's mass μ L / (N + 1) (the lumped-mass rule; with a
 /// profile, half of each neighbouring segment's mass). The ends are as `f.upper` and
 /// `f.lower` say; the beads join the segments as `f.joints` says; each segment carries the
-/// tension of the lowest plus the weight of the beads below it.
+/// tension of the lowest plus the weight of the beads below it. More than [`MAX_BEADS`]
+/// beads is an error.
 pub fn add_beaded_fibre(
     b: &mut SystemBuilder,
     f: &BeadedFibre,
     tags: &WireTags,
 ) -> Result<(), BuildError> {
+    if f.beads > MAX_BEADS {
+        return Err(BuildError::Invalid {
+            item: format!("fibre '{}'", f.name),
+            message: format!(
+                "add_beaded_fibre: beads is {}, at most {MAX_BEADS}",
+                f.beads
+            ),
+        });
+    }
     let segment = f.length / (f.beads + 1) as f64;
     let slices: Vec<FibreProfile> = f
         .profile
@@ -184,9 +198,10 @@ pub fn beads_mass(
         return 0.0;
     }
     match profile {
-        None => section.linear_density * length * beads as f64 / (beads + 1) as f64,
+        // N + 1 in floating point: no overflow for any count
+        None => section.linear_density * length * beads as f64 / (beads as f64 + 1.0),
         Some(p) => {
-            let segment = length / (beads + 1) as f64;
+            let segment = length / (beads as f64 + 1.0);
             let ends = p.slice(0.0, segment).mass() + p.slice(length - segment, length).mass();
             p.mass() - 0.5 * ends
         }

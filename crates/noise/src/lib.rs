@@ -193,8 +193,7 @@ pub fn thermal_noise_with(
         if !lossy {
             continue;
         }
-        for (slot, &p) in values.iter().enumerate() {
-            let (r, c) = model.pattern.position(slot);
+        for (&p, (r, c)) in values.iter().zip(model.pattern.positions()) {
             if let (Some(i), Some(j), true) = (sweep.local(r), sweep.local(c), p != 0.0) {
                 tag_forms.push(i, j, p);
             }

@@ -386,13 +386,35 @@ pub struct MatchedModes {
 /// |u_iᵀ M̄ v_j| / sqrt(u_iᵀ M̄ u_i · v_jᵀ M̄ v_j), M̄ = (M_old + M_new)/2 (1 for the same
 /// shape, 0 for shapes that share no kinetic energy): pairs are taken in order of
 /// decreasing overlap. Returns, for each new mode, the old mode it continues and their
-/// overlap, or `None` when every old mode is taken.
+/// overlap, or `None` when every old mode is taken. Shapes and masses over different
+/// numbers of coordinates are an error naming the argument.
 pub fn pair_modes_by_overlap(
     old_shapes: &DMatrix<f64>,
     old_mass: &DMatrix<f64>,
     new_shapes: &DMatrix<f64>,
     new_mass: &DMatrix<f64>,
-) -> Vec<Option<(usize, f64)>> {
+) -> Result<Vec<Option<(usize, f64)>>, Error> {
+    // every matrix over the old shapes' coordinates (their rows)
+    let n = old_shapes.nrows();
+    let square = |m: &DMatrix<f64>| m.shape() == (n, n);
+    for (argument, fits, given) in [
+        ("old_mass", square(old_mass), old_mass.shape()),
+        ("new_mass", square(new_mass), new_mass.shape()),
+        (
+            "new_shapes (rows)",
+            new_shapes.nrows() == n,
+            new_shapes.shape(),
+        ),
+    ] {
+        if !fits {
+            return Err(Error::Argument {
+                function: "pair_modes_by_overlap",
+                argument,
+                expected: format!("over old_shapes' {n} coordinates"),
+                given: format!("{} x {}", given.0, given.1),
+            });
+        }
+    }
     let mean = (old_mass + new_mass) * 0.5;
     let cross = old_shapes.transpose() * &mean * new_shapes;
     let norm = |u: &DMatrix<f64>| -> Vec<f64> {
@@ -425,7 +447,7 @@ pub fn pair_modes_by_overlap(
             matched[j] = Some((i, overlap));
         }
     }
-    matched
+    Ok(matched)
 }
 
 /// The shapes of all modes of `result`, one column each.
@@ -562,14 +584,23 @@ impl MatchedModes {
     }
 
     /// The same modes in a new solution `result`: each followed by the overlap of its shape
-    /// with this match's (so that modes that cross in frequency keep their identity).
-    pub fn follow(&self, result: &StageResult) -> MatchedModes {
+    /// with this match's (so that modes that cross in frequency keep their identity). A
+    /// `result` over other coordinates than this match's is an error.
+    pub fn follow(&self, result: &StageResult) -> Result<MatchedModes, Error> {
+        if self.shapes.ncols() != self.indices.len() {
+            return Err(Error::Argument {
+                function: "MatchedModes::follow",
+                argument: "self.shapes (columns)",
+                expected: format!("one per matched mode ({})", self.indices.len()),
+                given: self.shapes.ncols().to_string(),
+            });
+        }
         let pairs = pair_modes_by_overlap(
             &self.shapes,
             &self.mass,
             &all_shapes(result),
             &result.assembled.mass,
-        );
+        )?;
         let mut indices = vec![0; self.indices.len()];
         let mut overlaps = vec![0.0; self.indices.len()];
         for (new, pair) in pairs.iter().enumerate() {
@@ -578,7 +609,7 @@ impl MatchedModes {
                 overlaps[old] = overlap;
             }
         }
-        MatchedModes::from_indices(result, indices, overlaps)
+        Ok(MatchedModes::from_indices(result, indices, overlaps))
     }
 }
 
@@ -613,7 +644,8 @@ fn scales(values: &[f64]) -> Vec<f64> {
 ///
 /// This is the only place the fit gets its Jacobian from; exact sensitivities
 /// (`pendkit::sensitivities`) can take its place, returning their rows
-/// `matched.indices`.
+/// `matched.indices`. `values` must hold one value per free parameter and
+/// `relative_step` be finite and positive.
 pub fn mode_jacobian(
     case: &Case,
     stage: Stage,
@@ -622,8 +654,26 @@ pub fn mode_jacobian(
     matched: &MatchedModes,
     relative_step: f64,
 ) -> Result<(Vec<f64>, DMatrix<f64>), Error> {
+    let argument = |argument, expected: String, given: String| Error::Argument {
+        function: "mode_jacobian",
+        argument,
+        expected,
+        given,
+    };
+    if values.len() != free.len() {
+        let expected = format!("one value per free parameter ({})", free.len());
+        return Err(argument("values", expected, values.len().to_string()));
+    }
+    if !(relative_step.is_finite() && relative_step > 0.0) {
+        let expected = "finite and positive".to_string();
+        return Err(argument(
+            "relative_step",
+            expected,
+            relative_step.to_string(),
+        ));
+    }
     let jacobian = central_differences(case, stage, free, values, relative_step, |result| {
-        Ok(matched.follow(result).hz)
+        Ok(matched.follow(result)?.hz)
     })?;
     Ok((matched.hz.clone(), jacobian))
 }
@@ -1050,7 +1100,7 @@ pub fn fit(
             solves += 1;
             let candidate = solve(case, free, &trial, stage).and_then(|result| {
                 result.check_stable()?;
-                let matched = state.matched.follow(&result);
+                let matched = state.matched.follow(&result)?;
                 evaluate(&trial, &matched, &result)
             });
             match candidate {

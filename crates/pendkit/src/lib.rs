@@ -227,6 +227,18 @@ pub enum Error {
         /// Where (Hz).
         f_hz: f64,
     },
+    /// An argument of a library function whose size does not fit the others.
+    #[error("{function}: {argument} is {given}, expected {expected}")]
+    Argument {
+        /// The function called, e.g. `pair_modes_by_overlap`.
+        function: &'static str,
+        /// The argument, e.g. `new_mass`.
+        argument: &'static str,
+        /// What it should be, e.g. `6 x 6`.
+        expected: String,
+        /// What it is.
+        given: String,
+    },
 }
 
 /// Most repetitions `pendkit bench` makes.

@@ -190,6 +190,22 @@ pub struct Answer {
     pub transfer: Option<Vec<c64>>,
 }
 
+impl Answer {
+    /// Its mass matrix is square over its coordinates, as `function`'s argument `argument`
+    /// needs (a hand-built answer may not be).
+    fn check(&self, function: &str, argument: &str) -> Result<(), String> {
+        let n = self.coordinates.len();
+        if self.mass.shape() != (n, n) {
+            return Err(format!(
+                "{function}: {argument}.mass is {} x {}, its {n} coordinates need {n} x {n}",
+                self.mass.nrows(),
+                self.mass.ncols()
+            ));
+        }
+        Ok(())
+    }
+}
+
 /// Answers `question` with `variant`, from the model's name: build, equilibrium, stage,
 /// modes below the top (stable ones only: an unstable variant is an error), noise and the
 /// transfer function.
@@ -268,6 +284,7 @@ pub fn match_modes(
     variant: &Answer,
     top_hz: f64,
 ) -> Result<Vec<(usize, usize, f64)>, String> {
+    reference.check("match_modes", "reference")?;
     // shared coordinates: (index in reference, index in variant)
     let shared: Vec<(usize, usize)> = reference
         .coordinates
@@ -352,8 +369,26 @@ pub fn match_modes(
 
 /// The errors of `variant`'s answer against the reference's (see the module's doc); an
 /// error message when they cannot be measured (a missing mode, a curve that is not
-/// finite).
+/// finite, curves over different numbers of points, a mass matrix that does not fit the
+/// coordinates).
 pub fn compare(reference: &Answer, variant: &Answer, top_hz: f64) -> Result<Errors, String> {
+    let same_length = |what: &str, r: usize, v: usize| {
+        if r == v {
+            Ok(())
+        } else {
+            Err(format!(
+                "compare: variant.{what} has {v} points, the reference's has {r}"
+            ))
+        }
+    };
+    same_length(
+        "noise_asd",
+        reference.noise_asd.len(),
+        variant.noise_asd.len(),
+    )?;
+    if let (Some(r), Some(v)) = (&reference.transfer, &variant.transfer) {
+        same_length("transfer", r.len(), v.len())?;
+    }
     let mut modes: f64 = 0.0;
     for (i, j, _) in match_modes(reference, variant, top_hz)? {
         let f_ref = reference.modes[i].hz;

@@ -30,9 +30,8 @@ use crate::spec::{
     Spec, SpringSet, StageFile, WireSet,
 };
 
-/// Largest number of violin beads per wire: dense linear algebra, and 200 beads on each of
-/// four fibres is already ~2400 degrees of freedom.
-pub const MAX_BEADS: usize = 200;
+/// Largest number of violin beads per wire (the model crate's limit).
+pub use pendkit_model::beads::MAX_BEADS;
 
 /// Which fields read which parameter, in the order first read.
 #[derive(Clone, Debug, Default)]

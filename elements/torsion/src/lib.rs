@@ -63,11 +63,11 @@ impl TorsionEnergy {
         grad.clear();
         grad.resize(n, 0.0);
         let m_t = self.reference_relative.transpose();
-        for (i, &l) in f0.local.iter().enumerate() {
-            grad[l] += vee(&(f0.jet.d_rotation(i).transpose() * r1 * m_t)).dot(&axis);
+        for (&l, dr0) in f0.local.iter().zip(f0.jet.d_rotations()) {
+            grad[l] += vee(&(dr0.transpose() * r1 * m_t)).dot(&axis);
         }
-        for (i, &l) in f1.local.iter().enumerate() {
-            grad[l] += vee(&(r0.transpose() * f1.jet.d_rotation(i) * m_t)).dot(&axis);
+        for (&l, dr1) in f1.local.iter().zip(f1.jet.d_rotations()) {
+            grad[l] += vee(&(r0.transpose() * dr1 * m_t)).dot(&axis);
         }
         if out.hessian {
             for a in 0..n {
