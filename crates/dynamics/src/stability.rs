@@ -65,8 +65,14 @@ pub struct GrowingMode {
 #[derive(Clone, Debug, PartialEq)]
 pub struct RunawayFloat {
     /// Stiffness along the direction (N/m, N m/rad for angles; a unit vector over the
-    /// floats): negative.
+    /// floats): negative, or within `error` of zero.
     pub stiffness: f64,
+    /// Estimated error of `stiffness` (same units). A stiffness within it of zero is a
+    /// runaway direction only when the floats along it are coupled to the variables so
+    /// strongly that, whichever its sign within the error, the potential goes downhill:
+    /// negative, the floats run away; positive, following the variables they turn the
+    /// variables' stiffness negative (see [`runaway_floats`]).
+    pub error: f64,
     /// The floats with the largest shares of the direction (name, share 0–1).
     pub floats: Vec<(String, f64)>,
 }
@@ -210,10 +216,17 @@ impl fmt::Display for Stability {
             } else {
                 format!("floats {} have", names.join(", "))
             };
-            parts.push(format!(
-                "{what} no stable position (stiffness {:.4e} N/m or N m/rad with the variables held: a massless coordinate on a maximum of the potential moves without limit)",
-                r.stiffness
-            ));
+            if r.stiffness < -r.error {
+                parts.push(format!(
+                    "{what} no stable position (stiffness {:.4e} N/m or N m/rad with the variables held: a massless coordinate on a maximum of the potential moves without limit)",
+                    r.stiffness
+                ));
+            } else {
+                parts.push(format!(
+                    "{what} no stable position within rounding (stiffness {:.1e} ± {:.1e} N/m or N m/rad with the variables held, zero within its error, and coupled to the variables so strongly that either sign goes downhill: negative, the massless coordinate runs away; positive, following the variables it makes their stiffness negative)",
+                    r.stiffness, r.error
+                ));
+            }
         }
         if let Some(g) = self.growing.first() {
             let more = if self.growing.len() > 1 {
@@ -838,7 +851,7 @@ pub fn runaway_floats(
     if nq == 0 {
         return Ok(Vec::new());
     }
-    let (q, _) = float_blocks(model, damping);
+    let (q, c) = float_blocks(model, damping);
     if let Some(bad) = q.iter().position(|x| !x.is_finite()) {
         return Err(DynamicsError::NotFinite {
             what: "float stiffness block",
@@ -847,15 +860,15 @@ pub fn runaway_floats(
         });
     }
     let mut runaway = Vec::new();
+    let mut undetermined = Vec::new();
     // Q is block diagonal over the groups its exact zeros separate: its eigenpairs are the
     // groups' own
     for group in crate::schur::components(nq, |i, j| q[(i, j)] != 0.0) {
         let qg = DMatrix::from_fn(group.len(), group.len(), |i, j| q[(group[i], group[j])]);
         let eigen = qg.clone().symmetric_eigen();
+        // the group's rows among the unknowns (where its directions are non-zero)
+        let rows: Vec<usize> = group.iter().map(|&f| nx + f).collect();
         for (k, &kappa) in eigen.eigenvalues.iter().enumerate() {
-            if kappa >= 0.0 {
-                continue;
-            }
             let w = eigen.eigenvectors.column(k);
             let error = match rounding {
                 Some(r) => {
@@ -863,7 +876,11 @@ pub fn runaway_floats(
                     for (&f, x) in group.iter().zip(w.iter()) {
                         z[nx + f] = *x;
                     }
-                    r.error_unknowns(&z)
+                    // a positive stiffness above the cheap bound of its rounding is held
+                    if kappa >= 0.0 && kappa > r.on_rows(true, &z, &rows) {
+                        continue;
+                    }
+                    r.on_rows(false, &z, &rows)
                 }
                 None => {
                     let mut sum = 0.0;
@@ -872,27 +889,102 @@ pub fn runaway_floats(
                             sum += w[i].abs() * qg[(i, j)].abs() * w[j].abs();
                         }
                     }
-                    ROUNDING * f64::EPSILON * sum
+                    let error = ROUNDING * f64::EPSILON * sum;
+                    if kappa > error {
+                        continue;
+                    }
+                    error
                 }
             };
             if kappa < -error {
-                let mut floats: Vec<(String, f64)> = w
-                    .iter()
-                    .zip(&group)
-                    .map(|(x, &f)| (model.floats.get(f).cloned().unwrap_or_default(), x * x))
-                    .filter(|(_, share)| *share >= 0.01)
-                    .collect();
-                floats.sort_by(|a, b| b.1.total_cmp(&a.1));
-                floats.truncate(3);
                 runaway.push(RunawayFloat {
                     stiffness: kappa,
-                    floats,
+                    error,
+                    floats: float_shares(model, &group, w.iter().copied()),
                 });
+            } else if kappa <= error {
+                undetermined.push((kappa, error, group.clone(), w.iter().copied().collect()));
             }
         }
     }
+    runaway.extend(undetermined_runaways(
+        model,
+        &re_values(model, damping),
+        &c,
+        nx,
+        undetermined,
+    ));
     runaway.sort_by(|a, b| a.stiffness.total_cmp(&b.stiffness));
     Ok(runaway)
+}
+
+/// The floats with the largest shares (at least 1 %) of a direction `w` over the floats
+/// `group` (0-based among the floats): at most three, largest first.
+fn float_shares(
+    model: &StageModel,
+    group: &[usize],
+    w: impl Iterator<Item = f64>,
+) -> Vec<(String, f64)> {
+    let mut floats: Vec<(String, f64)> = w
+        .zip(group)
+        .map(|(x, &f)| (model.floats.get(f).cloned().unwrap_or_default(), x * x))
+        .filter(|(_, share)| *share >= 0.01)
+        .collect();
+    floats.sort_by(|a, b| b.1.total_cmp(&a.1));
+    floats.truncate(3);
+    floats
+}
+
+/// The stage's real stiffness values at f = 0 on its pattern.
+fn re_values(model: &StageModel, damping: &Damping) -> Vec<f64> {
+    model.master_values(damping, 0.0).0
+}
+
+/// A float direction w (unit, over the floats) whose stiffness κ is zero within its error
+/// δ: unknown in sign. With b = C w the variables' coupling to it (N/m) and a = uᵀ K u the
+/// variables' own stiffness along u = b/|b|, the stiffness restricted to the plane of u
+/// and w is [[a, |b|], [|b|, κ]], indefinite for every κ ≤ κ + δ when a (κ + δ) < |b|²; by
+/// Cauchy interlacing the whole stiffness then has a negative eigenvalue whatever the
+/// rounding: the direction is reported as runaway. (The margin of 2 covers the rounding
+/// of a and b themselves, a few ulps.) Directions weakly coupled stay neutral.
+fn undetermined_runaways(
+    model: &StageModel,
+    re: &[f64],
+    c: &DMatrix<f64>,
+    nx: usize,
+    undetermined: Vec<(f64, f64, Vec<usize>, Vec<f64>)>,
+) -> Vec<RunawayFloat> {
+    let mut runaway = Vec::new();
+    for (kappa, error, group, w) in undetermined {
+        // b = Cᵀ w over the variables
+        let mut b = vec![0.0; nx];
+        for (&f, &wf) in group.iter().zip(&w) {
+            for (j, bj) in b.iter_mut().enumerate() {
+                *bj += wf * c[(f, j)];
+            }
+        }
+        let b2: f64 = b.iter().map(|x| x * x).sum();
+        if b2 == 0.0 || !b2.is_finite() {
+            continue;
+        }
+        // a = uᵀ K_xx u from the pattern's variable entries
+        let mut a = 0.0;
+        for (slot, &v) in re.iter().enumerate() {
+            let (r, col) = model.pattern.position(slot);
+            if r < nx && col < nx {
+                a += b[r] * v * b[col];
+            }
+        }
+        let a = a / b2;
+        if 2.0 * a * (kappa + error) < b2 {
+            runaway.push(RunawayFloat {
+                stiffness: kappa,
+                error,
+                floats: float_shares(model, &group, w.iter().copied()),
+            });
+        }
+    }
+    runaway
 }
 
 /// Bodies with mass whose z axis points below the horizontal at coordinates `x` (a full

@@ -570,30 +570,25 @@ pub fn run_stage_with(
     });
     let modes = match options.modes {
         ModeSelection::Below(hz) if model.sizes.0 > DENSE_MODES_LIMIT => {
-            timed(&mut times, "modes", 1, || {
+            let below = timed(&mut times, "modes", 1, || {
                 model.modes_below_with_rounding(&system.damping, hz, &rounding)
-            })?
-        }
-        selection => {
-            let reduced = timed(&mut times, "floats", 1, || {
-                eliminate_floats(
-                    &model.real_stiffness(&system.damping),
-                    &assembled.layout,
-                    &system,
-                )
-            })?;
-            let mut modes = timed(&mut times, "modes", 1, || {
-                normal_modes_with_rounding(
-                    &reduced.k_eff,
-                    &assembled.mass,
-                    &model.variables,
-                    &rounding,
-                )
-            })?;
-            if let ModeSelection::Below(hz) = selection {
-                modes.modes.retain(|m| m.hz < hz);
+            });
+            match below {
+                Ok(modes) => modes,
+                // the shift-invert iteration could not resolve every mode below the bound
+                // (a growing mode beyond its shift's resolution, a shift on an eigenvalue):
+                // the dense solve, slower but complete, decides instead
+                Err(DynamicsError::Solver(_)) => {
+                    dense_modes(&model, &assembled, &system, &rounding, Some(hz), &mut times)?
+                }
+                Err(e) => return Err(e.into()),
             }
-            modes
+        }
+        ModeSelection::Below(hz) => {
+            dense_modes(&model, &assembled, &system, &rounding, Some(hz), &mut times)?
+        }
+        ModeSelection::All => {
+            dense_modes(&model, &assembled, &system, &rounding, None, &mut times)?
         }
     };
     // after the modes, so that a model the modes refuse outright (a massless body, whose
@@ -611,6 +606,32 @@ pub fn run_stage_with(
         modes,
         stability,
     })
+}
+
+/// The stage's modes by the dense eigensolver block by block (those below `below` Hz when
+/// given, every growing mode among them), recording the `floats` and `modes` phases.
+fn dense_modes(
+    model: &StageModel,
+    assembled: &Assembled,
+    system: &System,
+    rounding: &TermRounding,
+    below: Option<f64>,
+    times: &mut Option<&mut PhaseTimes>,
+) -> Result<Modes, Error> {
+    let reduced = timed(times, "floats", 1, || {
+        eliminate_floats(
+            &model.real_stiffness(&system.damping),
+            &assembled.layout,
+            system,
+        )
+    })?;
+    let mut modes = timed(times, "modes", 1, || {
+        normal_modes_with_rounding(&reduced.k_eff, &assembled.mass, &model.variables, rounding)
+    })?;
+    if let Some(hz) = below {
+        modes.modes.retain(|m| m.hz < hz);
+    }
+    Ok(modes)
 }
 
 /// A point on a body as the linearised geometry at equilibrium sees it: how far it moves
