@@ -560,6 +560,17 @@ fn verdict_disagreements(
             .omega_squared
             .iter()
             .all(|&w| w > reference.omega_squared_error);
+    // a stable verdict never rests on a float stiffness within rounding of zero
+    let float_undetermined = reference
+        .float_eigenvalues
+        .iter()
+        .any(|k| k.abs() <= reference.float_error);
+    if s.verdict == Verdict::Stable && float_undetermined {
+        wrong.push(format!(
+            "stable, but a float stiffness is zero within rounding ({:?} ± {:e})",
+            reference.float_eigenvalues, reference.float_error
+        ));
+    }
     match s.verdict {
         Verdict::Stable | Verdict::Neutral if clearly_unstable => wrong.push(format!(
             "{:?} but the reference has negative directions",
@@ -837,7 +848,7 @@ fn equilibria_from_tilted_starts_agree_with_the_independent_solve() {
         ("rigid-body", "pitch1", 3.1),
         ("rigid-body", "roll1", 3.1),
         ("rigid-body", "yaw1", 3.1),
-        ("rigid-body", "yaw1", 1.5708),
+        ("rigid-body", "yaw1", 1.6),
         ("rigid-body", "z1", 0.6),
         ("triple", "pitch1", 3.0),
         ("triple", "yaw2", 3.0),
@@ -942,4 +953,168 @@ fn shift_invert_modes_near_their_shift_report_no_spurious_growing_modes() {
         (a.omega_squared - b.omega_squared).abs() <= a.omega_squared_error + b.omega_squared_error,
         "{a:?} vs {b:?}"
     );
+}
+
+/// The stated errors are honest: each point's three lowest modes from the two derivative
+/// paths (the fast, hand-differentiated one and the hyper-dual reference: the same
+/// Hessians rounded differently) agree within the sum of their stated errors, at the pitch
+/// break-off within 1e-12 of its bisected value, with wires and blades 1e6–1e12 times
+/// stiffer than nominal, near g = 0 and with a blade near zero stiffness. The verdicts
+/// agree too.
+#[test]
+fn stated_errors_cover_the_difference_between_the_two_derivative_paths() {
+    use pendkit::{RunOptions, run_stage_with};
+    use pendkit_assembly::{AssemblyOptions, DerivativePath};
+    let points: Vec<(&str, Vec<&str>, Stage)> = vec![
+        ("quad", vec!["d4=-1.3787475950811184e-2"], Stage::S2),
+        ("quad", vec!["d4=-1.378747595081132e-2"], Stage::S2),
+        ("quad", vec!["d4=-1.3787475950824973e-2"], Stage::S2),
+        ("quad", vec!["d4=-1.3787475950797396e-2"], Stage::S2),
+        ("quad", vec!["Yn=2.2e17", "d4=-0.02"], Stage::S2),
+        ("quad", vec!["rn=scale(30)", "d4=-0.02"], Stage::S2),
+        ("double-pendulum", vec!["r_wire=scale(100)"], Stage::S2),
+        ("chain", vec!["E_wire=2.12e19", "d_bottom=-0.05"], Stage::S2),
+        (
+            "quad-full",
+            vec!["d4=-0.02", "blade_stiff_translation=1e12"],
+            Stage::S2,
+        ),
+        ("toy", vec!["k1=-1000", "k2=1e15"], Stage::S0A),
+        ("quad", vec!["g=1e-3"], Stage::S2),
+        ("quad", vec!["ufc1=1e-4", "d4=-0.02"], Stage::S2),
+    ];
+    let mut bad = Vec::new();
+    for (model, sets, stage) in points {
+        let sets_owned: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
+        let (system, _) = Case::model(model)
+            .unwrap()
+            .with_sets(&sets_owned)
+            .unwrap()
+            .build()
+            .unwrap();
+        let [fast, reference] = [DerivativePath::Fast, DerivativePath::Reference].map(|path| {
+            let options = RunOptions {
+                assembly: AssemblyOptions {
+                    derivatives: path,
+                    ..Default::default()
+                },
+                ..Default::default()
+            };
+            run_stage_with(system.clone(), stage, &options, None).expect("runs")
+        });
+        if fast.stability.verdict != reference.stability.verdict {
+            bad.push(format!(
+                "{model} {sets:?}: {} vs {}",
+                fast.stability, reference.stability
+            ));
+        }
+        for (a, b) in fast.modes.modes.iter().zip(&reference.modes.modes).take(3) {
+            if (a.omega_squared - b.omega_squared).abs()
+                > a.omega_squared_error + b.omega_squared_error
+            {
+                bad.push(format!(
+                    "{model} {sets:?} {}: ω² {:e} ± {:e} vs {:e} ± {:e}",
+                    a.label,
+                    a.omega_squared,
+                    a.omega_squared_error,
+                    b.omega_squared,
+                    b.omega_squared_error
+                ));
+            }
+        }
+    }
+    assert!(bad.is_empty(), "{}", bad.join("\n"));
+}
+
+/// A float whose own stiffness cancels to rounding, weakly coupled to a mass held by its
+/// own spring: springs k1 = −1000 and k0 ≈ 1000 − k2 N/m from the ground to the float q,
+/// k2 = 1e-6 N/m from q to the mass x, k3 = 1000 N/m from the ground to x (a massless
+/// "holder" body posed by x).
+const WEAK_FLOAT: &str = r#"
+name = "weak-float"
+summary = "a float whose own stiffness cancels to rounding, weakly coupled to a held mass"
+gravity = 0
+
+[parameters]
+m = { value = 1, unit = "kg", description = "the mass" }
+k1 = { value = -1000, unit = "N/m", description = "negative spring, ground to float" }
+k0 = { value = 999.999999, unit = "N/m", description = "positive spring, ground to float" }
+k2 = { value = 1e-6, unit = "N/m", description = "weak spring, float to mass" }
+k3 = { value = 1000, unit = "N/m", description = "spring, ground to mass" }
+
+[coordinates]
+x = "variable"
+q = "float"
+s = "parameter"
+
+[bodies.ground]
+pose = ["s", 0, 0, 0, 0, 0]
+
+[bodies.junction]
+pose = ["q", 0, 0, 0, 0, 0]
+
+[bodies.junction2]
+pose = ["q", 0, 0, 0, 0, 0]
+
+[bodies.mass]
+pose = ["x", 0, 0, 0, 0, 0]
+mass = "m"
+
+[bodies.holder]
+pose = ["x", 0, 0, 0, 0, 0]
+
+[stages.junction]
+from = "ground"
+springs = { name = "k1", stiffness = ["k1", 0, 0, 0, 0, 0], tag = "k1" }
+
+[stages.junction2]
+from = "ground"
+springs = { name = "k0", stiffness = ["k0", 0, 0, 0, 0, 0], tag = "k0" }
+
+[stages.mass]
+from = "junction"
+springs = { name = "k2", stiffness = ["k2", 0, 0, 0, 0, 0], tag = "k2" }
+
+[stages.holder]
+from = "ground"
+springs = { name = "k3", stiffness = ["k3", 0, 0, 0, 0, 0], tag = "k3" }
+"#;
+
+/// Guards the weakly coupled float whose stiffness is zero within rounding. With k0 an ulp
+/// either side of 1000 − k1 − k2 the float block Q = k1 + k0 + k2 is ±1e-13 N/m, below the
+/// rounding of its 1000 N/m terms (a few ulps of them), so its sign cannot be told: if
+/// negative the float runs away. The mass, held by k3, shows a healthy 5 Hz mode either way
+/// (k3 − k2²/Q ≈ 1000 ± 10 N/m), which read as "stable" with either sign of Q. Reference:
+/// the closed form of the 2 × 2 stiffness [[k2 + k3, −k2], [−k2, Q]], whose float
+/// direction decides; with Q clearly positive (k0 = 1000 N/m, Q = k2 = 1e-6 N/m, ten
+/// million times its rounding) it is stable.
+#[test]
+fn a_weakly_coupled_float_zero_within_rounding_is_neutral_never_stable() {
+    let run_with = |k0: &str| {
+        let case = Case::from_text(std::path::Path::new("weak-float.toml"), WEAK_FLOAT)
+            .and_then(|c| c.with_sets(&[format!("k0={k0}")]))
+            .expect("case");
+        let (system, _) = case.build().expect("builds");
+        run_stage(system, Stage::S0A).expect("runs")
+    };
+    for k0 in ["999.9999990000001", "999.9999989999999"] {
+        let r = run_with(k0);
+        let q: f64 = -1000.0 + k0.parse::<f64>().unwrap() + 1e-6;
+        assert!(q.abs() < 1e-12, "Q = {q:e}");
+        assert_eq!(
+            r.stability.verdict,
+            Verdict::Neutral,
+            "k0 {k0}: {}",
+            r.stability
+        );
+        let float = &r.stability.neutral_floats[0];
+        assert_eq!(float.floats[0].0, "q");
+        assert!(float.error >= float.stiffness.abs(), "{float:?}");
+        // nothing is refused (nothing is shown to grow), but the verdict is said
+        let note = r.require_stable(false).unwrap().expect("a note");
+        assert!(note.contains("'q'") || note.contains(" q "), "{note}");
+    }
+    let r = run_with("1000");
+    assert_eq!(r.stability.verdict, Verdict::Stable, "{}", r.stability);
+    assert!(r.require_stable(false).unwrap().is_none());
 }

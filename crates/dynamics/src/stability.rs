@@ -77,6 +77,18 @@ pub struct RunawayFloat {
     pub floats: Vec<(String, f64)>,
 }
 
+/// The float block's directions that decide the verdict: those with no stable position,
+/// and those whose stiffness is zero within its error (sign not determined) but whose
+/// coupling to the variables is too weak to make either sign unstable.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct FloatDirections {
+    /// Directions where the massless floats have no stable position.
+    pub runaway: Vec<RunawayFloat>,
+    /// Directions with stiffness zero within its error: nothing shown to grow, but a
+    /// stable verdict would rest on a sign rounding cannot tell.
+    pub neutral: Vec<RunawayFloat>,
+}
+
 /// A body whose frame's z axis points below the horizontal at equilibrium.
 #[derive(Clone, Debug, PartialEq)]
 pub struct InvertedBody {
@@ -95,6 +107,8 @@ pub struct Stability {
     pub growing: Vec<GrowingMode>,
     /// Float directions with negative stiffness.
     pub runaway_floats: Vec<RunawayFloat>,
+    /// Float directions with zero stiffness within its error, weakly coupled: neutral.
+    pub neutral_floats: Vec<RunawayFloat>,
     /// Number of neutral modes (ω² = 0 within its error).
     pub neutral: usize,
     /// Number of directions the potential was examined in: modes plus floats.
@@ -107,18 +121,23 @@ pub struct Stability {
 impl Stability {
     /// The verdict from modes alone (no floats, no bodies): for [`Modes::check_stable`].
     pub fn of_modes(modes: &Modes) -> Stability {
-        Stability::assess(modes, Vec::new(), 0, Vec::new())
+        Stability::assess(modes, FloatDirections::default(), 0, Vec::new())
     }
 
     /// The verdict from a stage's modes (which must include every mode with ω² < 0: all of
-    /// them, or those below a positive frequency), the runaway directions of its float
-    /// block among `floats` floats, and the bodies found upside down.
+    /// them, or those below a positive frequency), the runaway and neutral directions of
+    /// its float block among `floats` floats ([`float_directions`]), and the bodies found
+    /// upside down.
     pub fn assess(
         modes: &Modes,
-        runaway_floats: Vec<RunawayFloat>,
+        float_directions: FloatDirections,
         floats: usize,
         inverted: Vec<InvertedBody>,
     ) -> Stability {
+        let FloatDirections {
+            runaway: runaway_floats,
+            neutral: neutral_floats,
+        } = float_directions;
         let mut growing: Vec<GrowingMode> = modes
             .modes
             .iter()
@@ -141,7 +160,7 @@ impl Stability {
             Verdict::Unstable
         } else if !inverted.is_empty() {
             Verdict::Inverted
-        } else if neutral > 0 {
+        } else if neutral > 0 || !neutral_floats.is_empty() {
             Verdict::Neutral
         } else {
             Verdict::Stable
@@ -150,6 +169,7 @@ impl Stability {
             verdict,
             growing,
             runaway_floats,
+            neutral_floats,
             neutral,
             directions: modes.coordinates.len() + floats,
             inverted,
@@ -187,11 +207,25 @@ impl fmt::Display for Stability {
         match self.verdict {
             Verdict::Stable => return write!(f, "stable equilibrium (a minimum of the potential)"),
             Verdict::Neutral => {
-                return write!(
-                    f,
-                    "neutral equilibrium: {} mode(s) with zero stiffness within rounding, nothing grows",
-                    self.neutral
-                );
+                write!(f, "neutral equilibrium: ")?;
+                if self.neutral > 0 {
+                    write!(
+                        f,
+                        "{} mode(s) with zero stiffness within rounding, ",
+                        self.neutral
+                    )?;
+                }
+                for r in &self.neutral_floats {
+                    let names: Vec<&str> = r.floats.iter().map(|(n, _)| n.as_str()).collect();
+                    write!(
+                        f,
+                        "float(s) {} with stiffness {:.1e} ± {:.1e} N/m or N m/rad (variables held), zero within rounding: its sign, and whether they run away, cannot be told, ",
+                        names.join(", "),
+                        r.stiffness,
+                        r.error
+                    )?;
+                }
+                return write!(f, "nothing is shown to grow");
             }
             Verdict::Inverted => {
                 let bodies: Vec<String> = self
@@ -841,15 +875,29 @@ impl StiffnessRounding for TermRounding {
 
 /// The directions of the float block Q (real stiffness at f = 0, variables held) with
 /// stiffness below minus its rounding (`rounding`, or a few ulps of Q's entries without
-/// it): those where the massless floats have no stable position.
+/// it): those where the massless floats have no stable position ([`float_directions`]'s
+/// runaway ones).
 pub fn runaway_floats(
     model: &StageModel,
     damping: &Damping,
     rounding: Option<&TermRounding>,
 ) -> Result<Vec<RunawayFloat>, DynamicsError> {
+    Ok(float_directions(model, damping, rounding)?.runaway)
+}
+
+/// The float block Q's directions (real stiffness at f = 0, variables held) that decide
+/// the verdict, each stiffness κ against its rounding δ (`rounding`, or a few ulps of Q's
+/// entries without it): runaway when κ < −δ, or when |κ| ≤ δ and the direction is so
+/// strongly coupled to the variables that either sign goes downhill
+/// (`undetermined_runaways`); neutral when |κ| ≤ δ otherwise.
+pub fn float_directions(
+    model: &StageModel,
+    damping: &Damping,
+    rounding: Option<&TermRounding>,
+) -> Result<FloatDirections, DynamicsError> {
     let (nx, nq, _) = model.sizes;
     if nq == 0 {
-        return Ok(Vec::new());
+        return Ok(FloatDirections::default());
     }
     let (q, c) = float_blocks(model, damping);
     if let Some(bad) = q.iter().position(|x| !x.is_finite()) {
@@ -907,15 +955,11 @@ pub fn runaway_floats(
             }
         }
     }
-    runaway.extend(undetermined_runaways(
-        model,
-        &re_values(model, damping),
-        &c,
-        nx,
-        undetermined,
-    ));
+    let (coupled, neutral) =
+        undetermined_runaways(model, &re_values(model, damping), &c, nx, undetermined);
+    runaway.extend(coupled);
     runaway.sort_by(|a, b| a.stiffness.total_cmp(&b.stiffness));
-    Ok(runaway)
+    Ok(FloatDirections { runaway, neutral })
 }
 
 /// The floats with the largest shares (at least 1 %) of a direction `w` over the floats
@@ -946,15 +990,16 @@ fn re_values(model: &StageModel, damping: &Damping) -> Vec<f64> {
 /// and w is [[a, |b|], [|b|, κ]], indefinite for every κ ≤ κ + δ when a (κ + δ) < |b|²; by
 /// Cauchy interlacing the whole stiffness then has a negative eigenvalue whatever the
 /// rounding: the direction is reported as runaway. (The margin of 2 covers the rounding
-/// of a and b themselves, a few ulps.) Directions weakly coupled stay neutral.
+/// of a and b themselves, a few ulps.) Directions weakly coupled are returned second:
+/// neutral.
 fn undetermined_runaways(
     model: &StageModel,
     re: &[f64],
     c: &DMatrix<f64>,
     nx: usize,
     undetermined: Vec<(f64, f64, Vec<usize>, Vec<f64>)>,
-) -> Vec<RunawayFloat> {
-    let mut runaway = Vec::new();
+) -> (Vec<RunawayFloat>, Vec<RunawayFloat>) {
+    let (mut runaway, mut neutral) = (Vec::new(), Vec::new());
     for (kappa, error, group, w) in undetermined {
         // b = Cᵀ w over the variables
         let mut b = vec![0.0; nx];
@@ -964,7 +1009,13 @@ fn undetermined_runaways(
             }
         }
         let b2: f64 = b.iter().map(|x| x * x).sum();
+        let direction = RunawayFloat {
+            stiffness: kappa,
+            error,
+            floats: float_shares(model, &group, w.iter().copied()),
+        };
         if b2 == 0.0 || !b2.is_finite() {
+            neutral.push(direction);
             continue;
         }
         // a = uᵀ K_xx u from the pattern's variable entries
@@ -977,14 +1028,12 @@ fn undetermined_runaways(
         }
         let a = a / b2;
         if 2.0 * a * (kappa + error) < b2 {
-            runaway.push(RunawayFloat {
-                stiffness: kappa,
-                error,
-                floats: float_shares(model, &group, w.iter().copied()),
-            });
+            runaway.push(direction);
+        } else {
+            neutral.push(direction);
         }
     }
-    runaway
+    (runaway, neutral)
 }
 
 /// Bodies with mass whose z axis points below the horizontal at coordinates `x` (a full

@@ -71,8 +71,8 @@ use std::path::{Path, PathBuf};
 use nalgebra::{DVector, Vector3};
 use pendkit_assembly::{Assembled, AssemblyError, assemble_with, timed};
 use pendkit_dynamics::{
-    DynamicsError, TermRounding, eliminate_floats, inverted_bodies, normal_modes_with_rounding,
-    runaway_floats,
+    DynamicsError, TermRounding, eliminate_floats, float_directions, inverted_bodies,
+    normal_modes_with_rounding,
 };
 use pendkit_energy::{NamedSignal, SignalTerm};
 use pendkit_model::BuildError;
@@ -595,7 +595,7 @@ pub fn run_stage_with(
     // wires then carry no tension) is refused for that
     pendkit_dynamics::validate::check_wire_stretch(&system, &assembled.equilibrium.coords)?;
     let stability = timed(&mut times, "stability", 1, || {
-        let floats = runaway_floats(&model, &system.damping, Some(&rounding))?;
+        let floats = float_directions(&model, &system.damping, Some(&rounding))?;
         let inverted = inverted_bodies(&system, &assembled.equilibrium.coords);
         Ok::<_, Error>(Stability::assess(&modes, floats, model.sizes.1, inverted))
     })?;
@@ -653,8 +653,13 @@ impl StageResult {
     /// noise, state space, ...) makes before it answers: `Ok(None)` when nothing grows;
     /// when something does, the error, or with `allow_unstable` `Ok(Some(warning))`, the
     /// one line to show the user before going on (control design needs unstable plants).
+    /// A neutral verdict that rests on a float stiffness rounding cannot sign (nothing
+    /// shown to grow) goes on, with the verdict as the line to show.
     pub fn require_stable(&self, allow_unstable: bool) -> Result<Option<String>, Error> {
         match (self.check_stable(), allow_unstable) {
+            (Ok(()), _) if !self.stability.neutral_floats.is_empty() => {
+                Ok(Some(self.stability.to_string()))
+            }
             (Ok(()), _) => Ok(None),
             (Err(e), true) => Ok(Some(format!("{e} (going on: --allow-unstable)"))),
             (Err(e), false) => Err(e),
