@@ -315,8 +315,9 @@ pub struct FloatMap {
 }
 
 /// The float block Q (nq × nq) and the float–variable coupling C (nq × nx) of `model` at
-/// f = 0 with `damping`'s ε'(0).
-fn float_blocks(model: &StageModel, damping: &Damping) -> (DMatrix<f64>, DMatrix<f64>) {
+/// f = 0 with `damping`'s ε'(0), and the real stiffness's values they were taken from (on
+/// the stage's pattern).
+fn float_blocks(model: &StageModel, damping: &Damping) -> (DMatrix<f64>, DMatrix<f64>, Vec<f64>) {
     let (nx, nq, _) = model.sizes;
     let (re, _) = model.master_values(damping, 0.0);
     let mut q = DMatrix::zeros(nq, nq);
@@ -331,14 +332,14 @@ fn float_blocks(model: &StageModel, damping: &Damping) -> (DMatrix<f64>, DMatrix
             }
         }
     }
-    (q, c)
+    (q, c, re)
 }
 
 impl FloatMap {
     /// The map of `model` with `damping`'s ε'(0).
     pub fn new(model: &StageModel, damping: &Damping) -> Self {
         let (nx, nq, _) = model.sizes;
-        let (q, c) = float_blocks(model, damping);
+        let (q, c, _) = float_blocks(model, damping);
         let mut groups = Vec::new();
         for group in crate::schur::components(nq, |i, j| q[(i, j)] != 0.0) {
             let variables: Vec<usize> = (0..nx)
@@ -899,7 +900,7 @@ pub fn float_directions(
     if nq == 0 {
         return Ok(FloatDirections::default());
     }
-    let (q, c) = float_blocks(model, damping);
+    let (q, c, re) = float_blocks(model, damping);
     if let Some(bad) = q.iter().position(|x| !x.is_finite()) {
         return Err(DynamicsError::NotFinite {
             what: "float stiffness block",
@@ -955,8 +956,7 @@ pub fn float_directions(
             }
         }
     }
-    let (coupled, neutral) =
-        undetermined_runaways(model, &re_values(model, damping), &c, nx, undetermined);
+    let (coupled, neutral) = undetermined_runaways(model, &re, &c, nx, undetermined);
     runaway.extend(coupled);
     runaway.sort_by(|a, b| a.stiffness.total_cmp(&b.stiffness));
     Ok(FloatDirections { runaway, neutral })
@@ -977,11 +977,6 @@ fn float_shares(
     floats.sort_by(|a, b| b.1.total_cmp(&a.1));
     floats.truncate(3);
     floats
-}
-
-/// The stage's real stiffness values at f = 0 on its pattern.
-fn re_values(model: &StageModel, damping: &Damping) -> Vec<f64> {
-    model.master_values(damping, 0.0).0
 }
 
 /// A float direction w (unit, over the floats) whose stiffness κ is zero within its error
