@@ -737,6 +737,13 @@ fn sweep_points() -> Vec<(&'static str, Vec<String>, Stage, bool)> {
         vec!["Yn=2.2e17"],
         vec!["Y3=7e16", "d4=-0.02"],
         vec!["rn=scale(30)"],
+        vec!["m3=1e-3"],
+        vec!["m3=1e-3", "d4=-0.02"],
+        vec!["I3y=1e-9"],
+        vec!["I3y=1e-9", "d4=-0.02"],
+        vec!["mn=1e4"],
+        vec!["mn=1e4", "d0=-0.02"],
+        vec!["d1=-0.05", "d3=-0.05"],
     ] {
         p.push(("quad", s(&sets), Stage::S2, false));
     }
