@@ -786,6 +786,27 @@ fn sweep_points() -> Vec<(&'static str, Vec<String>, Stage, bool)> {
     ] {
         p.push(("chain", s(&sets), Stage::S2, false));
     }
+    // every stage, and the other quad and triple variants, past the break-off
+    for stage in [Stage::S0A, Stage::S0B, Stage::S1A, Stage::S1B] {
+        p.push(("quad", s(&["d4=-0.02"]), stage, false));
+        p.push(("quad-full", s(&["d4=-0.02"]), stage, false));
+    }
+    for model in [
+        "quad-lite",
+        "quad-lateral",
+        "triple-lite",
+        "triple-full",
+        "triple-lateral",
+    ] {
+        p.push((model, s(&["d4=-0.02"]), Stage::S2, false));
+        p.push((model, s(&[]), Stage::S1B, false));
+    }
+    p.push((
+        "triple-v5",
+        s(&["d4=-0.01", "n_beads=10"]),
+        Stage::S2,
+        false,
+    ));
     p
 }
 
