@@ -301,3 +301,848 @@ fn the_rounding_bound_covers_the_term_by_term_estimate_on_every_mode() {
         }
     }
 }
+
+// ---------------------------------------------------------------------------------------
+// An independent check of the verdict (issue 11, brief C): the stiffness over the
+// variables and floats, its float block's eigenvalues, the float elimination and the
+// generalised eigenvalues of (K_eff, M), all by nalgebra's dense LU, Cholesky and
+// symmetric eigen-solve (the library uses faer, a pattern-ordered sparse assembly, a
+// block split and shifted factorisations), from the per-term Hessians summed afresh and,
+// for small models, from central differences of the energy gradient.
+// ---------------------------------------------------------------------------------------
+
+/// The stiffness over the unknowns (variables then floats, layout order) as the plain
+/// sum of the terms' tension-on Hessians (N/m, N/rad, N m/rad): every model swept here
+/// has ε'(0) = 1 for every tag, so this is the stage's real stiffness at f = 0.
+fn summed_stiffness(r: &StageResult) -> DMatrix<f64> {
+    let (nx, nq, _) = r.assembled.layout.sizes();
+    r.assembled
+        .stiffness()
+        .view((0, 0), (nx + nq, nx + nq))
+        .into_owned()
+}
+
+/// The stiffness over the unknowns by central differences of the net generalised force
+/// of the stage's terms, rebuilt here around the equilibrium (all registered kinds that
+/// join at or before the stage, the case's extra terms and constraints). Step h = 1e-6
+/// (m or rad): truncation h² times third derivatives, rounding ε |force| / h.
+fn finite_difference_stiffness(r: &StageResult) -> DMatrix<f64> {
+    use pendkit_energy::{ExtraPhase, Reference, constraint_terms, extra_terms, registry};
+    let system = &r.system;
+    let x0 = r.assembled.equilibrium.coords.clone();
+    let stage = r.assembled.stage;
+    let reference = Reference {
+        system,
+        coords: &x0,
+    };
+    let mut terms = Vec::new();
+    for kind in registry() {
+        if system.element_stage(kind).is_some_and(|s| s <= stage) {
+            terms.extend(kind.terms(&reference).expect("terms"));
+        }
+    }
+    terms.extend(extra_terms(system, ExtraPhase::BeforeEquilibrium, None).expect("extra"));
+    terms.extend(extra_terms(system, ExtraPhase::AfterEquilibrium, Some(&x0)).expect("extra"));
+    terms.extend(constraint_terms(system, &x0));
+    let layout = &r.assembled.layout;
+    let unknowns: Vec<usize> = layout
+        .variables
+        .iter()
+        .chain(&layout.floats)
+        .copied()
+        .collect();
+    let force = |x: &[f64]| -> Vec<f64> {
+        let mut g = vec![0.0; x.len()];
+        for term in &terms {
+            let d = term.derivatives(x).expect("derivatives");
+            for (a, &i) in term.coords.iter().enumerate() {
+                g[i] += d.gradient[a];
+            }
+        }
+        unknowns.iter().map(|&i| g[i]).collect()
+    };
+    let n = unknowns.len();
+    let h = 1e-6;
+    let mut k = DMatrix::zeros(n, n);
+    for (j, &gj) in unknowns.iter().enumerate() {
+        let (mut plus, mut minus) = (x0.clone(), x0.clone());
+        plus[gj] += h;
+        minus[gj] -= h;
+        let (fp, fm) = (force(&plus), force(&minus));
+        for i in 0..n {
+            k[(i, j)] = (fp[i] - fm[i]) / (2.0 * h);
+        }
+    }
+    (&k + k.transpose()) * 0.5
+}
+
+/// The independent verdict's evidence.
+#[derive(Debug)]
+struct Independent {
+    /// Eigenvalues of the float block Q (N/m or N m/rad), ascending, and their absolute
+    /// error (a few n ε ‖Q‖).
+    float_eigenvalues: Vec<f64>,
+    float_error: f64,
+    /// Generalised eigenvalues ω² of (K_eff, M) (rad²/s²), ascending, and their common
+    /// absolute error: the dense solve's n ε ‖L⁻¹ K_eff L⁻ᵀ‖ plus the rounding of
+    /// forming K_eff, ε ‖L⁻¹‖² ‖|K| + |C| |Q⁻¹| |Cᵀ|‖ (the float elimination's
+    /// amplification by the float block's conditioning).
+    omega_squared: Vec<f64>,
+    omega_squared_error: f64,
+}
+
+/// Σ over the terms of |H_on| over the unknowns: what the summed stiffness's entries are
+/// rounded relative to (each term's entries to a few ulps of themselves).
+fn summed_abs_stiffness(r: &StageResult) -> DMatrix<f64> {
+    let (nx, nq, _) = r.assembled.layout.sizes();
+    let n = nx + nq;
+    let mut a = DMatrix::zeros(n, n);
+    for t in &r.assembled.terms {
+        let m = t.coords.len();
+        for (i, &gi) in t.coords.iter().enumerate() {
+            for (j, &gj) in t.coords.iter().enumerate() {
+                let (pi, pj) = (
+                    r.assembled.layout.position[gi],
+                    r.assembled.layout.position[gj],
+                );
+                if pi < n && pj < n {
+                    a[(pi, pj)] += t.on[i * m + j].abs();
+                }
+            }
+        }
+    }
+    a
+}
+
+impl Independent {
+    fn new(k: &DMatrix<f64>, abs_k: &DMatrix<f64>, mass: &DMatrix<f64>, nx: usize) -> Independent {
+        let n = k.nrows();
+        let nq = n - nx;
+        let eps = f64::EPSILON;
+        let kxx = k.view((0, 0), (nx, nx)).into_owned();
+        let (k_eff, entries) = if nq > 0 {
+            let q = k.view((nx, nx), (nq, nq)).into_owned();
+            let c = k.view((nx, 0), (nq, nx)).into_owned();
+            let q_inv = q.clone().try_inverse().expect("float block invertible");
+            let k_eff = &kxx - c.transpose() * &q_inv * &c;
+            let entries = abs_k.view((0, 0), (nx, nx)).into_owned()
+                + c.abs().transpose() * q_inv.abs() * c.abs();
+            (k_eff, entries)
+        } else {
+            (kxx.clone(), abs_k.view((0, 0), (nx, nx)).into_owned())
+        };
+        let (float_eigenvalues, float_error) = if nq > 0 {
+            let q = k.view((nx, nx), (nq, nq)).into_owned();
+            // ‖ Σ|H_t| ‖ over the float block bounds the rounding of Q's entries (the sum
+            // of the terms cancels; their sizes do not)
+            let norm = abs_k.view((nx, nx), (nq, nq)).into_owned().norm();
+            let mut e: Vec<f64> = q.symmetric_eigenvalues().iter().copied().collect();
+            e.sort_by(f64::total_cmp);
+            (e, 16.0 * nq as f64 * eps * norm)
+        } else {
+            (Vec::new(), 0.0)
+        };
+        let li = mass
+            .clone()
+            .cholesky()
+            .expect("M positive definite")
+            .l()
+            .try_inverse()
+            .expect("L invertible");
+        let a = &li * &k_eff * li.transpose();
+        let a = (&a + a.transpose()) * 0.5;
+        let mut omega_squared: Vec<f64> = a.symmetric_eigenvalues().iter().copied().collect();
+        omega_squared.sort_by(f64::total_cmp);
+        let top = omega_squared.iter().fold(0.0f64, |acc, x| acc.max(x.abs()));
+        let li_norm = li.norm(); // Frobenius ≥ 2-norm
+        let entries_norm = entries.norm();
+        let omega_squared_error =
+            16.0 * nx as f64 * eps * top + 16.0 * eps * li_norm * li_norm * entries_norm;
+        Independent {
+            float_eigenvalues,
+            float_error,
+            omega_squared,
+            omega_squared_error,
+        }
+    }
+
+    /// Negative eigenvalues beyond the errors: (floats, modes).
+    fn clearly_negative(&self) -> (usize, usize) {
+        (
+            self.float_eigenvalues
+                .iter()
+                .filter(|&&k| k < -self.float_error)
+                .count(),
+            self.omega_squared
+                .iter()
+                .filter(|&&w| w < -self.omega_squared_error)
+                .count(),
+        )
+    }
+}
+
+/// What is wrong with the library's verdict for `r`, judged against `reference`: a
+/// confident verdict contradicted beyond both sides' stated errors, or a growth rate
+/// outside them. Empty when the two agree.
+fn verdict_disagreements(
+    r: &StageResult,
+    k: &DMatrix<f64>,
+    reference: &Independent,
+) -> Vec<String> {
+    let s = &r.stability;
+    let (nx, _, _) = r.assembled.layout.sizes();
+    let mut wrong = Vec::new();
+    let (float_neg, mode_neg) = reference.clearly_negative();
+    // every clearly negative float direction is reported
+    if s.runaway_floats.len() < float_neg {
+        wrong.push(format!(
+            "{float_neg} float direction(s) negative ({:?} ± {:e}), {} reported",
+            &reference.float_eigenvalues[..float_neg],
+            reference.float_error,
+            s.runaway_floats.len()
+        ));
+    }
+    // a reported runaway float is negative in the reference beyond its error, or (zero
+    // within its stated error) the whole stiffness stays indefinite with the float block
+    // made as stiff as that error allows: + δ I on it
+    let lowest_float = reference.float_eigenvalues.first().copied().unwrap_or(0.0);
+    let undetermined = s.runaway_floats.iter().any(|f| f.stiffness >= -f.error);
+    for f in &s.runaway_floats {
+        if f.stiffness < -f.error && lowest_float > reference.float_error {
+            wrong.push(format!(
+                "float {:?} reported at {:e} N/m, the reference's lowest is {lowest_float:e} ± {:e}",
+                f.floats, f.stiffness, reference.float_error
+            ));
+        }
+        if f.stiffness >= -f.error {
+            let mut stiffer = k.clone();
+            for i in nx..k.nrows() {
+                stiffer[(i, i)] += f.error + f.stiffness.abs();
+            }
+            let lowest = stiffer.symmetric_eigenvalues().min();
+            if lowest >= 0.0 {
+                wrong.push(format!(
+                    "float {:?} reported as runaway within rounding ({:e} ± {:e}), but the stiffness with the floats held that much more is positive definite",
+                    f.floats, f.stiffness, f.error
+                ));
+            }
+        }
+    }
+    // the growing modes: each clearly negative reference ω² is reported, and each
+    // reported one is negative in the reference, with matching growth rates
+    if float_neg == 0 && !undetermined {
+        for (i, &w2) in reference.omega_squared.iter().enumerate() {
+            let lib = r.modes.modes.get(i);
+            let lib_w2 = lib.map_or(f64::NAN, |m| m.omega_squared);
+            let lib_err = lib.map_or(0.0, |m| m.omega_squared_error);
+            let tolerance = reference.omega_squared_error + lib_err;
+            if (w2 - lib_w2).abs() > tolerance && (w2 < 0.0 || lib_w2 < 0.0) {
+                wrong.push(format!(
+                    "mode {}: ω² {lib_w2:e} ± {lib_err:e}, reference {w2:e} ± {:e}",
+                    i + 1,
+                    reference.omega_squared_error
+                ));
+            }
+        }
+        if mode_neg > s.growing.len() {
+            wrong.push(format!(
+                "{mode_neg} mode(s) clearly growing, {} reported",
+                s.growing.len()
+            ));
+        }
+    }
+    let clearly_unstable = float_neg + mode_neg > 0;
+    let clearly_stable = reference
+        .float_eigenvalues
+        .iter()
+        .all(|&k| k > reference.float_error)
+        && reference
+            .omega_squared
+            .iter()
+            .all(|&w| w > reference.omega_squared_error);
+    // a stable verdict never rests on a float stiffness within rounding of zero
+    let float_undetermined = reference
+        .float_eigenvalues
+        .iter()
+        .any(|k| k.abs() <= reference.float_error);
+    if s.verdict == Verdict::Stable && float_undetermined {
+        wrong.push(format!(
+            "stable, but a float stiffness is zero within rounding ({:?} ± {:e})",
+            reference.float_eigenvalues, reference.float_error
+        ));
+    }
+    match s.verdict {
+        Verdict::Stable | Verdict::Neutral if clearly_unstable => wrong.push(format!(
+            "{:?} but the reference has negative directions",
+            s.verdict
+        )),
+        Verdict::Unstable if clearly_stable => {
+            wrong.push("unstable but the reference is positive definite".into())
+        }
+        _ => {}
+    }
+    wrong
+}
+
+/// One point of the sweep: the library's verdict against the reference from the summed
+/// Hessians, and for small models the summed Hessians against finite differences.
+fn check_point(model: &str, sets: &[&str], stage: Stage, fd: bool) -> Result<String, String> {
+    let sets_owned: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
+    let case = Case::model(model)
+        .and_then(|c| c.with_sets(&sets_owned))
+        .map_err(|e| format!("case: {e}"))?;
+    let (system, _) = case
+        .build()
+        .map_err(|e| format!("{model} {sets:?}: build: {e}"))?;
+    let r = match run_stage(system, stage) {
+        Ok(r) => r,
+        // refusing is allowed (a stated limit); a wrong verdict is not
+        Err(e) => return Ok(format!("{model} {sets:?}: refused: {e}")),
+    };
+    let (nx, _, _) = r.assembled.layout.sizes();
+    let k = summed_stiffness(&r);
+    let abs_k = summed_abs_stiffness(&r);
+    let reference = Independent::new(&k, &abs_k, &r.assembled.mass, nx);
+    let mut wrong = verdict_disagreements(&r, &k, &reference);
+    if fd {
+        let k_fd = finite_difference_stiffness(&r);
+        let scale = k.abs().max().max(1e-300);
+        let diff = (&k_fd - &k).abs().max();
+        if diff > 1e-5 * scale {
+            wrong.push(format!(
+                "finite differences differ by {diff:e} (scale {scale:e})"
+            ));
+        }
+        // and the verdict from the differenced stiffness (a second Hessian path) agrees
+        // with the library's as well, at the differences' own accuracy (1e-5 of the
+        // largest entry, in place of the summed Hessians' rounding)
+        let fd_abs = abs_k.map(|x| x + 1e-5 * scale / (16.0 * f64::EPSILON));
+        let fd_reference = Independent::new(&k_fd, &fd_abs, &r.assembled.mass, nx);
+        for w in verdict_disagreements(&r, &k_fd, &fd_reference) {
+            wrong.push(format!("by finite differences: {w}"));
+        }
+    }
+    let line = format!(
+        "{model} {sets:?}: {:?} growing {:?} floats {:?} | ref ω²min {:e} ± {:e} Qmin {:?}",
+        r.stability.verdict,
+        r.stability
+            .growing
+            .iter()
+            .map(|g| (g.rate_hz, g.accuracy))
+            .collect::<Vec<_>>(),
+        r.stability
+            .runaway_floats
+            .iter()
+            .map(|f| f.stiffness)
+            .collect::<Vec<_>>(),
+        reference.omega_squared.first().copied().unwrap_or(f64::NAN),
+        reference.omega_squared_error,
+        reference.float_eigenvalues.first(),
+    );
+    if wrong.is_empty() {
+        Ok(line)
+    } else {
+        Err(format!("{line}\n    WRONG: {}", wrong.join("; ")))
+    }
+}
+
+/// Issue 11's target, zero wrong verdicts, over a representative sweep of every bundled
+/// model family toward and past instability: negative and tiny break-off distances,
+/// negative springs on the toy's float (to within an ulp of the float's balance), stiffness
+/// ratios to 1e12, heavy masses, g = 0 and negative, blade springs at zero and negative,
+/// 40 violin beads per fibre, long chains. Each point's verdict, growing modes and runaway
+/// floats are judged against the independent dense solve above ([`verdict_disagreements`]:
+/// a disagreement counts only beyond both sides' stated errors, so marginal points may be
+/// neutral but never confidently wrong), and for the small models the summed Hessians
+/// against central differences of the energy gradient (to 1e-5 of the largest entry: the
+/// differences' truncation and rounding at h = 1e-6). Refusals (a stated limit of the
+/// method, e.g. a wire stretched below what double precision resolves) are allowed.
+#[test]
+fn verdicts_agree_with_an_independent_dense_solve_across_the_bundled_models() {
+    let mut bad = Vec::new();
+    for (model, sets, stage, fd) in &sweep_points() {
+        let sets: Vec<&str> = sets.iter().map(|s| s.as_str()).collect();
+        if let Err(line) = check_point(model, &sets, *stage, *fd) {
+            bad.push(line);
+        }
+    }
+    assert!(bad.is_empty(), "{} wrong:\n{}", bad.len(), bad.join("\n"));
+}
+
+fn sweep_points() -> Vec<(&'static str, Vec<String>, Stage, bool)> {
+    let mut p = Vec::new();
+    let s = |v: &[&str]| v.iter().map(|x| x.to_string()).collect::<Vec<_>>();
+    for k1 in [
+        "-4000",
+        "-3000.0001",
+        "-2999.9999",
+        "-1000",
+        "-1e-9",
+        "0.0",
+        "1e-12",
+        "1000",
+    ] {
+        p.push(("toy", s(&[&format!("k1={k1}")]), Stage::S0A, true));
+    }
+    for k1 in [
+        "-2999.999999999999",
+        "-2999.99999999999",
+        "-2999.9999999999",
+        "-2999.999999999",
+        "-3000.000000000001",
+        "-3000.00000000001",
+        "-3000.0000000001",
+    ] {
+        p.push(("toy", s(&[&format!("k1={k1}")]), Stage::S0A, false));
+    }
+    for k2 in ["1e15", "1e12", "-1e12", "-999.99", "-1000.01"] {
+        p.push((
+            "toy",
+            s(&["k1=-1000", &format!("k2={k2}")]),
+            Stage::S0A,
+            true,
+        ));
+    }
+    for model in ["pendulum", "double-pendulum", "rigid-body"] {
+        for g in ["9.81", "0", "1e-12", "-9.81"] {
+            p.push((model, s(&[&format!("g={g}")]), Stage::S2, true));
+        }
+    }
+    for sets in [
+        vec![],
+        vec!["d4=-0.02"],
+        vec!["d4=-1e-3"],
+        vec!["d4=-1e-4"],
+        vec!["d4=-1e-5"],
+        vec!["d4=-1e-6"],
+        vec!["d4=0"],
+        vec!["d4=1e-6"],
+        vec!["d2=-0.01"],
+        vec!["d0=-0.01"],
+        vec!["d1=-0.01"],
+        vec!["d3=-0.01"],
+        vec!["dn=-0.01"],
+        vec![
+            "d0=-0.003",
+            "d1=-0.003",
+            "d2=-0.003",
+            "d3=-0.003",
+            "d4=-0.003",
+        ],
+        vec!["ufc1=1e-6"],
+        vec!["mn=1000"],
+        vec!["m1=500"],
+        vec!["m3=1000"],
+        vec!["g=0"],
+        vec!["Yn=2.2e17"],
+        vec!["Y3=7e16", "d4=-0.02"],
+        vec!["rn=scale(30)"],
+        vec!["m3=1e-3"],
+        vec!["m3=1e-3", "d4=-0.02"],
+        vec!["I3y=1e-9"],
+        vec!["I3y=1e-9", "d4=-0.02"],
+        vec!["mn=1e4"],
+        vec!["mn=1e4", "d0=-0.02"],
+        vec!["d1=-0.05", "d3=-0.05"],
+    ] {
+        p.push(("quad", s(&sets), Stage::S2, false));
+    }
+    p.push(("quad", s(&[]), Stage::S0A, true));
+    p.push(("quad", s(&["d4=-0.02"]), Stage::S0A, true));
+    for sets in [vec!["kv_2=1e-9"], vec!["d4=-0.02"]] {
+        p.push(("quad-aligo", s(&sets), Stage::S2, false));
+    }
+    for sets in [
+        vec!["d4=-0.02", "n_beads=40"],
+        vec!["d4=-1e-4", "n_beads=20"],
+        vec!["n_beads=20"],
+    ] {
+        p.push(("quad-v5", s(&sets), Stage::S2, false));
+    }
+    for sets in [
+        vec!["d4=-0.02", "blade_stiff_translation=1e12"],
+        vec!["blade_stiff_translation=0"],
+        vec!["blade_stiff_translation=-1e3"],
+        vec!["blade_stiff_rotation=-1"],
+        vec!["blade_stiff_rotation=0"],
+    ] {
+        p.push(("quad-full", s(&sets), Stage::S2, false));
+    }
+    for sets in [
+        vec![],
+        vec!["d4=-0.01"],
+        vec!["d2=-0.005"],
+        vec!["ufc1=1e-3"],
+    ] {
+        p.push(("triple", s(&sets), Stage::S2, false));
+    }
+    for sets in [
+        vec!["n_stages=10"],
+        vec!["n_stages=10", "d_bottom=-0.02"],
+        vec!["d_top=-0.02"],
+        vec!["E_wire=2.12e17"],
+        vec!["g=0"],
+        vec!["n_stages=3", "d_bottom=-1e-5"],
+    ] {
+        p.push(("chain", s(&sets), Stage::S2, false));
+    }
+    // every stage, and the other quad and triple variants, past the break-off
+    for stage in [Stage::S0A, Stage::S0B, Stage::S1A, Stage::S1B] {
+        p.push(("quad", s(&["d4=-0.02"]), stage, false));
+        p.push(("quad-full", s(&["d4=-0.02"]), stage, false));
+    }
+    for model in [
+        "quad-lite",
+        "quad-lateral",
+        "triple-lite",
+        "triple-full",
+        "triple-lateral",
+    ] {
+        p.push((model, s(&["d4=-0.02"]), Stage::S2, false));
+        p.push((model, s(&[]), Stage::S1B, false));
+    }
+    p.push((
+        "triple-v5",
+        s(&["d4=-0.01", "n_beads=10"]),
+        Stage::S2,
+        false,
+    ));
+    p
+}
+
+/// [`check_point`] for a system built by the caller: the line and the result (none when
+/// refused), or the disagreements.
+fn check_system(
+    label: &str,
+    system: pendkit_energy::System,
+    stage: Stage,
+) -> Result<(String, Option<StageResult>), String> {
+    let r = match run_stage(system, stage) {
+        Ok(r) => r,
+        Err(e) => return Ok((format!("{label}: refused: {e}"), None)),
+    };
+    let (nx, _, _) = r.assembled.layout.sizes();
+    let k = summed_stiffness(&r);
+    let reference = Independent::new(&k, &summed_abs_stiffness(&r), &r.assembled.mass, nx);
+    let wrong = verdict_disagreements(&r, &k, &reference);
+    let line = format!(
+        "{label}: {:?} growing {:?} floats {:?} inverted {:?} | ref ω²min {:e} ± {:e} | {}",
+        r.stability.verdict,
+        r.stability
+            .growing
+            .iter()
+            .map(|g| (g.rate_hz, g.accuracy))
+            .collect::<Vec<_>>(),
+        r.stability
+            .runaway_floats
+            .iter()
+            .map(|f| f.stiffness)
+            .collect::<Vec<_>>(),
+        r.stability.inverted,
+        reference.omega_squared.first().copied().unwrap_or(f64::NAN),
+        reference.omega_squared_error,
+        r.stability,
+    );
+    if wrong.is_empty() {
+        Ok((line, Some(r)))
+    } else {
+        Err(format!("{line}\n    WRONG: {}", wrong.join("; ")))
+    }
+}
+
+/// Equilibria reached from tilted starts (Newton lands on the hanging one, on an
+/// upside-down minimum, or on a saddle): the verdict agrees with the independent dense
+/// solve, and a body found upside down is named (never a stable verdict).
+#[test]
+fn equilibria_from_tilted_starts_agree_with_the_independent_solve() {
+    let mut bad = Vec::new();
+    for (model, coord, start) in [
+        ("quad", "pitch1", 3.0),
+        ("quad", "pitch1", 1.6),
+        ("quad", "pitch1", 1.2),
+        ("quad", "yaw1", 3.0),
+        ("quad", "yaw1", 1.6),
+        ("quad", "roll1", 1.6),
+        ("quad", "roll3", 3.0),
+        ("quad", "pitch3", 3.0),
+        ("quad", "pitch3", 1.5),
+        ("quad", "yaw3", 3.1),
+        ("quad", "x3", 0.5),
+        ("quad", "z3", 0.5),
+        ("double-pendulum", "x2", 0.5),
+        ("double-pendulum", "z2", 1.0),
+        ("double-pendulum", "z1", 0.5),
+        ("pendulum", "z1", 1.0),
+        ("rigid-body", "pitch1", 3.1),
+        ("rigid-body", "roll1", 3.1),
+        ("rigid-body", "yaw1", 3.1),
+        ("rigid-body", "yaw1", 1.6),
+        ("rigid-body", "z1", 0.6),
+        ("triple", "pitch1", 3.0),
+        ("triple", "yaw2", 3.0),
+        ("chain", "yaw2", 3.1),
+        ("chain", "pitch4", 3.0),
+    ] {
+        let (mut system, _) = Case::model(model).unwrap().build().unwrap();
+        let c = system
+            .coords
+            .iter_mut()
+            .find(|c| c.name == coord)
+            .expect("coordinate");
+        c.start = start;
+        match check_system(&format!("{model} {coord}={start}"), system, Stage::S2) {
+            Ok((line, Some(r))) => {
+                let upside_down = !r.stability.inverted.is_empty();
+                if upside_down && r.stability.is_stable() {
+                    bad.push(format!("{line}: upside down but stable"));
+                }
+            }
+            Ok((_, None)) => {}
+            Err(line) => bad.push(line),
+        }
+    }
+    assert!(bad.is_empty(), "{}", bad.join("\n"));
+}
+
+/// Guards the float whose stiffness is zero within its rounding: toy with k1 within an
+/// ulp or ten of −k2 = −3000 N/m. The float block Q = k1 + k2 (exact in double precision,
+/// Sterbenz) is ±1e-12 N/m, below the rounding of its 3000 N/m terms (a few ulps of them,
+/// 2.7e-12), so its sign cannot be told; the first-order error of the condensed mode
+/// (−k1 k2/Q ≈ ∓1e19 N/m) is then as large as the mode, which read as "neutral". But either
+/// sign is unstable: Q < 0, the float runs away; Q > 0, the mass sees k1 k2/(k1 + k2) < 0.
+/// Reference: the closed form of the 2 × 2 stiffness [[k2, −k2], [−k2, k1 + k2]], whose
+/// determinant k1 k2 is negative (−9e6) for every Q up to its rounding.
+#[test]
+fn a_float_zero_within_rounding_but_strongly_coupled_is_unstable_whatever_its_sign() {
+    for k1 in [
+        "-2999.999999999999",
+        "-3000.000000000001",
+        "-2999.99999999999",
+    ] {
+        let r = run("toy", &[&format!("k1={k1}")], Stage::S0A);
+        assert_eq!(
+            r.stability.verdict,
+            Verdict::Unstable,
+            "k1 {k1}: {}",
+            r.stability
+        );
+        let float = &r.stability.runaway_floats[0];
+        assert_eq!(float.floats[0].0, "q");
+        let q = k1.parse::<f64>().unwrap() + 3000.0;
+        assert_eq!(float.stiffness, q, "Q = k1 + k2 exactly");
+        // its stated error covers it: zero within rounding, not a confident sign
+        assert!(float.error >= float.stiffness.abs(), "{float:?}");
+        let message = r.check_stable().unwrap_err().to_string();
+        assert!(
+            message.contains("within rounding") && message.contains("'q'"),
+            "{message}"
+        );
+    }
+    // a float clearly held (Q = 1e-9 N/m, 400 times its rounding) stays a fast growing mode
+    let r = run("toy", &["k1=-2999.999999999"], Stage::S0A);
+    assert!(r.stability.runaway_floats.is_empty(), "{}", r.stability);
+    assert_eq!(r.stability.growing.len(), 1);
+}
+
+/// Guards the shift-invert modes (more than 200 variables, modes below a frequency) near
+/// a marginal pitch: quad-v5 with 40 beads per fibre at d4 = −1.3787476e-2 m, where the
+/// lowest mode lies at ω² ≈ 2e-5 rad²/s², next to the iteration's shift (−1e-6 of the
+/// bound's ω²). The operator's largest |θ| = 1/(ω² − σ) is then ~1e5, and Rayleigh–Ritz
+/// values of rounding size (ulps of it) read as λ = σ + 1/θ ≈ −5e11 rad²/s²: 132 "growing
+/// modes" at 51 kHz were reported. Reference: the dense eigen-solve of all modes on the
+/// same stage (the library's other method: faer's Cholesky of K or M and a symmetric
+/// eigen-solve, no shift); the verdicts must match and the lowest ω² agree within both
+/// stated errors.
+#[test]
+fn shift_invert_modes_near_their_shift_report_no_spurious_growing_modes() {
+    use pendkit::{ModeSelection, RunOptions, run_stage_with};
+    let sets = vec!["d4=-1.3787476e-2".to_string(), "n_beads=40".to_string()];
+    let (system, _) = Case::model("quad-v5")
+        .unwrap()
+        .with_sets(&sets)
+        .unwrap()
+        .build()
+        .unwrap();
+    let options = RunOptions {
+        modes: ModeSelection::Below(1.0),
+        ..Default::default()
+    };
+    let below = run_stage_with(system.clone(), Stage::S2, &options, None).expect("runs");
+    assert!(below.modes.coordinates.len() > pendkit::DENSE_MODES_LIMIT);
+    let all = run_stage(system, Stage::S2).expect("runs");
+    assert_eq!(
+        below.stability.verdict, all.stability.verdict,
+        "{}",
+        below.stability
+    );
+    assert!(below.stability.growing.is_empty(), "{}", below.stability);
+    let (a, b) = (&below.modes.modes[0], &all.modes.modes[0]);
+    assert!(
+        (a.omega_squared - b.omega_squared).abs() <= a.omega_squared_error + b.omega_squared_error,
+        "{a:?} vs {b:?}"
+    );
+}
+
+/// The stated errors are honest: each point's three lowest modes from the two derivative
+/// paths (the fast, hand-differentiated one and the hyper-dual reference: the same
+/// Hessians rounded differently) agree within the sum of their stated errors, at the pitch
+/// break-off within 1e-12 of its bisected value, with wires and blades 1e6–1e12 times
+/// stiffer than nominal, near g = 0 and with a blade near zero stiffness. The verdicts
+/// agree too.
+#[test]
+fn stated_errors_cover_the_difference_between_the_two_derivative_paths() {
+    use pendkit::{RunOptions, run_stage_with};
+    use pendkit_assembly::{AssemblyOptions, DerivativePath};
+    let points: Vec<(&str, Vec<&str>, Stage)> = vec![
+        ("quad", vec!["d4=-1.3787475950811184e-2"], Stage::S2),
+        ("quad", vec!["d4=-1.378747595081132e-2"], Stage::S2),
+        ("quad", vec!["d4=-1.3787475950824973e-2"], Stage::S2),
+        ("quad", vec!["d4=-1.3787475950797396e-2"], Stage::S2),
+        ("quad", vec!["Yn=2.2e17", "d4=-0.02"], Stage::S2),
+        ("quad", vec!["rn=scale(30)", "d4=-0.02"], Stage::S2),
+        ("double-pendulum", vec!["r_wire=scale(100)"], Stage::S2),
+        ("chain", vec!["E_wire=2.12e19", "d_bottom=-0.05"], Stage::S2),
+        (
+            "quad-full",
+            vec!["d4=-0.02", "blade_stiff_translation=1e12"],
+            Stage::S2,
+        ),
+        ("toy", vec!["k1=-1000", "k2=1e15"], Stage::S0A),
+        ("quad", vec!["g=1e-3"], Stage::S2),
+        ("quad", vec!["ufc1=1e-4", "d4=-0.02"], Stage::S2),
+    ];
+    let mut bad = Vec::new();
+    for (model, sets, stage) in points {
+        let sets_owned: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
+        let (system, _) = Case::model(model)
+            .unwrap()
+            .with_sets(&sets_owned)
+            .unwrap()
+            .build()
+            .unwrap();
+        let [fast, reference] = [DerivativePath::Fast, DerivativePath::Reference].map(|path| {
+            let options = RunOptions {
+                assembly: AssemblyOptions {
+                    derivatives: path,
+                    ..Default::default()
+                },
+                ..Default::default()
+            };
+            run_stage_with(system.clone(), stage, &options, None).expect("runs")
+        });
+        if fast.stability.verdict != reference.stability.verdict {
+            bad.push(format!(
+                "{model} {sets:?}: {} vs {}",
+                fast.stability, reference.stability
+            ));
+        }
+        for (a, b) in fast.modes.modes.iter().zip(&reference.modes.modes).take(3) {
+            if (a.omega_squared - b.omega_squared).abs()
+                > a.omega_squared_error + b.omega_squared_error
+            {
+                bad.push(format!(
+                    "{model} {sets:?} {}: ω² {:e} ± {:e} vs {:e} ± {:e}",
+                    a.label,
+                    a.omega_squared,
+                    a.omega_squared_error,
+                    b.omega_squared,
+                    b.omega_squared_error
+                ));
+            }
+        }
+    }
+    assert!(bad.is_empty(), "{}", bad.join("\n"));
+}
+
+/// A float whose own stiffness cancels to rounding, weakly coupled to a mass held by its
+/// own spring: springs k1 = −1000 and k0 ≈ 1000 − k2 N/m from the ground to the float q,
+/// k2 = 1e-6 N/m from q to the mass x, k3 = 1000 N/m from the ground to x (a massless
+/// "holder" body posed by x).
+const WEAK_FLOAT: &str = r#"
+name = "weak-float"
+summary = "a float whose own stiffness cancels to rounding, weakly coupled to a held mass"
+gravity = 0
+
+[parameters]
+m = { value = 1, unit = "kg", description = "the mass" }
+k1 = { value = -1000, unit = "N/m", description = "negative spring, ground to float" }
+k0 = { value = 999.999999, unit = "N/m", description = "positive spring, ground to float" }
+k2 = { value = 1e-6, unit = "N/m", description = "weak spring, float to mass" }
+k3 = { value = 1000, unit = "N/m", description = "spring, ground to mass" }
+
+[coordinates]
+x = "variable"
+q = "float"
+s = "parameter"
+
+[bodies.ground]
+pose = ["s", 0, 0, 0, 0, 0]
+
+[bodies.junction]
+pose = ["q", 0, 0, 0, 0, 0]
+
+[bodies.junction2]
+pose = ["q", 0, 0, 0, 0, 0]
+
+[bodies.mass]
+pose = ["x", 0, 0, 0, 0, 0]
+mass = "m"
+
+[bodies.holder]
+pose = ["x", 0, 0, 0, 0, 0]
+
+[stages.junction]
+from = "ground"
+springs = { name = "k1", stiffness = ["k1", 0, 0, 0, 0, 0], tag = "k1" }
+
+[stages.junction2]
+from = "ground"
+springs = { name = "k0", stiffness = ["k0", 0, 0, 0, 0, 0], tag = "k0" }
+
+[stages.mass]
+from = "junction"
+springs = { name = "k2", stiffness = ["k2", 0, 0, 0, 0, 0], tag = "k2" }
+
+[stages.holder]
+from = "ground"
+springs = { name = "k3", stiffness = ["k3", 0, 0, 0, 0, 0], tag = "k3" }
+"#;
+
+/// Guards the weakly coupled float whose stiffness is zero within rounding. With k0 an ulp
+/// either side of 1000 − k1 − k2 the float block Q = k1 + k0 + k2 is ±1e-13 N/m, below the
+/// rounding of its 1000 N/m terms (a few ulps of them), so its sign cannot be told: if
+/// negative the float runs away. The mass, held by k3, shows a healthy 5 Hz mode either way
+/// (k3 − k2²/Q ≈ 1000 ± 10 N/m), which read as "stable" with either sign of Q. Reference:
+/// the closed form of the 2 × 2 stiffness [[k2 + k3, −k2], [−k2, Q]], whose float
+/// direction decides; with Q clearly positive (k0 = 1000 N/m, Q = k2 = 1e-6 N/m, ten
+/// million times its rounding) it is stable.
+#[test]
+fn a_weakly_coupled_float_zero_within_rounding_is_neutral_never_stable() {
+    let run_with = |k0: &str| {
+        let case = Case::from_text(std::path::Path::new("weak-float.toml"), WEAK_FLOAT)
+            .and_then(|c| c.with_sets(&[format!("k0={k0}")]))
+            .expect("case");
+        let (system, _) = case.build().expect("builds");
+        run_stage(system, Stage::S0A).expect("runs")
+    };
+    for k0 in ["999.9999990000001", "999.9999989999999"] {
+        let r = run_with(k0);
+        let q: f64 = -1000.0 + k0.parse::<f64>().unwrap() + 1e-6;
+        assert!(q.abs() < 1e-12, "Q = {q:e}");
+        assert_eq!(
+            r.stability.verdict,
+            Verdict::Neutral,
+            "k0 {k0}: {}",
+            r.stability
+        );
+        let float = &r.stability.neutral_floats[0];
+        assert_eq!(float.floats[0].0, "q");
+        assert!(float.error >= float.stiffness.abs(), "{float:?}");
+        // nothing is refused (nothing is shown to grow), but the verdict is said
+        let note = r.require_stable(false).unwrap().expect("a note");
+        assert!(note.contains("'q'") || note.contains(" q "), "{note}");
+    }
+    let r = run_with("1000");
+    assert_eq!(r.stability.verdict, Verdict::Stable, "{}", r.stability);
+    assert!(r.require_stable(false).unwrap().is_none());
+}

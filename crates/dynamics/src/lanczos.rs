@@ -34,6 +34,12 @@ const BLOCK: usize = 4;
 /// TOLERANCE at worst.
 const TOLERANCE: f64 = 1e-11;
 
+/// Absolute error of the Rayleigh–Ritz values θ of a basis of `dim` vectors whose largest
+/// |θ| is `theta_max`: a few ulps per step of the dense eigen-solve, as for the dense modes.
+fn ritz_noise(dim: usize, theta_max: f64) -> f64 {
+    ROUNDING * (dim as f64).sqrt().max(1.0) * f64::EPSILON * theta_max
+}
+
 /// A symmetric matrix over the unknowns (variables, then floats) in compressed columns,
 /// with each stored entry's slot in the stage's pattern.
 struct Unknowns {
@@ -235,6 +241,12 @@ impl StageModel {
             let below = joint_inertia.negatives(&joint.values(&k, m, shift))?;
             below.checked_sub(float_negatives?)
         });
+        // how many lie below zero, the same way: the growing modes, which must all be
+        // among those found (a pivot of rounding size may count a neutral mode either way)
+        let growing = joint_inertia
+            .negatives(&joint.values(&k, m, 0.0))
+            .zip(float_negatives)
+            .and_then(|(joint, floats)| joint.checked_sub(floats));
         if wanted == Some(0) {
             return Ok(Modes {
                 coordinates: self.variables.clone(),
@@ -269,7 +281,7 @@ impl StageModel {
         let mut mq: Vec<Vec<f64>> = Vec::new();
         let mut block = start_block(nx, BLOCK.min(nx), 1);
         let mut seed = 1;
-        let mut found: Vec<(f64, Vec<f64>)> = Vec::new();
+        let mut found: Vec<(f64, Vec<f64>, f64)> = Vec::new();
         loop {
             let mut added = 0;
             for mut v in block.drain(..) {
@@ -314,9 +326,16 @@ impl StageModel {
                 let (theta, y) = (evd.S().column_vector(), evd.U());
                 found.clear();
                 let mut all_converged = true;
+                // the Rayleigh–Ritz values carry an absolute error of a few ulps of the
+                // largest |θ| (the eigen-solve of T and the rounding of the operator's
+                // images): a |θ| at that level is not resolved, and λ = σ + 1/θ from it
+                // would be a spurious mode far above or below (a tiny negative θ from
+                // rounding reads as a huge growth rate)
+                let theta_max = (0..dim).map(|j| theta[j].abs()).fold(0.0, f64::max);
+                let unresolved = ritz_noise(dim, theta_max);
                 for j in 0..dim {
                     let th = theta[j];
-                    if th == 0.0 {
+                    if th.abs() <= unresolved {
                         continue;
                     }
                     let lambda = sigma + 1.0 / th;
@@ -333,7 +352,8 @@ impl StageModel {
                     r.iter_mut().zip(&u).for_each(|(a, b)| *a -= th * b);
                     let residual = dot(&r, &mass.times(&r)).sqrt();
                     if residual <= TOLERANCE * th.abs() || complete {
-                        found.push((lambda, u));
+                        // δλ = δθ/θ² for the Ritz value's own rounding
+                        found.push((lambda, u, unresolved / (th * th)));
                     } else {
                         all_converged = false;
                     }
@@ -349,16 +369,28 @@ impl StageModel {
         // so λ = σ + 1/θ within TOLERANCE |λ − σ|
         let raw = found
             .into_iter()
-            .map(|(lambda, u)| RawMode {
+            .map(|(lambda, u, rounding)| RawMode {
                 omega_squared: lambda,
-                error: TOLERANCE * (lambda - sigma).abs(),
+                error: TOLERANCE * (lambda - sigma).abs() + rounding,
                 vector: u,
                 block: 0,
             })
             .collect();
+        let modes = finish(raw, &[(0..nx).collect()], &mass, &self.variables, rounding);
+        // every growing mode the inertia counts is among the modes found (growing, or
+        // neutral within its error); one beyond the shift's resolution is not reported
+        // as a verdict from an incomplete list
+        let found_growing = modes.iter().filter(|m| m.omega_squared <= 0.0).count();
+        if let Some(growing) = growing
+            && found_growing < growing
+        {
+            return Err(DynamicsError::Solver(format!(
+                "shift-invert resolved {found_growing} of the {growing} growing modes the inertia counts"
+            )));
+        }
         Ok(Modes {
             coordinates: self.variables.clone(),
-            modes: finish(raw, &[(0..nx).collect()], &mass, &self.variables, rounding),
+            modes,
         })
     }
 }

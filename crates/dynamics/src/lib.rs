@@ -21,8 +21,8 @@ pub use modes::{
 };
 pub use pattern::Pattern;
 pub use stability::{
-    FloatMap, GrowingMode, InvertedBody, RunawayFloat, Stability, TermRounding, Verdict,
-    inverted_bodies, runaway_floats,
+    FloatDirections, FloatMap, GrowingMode, InvertedBody, RunawayFloat, Stability, TermRounding,
+    Verdict, float_directions, inverted_bodies, runaway_floats,
 };
 pub use stage::{Input, Output, ReducedComplex, StageModel, StateSpace, TermLoss};
 pub use sweep::{DENSE_LIMIT, Solver, Sweep, coupled_unknowns};

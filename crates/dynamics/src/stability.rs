@@ -65,10 +65,28 @@ pub struct GrowingMode {
 #[derive(Clone, Debug, PartialEq)]
 pub struct RunawayFloat {
     /// Stiffness along the direction (N/m, N m/rad for angles; a unit vector over the
-    /// floats): negative.
+    /// floats): negative, or within `error` of zero.
     pub stiffness: f64,
+    /// Estimated error of `stiffness` (same units). A stiffness within it of zero is a
+    /// runaway direction only when the floats along it are coupled to the variables so
+    /// strongly that, whichever its sign within the error, the potential goes downhill:
+    /// negative, the floats run away; positive, following the variables they turn the
+    /// variables' stiffness negative (see [`runaway_floats`]).
+    pub error: f64,
     /// The floats with the largest shares of the direction (name, share 0–1).
     pub floats: Vec<(String, f64)>,
+}
+
+/// The float block's directions that decide the verdict: those with no stable position,
+/// and those whose stiffness is zero within its error (sign not determined) but whose
+/// coupling to the variables is too weak to make either sign unstable.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct FloatDirections {
+    /// Directions where the massless floats have no stable position.
+    pub runaway: Vec<RunawayFloat>,
+    /// Directions with stiffness zero within its error: nothing shown to grow, but a
+    /// stable verdict would rest on a sign rounding cannot tell.
+    pub neutral: Vec<RunawayFloat>,
 }
 
 /// A body whose frame's z axis points below the horizontal at equilibrium.
@@ -89,6 +107,8 @@ pub struct Stability {
     pub growing: Vec<GrowingMode>,
     /// Float directions with negative stiffness.
     pub runaway_floats: Vec<RunawayFloat>,
+    /// Float directions with zero stiffness within its error, weakly coupled: neutral.
+    pub neutral_floats: Vec<RunawayFloat>,
     /// Number of neutral modes (ω² = 0 within its error).
     pub neutral: usize,
     /// Number of directions the potential was examined in: modes plus floats.
@@ -101,18 +121,23 @@ pub struct Stability {
 impl Stability {
     /// The verdict from modes alone (no floats, no bodies): for [`Modes::check_stable`].
     pub fn of_modes(modes: &Modes) -> Stability {
-        Stability::assess(modes, Vec::new(), 0, Vec::new())
+        Stability::assess(modes, FloatDirections::default(), 0, Vec::new())
     }
 
     /// The verdict from a stage's modes (which must include every mode with ω² < 0: all of
-    /// them, or those below a positive frequency), the runaway directions of its float
-    /// block among `floats` floats, and the bodies found upside down.
+    /// them, or those below a positive frequency), the runaway and neutral directions of
+    /// its float block among `floats` floats ([`float_directions`]), and the bodies found
+    /// upside down.
     pub fn assess(
         modes: &Modes,
-        runaway_floats: Vec<RunawayFloat>,
+        float_directions: FloatDirections,
         floats: usize,
         inverted: Vec<InvertedBody>,
     ) -> Stability {
+        let FloatDirections {
+            runaway: runaway_floats,
+            neutral: neutral_floats,
+        } = float_directions;
         let mut growing: Vec<GrowingMode> = modes
             .modes
             .iter()
@@ -135,7 +160,7 @@ impl Stability {
             Verdict::Unstable
         } else if !inverted.is_empty() {
             Verdict::Inverted
-        } else if neutral > 0 {
+        } else if neutral > 0 || !neutral_floats.is_empty() {
             Verdict::Neutral
         } else {
             Verdict::Stable
@@ -144,6 +169,7 @@ impl Stability {
             verdict,
             growing,
             runaway_floats,
+            neutral_floats,
             neutral,
             directions: modes.coordinates.len() + floats,
             inverted,
@@ -181,11 +207,25 @@ impl fmt::Display for Stability {
         match self.verdict {
             Verdict::Stable => return write!(f, "stable equilibrium (a minimum of the potential)"),
             Verdict::Neutral => {
-                return write!(
-                    f,
-                    "neutral equilibrium: {} mode(s) with zero stiffness within rounding, nothing grows",
-                    self.neutral
-                );
+                write!(f, "neutral equilibrium: ")?;
+                if self.neutral > 0 {
+                    write!(
+                        f,
+                        "{} mode(s) with zero stiffness within rounding, ",
+                        self.neutral
+                    )?;
+                }
+                for r in &self.neutral_floats {
+                    let names: Vec<&str> = r.floats.iter().map(|(n, _)| n.as_str()).collect();
+                    write!(
+                        f,
+                        "float(s) {} with stiffness {:.1e} ± {:.1e} N/m or N m/rad (variables held), zero within rounding: its sign, and whether they run away, cannot be told, ",
+                        names.join(", "),
+                        r.stiffness,
+                        r.error
+                    )?;
+                }
+                return write!(f, "nothing is shown to grow");
             }
             Verdict::Inverted => {
                 let bodies: Vec<String> = self
@@ -210,10 +250,17 @@ impl fmt::Display for Stability {
             } else {
                 format!("floats {} have", names.join(", "))
             };
-            parts.push(format!(
-                "{what} no stable position (stiffness {:.4e} N/m or N m/rad with the variables held: a massless coordinate on a maximum of the potential moves without limit)",
-                r.stiffness
-            ));
+            if r.stiffness < -r.error {
+                parts.push(format!(
+                    "{what} no stable position (stiffness {:.4e} N/m or N m/rad with the variables held: a massless coordinate on a maximum of the potential moves without limit)",
+                    r.stiffness
+                ));
+            } else {
+                parts.push(format!(
+                    "{what} no stable position within rounding (stiffness {:.1e} ± {:.1e} N/m or N m/rad with the variables held, zero within its error, and coupled to the variables so strongly that either sign goes downhill: negative, the massless coordinate runs away; positive, following the variables it makes their stiffness negative)",
+                    r.stiffness, r.error
+                ));
+            }
         }
         if let Some(g) = self.growing.first() {
             let more = if self.growing.len() > 1 {
@@ -268,8 +315,9 @@ pub struct FloatMap {
 }
 
 /// The float block Q (nq × nq) and the float–variable coupling C (nq × nx) of `model` at
-/// f = 0 with `damping`'s ε'(0).
-fn float_blocks(model: &StageModel, damping: &Damping) -> (DMatrix<f64>, DMatrix<f64>) {
+/// f = 0 with `damping`'s ε'(0), and the real stiffness's values they were taken from (on
+/// the stage's pattern).
+fn float_blocks(model: &StageModel, damping: &Damping) -> (DMatrix<f64>, DMatrix<f64>, Vec<f64>) {
     let (nx, nq, _) = model.sizes;
     let (re, _) = model.master_values(damping, 0.0);
     let mut q = DMatrix::zeros(nq, nq);
@@ -284,14 +332,14 @@ fn float_blocks(model: &StageModel, damping: &Damping) -> (DMatrix<f64>, DMatrix
             }
         }
     }
-    (q, c)
+    (q, c, re)
 }
 
 impl FloatMap {
     /// The map of `model` with `damping`'s ε'(0).
     pub fn new(model: &StageModel, damping: &Damping) -> Self {
         let (nx, nq, _) = model.sizes;
-        let (q, c) = float_blocks(model, damping);
+        let (q, c, _) = float_blocks(model, damping);
         let mut groups = Vec::new();
         for group in crate::schur::components(nq, |i, j| q[(i, j)] != 0.0) {
             let variables: Vec<usize> = (0..nx)
@@ -828,17 +876,31 @@ impl StiffnessRounding for TermRounding {
 
 /// The directions of the float block Q (real stiffness at f = 0, variables held) with
 /// stiffness below minus its rounding (`rounding`, or a few ulps of Q's entries without
-/// it): those where the massless floats have no stable position.
+/// it): those where the massless floats have no stable position ([`float_directions`]'s
+/// runaway ones).
 pub fn runaway_floats(
     model: &StageModel,
     damping: &Damping,
     rounding: Option<&TermRounding>,
 ) -> Result<Vec<RunawayFloat>, DynamicsError> {
+    Ok(float_directions(model, damping, rounding)?.runaway)
+}
+
+/// The float block Q's directions (real stiffness at f = 0, variables held) that decide
+/// the verdict, each stiffness κ against its rounding δ (`rounding`, or a few ulps of Q's
+/// entries without it): runaway when κ < −δ, or when |κ| ≤ δ and the direction is so
+/// strongly coupled to the variables that either sign goes downhill
+/// (`undetermined_runaways`); neutral when |κ| ≤ δ otherwise.
+pub fn float_directions(
+    model: &StageModel,
+    damping: &Damping,
+    rounding: Option<&TermRounding>,
+) -> Result<FloatDirections, DynamicsError> {
     let (nx, nq, _) = model.sizes;
     if nq == 0 {
-        return Ok(Vec::new());
+        return Ok(FloatDirections::default());
     }
-    let (q, _) = float_blocks(model, damping);
+    let (q, c, re) = float_blocks(model, damping);
     if let Some(bad) = q.iter().position(|x| !x.is_finite()) {
         return Err(DynamicsError::NotFinite {
             what: "float stiffness block",
@@ -847,15 +909,15 @@ pub fn runaway_floats(
         });
     }
     let mut runaway = Vec::new();
+    let mut undetermined = Vec::new();
     // Q is block diagonal over the groups its exact zeros separate: its eigenpairs are the
     // groups' own
     for group in crate::schur::components(nq, |i, j| q[(i, j)] != 0.0) {
         let qg = DMatrix::from_fn(group.len(), group.len(), |i, j| q[(group[i], group[j])]);
         let eigen = qg.clone().symmetric_eigen();
+        // the group's rows among the unknowns (where its directions are non-zero)
+        let rows: Vec<usize> = group.iter().map(|&f| nx + f).collect();
         for (k, &kappa) in eigen.eigenvalues.iter().enumerate() {
-            if kappa >= 0.0 {
-                continue;
-            }
             let w = eigen.eigenvectors.column(k);
             let error = match rounding {
                 Some(r) => {
@@ -863,7 +925,11 @@ pub fn runaway_floats(
                     for (&f, x) in group.iter().zip(w.iter()) {
                         z[nx + f] = *x;
                     }
-                    r.error_unknowns(&z)
+                    // a positive stiffness above the cheap bound of its rounding is held
+                    if kappa >= 0.0 && kappa > r.on_rows(true, &z, &rows) {
+                        continue;
+                    }
+                    r.on_rows(false, &z, &rows)
                 }
                 None => {
                     let mut sum = 0.0;
@@ -872,27 +938,97 @@ pub fn runaway_floats(
                             sum += w[i].abs() * qg[(i, j)].abs() * w[j].abs();
                         }
                     }
-                    ROUNDING * f64::EPSILON * sum
+                    let error = ROUNDING * f64::EPSILON * sum;
+                    if kappa > error {
+                        continue;
+                    }
+                    error
                 }
             };
             if kappa < -error {
-                let mut floats: Vec<(String, f64)> = w
-                    .iter()
-                    .zip(&group)
-                    .map(|(x, &f)| (model.floats.get(f).cloned().unwrap_or_default(), x * x))
-                    .filter(|(_, share)| *share >= 0.01)
-                    .collect();
-                floats.sort_by(|a, b| b.1.total_cmp(&a.1));
-                floats.truncate(3);
                 runaway.push(RunawayFloat {
                     stiffness: kappa,
-                    floats,
+                    error,
+                    floats: float_shares(model, &group, w.iter().copied()),
                 });
+            } else if kappa <= error {
+                undetermined.push((kappa, error, group.clone(), w.iter().copied().collect()));
             }
         }
     }
+    let (coupled, neutral) = undetermined_runaways(model, &re, &c, nx, undetermined);
+    runaway.extend(coupled);
     runaway.sort_by(|a, b| a.stiffness.total_cmp(&b.stiffness));
-    Ok(runaway)
+    Ok(FloatDirections { runaway, neutral })
+}
+
+/// The floats with the largest shares (at least 1 %) of a direction `w` over the floats
+/// `group` (0-based among the floats): at most three, largest first.
+fn float_shares(
+    model: &StageModel,
+    group: &[usize],
+    w: impl Iterator<Item = f64>,
+) -> Vec<(String, f64)> {
+    let mut floats: Vec<(String, f64)> = w
+        .zip(group)
+        .map(|(x, &f)| (model.floats.get(f).cloned().unwrap_or_default(), x * x))
+        .filter(|(_, share)| *share >= 0.01)
+        .collect();
+    floats.sort_by(|a, b| b.1.total_cmp(&a.1));
+    floats.truncate(3);
+    floats
+}
+
+/// A float direction w (unit, over the floats) whose stiffness κ is zero within its error
+/// δ: unknown in sign. With b = C w the variables' coupling to it (N/m) and a = uᵀ K u the
+/// variables' own stiffness along u = b/|b|, the stiffness restricted to the plane of u
+/// and w is [[a, |b|], [|b|, κ]], indefinite for every κ ≤ κ + δ when a (κ + δ) < |b|²; by
+/// Cauchy interlacing the whole stiffness then has a negative eigenvalue whatever the
+/// rounding: the direction is reported as runaway. (The margin of 2 covers the rounding
+/// of a and b themselves, a few ulps.) Directions weakly coupled are returned second:
+/// neutral.
+fn undetermined_runaways(
+    model: &StageModel,
+    re: &[f64],
+    c: &DMatrix<f64>,
+    nx: usize,
+    undetermined: Vec<(f64, f64, Vec<usize>, Vec<f64>)>,
+) -> (Vec<RunawayFloat>, Vec<RunawayFloat>) {
+    let (mut runaway, mut neutral) = (Vec::new(), Vec::new());
+    for (kappa, error, group, w) in undetermined {
+        // b = Cᵀ w over the variables
+        let mut b = vec![0.0; nx];
+        for (&f, &wf) in group.iter().zip(&w) {
+            for (j, bj) in b.iter_mut().enumerate() {
+                *bj += wf * c[(f, j)];
+            }
+        }
+        let b2: f64 = b.iter().map(|x| x * x).sum();
+        let direction = RunawayFloat {
+            stiffness: kappa,
+            error,
+            floats: float_shares(model, &group, w.iter().copied()),
+        };
+        if b2 == 0.0 || !b2.is_finite() {
+            neutral.push(direction);
+            continue;
+        }
+        // a = uᵀ K_xx u from the pattern's variable entries
+        let mut a = 0.0;
+        for (slot, &v) in re.iter().enumerate() {
+            let (r, col) = model.pattern.position(slot);
+            if r < nx && col < nx {
+                a += b[r] * v * b[col];
+            }
+        }
+        let a = a / b2;
+        if 2.0 * a * (kappa + error) < b2 {
+            runaway.push(direction);
+        } else {
+            neutral.push(direction);
+        }
+    }
+    (runaway, neutral)
 }
 
 /// Bodies with mass whose z axis points below the horizontal at coordinates `x` (a full

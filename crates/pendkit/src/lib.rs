@@ -71,8 +71,8 @@ use std::path::{Path, PathBuf};
 use nalgebra::{DVector, Vector3};
 use pendkit_assembly::{Assembled, AssemblyError, assemble_with, timed};
 use pendkit_dynamics::{
-    DynamicsError, TermRounding, eliminate_floats, inverted_bodies, normal_modes_with_rounding,
-    runaway_floats,
+    DynamicsError, TermRounding, eliminate_floats, float_directions, inverted_bodies,
+    normal_modes_with_rounding,
 };
 use pendkit_energy::{NamedSignal, SignalTerm};
 use pendkit_model::BuildError;
@@ -582,37 +582,32 @@ pub fn run_stage_with(
     });
     let modes = match options.modes {
         ModeSelection::Below(hz) if model.sizes.0 > DENSE_MODES_LIMIT => {
-            timed(&mut times, "modes", 1, || {
+            let below = timed(&mut times, "modes", 1, || {
                 model.modes_below_with_rounding(&system.damping, hz, &rounding)
-            })?
-        }
-        selection => {
-            let reduced = timed(&mut times, "floats", 1, || {
-                eliminate_floats(
-                    &model.real_stiffness(&system.damping),
-                    &assembled.layout,
-                    &system,
-                )
-            })?;
-            let mut modes = timed(&mut times, "modes", 1, || {
-                normal_modes_with_rounding(
-                    &reduced.k_eff,
-                    &assembled.mass,
-                    &model.variables,
-                    &rounding,
-                )
-            })?;
-            if let ModeSelection::Below(hz) = selection {
-                modes.modes.retain(|m| m.hz < hz);
+            });
+            match below {
+                Ok(modes) => modes,
+                // the shift-invert iteration could not resolve every mode below the bound
+                // (a growing mode beyond its shift's resolution, a shift on an eigenvalue):
+                // the dense solve, slower but complete, decides instead
+                Err(DynamicsError::Solver(_)) => {
+                    dense_modes(&model, &assembled, &system, &rounding, Some(hz), &mut times)?
+                }
+                Err(e) => return Err(e.into()),
             }
-            modes
+        }
+        ModeSelection::Below(hz) => {
+            dense_modes(&model, &assembled, &system, &rounding, Some(hz), &mut times)?
+        }
+        ModeSelection::All => {
+            dense_modes(&model, &assembled, &system, &rounding, None, &mut times)?
         }
     };
     // after the modes, so that a model the modes refuse outright (a massless body, whose
     // wires then carry no tension) is refused for that
     pendkit_dynamics::validate::check_wire_stretch(&system, &assembled.equilibrium.coords)?;
     let stability = timed(&mut times, "stability", 1, || {
-        let floats = runaway_floats(&model, &system.damping, Some(&rounding))?;
+        let floats = float_directions(&model, &system.damping, Some(&rounding))?;
         let inverted = inverted_bodies(&system, &assembled.equilibrium.coords);
         Ok::<_, Error>(Stability::assess(&modes, floats, model.sizes.1, inverted))
     })?;
@@ -623,6 +618,32 @@ pub fn run_stage_with(
         modes,
         stability,
     })
+}
+
+/// The stage's modes by the dense eigensolver block by block (those below `below` Hz when
+/// given, every growing mode among them), recording the `floats` and `modes` phases.
+fn dense_modes(
+    model: &StageModel,
+    assembled: &Assembled,
+    system: &System,
+    rounding: &TermRounding,
+    below: Option<f64>,
+    times: &mut Option<&mut PhaseTimes>,
+) -> Result<Modes, Error> {
+    let reduced = timed(times, "floats", 1, || {
+        eliminate_floats(
+            &model.real_stiffness(&system.damping),
+            &assembled.layout,
+            system,
+        )
+    })?;
+    let mut modes = timed(times, "modes", 1, || {
+        normal_modes_with_rounding(&reduced.k_eff, &assembled.mass, &model.variables, rounding)
+    })?;
+    if let Some(hz) = below {
+        modes.modes.retain(|m| m.hz < hz);
+    }
+    Ok(modes)
 }
 
 /// A point on a body as the linearised geometry at equilibrium sees it: how far it moves
@@ -644,8 +665,13 @@ impl StageResult {
     /// noise, state space, ...) makes before it answers: `Ok(None)` when nothing grows;
     /// when something does, the error, or with `allow_unstable` `Ok(Some(warning))`, the
     /// one line to show the user before going on (control design needs unstable plants).
+    /// A neutral verdict that rests on a float stiffness rounding cannot sign (nothing
+    /// shown to grow) goes on, with the verdict as the line to show.
     pub fn require_stable(&self, allow_unstable: bool) -> Result<Option<String>, Error> {
         match (self.check_stable(), allow_unstable) {
+            (Ok(()), _) if !self.stability.neutral_floats.is_empty() => {
+                Ok(Some(self.stability.to_string()))
+            }
             (Ok(()), _) => Ok(None),
             (Err(e), true) => Ok(Some(format!("{e} (going on: --allow-unstable)"))),
             (Err(e), false) => Err(e),

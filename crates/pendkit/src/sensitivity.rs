@@ -164,7 +164,7 @@ fn matrices_point(
         coordinates: model.variables.clone(),
         modes: Vec::new(),
     };
-    let stability = Stability::assess(&modes, Vec::new(), model.sizes.1, Vec::new());
+    let stability = Stability::assess(&modes, Default::default(), model.sizes.1, Vec::new());
     Ok(Point {
         result: StageResult {
             system,
