@@ -70,10 +70,7 @@ pub fn parse_vary(text: &str) -> Result<Vary, CliError> {
         _ => return Err(bad("wrong number of fields")),
     };
     let number = |t: &str, what: &str| -> Result<f64, CliError> {
-        t.parse::<f64>()
-            .ok()
-            .filter(|v| v.is_finite())
-            .ok_or_else(|| bad(&format!("{what} '{t}' is not a finite number")))
+        crate::common::number(t).map_err(|e| bad(&format!("{what}: {e}")))
     };
     let (start, stop) = (number(parts[0], "START")?, number(parts[1], "STOP")?);
     let n: usize = parts[2]

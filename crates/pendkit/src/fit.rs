@@ -188,10 +188,8 @@ fn data_lines<'a>(text: &'a str, header: &str) -> Vec<(usize, Vec<&'a str>)> {
 
 /// A field that must be a positive finite number.
 fn positive(field: &str, what: &str) -> Result<f64, String> {
-    let x: f64 = field
-        .parse()
-        .map_err(|_| format!("{what} '{field}' is not a number"))?;
-    if x.is_finite() && x > 0.0 {
+    let x = pendkit_expr::number_literal(field).map_err(|e| format!("{what}: {e}"))?;
+    if x > 0.0 {
         Ok(x)
     } else {
         Err(format!("{what} must be positive and finite, got {field}"))

@@ -659,10 +659,10 @@ impl StageResult {
             let nums = |t: &str, what: &str| -> Result<Vector3<f64>, Error> {
                 let v: Vec<f64> = t
                     .split(',')
-                    .map(|x| x.trim().parse::<f64>())
+                    .map(pendkit_expr::number_literal)
                     .collect::<Result<_, _>>()
-                    .map_err(|_| bad(&format!("the {what} is not three numbers")))?;
-                if v.len() == 3 && v.iter().all(|x| x.is_finite()) {
+                    .map_err(|e| bad(&format!("the {what} is not three numbers: {e}")))?;
+                if v.len() == 3 {
                     Ok(Vector3::new(v[0], v[1], v[2]))
                 } else {
                     Err(bad(&format!("the {what} must be three finite numbers")))
