@@ -180,10 +180,10 @@ impl ModelArgs {
 #[derive(clap::Args, Clone)]
 pub struct GridArgs {
     /// First frequency of the log-spaced grid (Hz).
-    #[arg(long, default_value_t = 0.1, value_parser = number)]
+    #[arg(long, default_value_t = 0.1, value_parser = number, allow_hyphen_values = true)]
     pub from: f64,
     /// Last frequency of the log-spaced grid (Hz).
-    #[arg(long, default_value_t = 100.0, value_parser = number)]
+    #[arg(long, default_value_t = 100.0, value_parser = number, allow_hyphen_values = true)]
     pub to: f64,
     /// Number of log-spaced points.
     #[arg(long, default_value_t = 200)]

@@ -247,6 +247,23 @@ pub fn run(a: Args) -> Result<String, CliError> {
                 .join(" x ")
         )));
     }
+    // a parameter swept twice, or swept and also set, would take only the last value
+    // given while the table's columns claim the others
+    for (k, v) in varies.iter().enumerate() {
+        if varies[..k].iter().any(|w| w.name == v.name) {
+            return Err(CliError::usage(format!(
+                "--vary: '{}' is swept twice: sweep each parameter once",
+                v.name
+            )));
+        }
+        let set_name = |s: &String| s.split_once('=').map(|(n, _)| n.trim().to_string());
+        if a.args.sets.iter().filter_map(set_name).any(|n| n == v.name) {
+            return Err(CliError::usage(format!(
+                "--vary: '{}' is swept and also given by --set: the sweep would replace the --set",
+                v.name
+            )));
+        }
+    }
     if a.modes && a.plot.is_some() && varies.len() != 1 {
         return Err(CliError::usage(
             "--plot with --modes draws frequencies against one swept parameter: give one --vary",

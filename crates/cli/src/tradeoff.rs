@@ -33,14 +33,14 @@ pub struct Args {
     #[arg(long, default_value_t = 200)]
     points: usize,
     /// Largest relative error accepted when naming the cheapest variant.
-    #[arg(long, default_value_t = 1e-3, value_parser = crate::common::number)]
+    #[arg(long, default_value_t = 1e-3, value_parser = crate::common::number, allow_hyphen_values = true)]
     tolerance: f64,
     /// Violin beads per fibre to try, comma-separated (models with n_beads only).
     #[arg(long, value_name = "N,...", default_value = "0,1,2,5,10,20,40")]
     beads: String,
     /// Time spent repeating each variant (s): the minimum of up to 5 runs within it is
     /// reported (the first run always completes).
-    #[arg(long, value_name = "S", default_value_t = 0.5, value_parser = crate::common::number)]
+    #[arg(long, value_name = "S", default_value_t = 0.5, value_parser = crate::common::number, allow_hyphen_values = true)]
     budget: f64,
     /// Override a parameter or damping field of every variant (as for `modes`; repeatable).
     #[arg(long = "set", value_name = "NAME=EXPR")]

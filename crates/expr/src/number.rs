@@ -21,7 +21,7 @@ pub enum NumberError {
     /// 2.2e-308): it would read as 0, or as a subnormal number that has lost most of its
     /// digits.
     #[error(
-        "number '{0}' is too small (a nonzero number below 2.2e-308 underflows to 0 or loses its digits)"
+        "number '{0}' is too small (a nonzero number below 2.2e-308 underflows to 0 or to a subnormal that has lost digits)"
     )]
     Underflow(String),
 }

@@ -178,8 +178,9 @@ pub fn parse_case(text: &str) -> Result<CaseFile, FileError> {
 /// suspension file (which describes the model itself and has no `model` key). Text that is
 /// not TOML is not a case file: the suspension reader then reports where it breaks.
 pub fn is_case_file(text: &str) -> bool {
-    text.parse::<toml::Table>()
-        .is_ok_and(|table| table.contains_key("model"))
+    // parsed without converting values, so that a case file whose numbers an f64 cannot
+    // hold (`1e400`) is still read as one, and refused as one
+    toml::de::DeTable::parse(text).is_ok_and(|table| table.get_ref().contains_key("model"))
 }
 
 /// Reads and parses a case file.
@@ -215,6 +216,7 @@ mod tests {
         assert!(is_case_file("model = \"my-susp.toml\"\n"));
         assert!(!is_case_file("[bodies.top]\nmass = 1\n"));
         assert!(!is_case_file("model = \n"));
+        assert!(is_case_file("model = \"quad\"\n[parameters]\nm3 = 1e400\n"));
     }
 
     #[test]
