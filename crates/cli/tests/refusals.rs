@@ -618,17 +618,26 @@ fn case_file_numbers_an_f64_cannot_hold_are_refused_with_file_line_and_field() {
     );
     refused(
         &["modes", &case],
-        &["literal-case.toml", "line 4: parameter 'm1'", "too small"],
+        &[
+            "literal-case.toml",
+            "line 4: parameters.m1",
+            "'1e-400' is too small",
+        ],
     );
-    // an overflowing literal is refused by the TOML reader, and the file is still a case
-    // file (it was read as a suspension file before)
+    // and an overflowing one, which the TOML reader refused without naming the field (and
+    // the file was then read as a suspension file)
     let case = scratch_file(
         "literal-case-big.toml",
         "model = \"pendulum\"\n[parameters]\nm1 = 1e400\n",
     );
     refused(
         &["modes", &case],
-        &["case file", "literal-case-big.toml", "line 3", "overflow"],
+        &[
+            "case file",
+            "literal-case-big.toml",
+            "line 3: parameters.m1",
+            "'1e400' is too large",
+        ],
     );
 }
 
@@ -677,4 +686,17 @@ fn case_file_whose_model_is_a_case_file_is_refused_naming_it() {
     // field"
     let path = scratch_file("self-case.toml", "model = \"self-case.toml\"\n");
     refused(&["modes", &path], &["self-case.toml", "is a case file"]);
+}
+
+#[test]
+fn negative_stiffness_near_the_bottom_of_f64_is_unstable_not_a_hang() {
+    // `modes toy --set k2=-1e-305` ran for ever: the shift bisection started from a floor
+    // that underflowed to 0 and formed low·high, which underflowed to 0 too. The toy's
+    // springs in series give k = k1 k2 / (k1 + k2) ≈ k2 for |k2| ≪ k1 = 1000 N/m, so with
+    // m = 1 kg the mode grows with e-folding time 1/sqrt(|k2|/m) = 1/sqrt(1e-305) s
+    // = 3.162e152 s (closed form; printed to 4 digits).
+    refused(
+        &["modes", "toy", "--set", "k2=-1e-305"],
+        &["unstable", "e-folding time 3.162e152 s"],
+    );
 }

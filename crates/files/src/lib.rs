@@ -107,6 +107,8 @@ fn expression_text(
     match value.get_ref() {
         toml::Value::String(s) => Ok(s.clone()),
         toml::Value::Integer(i) => Ok(i.to_string()),
+        // the literal as written (checked by `check_float_literals`): the parsed f64 of
+        // `0e-999` or `1.5e-7` prints differently, and that of `nan` means nothing
         toml::Value::Float(f) => {
             let literal = text
                 .get(value.span())
@@ -122,8 +124,52 @@ fn expression_text(
     }
 }
 
+/// Refuses, naming its line and field, the first float literal of the TOML `text` that an
+/// `f64` cannot hold: the TOML parser reads `1e-400` as 0 and refuses `1e400` without
+/// naming the field, so the literals are checked as written, before the values are read.
+fn check_float_literals(text: &str) -> Result<(), FileError> {
+    use toml::de::{DeTable, DeValue};
+    fn walk(text: &str, path: &str, value: &Spanned<DeValue>) -> Result<(), FileError> {
+        match value.get_ref() {
+            DeValue::Float(f) => {
+                pendkit_expr::number_literal(&f.as_str().replace('_', "")).map_err(|e| {
+                    FileError::Parse {
+                        message: format!("line {}: {path}: {e}", line_of(text, value.span().start)),
+                    }
+                })?;
+            }
+            DeValue::Array(items) => {
+                for item in items.iter() {
+                    walk(text, path, item)?;
+                }
+            }
+            DeValue::Table(table) => walk_table(text, path, table)?,
+            _ => {}
+        }
+        Ok(())
+    }
+    fn walk_table(text: &str, path: &str, table: &DeTable) -> Result<(), FileError> {
+        for (key, value) in table.iter() {
+            let key: &str = key.get_ref();
+            let path = if path.is_empty() {
+                key.to_string()
+            } else {
+                format!("{path}.{key}")
+            };
+            walk(text, &path, value)?;
+        }
+        Ok(())
+    }
+    // a file that is not TOML is reported by the reader below
+    match DeTable::parse(text) {
+        Ok(table) => walk_table(text, "", table.get_ref()),
+        Err(_) => Ok(()),
+    }
+}
+
 /// Parses the text of a case file.
 pub fn parse_case(text: &str) -> Result<CaseFile, FileError> {
+    check_float_literals(text)?;
     let file: CaseToml = toml::from_str(text).map_err(|e| {
         let at = e
             .span()
@@ -138,7 +184,7 @@ pub fn parse_case(text: &str) -> Result<CaseFile, FileError> {
     let mut parameters: Vec<_> = file.parameters.iter().collect();
     parameters.sort_by_key(|(_, value)| value.span().start);
     for (name, value) in parameters {
-        let expression = expression_text(text, &format!("parameter '{name}'"), value)?;
+        let expression = expression_text(text, &format!("parameters.{name}"), value)?;
         overrides.parameters.push((name.clone(), expression));
     }
     for (tag, d) in &file.damping {
@@ -203,7 +249,7 @@ mod tests {
         let e = parse_case("model = \"pendulum\"\n[parameters]\nm1 = true\n").unwrap_err();
         assert_eq!(
             e.to_string(),
-            "line 3: parameter 'm1': expected a number or an expression string, got boolean"
+            "line 3: parameters.m1: expected a number or an expression string, got boolean"
         );
         let e = parse_case("model = \"toy\"\nextra = 1\n").unwrap_err();
         assert!(e.to_string().contains("unknown field"), "{e}");
@@ -236,12 +282,10 @@ mod tests {
 
     #[test]
     fn number_literals_an_f64_cannot_hold_are_refused_with_line_and_field() {
-        // the TOML parser refuses an overflowing literal itself, naming the line
-        let e = parse_case("model = \"quad\"\n[parameters]\nm3 = 1e400\n").unwrap_err();
-        assert!(e.to_string().starts_with("line 3: "), "{e}");
-        assert!(e.to_string().contains("overflow"), "{e}");
-        // but rounds 1e-400 to 0, and takes inf and nan: the literal is checked instead
+        // the TOML parser refuses 1e400 without naming the field, rounds 1e-400 to 0 and
+        // takes inf and nan: the literal is checked instead
         for (value, problem) in [
+            ("1e400", "too large"),
             ("1e-400", "too small"),
             ("-2.5e-320", "too small"),
             ("inf", "not a finite number"),
@@ -252,7 +296,7 @@ mod tests {
             ))
             .unwrap_err()
             .to_string();
-            assert!(e.starts_with("line 4: parameter 'm3': "), "{e}");
+            assert!(e.starts_with("line 4: parameters.m3: "), "{e}");
             assert!(e.contains(problem), "{e}");
             let e = parse_case(&format!(
                 "model = \"quad\"\n[damping.w]\nstructural = 1\nthermoelastic = [1e-3,\n {value}]\n"
@@ -260,6 +304,7 @@ mod tests {
             .unwrap_err()
             .to_string();
             assert!(e.starts_with("line 5: damping.w.thermoelastic: "), "{e}");
+            assert!(e.contains(problem), "{e}");
         }
         // zero written with a huge exponent is zero; underscores and '+' are TOML's own
         let c = parse_case("model = \"quad\"\n[parameters]\nb = 0e-999\na = +1_000.5\n").unwrap();
