@@ -604,7 +604,7 @@ fn number_literals_an_f64_cannot_hold_are_refused_in_every_option() {
         );
         refused(
             &["fit", "pendulum", "--modes", &measured, "--free", "m1"],
-            &["literal-modes.csv:3: hz", problem],
+            &["literal-modes.csv:3: hz", value],
         );
     }
 }
