@@ -267,3 +267,94 @@ proptest! {
         }
     }
 }
+
+/// A decimal literal at the edges of `f64` (`d.ddde±3xx`, either sign) or zero with a huge
+/// exponent, and whether an `f64` holds it as a normal number: decided from the digits
+/// against the limits f64::MIN_POSITIVE = 2.2250738585072014e-308 and f64::MAX =
+/// 1.7976931348623157e308 (IEEE 754), without parsing the literal. Three digits of mantissa
+/// never fall between a limit and the rounding threshold next to it, so the comparison of
+/// mantissas is exact.
+fn limit_literal() -> impl Strategy<Value = (String, bool)> {
+    let edge = (
+        any::<bool>(),
+        1000u32..10000,
+        prop_oneof![-330i32..=-300, 300i32..=330],
+    )
+        .prop_map(|(negative, digits, exponent)| {
+            let mantissa = f64::from(digits) / 1000.0;
+            let sign = if negative { "-" } else { "" };
+            let text = format!("{sign}{}.{:03}e{exponent}", digits / 1000, digits % 1000);
+            let representable = if exponent < 0 {
+                exponent > -308 || (exponent == -308 && mantissa > 2.2250738585072014)
+            } else {
+                exponent < 308 || (exponent == 308 && mantissa < 1.7976931348623157)
+            };
+            (text, representable)
+        });
+    let zero = (-999i32..999).prop_map(|e| (format!("0e{e}"), true));
+    prop_oneof![4 => edge, 1 => zero]
+}
+
+/// Whether an error is the literal's own refusal (its text quoted, too small or too large).
+fn refuses_literal(error: &str, literal: &str) -> bool {
+    error.contains(literal)
+        && (error.contains("too small")
+            || error.contains("too large")
+            || error.contains("overflow"))
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 64, ..ProptestConfig::default() })]
+
+    /// A number literal an `f64` cannot hold (1e-400 read as 0, 1e400 as inf) is refused
+    /// where it is written — in `--set`, in an expression, in a case file (bare or quoted),
+    /// in a suspension file's parameter or field — quoting the literal; a literal it can hold
+    /// is never refused as one; and success is finite.
+    #[test]
+    fn number_literals_at_the_limits_of_f64_are_refused_exactly_when_not_representable(
+        (literal, representable) in limit_literal(),
+        where_ in 0..6usize,
+        field in 0..5usize,
+    ) {
+        let dir = std::env::temp_dir().join(format!("pendkit-prop-literals-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let case = match where_ {
+            0 => Case::model("toy").and_then(|c| c.with_sets(&[format!("k2={literal}")])),
+            1 => Case::model("toy").and_then(|c| c.with_sets(&[format!("k2=3000+{literal}")])),
+            2 | 3 => {
+                let value = if where_ == 2 { literal.clone() } else { format!("\"{literal}\"") };
+                let path = dir.join("literal-case.toml");
+                std::fs::write(&path, format!("model = \"toy\"\n[parameters]\nk2 = {value}\n")).unwrap();
+                Case::from_file(&path)
+            }
+            _ => {
+                // a field of the pendulum's file: a parameter's value or a part's own field
+                let source = concat!(env!("CARGO_MANIFEST_DIR"), "/../models/basic/pendulum.toml");
+                let base = std::fs::read_to_string(source).unwrap();
+                let (from, to) = [
+                    ("value = 40,", format!("value = {literal},")),
+                    ("length = \"l_fibre\"", format!("length = {literal}")),
+                    ("radius = \"r_fibre\"", format!("radius = \"{literal}\"")),
+                    ("density = \"rho_fibre\"", format!("density = {literal}")),
+                    ("mass = \"m1\"", format!("mass = \"2*{literal}\"")),
+                ][field].clone();
+                let path = fresh_path("literal");
+                std::fs::write(&path, base.replacen(from, &to, 1)).unwrap();
+                Case::from_file(&path)
+            }
+        };
+        let outcome = case.and_then(|c| c.build().map(|(system, _)| system));
+        match outcome {
+            Err(e) => {
+                let e = e.to_string();
+                prop_assert_eq!(refuses_literal(&e, &literal), !representable, "{}", e);
+            }
+            Ok(system) => {
+                prop_assert!(representable, "{literal} accepted");
+                if let Ok(r) = run_stage(system, Stage::S2) {
+                    check_finite(&r, Stage::S2)?;
+                }
+            }
+        }
+    }
+}

@@ -180,10 +180,10 @@ impl ModelArgs {
 #[derive(clap::Args, Clone)]
 pub struct GridArgs {
     /// First frequency of the log-spaced grid (Hz).
-    #[arg(long, default_value_t = 0.1)]
+    #[arg(long, default_value_t = 0.1, value_parser = number, allow_hyphen_values = true)]
     pub from: f64,
     /// Last frequency of the log-spaced grid (Hz).
-    #[arg(long, default_value_t = 100.0)]
+    #[arg(long, default_value_t = 100.0, value_parser = number, allow_hyphen_values = true)]
     pub to: f64,
     /// Number of log-spaced points.
     #[arg(long, default_value_t = 200)]
@@ -209,17 +209,21 @@ impl Default for GridArgs {
     }
 }
 
+/// A number typed on the command line (the value parser of every numeric option, and of the
+/// numbers inside text options): refuses `nan`, `inf`, and a literal an `f64` cannot hold
+/// (`1e400`, or `1e-400`, which would read as 0).
+pub fn number(text: &str) -> Result<f64, String> {
+    pendkit::expr::number_literal(text).map_err(|e| e.to_string())
+}
+
 /// A frequency from text: finite and positive, or a one-line error naming `place`.
 fn frequency(text: &str, place: &str) -> Result<f64, CliError> {
-    match text.trim().parse::<f64>() {
-        Ok(f) if f.is_finite() && f > 0.0 => Ok(f),
+    match number(text) {
+        Ok(f) if f > 0.0 => Ok(f),
         Ok(f) => Err(CliError::usage(format!(
-            "{place}: frequency {f} Hz must be finite and positive"
+            "{place}: frequency {f} Hz must be positive"
         ))),
-        Err(_) => Err(CliError::usage(format!(
-            "{place}: '{}' is not a number (Hz)",
-            text.trim()
-        ))),
+        Err(e) => Err(CliError::usage(format!("{place}: {e} (Hz)"))),
     }
 }
 

@@ -26,7 +26,7 @@ pub struct Args {
     lab: bool,
     /// Only the modes below this frequency (Hz); large models find them by shift-invert
     /// on a sparse factorisation instead of the dense eigensolver.
-    #[arg(long, value_name = "HZ")]
+    #[arg(long, value_name = "HZ", value_parser = crate::common::number, allow_hyphen_values = true)]
     below: Option<f64>,
     /// Write a figure (.svg or .png): the mode chart (frequencies by degree-of-freedom
     /// family), or with --shape the shape of one mode.

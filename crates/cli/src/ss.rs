@@ -15,7 +15,7 @@ pub struct Args {
     #[arg(long)]
     out: std::path::PathBuf,
     /// Frequency (Hz) at which damping is represented as viscous.
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, value_parser = crate::common::number, allow_hyphen_values = true)]
     damping_frequency: f64,
     /// Replace the output file if it exists.
     #[arg(long)]

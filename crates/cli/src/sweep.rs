@@ -70,10 +70,7 @@ pub fn parse_vary(text: &str) -> Result<Vary, CliError> {
         _ => return Err(bad("wrong number of fields")),
     };
     let number = |t: &str, what: &str| -> Result<f64, CliError> {
-        t.parse::<f64>()
-            .ok()
-            .filter(|v| v.is_finite())
-            .ok_or_else(|| bad(&format!("{what} '{t}' is not a finite number")))
+        crate::common::number(t).map_err(|e| bad(&format!("{what}: {e}")))
     };
     let (start, stop) = (number(parts[0], "START")?, number(parts[1], "STOP")?);
     let n: usize = parts[2]
@@ -251,6 +248,23 @@ pub fn run(a: Args) -> Result<String, CliError> {
                 .collect::<Vec<_>>()
                 .join(" x ")
         )));
+    }
+    // a parameter swept twice, or swept and also set, would take only the last value
+    // given while the table's columns claim the others
+    for (k, v) in varies.iter().enumerate() {
+        if varies[..k].iter().any(|w| w.name == v.name) {
+            return Err(CliError::usage(format!(
+                "--vary: '{}' is swept twice: sweep each parameter once",
+                v.name
+            )));
+        }
+        let set_name = |s: &String| s.split_once('=').map(|(n, _)| n.trim().to_string());
+        if a.args.sets.iter().filter_map(set_name).any(|n| n == v.name) {
+            return Err(CliError::usage(format!(
+                "--vary: '{}' is swept and also given by --set: the sweep would replace the --set",
+                v.name
+            )));
+        }
     }
     if a.modes && a.plot.is_some() && varies.len() != 1 {
         return Err(CliError::usage(

@@ -33,14 +33,14 @@ pub struct Args {
     #[arg(long, default_value_t = 200)]
     points: usize,
     /// Largest relative error accepted when naming the cheapest variant.
-    #[arg(long, default_value_t = 1e-3)]
+    #[arg(long, default_value_t = 1e-3, value_parser = crate::common::number, allow_hyphen_values = true)]
     tolerance: f64,
     /// Violin beads per fibre to try, comma-separated (models with n_beads only).
     #[arg(long, value_name = "N,...", default_value = "0,1,2,5,10,20,40")]
     beads: String,
     /// Time spent repeating each variant (s): the minimum of up to 5 runs within it is
     /// reported (the first run always completes).
-    #[arg(long, value_name = "S", default_value_t = 0.5)]
+    #[arg(long, value_name = "S", default_value_t = 0.5, value_parser = crate::common::number, allow_hyphen_values = true)]
     budget: f64,
     /// Override a parameter or damping field of every variant (as for `modes`; repeatable).
     #[arg(long = "set", value_name = "NAME=EXPR")]
@@ -58,11 +58,11 @@ fn band(text: &str) -> Result<(f64, f64), CliError> {
         ))
     };
     let (a, b) = text.split_once(':').ok_or_else(bad)?;
-    let (a, b): (f64, f64) = (
-        a.trim().parse().map_err(|_| bad())?,
-        b.trim().parse().map_err(|_| bad())?,
+    let (a, b) = (
+        crate::common::number(a).map_err(|_| bad())?,
+        crate::common::number(b).map_err(|_| bad())?,
     );
-    if a > 0.0 && a < b && b.is_finite() {
+    if a > 0.0 && a < b {
         Ok((a, b))
     } else {
         Err(bad())

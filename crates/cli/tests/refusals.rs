@@ -127,16 +127,41 @@ fn negative_loss_and_non_finite_damping_are_refused_naming_the_tag() {
 #[test]
 fn frequency_grids_outside_the_documented_limits_are_refused() {
     let tf = ["tf", "quad", "--input", "x00", "--output", "x3"];
-    refused(&[&tf[..], &["--to", "inf"]].concat(), &["--to"]);
-    refused(&[&tf[..], &["--from", "1e-320"]].concat(), &["1e-9"]);
+    // refused by the options' number parser (a clap error: exit status 2 with a usage hint)
+    refused_option(
+        &[&tf[..], &["--to", "inf"]].concat(),
+        "--to",
+        &["not a finite number"],
+    );
+    refused_option(
+        &[&tf[..], &["--from", "1e-320"]].concat(),
+        "--from",
+        &["too small"],
+    );
+    refused(&[&tf[..], &["--from", "1e-12"]].concat(), &["1e-9"]);
     refused(
         &[&tf[..], &["--points", "100000000000000"]].concat(),
         &["1000000"],
     );
-    refused(&[&tf[..], &["--freqs", "1,nan"]].concat(), &["NaN"]);
+    refused(
+        &[&tf[..], &["--freqs", "1,nan"]].concat(),
+        &["nan", "not a finite number"],
+    );
     refused(
         &[&tf[..], &["--freqs", "1,1e300"]].concat(),
         &["1e300", "1e9"],
+    );
+    refused_option(
+        &[
+            "ss",
+            "quad",
+            "--out",
+            "never-written.mat",
+            "--damping-frequency",
+            "1e-320",
+        ],
+        "--damping-frequency",
+        &["too small"],
     );
     refused(
         &[
@@ -145,7 +170,7 @@ fn frequency_grids_outside_the_documented_limits_are_refused() {
             "--out",
             "never-written.mat",
             "--damping-frequency",
-            "1e-320",
+            "1e-12",
         ],
         &["damping frequency", "1e-9"],
     );
@@ -490,4 +515,188 @@ fn huge_lengths_in_errors_are_printed_in_exponent_form() {
         &["unstretched length", "e"],
     );
     assert!(e.len() < 300, "{e}");
+}
+
+/// Runs and expects clap to refuse an option's value: failure, nothing on stdout, and the
+/// first line of stderr naming the option and containing every one of `words`.
+#[track_caller]
+fn refused_option(args: &[&str], option: &str, words: &[&str]) {
+    let (ok, stdout, stderr) = pendkit(args);
+    assert!(!ok, "{args:?} succeeded: {stdout}");
+    assert!(stdout.is_empty(), "{args:?} printed: {stdout}");
+    let first = stderr.lines().next().unwrap_or_default();
+    assert!(
+        first.contains(option),
+        "{args:?}: '{option}' not in {first}"
+    );
+    for w in words {
+        assert!(first.contains(w), "{args:?}: '{w}' not in {first}");
+    }
+}
+
+#[test]
+fn number_literals_an_f64_cannot_hold_are_refused_in_every_option() {
+    // 1e-400 read as 0 and 1e400 as inf without a word: each is now named where typed
+    let tf = ["tf", "pendulum", "--input", "x00", "--output", "x1"];
+    for (value, problem) in [
+        ("1e-400", "too small"),
+        ("-4.9e-324", "too small"),
+        ("1e400", "too large"),
+        ("nan", "not a finite number"),
+    ] {
+        // in an expression, `nan` is a name nothing defines; the others are literals
+        for set in [format!("m1={value}"), format!("m1=2*{value}")] {
+            let words = if value == "nan" {
+                vec!["'m1'", "undefined symbol 'nan'"]
+            } else {
+                vec!["parameter 'm1'", value, problem]
+            };
+            refused(&["modes", "pendulum", "--set", &set], &words);
+        }
+        for option in ["--from", "--to"] {
+            refused_option(&[&tf[..], &[option, value]].concat(), option, &[problem]);
+        }
+        refused(
+            &[&tf[..], &["--freqs", &format!("1,{value}")]].concat(),
+            &["--freqs", problem],
+        );
+        refused_option(
+            &[
+                "ss",
+                "pendulum",
+                "--out",
+                "x.json",
+                "--damping-frequency",
+                value,
+            ],
+            "--damping-frequency",
+            &[problem],
+        );
+        refused_option(
+            &["modes", "pendulum", "--below", value],
+            "--below",
+            &[problem],
+        );
+        refused(
+            &[
+                "sweep",
+                "toy",
+                "--vary",
+                &format!("k1=1000:{value}:3"),
+                "--modes",
+            ],
+            &["--vary", "STOP", problem],
+        );
+        refused(
+            &[
+                "tf",
+                "pendulum",
+                "--input",
+                "x00",
+                "--output",
+                &format!("mass1@0,0,{value}/1,0,0"),
+            ],
+            &["the point is not three numbers", problem],
+        );
+        let measured = scratch_file(
+            "literal-modes.csv",
+            &format!("label,hz,sigma_hz\nx1,0.64,0.01\nz1,{value},0.1\n"),
+        );
+        refused(
+            &["fit", "pendulum", "--modes", &measured, "--free", "m1"],
+            &["literal-modes.csv:3: hz", value],
+        );
+    }
+}
+
+#[test]
+fn case_file_numbers_an_f64_cannot_hold_are_refused_with_file_line_and_field() {
+    // `m1 = 1e-400` reached the model as 0 (and failed later on a massless body)
+    let case = scratch_file(
+        "literal-case.toml",
+        "model = \"pendulum\"\n[parameters]\nl_fibre = 0.5\nm1 = 1e-400\n",
+    );
+    refused(
+        &["modes", &case],
+        &[
+            "literal-case.toml",
+            "line 4: parameters.m1",
+            "'1e-400' is too small",
+        ],
+    );
+    // and an overflowing one, which the TOML reader refused without naming the field (and
+    // the file was then read as a suspension file)
+    let case = scratch_file(
+        "literal-case-big.toml",
+        "model = \"pendulum\"\n[parameters]\nm1 = 1e400\n",
+    );
+    refused(
+        &["modes", &case],
+        &[
+            "case file",
+            "literal-case-big.toml",
+            "line 3: parameters.m1",
+            "'1e400' is too large",
+        ],
+    );
+}
+
+#[test]
+fn set_of_the_same_parameter_twice_is_refused_not_last_one_wins() {
+    // `--set m3=1 --set m3=2` silently used 2
+    refused(
+        &["modes", "quad", "--set", "m3=1", "--set", "m3 = 2"],
+        &["--set 'm3' is given twice"],
+    );
+    refused(
+        &[
+            "noise",
+            "pendulum",
+            "--output",
+            "x1",
+            "--set",
+            "damping.fibre_bending.structural=1",
+            "--set",
+            "damping.fibre_bending.structural=2",
+        ],
+        &["damping.fibre_bending.structural", "twice"],
+    );
+}
+
+#[test]
+fn sweep_of_a_parameter_twice_or_also_set_is_refused() {
+    // two --vary of k1 gave a table whose first k1 column changed nothing
+    refused(
+        &[
+            "sweep", "toy", "--vary", "k1=1:2:3", "--vary", "k1=1:2:3", "--modes",
+        ],
+        &["'k1' is swept twice"],
+    );
+    refused(
+        &[
+            "sweep", "toy", "--set", "k1=5", "--vary", "k1=1:2:3", "--modes",
+        ],
+        &["'k1' is swept and also given by --set"],
+    );
+}
+
+#[test]
+fn case_file_whose_model_is_a_case_file_is_refused_naming_it() {
+    // a case naming itself (or another case) was read as a suspension file: "model: unknown
+    // field"
+    let path = scratch_file("self-case.toml", "model = \"self-case.toml\"\n");
+    refused(&["modes", &path], &["self-case.toml", "is a case file"]);
+}
+
+#[test]
+fn negative_stiffness_near_the_bottom_of_f64_is_unstable_not_a_hang() {
+    // `modes toy --set k2=-1e-305` ran for ever: the shift bisection started from a floor
+    // that underflowed to 0 and formed low·high, which underflowed to 0 too. The toy's
+    // springs in series give k = k1 k2 / (k1 + k2) ≈ k2 for |k2| ≪ k1 = 1000 N/m, so with
+    // m = 1 kg the mode grows with e-folding time 1/sqrt(|k2|/m) = 1/sqrt(1e-305) s
+    // = 3.162e152 s (closed form; printed to 4 digits).
+    refused(
+        &["modes", "toy", "--set", "k2=-1e-305"],
+        &["unstable", "e-folding time 3.162e152 s"],
+    );
 }

@@ -557,9 +557,12 @@ fn block_modes(
             return Ok(by_mass);
         }
     }
-    let mut low = floor;
+    // a geometric bisection needs a positive start: with stiffnesses near the bottom of
+    // the f64 range the floor underflows to 0, and from 0 the midpoint stays 0 for ever
+    let mut low = floor.max(f64::MIN_POSITIVE);
     while high > 2.0 * low {
-        let mid = (low * high).sqrt();
+        // the geometric mean without forming low·high, which underflows to 0 there
+        let mid = low.sqrt() * high.sqrt();
         if shift_pd(mid) {
             high = mid;
         } else {

@@ -13,6 +13,7 @@
 //! ```
 
 mod compile;
+mod number;
 mod parse;
 
 use std::collections::BTreeSet;
@@ -22,6 +23,7 @@ use std::str::FromStr;
 use num_dual::DualNum;
 
 pub use compile::{Compiled, Slot};
+pub use number::{NumberError, number_literal};
 pub use parse::parse;
 
 /// A binary operator.

@@ -96,15 +96,9 @@ fn lex(src: &str) -> Result<Vec<Token>, ExprError> {
                 }
             }
             let text: String = chars[start..i].iter().collect();
-            match text.parse::<f64>() {
-                Ok(x) if x.is_finite() => Kind::Num(x),
-                _ => {
-                    return Err(syntax(
-                        src,
-                        format!("number out of range '{text}'"),
-                        start + 1,
-                    ));
-                }
+            match crate::number_literal(&text) {
+                Ok(x) => Kind::Num(x),
+                Err(e) => return Err(syntax(src, e.to_string(), start + 1)),
             }
         } else if c.is_ascii_alphabetic() || c == '_' {
             i += 1;

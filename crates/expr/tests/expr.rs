@@ -287,8 +287,15 @@ fn error_messages() {
     );
     assert_eq!(
         err("1e999"),
-        r#"number out of range '1e999' at column 1 in "1e999""#
+        r#"number '1e999' is too large (overflows to infinity; the largest is 1.8e308) at column 1 in "1e999""#
     );
+    // a nonzero literal that would read as 0 (or a subnormal) is named, not read as 0
+    assert!(
+        err("2*1e-400").starts_with("number '1e-400' is too small"),
+        "{}",
+        err("2*1e-400")
+    );
+    assert!(err("2*1e-400").ends_with(r#"at column 3 in "2*1e-400""#));
     assert_eq!(
         err("sin + 1"),
         r#"expected '(' after function 'sin' at column 5 in "sin + 1""#

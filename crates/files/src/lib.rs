@@ -24,6 +24,7 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use pendkit_model::{DampingSpec, Overrides};
+use toml::Spanned;
 
 /// A parsed case file.
 #[derive(Clone, Debug, Default)]
@@ -59,7 +60,8 @@ pub enum FileError {
 /// Form of a case file: `model = "name"`, a `[parameters]` table whose values are numbers
 /// or expression strings (including `scale(x)` and `increment(x)`), and `[damping.<tag>]`
 /// tables with `real`, `structural`, `viscous`, `imag` (expressions, `f` in Hz allowed in
-/// `real` and `imag`) and `thermoelastic = [delta, tau]`.
+/// `real` and `imag`) and `thermoelastic = [delta, tau]`. Values keep their spans, so that a
+/// number is read from the literal the file writes and every error names its line.
 #[derive(serde::Deserialize)]
 #[serde(deny_unknown_fields)]
 struct CaseToml {
@@ -67,7 +69,7 @@ struct CaseToml {
     #[serde(default)]
     description: Option<String>,
     #[serde(default)]
-    parameters: toml::Table,
+    parameters: BTreeMap<String, Spanned<toml::Value>>,
     #[serde(default)]
     damping: BTreeMap<String, DampingToml>,
 }
@@ -76,55 +78,129 @@ struct CaseToml {
 #[derive(serde::Deserialize)]
 #[serde(deny_unknown_fields)]
 struct DampingToml {
-    real: Option<toml::Value>,
-    structural: Option<toml::Value>,
-    viscous: Option<toml::Value>,
-    imag: Option<toml::Value>,
-    thermoelastic: Option<[toml::Value; 2]>,
+    real: Option<Spanned<toml::Value>>,
+    structural: Option<Spanned<toml::Value>>,
+    viscous: Option<Spanned<toml::Value>>,
+    imag: Option<Spanned<toml::Value>>,
+    thermoelastic: Option<[Spanned<toml::Value>; 2]>,
 }
 
-/// A TOML number or string as expression text.
-fn expression_text(what: &str, value: &toml::Value) -> Result<String, FileError> {
-    match value {
+/// The 1-based line of byte offset `offset` of `text`.
+fn line_of(text: &str, offset: usize) -> usize {
+    text.get(..offset).unwrap_or(text).lines().count().max(1)
+}
+
+/// A TOML number or string of the case file `text` as expression text; `what` names the
+/// field. A float is read from the literal the file writes (TOML parsers round it to an
+/// `f64` first, so `1e-400` would arrive as 0): one that an `f64` cannot hold is refused here.
+fn expression_text(
+    text: &str,
+    what: &str,
+    value: &Spanned<toml::Value>,
+) -> Result<String, FileError> {
+    let error = |message: String| FileError::Parse {
+        message: format!(
+            "line {}: {what}: {message}",
+            line_of(text, value.span().start)
+        ),
+    };
+    match value.get_ref() {
         toml::Value::String(s) => Ok(s.clone()),
         toml::Value::Integer(i) => Ok(i.to_string()),
-        toml::Value::Float(f) => Ok(format!("{f:e}")),
-        other => Err(FileError::Parse {
-            message: format!(
-                "{what}: expected a number or an expression string, got {}",
-                other.type_str()
-            ),
-        }),
+        // the literal as written (checked by `check_float_literals`): the parsed f64 of
+        // `0e-999` or `1.5e-7` prints differently, and that of `nan` means nothing
+        toml::Value::Float(f) => {
+            let literal = text
+                .get(value.span())
+                .map(|l| l.replace('_', ""))
+                .unwrap_or_else(|| format!("{f:e}"));
+            pendkit_expr::number_literal(&literal).map_err(|e| error(e.to_string()))?;
+            Ok(literal.trim_start_matches('+').to_string())
+        }
+        other => Err(error(format!(
+            "expected a number or an expression string, got {}",
+            other.type_str()
+        ))),
+    }
+}
+
+/// Refuses, naming its line and field, the first float literal of the TOML `text` that an
+/// `f64` cannot hold: the TOML parser reads `1e-400` as 0 and refuses `1e400` without
+/// naming the field, so the literals are checked as written, before the values are read.
+fn check_float_literals(text: &str) -> Result<(), FileError> {
+    use toml::de::{DeTable, DeValue};
+    fn walk(text: &str, path: &str, value: &Spanned<DeValue>) -> Result<(), FileError> {
+        match value.get_ref() {
+            DeValue::Float(f) => {
+                pendkit_expr::number_literal(&f.as_str().replace('_', "")).map_err(|e| {
+                    FileError::Parse {
+                        message: format!("line {}: {path}: {e}", line_of(text, value.span().start)),
+                    }
+                })?;
+            }
+            DeValue::Array(items) => {
+                for item in items.iter() {
+                    walk(text, path, item)?;
+                }
+            }
+            DeValue::Table(table) => walk_table(text, path, table)?,
+            _ => {}
+        }
+        Ok(())
+    }
+    fn walk_table(text: &str, path: &str, table: &DeTable) -> Result<(), FileError> {
+        for (key, value) in table.iter() {
+            let key: &str = key.get_ref();
+            let path = if path.is_empty() {
+                key.to_string()
+            } else {
+                format!("{path}.{key}")
+            };
+            walk(text, &path, value)?;
+        }
+        Ok(())
+    }
+    // a file that is not TOML is reported by the reader below
+    match DeTable::parse(text) {
+        Ok(table) => walk_table(text, "", table.get_ref()),
+        Err(_) => Ok(()),
     }
 }
 
 /// Parses the text of a case file.
 pub fn parse_case(text: &str) -> Result<CaseFile, FileError> {
+    check_float_literals(text)?;
     let file: CaseToml = toml::from_str(text).map_err(|e| {
-        let line = e
+        let at = e
             .span()
-            .map(|s| text.get(..s.start).unwrap_or(text).lines().count().max(1));
-        let at = line.map(|l| format!("line {l}: ")).unwrap_or_default();
+            .map(|s| format!("line {}: ", line_of(text, s.start)))
+            .unwrap_or_default();
         FileError::Parse {
             message: format!("{at}{}", e.message().trim()),
         }
     })?;
     let mut overrides = Overrides::default();
-    for (name, value) in &file.parameters {
-        let text = expression_text(&format!("parameter '{name}'"), value)?;
-        overrides.parameters.push((name.clone(), text));
+    // in file order (the map is sorted by name)
+    let mut parameters: Vec<_> = file.parameters.iter().collect();
+    parameters.sort_by_key(|(_, value)| value.span().start);
+    for (name, value) in parameters {
+        let expression = expression_text(text, &format!("parameters.{name}"), value)?;
+        overrides.parameters.push((name.clone(), expression));
     }
     for (tag, d) in &file.damping {
-        let field = |name: &str, v: &Option<toml::Value>| {
+        let field = |name: &str, v: &Option<Spanned<toml::Value>>| {
             v.as_ref()
-                .map(|v| expression_text(&format!("damping.{tag}.{name}"), v))
+                .map(|v| expression_text(text, &format!("damping.{tag}.{name}"), v))
                 .transpose()
         };
         let thermoelastic = match &d.thermoelastic {
             None => None,
             Some([delta, tau]) => {
                 let what = format!("damping.{tag}.thermoelastic");
-                Some((expression_text(&what, delta)?, expression_text(&what, tau)?))
+                Some((
+                    expression_text(text, &what, delta)?,
+                    expression_text(text, &what, tau)?,
+                ))
             }
         };
         let spec = DampingSpec {
@@ -148,8 +224,9 @@ pub fn parse_case(text: &str) -> Result<CaseFile, FileError> {
 /// suspension file (which describes the model itself and has no `model` key). Text that is
 /// not TOML is not a case file: the suspension reader then reports where it breaks.
 pub fn is_case_file(text: &str) -> bool {
-    text.parse::<toml::Table>()
-        .is_ok_and(|table| table.contains_key("model"))
+    // parsed without converting values, so that a case file whose numbers an f64 cannot
+    // hold (`1e400`) is still read as one, and refused as one
+    toml::de::DeTable::parse(text).is_ok_and(|table| table.get_ref().contains_key("model"))
 }
 
 /// Reads and parses a case file.
@@ -172,7 +249,7 @@ mod tests {
         let e = parse_case("model = \"pendulum\"\n[parameters]\nm1 = true\n").unwrap_err();
         assert_eq!(
             e.to_string(),
-            "parameter 'm1': expected a number or an expression string, got boolean"
+            "line 3: parameters.m1: expected a number or an expression string, got boolean"
         );
         let e = parse_case("model = \"toy\"\nextra = 1\n").unwrap_err();
         assert!(e.to_string().contains("unknown field"), "{e}");
@@ -185,6 +262,7 @@ mod tests {
         assert!(is_case_file("model = \"my-susp.toml\"\n"));
         assert!(!is_case_file("[bodies.top]\nmass = 1\n"));
         assert!(!is_case_file("model = \n"));
+        assert!(is_case_file("model = \"quad\"\n[parameters]\nm3 = 1e400\n"));
     }
 
     #[test]
@@ -197,8 +275,45 @@ mod tests {
         assert_eq!(d.structural.as_deref(), Some("0"));
         assert_eq!(
             d.thermoelastic,
-            Some(("1e-3".to_string(), "5e-1".to_string()))
+            Some(("1e-3".to_string(), "0.5".to_string()))
         );
         assert_eq!(d.real, None);
+    }
+
+    #[test]
+    fn number_literals_an_f64_cannot_hold_are_refused_with_line_and_field() {
+        // the TOML parser refuses 1e400 without naming the field, rounds 1e-400 to 0 and
+        // takes inf and nan: the literal is checked instead
+        for (value, problem) in [
+            ("1e400", "too large"),
+            ("1e-400", "too small"),
+            ("-2.5e-320", "too small"),
+            ("inf", "not a finite number"),
+            ("nan", "not a finite number"),
+        ] {
+            let e = parse_case(&format!(
+                "model = \"quad\"\n[parameters]\nm1 = 2\nm3 = {value}\n"
+            ))
+            .unwrap_err()
+            .to_string();
+            assert!(e.starts_with("line 4: parameters.m3: "), "{e}");
+            assert!(e.contains(problem), "{e}");
+            let e = parse_case(&format!(
+                "model = \"quad\"\n[damping.w]\nstructural = 1\nthermoelastic = [1e-3,\n {value}]\n"
+            ))
+            .unwrap_err()
+            .to_string();
+            assert!(e.starts_with("line 5: damping.w.thermoelastic: "), "{e}");
+            assert!(e.contains(problem), "{e}");
+        }
+        // zero written with a huge exponent is zero; underscores and '+' are TOML's own
+        let c = parse_case("model = \"quad\"\n[parameters]\nb = 0e-999\na = +1_000.5\n").unwrap();
+        assert_eq!(
+            c.overrides.parameters,
+            [
+                ("b".to_string(), "0e-999".to_string()),
+                ("a".to_string(), "1000.5".to_string())
+            ]
+        );
     }
 }

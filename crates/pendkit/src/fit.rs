@@ -188,10 +188,16 @@ fn data_lines<'a>(text: &'a str, header: &str) -> Vec<(usize, Vec<&'a str>)> {
 
 /// A field that must be a positive finite number.
 fn positive(field: &str, what: &str) -> Result<f64, String> {
-    let x: f64 = field
-        .parse()
-        .map_err(|_| format!("{what} '{field}' is not a number"))?;
-    if x.is_finite() && x > 0.0 {
+    use pendkit_expr::NumberError;
+    let x = pendkit_expr::number_literal(field).map_err(|e| match e {
+        NumberError::NotANumber(_) => format!("{what} '{field}' is not a number"),
+        NumberError::NotFinite(_) => {
+            format!("{what} must be positive and finite, got {field}")
+        }
+        // a literal an f64 cannot hold, named as such (1e-400 is not 0)
+        too_small_or_large => format!("{what}: {too_small_or_large}"),
+    })?;
+    if x > 0.0 {
         Ok(x)
     } else {
         Err(format!("{what} must be positive and finite, got {field}"))

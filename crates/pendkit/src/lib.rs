@@ -149,6 +149,10 @@ pub enum Error {
     /// A `--set NAME=EXPR` argument without '='.
     #[error("--set '{0}': expected NAME=EXPR or damping.<tag>.<field>=EXPR")]
     SetSyntax(String),
+    /// Two overrides of the same parameter or damping field in one list: the later would
+    /// silently replace the earlier.
+    #[error("--set '{0}' is given twice: give each parameter or damping field once")]
+    SetTwice(String),
     /// An override of a parameter that nothing the model builds reads.
     #[error(
         "parameter '{name}' is read by nothing in model '{model}': overriding it would change nothing (parameters read: {read})"
@@ -329,7 +333,21 @@ impl Case {
         })?;
         let model = if file.model.ends_with(".toml") {
             let folder = path.parent().unwrap_or_else(|| Path::new(""));
-            load_suspension(&folder.join(&file.model))?
+            let model_path = folder.join(&file.model);
+            let model_text = std::fs::read_to_string(&model_path).map_err(|e| {
+                err(format!(
+                    "model '{}': cannot read: {e}",
+                    model_path.display()
+                ))
+            })?;
+            // a case names a model, never another case (which could name this one back)
+            if pendkit_files::is_case_file(&model_text) {
+                return Err(err(format!(
+                    "model '{}' is a case file: a case refines a bundled model or a suspension file",
+                    file.model
+                )));
+            }
+            suspension_from_text(&model_path, &model_text)?
         } else {
             find_model(&file.model).map_err(|e| err(e.to_string()))?
         };
@@ -362,11 +380,15 @@ impl Case {
     /// Adds `NAME=EXPR` overrides (applied after the case's own); `damping.<tag>.<field>=EXPR`
     /// sets a damping field.
     pub fn with_sets(mut self, sets: &[String]) -> Result<Case, Error> {
+        let mut seen = std::collections::BTreeSet::new();
         for s in sets {
             let (name, expr) = s
                 .split_once('=')
                 .ok_or_else(|| Error::SetSyntax(s.clone()))?;
             let (name, expr) = (name.trim(), expr.trim());
+            if !seen.insert(name) {
+                return Err(Error::SetTwice(name.to_string()));
+            }
             match name
                 .strip_prefix("damping.")
                 .and_then(|rest| rest.split_once('.'))
@@ -697,10 +719,10 @@ impl StageResult {
             let nums = |t: &str, what: &str| -> Result<Vector3<f64>, Error> {
                 let v: Vec<f64> = t
                     .split(',')
-                    .map(|x| x.trim().parse::<f64>())
+                    .map(pendkit_expr::number_literal)
                     .collect::<Result<_, _>>()
-                    .map_err(|_| bad(&format!("the {what} is not three numbers")))?;
-                if v.len() == 3 && v.iter().all(|x| x.is_finite()) {
+                    .map_err(|e| bad(&format!("the {what} is not three numbers: {e}")))?;
+                if v.len() == 3 {
                     Ok(Vector3::new(v[0], v[1], v[2]))
                 } else {
                     Err(bad(&format!("the {what} must be three finite numbers")))

@@ -168,9 +168,12 @@ fn node_of(source: &Arc<Source>, value: &Spanned<DeValue>) -> Node {
         DeValue::Float(f) => {
             let text = f.as_str().replace('_', "");
             let text = text.trim_start_matches('+');
-            match text.parse::<f64>() {
-                Ok(v) if v.is_finite() => Value::Num(text.to_string()),
-                _ => Value::Other(OTHER_KINDS[2]),
+            // a literal with digits stays text, even one an f64 cannot hold (`1e-400`,
+            // `1e400`): the field's reader names it as such; `inf` and `nan` have none
+            if text.bytes().any(|b| b.is_ascii_digit()) {
+                Value::Num(text.to_string())
+            } else {
+                Value::Other(OTHER_KINDS[2])
             }
         }
         DeValue::Boolean(b) => Value::Bool(*b),

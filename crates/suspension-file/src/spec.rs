@@ -665,19 +665,18 @@ fn parameter(name: String, node: &Node, at: At) -> Result<ParameterSpec, FileErr
         let allowed = match f.node("allowed") {
             None => None,
             Some((node, allowed_at)) => {
-                let numbers = match &node.value {
-                    Value::Array(items) => items
-                        .iter()
-                        .map(|n| match &n.value {
-                            Value::Num(t) => t.parse::<f64>().ok(),
-                            _ => None,
-                        })
-                        .collect::<Option<Vec<f64>>>(),
-                    _ => None,
+                let items = match &node.value {
+                    Value::Array(items) if !items.is_empty() => items,
+                    _ => return Err(allowed_at.error("expected an array of numbers")),
                 };
-                let value = numbers
-                    .filter(|v| !v.is_empty())
-                    .ok_or_else(|| allowed_at.error("expected an array of numbers"))?;
+                let value = items
+                    .iter()
+                    .map(|n| match &n.value {
+                        Value::Num(t) => pendkit_expr::number_literal(t)
+                            .map_err(|e| allowed_at.error(e.to_string())),
+                        _ => Err(allowed_at.error("expected an array of numbers")),
+                    })
+                    .collect::<Result<Vec<f64>, _>>()?;
                 Some(Located {
                     value,
                     at: allowed_at,

@@ -303,3 +303,40 @@ fn loss_physics_fields_build_and_bad_values_name_file_line_and_field() {
         "wires or fibres",
     );
 }
+
+#[test]
+fn number_literals_an_f64_cannot_hold_are_refused_at_reading() {
+    // a nonzero literal below 2.2e-308 would read as 0 (or a subnormal): named where written
+    starts(
+        &broken("radius = 0.3e-3", "radius = 0.3e-400"),
+        "bad.toml:20: stages.bob.wires.radius: ",
+        "number '0.3e-400' is too small",
+    );
+    starts(
+        &broken("density = 7800", "density = \"2*1e-320\""),
+        "bad.toml:6: materials.steel.density: ",
+        "number '1e-320' is too small",
+    );
+    starts(
+        &broken("{ value = 40,", "{ value = 40, allowed = [40, 1e-400],"),
+        "bad.toml:2: parameters.m.allowed: ",
+        "too small",
+    );
+    starts(
+        &broken("{ value = 40,", "{ value = \"4e999\","),
+        "bad.toml:2: parameters.m.value: ",
+        "too large",
+    );
+    starts(
+        &broken("youngs_modulus = 200e9", "youngs_modulus = 200e999"),
+        "bad.toml:4: materials.steel.youngs_modulus: ",
+        "number '200e999' is too large",
+    );
+    // zero written with a huge exponent is zero: the file reads (and fails later, for the
+    // zero radius it is)
+    starts(
+        &broken("radius = 0.3e-3", "radius = 0e-400"),
+        "bad.toml:16: stages.bob.wires: ",
+        "stiffness 0 N/m must be positive (check the wire's radius",
+    );
+}
