@@ -124,6 +124,24 @@ fn negative_loss_and_non_finite_damping_are_refused_naming_the_tag() {
     );
 }
 
+/// A temperature so high that the fibres' thermoelastic loss overflows makes the damping
+/// multiplier 1 + inf i at every frequency of the sweep: the sweep names the tag and the
+/// frequency, as the state-space export already did, instead of reporting a singular solve.
+#[test]
+fn damping_that_overflows_at_a_sweep_frequency_is_named_not_called_singular() {
+    for command in [
+        &["noise", "quad", "--output", "x3", "--points", "10"][..],
+        &[
+            "tf", "quad", "--input", "x00", "--output", "x3", "--points", "5",
+        ][..],
+    ] {
+        let mut args = command.to_vec();
+        args.extend(["--set", "temperature=1e300"]);
+        let message = refused(&args, &["damping tag", "fibre_bending", "not finite"]);
+        assert!(!message.contains("singular"), "{message}");
+    }
+}
+
 #[test]
 fn frequency_grids_outside_the_documented_limits_are_refused() {
     let tf = ["tf", "quad", "--input", "x00", "--output", "x3"];

@@ -348,6 +348,11 @@ impl<'m> Sweep<'m> {
             for (i, &f_hz) in block.iter().enumerate() {
                 for (k, &t) in self.varying.iter().enumerate() {
                     let m = c64::new(table[k * BLOCK + i], table[(nv + k) * BLOCK + i]);
+                    // as in `at`: a multiplier that is not finite or has a negative loss
+                    // here (a temperature of 1e300 K makes a thermoelastic loss infinite)
+                    // is named, not left to show up as a singular solve
+                    let tag = self.model.by_tag.get(t).map_or("", |(tag, _)| tag.as_str());
+                    crate::validate::check_multiplier(tag, f_hz, m.re, m.im)?;
                     self.now[t] = m;
                     self.now_varying[k] = m;
                 }

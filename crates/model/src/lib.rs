@@ -316,7 +316,7 @@ impl SystemBuilder {
         if spec.mass < 0.0 {
             return Err(BuildError::Invalid {
                 item,
-                message: format!("negative mass ({} kg)", spec.mass),
+                message: format!("negative mass ({} kg)", readable(spec.mass)),
             });
         }
         check_inertia(&item, &spec.inertia)?;
