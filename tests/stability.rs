@@ -623,7 +623,18 @@ fn check_point(model: &str, sets: &[&str], stage: Stage, fd: bool) -> Result<Str
         }
     }
     let line = format!(
-        "{model} {sets:?}: {:?} growing {:?} floats {:?} | ref ω²min {:e} ± {:e} Qmin {:?}",
+        "{model} {sets:?}: {} Qmin {:?}",
+        verdict_line(&r, &reference),
+        reference.float_eigenvalues.first(),
+    );
+    with_disagreements(line, &wrong)
+}
+
+/// The library's verdict (growth rates, runaway floats, inverted bodies) beside the
+/// independent check's lowest ω², for the sweep's log.
+fn verdict_line(r: &StageResult, reference: &Independent) -> String {
+    format!(
+        "{:?} growing {:?} floats {:?} inverted {:?} | ref ω²min {:e} ± {:e}",
         r.stability.verdict,
         r.stability
             .growing
@@ -635,10 +646,14 @@ fn check_point(model: &str, sets: &[&str], stage: Stage, fd: bool) -> Result<Str
             .iter()
             .map(|f| f.stiffness)
             .collect::<Vec<_>>(),
+        r.stability.inverted,
         reference.omega_squared.first().copied().unwrap_or(f64::NAN),
         reference.omega_squared_error,
-        reference.float_eigenvalues.first(),
-    );
+    )
+}
+
+/// `line` when nothing disagreed, else an error listing what did.
+fn with_disagreements(line: String, wrong: &[String]) -> Result<String, String> {
     if wrong.is_empty() {
         Ok(line)
     } else {
@@ -826,28 +841,11 @@ fn check_system(
     let reference = Independent::new(&k, &summed_abs_stiffness(&r), &r.assembled.mass, nx);
     let wrong = verdict_disagreements(&r, &k, &reference);
     let line = format!(
-        "{label}: {:?} growing {:?} floats {:?} inverted {:?} | ref ω²min {:e} ± {:e} | {}",
-        r.stability.verdict,
+        "{label}: {} | {}",
+        verdict_line(&r, &reference),
         r.stability
-            .growing
-            .iter()
-            .map(|g| (g.rate_hz, g.accuracy))
-            .collect::<Vec<_>>(),
-        r.stability
-            .runaway_floats
-            .iter()
-            .map(|f| f.stiffness)
-            .collect::<Vec<_>>(),
-        r.stability.inverted,
-        reference.omega_squared.first().copied().unwrap_or(f64::NAN),
-        reference.omega_squared_error,
-        r.stability,
     );
-    if wrong.is_empty() {
-        Ok((line, Some(r)))
-    } else {
-        Err(format!("{line}\n    WRONG: {}", wrong.join("; ")))
-    }
+    with_disagreements(line, &wrong).map(|line| (line, Some(r)))
 }
 
 /// Equilibria reached from tilted starts (Newton lands on the hanging one, on an

@@ -189,7 +189,7 @@ pub struct GridArgs {
     #[arg(long, default_value_t = 200)]
     pub points: usize,
     /// Explicit frequencies (Hz), comma-separated, e.g. 1,10,100 (instead of the grid).
-    #[arg(long, value_name = "HZ,...", conflicts_with_all = ["from", "to", "points", "freqs_file"])]
+    #[arg(long, value_name = "HZ,...", allow_hyphen_values = true, conflicts_with_all = ["from", "to", "points", "freqs_file"])]
     pub freqs: Option<String>,
     /// A file of frequencies (Hz), separated by commas, spaces or new lines; `#` starts a
     /// comment (instead of the grid).

@@ -169,6 +169,12 @@ fn frequency_grids_outside_the_documented_limits_are_refused() {
         &[&tf[..], &["--freqs", "1,1e300"]].concat(),
         &["1e300", "1e9"],
     );
+    // a list that starts with a minus sign reaches the frequency check (not clap's
+    // "unexpected argument")
+    refused(
+        &[&tf[..], &["--freqs", "-2,1"]].concat(),
+        &["--freqs", "-2", "must be positive"],
+    );
     refused_option(
         &[
             "ss",

@@ -555,9 +555,19 @@ fn frequencies(freqs: &Bound<'_, PyAny>) -> PyResult<Vec<f64>> {
         .enumerate()
         .find(|(_, f)| !(f.is_finite() && **f > 0.0))
     {
-        return Err(error(format!(
-            "freqs[{i}]: frequency {f} Hz must be finite and positive"
-        )));
+        // the command line's words for the same value (`--freqs nan`, `--freqs -2`)
+        return Err(error(if f.is_finite() {
+            format!("freqs[{i}]: frequency {f} Hz must be positive")
+        } else {
+            let text = if f.is_nan() {
+                "nan"
+            } else if *f > 0.0 {
+                "inf"
+            } else {
+                "-inf"
+            };
+            format!("freqs[{i}]: '{text}' is not a finite number (Hz)")
+        }));
     }
     Ok(values)
 }

@@ -98,6 +98,7 @@ def test_unknown_naming_scheme(cli):
 
 @pytest.mark.parametrize("bad, cli_text", [
     ([1.0, math.nan], "nan"), ([1.0, -2.0], "-2"), ([0.0], "0"), ([math.inf], "inf"),
+    ([-math.inf], "-inf"),
 ])
 def test_bad_frequencies(cli, bad, cli_text):
     r = pendkit.Model("pendulum").run()
