@@ -343,18 +343,17 @@ fn wires_stiffer_than_1e12_times_their_pendulum_stiffness_are_refused() {
     assert!(run("E_wire=scale(1e4)").is_ok());
 }
 
-/// The quad's test mass (the last body with six own coordinates), its frame's jet at the
-/// equilibrium (second order) and the equilibrium coordinates.
-fn test_mass_jet(r: &StageResult) -> pendkit::geometry::FrameJet {
+/// The jet (to `order`) of the quad's test mass's frame (the last body with six own
+/// coordinates) at the equilibrium.
+fn test_mass_jet(
+    r: &StageResult,
+    order: pendkit::geometry::JetOrder,
+) -> pendkit::geometry::FrameJet {
     let tm = r.test_mass().unwrap();
     let mut jet = pendkit::geometry::FrameJet::new();
     r.system.bodies[tm]
         .frame
-        .jet(
-            &r.assembled.equilibrium.coords,
-            pendkit::geometry::JetOrder::Second,
-            &mut jet,
-        )
+        .jet(&r.assembled.equilibrium.coords, order, &mut jet)
         .unwrap();
     jet
 }
@@ -362,7 +361,7 @@ fn test_mass_jet(r: &StageResult) -> pendkit::geometry::FrameJet {
 #[test]
 fn frame_jet_derivatives_past_the_jets_coordinates_are_errors_naming_function_and_index() {
     let r = quad();
-    let jet = test_mass_jet(&r);
+    let jet = test_mass_jet(&r, pendkit::geometry::JetOrder::Second);
     let k = jet.vars().len();
     assert!(k >= 6, "the test mass moves in six coordinates at least");
     let a = nalgebra::Vector3::new(0.0, 0.17, 0.0);
@@ -392,7 +391,7 @@ fn frame_jet_derivatives_past_the_jets_coordinates_are_errors_naming_function_an
 fn fast_path_helpers_given_a_frame_whose_local_indices_do_not_match_its_jet_are_errors() {
     use pendkit_energy::{Attached, FrameAt, add_curvature, add_jacobian};
     let r = quad();
-    let jet = test_mass_jet(&r);
+    let jet = test_mass_jet(&r, pendkit::geometry::JetOrder::Second);
     let k = jet.vars().len();
     let a = nalgebra::Vector3::new(0.0, 0.17, 0.0);
     // one local index too many: the last would read a jet coordinate that does not exist
@@ -427,16 +426,7 @@ fn fast_path_helpers_given_a_frame_whose_local_indices_do_not_match_its_jet_are_
         local: &local,
     };
     assert!(add_jacobian(&frame, Attached::Point(&a), 1.0, &mut columns).is_ok());
-    let mut first = pendkit::geometry::FrameJet::new();
-    let tm = r.test_mass().unwrap();
-    r.system.bodies[tm]
-        .frame
-        .jet(
-            &r.assembled.equilibrium.coords,
-            pendkit::geometry::JetOrder::First,
-            &mut first,
-        )
-        .unwrap();
+    let first = test_mass_jet(&r, pendkit::geometry::JetOrder::First);
     let frame = FrameAt {
         jet: &first,
         local: &local,
@@ -607,7 +597,7 @@ fn the_hyper_dual_fallback_refuses_frames_whose_local_indices_do_not_match_their
         Derivatives, FrameAt, JetPoint, OffForm, Scratch, hyper_dual_over_frames,
     };
     let r = quad();
-    let jet = test_mass_jet(&r);
+    let jet = test_mass_jet(&r, pendkit::geometry::JetOrder::Second);
     let k = jet.vars().len();
     let run = |local: &[usize]| {
         let n = k + 1;
