@@ -4,8 +4,10 @@
 use std::collections::BTreeMap;
 
 use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
+use num_dual::Dual64;
 use pendkit_expr::Expr;
 use pendkit_geometry::FrameMap;
+use pendkit_rotations::Real;
 
 use crate::{Damping, Element, Stage};
 
@@ -41,17 +43,17 @@ pub struct Coordinate {
 
 /// A rigid body (or a massless frame such as the support).
 #[derive(Clone, Debug)]
-pub struct Body {
+pub struct Body<S: Real = f64> {
     /// Name, e.g. `support`, `mass1`.
     pub name: String,
     /// How the body's frame follows the coordinates.
     pub frame: FrameMap,
     /// Mass (kg).
-    pub mass: f64,
+    pub mass: S,
     /// Inertia tensor about the centre of mass in body axes (kg m^2); products allowed.
-    pub inertia: Matrix3<f64>,
+    pub inertia: Matrix3<S>,
     /// Centre of mass in body coordinates (m); the origin unless the body says otherwise.
-    pub centre_of_mass: Vector3<f64>,
+    pub centre_of_mass: Vector3<S>,
     /// The shape the body is drawn as (figures only: the physics uses mass and inertia).
     pub shape: Option<Shape>,
     /// For each pose entry (x, y, z, yaw, pitch, roll), the coordinate it is exactly equal
@@ -103,67 +105,67 @@ impl Shape {
 
 /// How a wire leaves the body at one end.
 #[derive(Clone, Debug, PartialEq)]
-pub enum EndDirection {
+pub enum EndDirection<S: Real = f64> {
     /// Clamped along the direction that makes the wire straight at equilibrium.
     Auto,
     /// Clamped along this vector in body coordinates, pointing into the wire.
-    Explicit(Vector3<f64>),
+    Explicit(Vector3<S>),
     /// Free to pivot: no bending moment at this end.
     Hinged,
 }
 
 /// One end of a wire: a point on a body and how the wire leaves it.
 #[derive(Clone, Debug)]
-pub struct WireEnd {
+pub struct WireEnd<S: Real = f64> {
     /// The body the end is fixed to.
     pub body: BodyId,
     /// Attachment point in body coordinates (m).
-    pub point: Vector3<f64>,
+    pub point: Vector3<S>,
     /// Clamp direction or hinge.
-    pub direction: EndDirection,
+    pub direction: EndDirection<S>,
 }
 
 /// Elastic properties of a wire's cross-section, used by the plug-in wire elements.
 #[derive(Clone, Debug)]
-pub struct WireSection {
+pub struct WireSection<S: Real = f64> {
     /// Young's modulus (Pa).
-    pub youngs_modulus: f64,
+    pub youngs_modulus: S,
     /// Shear modulus (Pa).
-    pub shear_modulus: f64,
+    pub shear_modulus: S,
     /// Cross-sectional area (m^2).
-    pub area: f64,
+    pub area: S,
     /// Second moment of area about the first principal axis (m^4).
-    pub moment_1: f64,
+    pub moment_1: S,
     /// Second moment of area about the second principal axis (m^4).
-    pub moment_2: f64,
+    pub moment_2: S,
     /// Direction of the first principal axis, in the coordinates of the body at end 1.
-    pub principal_axis: Vector3<f64>,
+    pub principal_axis: Vector3<S>,
     /// Torsion constant J_e (m^4).
-    pub torsion_constant: f64,
+    pub torsion_constant: S,
     /// Polar moment of area J (m^4).
-    pub polar_moment: f64,
+    pub polar_moment: S,
     /// Linear density (kg/m), for reporting and violin-mode models.
-    pub linear_density: f64,
+    pub linear_density: S,
 }
 
-impl WireSection {
+impl<S: Real> WireSection<S> {
     /// A round wire of radius `r` (m) with Young's modulus `e` and shear modulus `g` (Pa)
     /// and density `rho` (kg/m^3): A = πr², I = πr⁴/4, J = J_e = πr⁴/2. A negative radius
     /// gives negative areas and moments (r² and r⁴ taken with the sign of r), so that the
     /// model builder refuses it instead of reading it as its absolute value.
-    pub fn round(r: f64, e: f64, g: f64, rho: f64) -> Self {
+    pub fn round(r: S, e: S, g: S, rho: S) -> Self {
         let pi = std::f64::consts::PI;
         let square = r * r.abs();
         let fourth = square * square.abs();
         WireSection {
             youngs_modulus: e,
             shear_modulus: g,
-            area: pi * square,
-            moment_1: pi * fourth / 4.0,
-            moment_2: pi * fourth / 4.0,
-            principal_axis: Vector3::x(),
-            torsion_constant: pi * fourth / 2.0,
-            polar_moment: pi * fourth / 2.0,
+            area: square * pi,
+            moment_1: fourth * (pi / 4.0),
+            moment_2: fourth * (pi / 4.0),
+            principal_axis: Vector3::new(S::from(1.0), S::from(0.0), S::from(0.0)),
+            torsion_constant: fourth * (pi / 2.0),
+            polar_moment: fourth * (pi / 2.0),
             linear_density: rho * pi * square,
         }
     }
@@ -182,36 +184,36 @@ pub struct WireTags {
 
 /// A massless wire between points on two bodies.
 #[derive(Clone, Debug)]
-pub struct Wire {
+pub struct Wire<S: Real = f64> {
     /// Name, e.g. `fibre1`.
     pub name: String,
     /// The two ends (end 0 is usually the upper one).
-    pub ends: [WireEnd; 2],
+    pub ends: [WireEnd<S>; 2],
     /// Longitudinal stiffness k (N/m), a constant (E A / l_eq in the bundled models).
-    pub stiffness: f64,
+    pub stiffness: S,
     /// Unstretched length l0 (m).
-    pub unstretched_length: f64,
+    pub unstretched_length: S,
     /// Cross-section properties.
-    pub section: WireSection,
+    pub section: WireSection<S>,
     /// Damping tags.
     pub tags: WireTags,
 }
 
-impl Wire {
+impl<S: Real> Wire<S> {
     /// A wire of equilibrium length `length` (m) carrying static tension `tension` (N):
     /// k = E A / length (the parameter sets' convention) and l0 = length − T / k.
     pub fn from_tension(
         name: impl Into<String>,
-        ends: [WireEnd; 2],
-        section: WireSection,
-        length: f64,
-        tension: f64,
+        ends: [WireEnd<S>; 2],
+        section: WireSection<S>,
+        length: S,
+        tension: S,
         tags: WireTags,
     ) -> Self {
         let stiffness = section.youngs_modulus * section.area / length;
         // A non-positive length or stiffness is passed through as it is, so that the builder
         // reports a zero-length or zero-stiffness wire rather than an infinite length.
-        let unstretched_length = if length > 0.0 && stiffness > 0.0 {
+        let unstretched_length = if length.re() > 0.0 && stiffness.re() > 0.0 {
             length - tension / stiffness
         } else {
             length
@@ -230,26 +232,26 @@ impl Wire {
 /// One end of a spring: a point on a body and the fixed angles that turn the body's axes
 /// into the spring's.
 #[derive(Clone, Debug)]
-pub struct SpringEnd {
+pub struct SpringEnd<S: Real = f64> {
     /// The body the end is fixed to.
     pub body: BodyId,
     /// Attachment point in body coordinates (m).
-    pub point: Vector3<f64>,
+    pub point: Vector3<S>,
     /// Attachment angles (yaw, pitch, roll) relative to the body axes (rad).
-    pub angles: [f64; 3],
+    pub angles: [S; 3],
 }
 
 /// A zero-length six-axis spring (blade, flexure, debugging constraint).
 #[derive(Clone, Debug)]
-pub struct Spring {
+pub struct Spring<S: Real = f64> {
     /// Name, e.g. `blade1`.
     pub name: String,
     /// The two ends; the relative pose of end 1 seen from end 0 is the spring's deflection.
-    pub ends: [SpringEnd; 2],
+    pub ends: [SpringEnd<S>; 2],
     /// Stiffness on (x, y, z, yaw, pitch, roll) deflection (N/m, N/rad, N m/m, N m/rad).
-    pub stiffness: Matrix6<f64>,
+    pub stiffness: Matrix6<S>,
     /// Preload force/torque at zero deflection (N, N m), in the spring's axes.
-    pub preload: Vector6<f64>,
+    pub preload: Vector6<S>,
     /// Damping tag.
     pub tag: String,
 }
@@ -279,7 +281,7 @@ pub struct ExtraTerm {
 
 /// An instance of an element kind that lives in a plug-in crate, described by data only.
 #[derive(Clone, Debug)]
-pub struct PluginElement {
+pub struct PluginElement<S: Real = f64> {
     /// Registered kind name, e.g. `viscous-spring`.
     pub kind: String,
     /// Instance name for reports.
@@ -287,9 +289,9 @@ pub struct PluginElement {
     /// Bodies the element connects.
     pub bodies: Vec<BodyId>,
     /// Points on those bodies (m, body coordinates), one per body.
-    pub points: Vec<Vector3<f64>>,
+    pub points: Vec<Vector3<S>>,
     /// Named numbers (SI units documented by the kind).
-    pub values: BTreeMap<String, f64>,
+    pub values: BTreeMap<String, S>,
     /// Damping tag.
     pub tag: String,
 }
@@ -338,22 +340,22 @@ pub struct NamedSignal {
 }
 
 /// A complete numeric model.
-#[derive(Clone, Debug, Default)]
-pub struct System {
+#[derive(Clone, Debug)]
+pub struct System<S: Real = f64> {
     /// All coordinates: variables, floats and parameters.
     pub coords: Vec<Coordinate>,
     /// All bodies, massive or not.
-    pub bodies: Vec<Body>,
+    pub bodies: Vec<Body<S>>,
     /// All wires.
-    pub wires: Vec<Wire>,
+    pub wires: Vec<Wire<S>>,
     /// All springs.
-    pub springs: Vec<Spring>,
+    pub springs: Vec<Spring<S>>,
     /// User-written extra potential terms.
     pub extra_terms: Vec<ExtraTerm>,
     /// Instances of plug-in element kinds.
-    pub plugin_elements: Vec<PluginElement>,
+    pub plugin_elements: Vec<PluginElement<S>>,
     /// Gravitational acceleration g (m/s^2), acting along -z.
-    pub gravity: f64,
+    pub gravity: S,
     /// Per-coordinate stiffness to the equilibrium (N/m or N m/rad), for debugging; zero
     /// entries add nothing.
     pub constraint_stiffness: BTreeMap<CoordId, f64>,
@@ -413,7 +415,7 @@ impl NameScheme {
     }
 }
 
-impl System {
+impl<S: Real> System<S> {
     /// Every index the system holds is in range: each body's frame reads only coordinates
     /// of [`System::coords`], and every wire, spring, plug-in element, constraint and
     /// named signal refers to an existing body or coordinate. The model builder guarantees
@@ -523,5 +525,212 @@ impl System {
         (0..self.coords.len())
             .filter(|&i| self.coords[i].kind == kind)
             .collect()
+    }
+}
+
+impl<S: Real> Default for System<S> {
+    fn default() -> Self {
+        System {
+            coords: Vec::new(),
+            bodies: Vec::new(),
+            wires: Vec::new(),
+            springs: Vec::new(),
+            extra_terms: Vec::new(),
+            plugin_elements: Vec::new(),
+            gravity: S::from(0.0),
+            constraint_stiffness: BTreeMap::new(),
+            early_wire_terms: EarlyWireTerms::default(),
+            damping: Damping::default(),
+            temperature: 0.0,
+            element_stages: BTreeMap::new(),
+            inputs: Vec::new(),
+            outputs: Vec::new(),
+            name_schemes: BTreeMap::new(),
+        }
+    }
+}
+
+/// Applies one map to every generic number of a [`System`], in the visiting order of
+/// [`System::map_scalars`].
+struct Visit<F>(F);
+
+impl<F> Visit<F> {
+    fn one<S: Real, T: Real>(&mut self, x: S) -> T
+    where
+        F: FnMut(S) -> T,
+    {
+        (self.0)(x)
+    }
+    fn vector3<S: Real, T: Real>(&mut self, v: &Vector3<S>) -> Vector3<T>
+    where
+        F: FnMut(S) -> T,
+    {
+        Vector3::from_iterator(v.iter().map(|&x| (self.0)(x)))
+    }
+    fn matrix3<S: Real, T: Real>(&mut self, m: &Matrix3<S>) -> Matrix3<T>
+    where
+        F: FnMut(S) -> T,
+    {
+        Matrix3::from_iterator(m.iter().map(|&x| (self.0)(x)))
+    }
+    fn vector6<S: Real, T: Real>(&mut self, v: &Vector6<S>) -> Vector6<T>
+    where
+        F: FnMut(S) -> T,
+    {
+        Vector6::from_iterator(v.iter().map(|&x| (self.0)(x)))
+    }
+    fn matrix6<S: Real, T: Real>(&mut self, m: &Matrix6<S>) -> Matrix6<T>
+    where
+        F: FnMut(S) -> T,
+    {
+        Matrix6::from_iterator(m.iter().map(|&x| (self.0)(x)))
+    }
+}
+
+/// The model numbers of a [`System`] that are generic over the scalar — the ones a
+/// dual-number build differentiates — in one fixed order: gravity; each body's mass,
+/// inertia (column-major) and centre of mass; each wire's end points and explicit end
+/// directions (end 0, then end 1), stiffness, unstretched length and section (Young's
+/// modulus, shear modulus, area, the two moments of area, principal axis, torsion constant,
+/// polar moment, linear density); each spring's end points and angles, stiffness
+/// (column-major) and preload; each plug-in element's points and values (in name order).
+/// Everything else (names, coordinates and their start values, frames, shapes, extra terms,
+/// damping, temperature, signals) is copied as it is.
+impl<S: Real> System<S> {
+    /// The same model with every generic number mapped by `f`, visited in the order above.
+    pub fn map_scalars<T: Real>(&self, f: impl FnMut(S) -> T) -> System<T> {
+        let mut v = Visit(f);
+        let gravity = v.one(self.gravity);
+        let bodies = self
+            .bodies
+            .iter()
+            .map(|b| Body {
+                name: b.name.clone(),
+                frame: b.frame.clone(),
+                mass: v.one(b.mass),
+                inertia: v.matrix3(&b.inertia),
+                centre_of_mass: v.vector3(&b.centre_of_mass),
+                shape: b.shape,
+                pose_coords: b.pose_coords,
+                mode_family: b.mode_family.clone(),
+            })
+            .collect();
+        let wires = self
+            .wires
+            .iter()
+            .map(|w| {
+                let ends = w.ends.each_ref().map(|e| WireEnd {
+                    body: e.body,
+                    point: v.vector3(&e.point),
+                    direction: match &e.direction {
+                        EndDirection::Auto => EndDirection::Auto,
+                        EndDirection::Explicit(d) => EndDirection::Explicit(v.vector3(d)),
+                        EndDirection::Hinged => EndDirection::Hinged,
+                    },
+                });
+                let stiffness = v.one(w.stiffness);
+                let unstretched_length = v.one(w.unstretched_length);
+                let s = &w.section;
+                let section = WireSection {
+                    youngs_modulus: v.one(s.youngs_modulus),
+                    shear_modulus: v.one(s.shear_modulus),
+                    area: v.one(s.area),
+                    moment_1: v.one(s.moment_1),
+                    moment_2: v.one(s.moment_2),
+                    principal_axis: v.vector3(&s.principal_axis),
+                    torsion_constant: v.one(s.torsion_constant),
+                    polar_moment: v.one(s.polar_moment),
+                    linear_density: v.one(s.linear_density),
+                };
+                Wire {
+                    name: w.name.clone(),
+                    ends,
+                    stiffness,
+                    unstretched_length,
+                    section,
+                    tags: w.tags.clone(),
+                }
+            })
+            .collect();
+        let springs = self
+            .springs
+            .iter()
+            .map(|sp| {
+                let ends = sp.ends.each_ref().map(|e| SpringEnd {
+                    body: e.body,
+                    point: v.vector3(&e.point),
+                    angles: e.angles.map(|a| v.one(a)),
+                });
+                Spring {
+                    name: sp.name.clone(),
+                    ends,
+                    stiffness: v.matrix6(&sp.stiffness),
+                    preload: v.vector6(&sp.preload),
+                    tag: sp.tag.clone(),
+                }
+            })
+            .collect();
+        let plugin_elements = self
+            .plugin_elements
+            .iter()
+            .map(|p| PluginElement {
+                kind: p.kind.clone(),
+                name: p.name.clone(),
+                bodies: p.bodies.clone(),
+                points: p.points.iter().map(|x| v.vector3(x)).collect(),
+                values: p
+                    .values
+                    .iter()
+                    .map(|(k, &x)| (k.clone(), v.one(x)))
+                    .collect(),
+                tag: p.tag.clone(),
+            })
+            .collect();
+        System {
+            coords: self.coords.clone(),
+            bodies,
+            wires,
+            springs,
+            extra_terms: self.extra_terms.clone(),
+            plugin_elements,
+            gravity,
+            constraint_stiffness: self.constraint_stiffness.clone(),
+            early_wire_terms: self.early_wire_terms,
+            damping: self.damping.clone(),
+            temperature: self.temperature,
+            element_stages: self.element_stages.clone(),
+            inputs: self.inputs.clone(),
+            outputs: self.outputs.clone(),
+            name_schemes: self.name_schemes.clone(),
+        }
+    }
+
+    /// The model's generic numbers, in the order of [`System::map_scalars`].
+    pub fn scalars(&self) -> Vec<S> {
+        let mut out = Vec::new();
+        self.map_scalars(|x| {
+            out.push(x);
+            x
+        });
+        out
+    }
+
+    /// The `f64` model: the real part of every number.
+    pub fn value(&self) -> System<f64> {
+        self.map_scalars(|x| x.re())
+    }
+}
+
+impl System<Dual64> {
+    /// The derivative of every generic number with respect to the seeded direction, in the
+    /// order of [`System::map_scalars`] (units: the number's unit per unit of the seed).
+    pub fn tangent(&self) -> Vec<f64> {
+        self.scalars().into_iter().map(|x| x.eps).collect()
+    }
+
+    /// The `f64` model moved along the exact tangent: every number x + step·dx (`step` in
+    /// the seed's unit).
+    pub fn stepped(&self, step: f64) -> System<f64> {
+        self.map_scalars(|x| x.re + step * x.eps)
     }
 }

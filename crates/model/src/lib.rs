@@ -14,6 +14,7 @@ use std::collections::{BTreeMap, HashMap, HashSet};
 use std::sync::{Arc, OnceLock};
 
 use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
+use pendkit_energy::Real;
 use pendkit_energy::{
     Body, BodyId, CoordId, CoordKind, Coordinate, EarlyWireTerms, EndDirection, ExtraPhase,
     ExtraTerm, NamedSignal, PluginElement, SignalTerm, Spring, SpringEnd, Stage, System, Wire,
@@ -70,13 +71,13 @@ pub enum BuildError {
 
 /// A body to add: name, pose expressions, mass properties.
 #[derive(Clone, Debug)]
-pub struct BodySpec {
+pub struct BodySpec<S: Real = f64> {
     name: String,
     parent: Option<BodyId>,
     pose: [String; 6],
-    mass: f64,
-    inertia: Matrix3<f64>,
-    centre_of_mass: Vector3<f64>,
+    mass: S,
+    inertia: Matrix3<S>,
+    centre_of_mass: Vector3<S>,
     shape: Option<Shape>,
     mode_family: Option<String>,
 }
@@ -85,16 +86,16 @@ pub struct BodySpec {
 /// T, vertical V, yaw Y, pitch P, roll R; for [`SystemBuilder::name_scheme`].
 pub const LIGO_DOF_NAMES: [&str; 6] = ["L", "T", "V", "Y", "P", "R"];
 
-impl BodySpec {
+impl<S: Real> BodySpec<S> {
     /// A massless body fixed at the lab origin; set its pose and mass properties next.
     pub fn new(name: impl Into<String>) -> Self {
         BodySpec {
             name: name.into(),
             parent: None,
             pose: std::array::from_fn(|_| "0".to_string()),
-            mass: 0.0,
-            inertia: Matrix3::zeros(),
-            centre_of_mass: Vector3::zeros(),
+            mass: S::from(0.0),
+            inertia: Matrix3::from_element(S::from(0.0)),
+            centre_of_mass: Vector3::from_element(S::from(0.0)),
             shape: None,
             mode_family: None,
         }
@@ -134,33 +135,34 @@ impl BodySpec {
     }
 
     /// Mass (kg).
-    pub fn mass(mut self, mass: f64) -> Self {
+    pub fn mass(mut self, mass: S) -> Self {
         self.mass = mass;
         self
     }
 
     /// Full inertia tensor about the centre of mass in body axes (kg m^2).
-    pub fn inertia(mut self, inertia: Matrix3<f64>) -> Self {
+    pub fn inertia(mut self, inertia: Matrix3<S>) -> Self {
         self.inertia = inertia;
         self
     }
 
     /// Principal moments about the body x, y, z axes (kg m^2).
-    pub fn inertia_diag(self, ix: f64, iy: f64, iz: f64) -> Self {
-        self.inertia(Matrix3::from_diagonal(&Vector3::new(ix, iy, iz)))
+    pub fn inertia_diag(self, ix: S, iy: S, iz: S) -> Self {
+        let zero = S::from(0.0);
+        self.inertia(Matrix3::new(ix, zero, zero, zero, iy, zero, zero, zero, iz))
     }
 
     /// Centre of mass in body coordinates (m), if it is not the body origin.
-    pub fn centre_of_mass(mut self, com: Vector3<f64>) -> Self {
+    pub fn centre_of_mass(mut self, com: Vector3<S>) -> Self {
         self.centre_of_mass = com;
         self
     }
 }
 
 /// Builds a [`System`] from named parts, checking each as it is added.
-#[derive(Debug, Default)]
-pub struct SystemBuilder {
-    system: System,
+#[derive(Debug)]
+pub struct SystemBuilder<S: Real = f64> {
+    system: System<S>,
     /// Names already used, so that lookups and duplicate checks do not scan the lists
     /// (a 100-stage chain has 600 coordinates and 400 wires).
     coord_ids: HashMap<String, CoordId>,
@@ -196,9 +198,21 @@ fn check_finite(
     }
 }
 
-impl SystemBuilder {
+impl<S: Real> Default for SystemBuilder<S> {
+    fn default() -> Self {
+        SystemBuilder {
+            system: System::default(),
+            coord_ids: HashMap::new(),
+            body_ids: HashMap::new(),
+            wire_names: HashSet::new(),
+            spring_names: HashSet::new(),
+        }
+    }
+}
+
+impl<S: Real> SystemBuilder<S> {
     /// An empty model with gravitational acceleration `g` (m/s^2) along -z.
-    pub fn new(g: f64) -> Self {
+    pub fn new(g: S) -> Self {
         let mut b = SystemBuilder::default();
         b.system.gravity = g;
         b
@@ -304,7 +318,7 @@ impl SystemBuilder {
     }
 
     /// Adds a body, checking its pose expressions and mass properties.
-    pub fn body(&mut self, spec: BodySpec) -> Result<BodyId, BuildError> {
+    pub fn body(&mut self, spec: BodySpec<S>) -> Result<BodyId, BuildError> {
         let item = format!("body '{}'", spec.name);
         if self.body_ids.contains_key(&spec.name) {
             return Err(BuildError::Duplicate {
@@ -312,20 +326,23 @@ impl SystemBuilder {
                 name: spec.name,
             });
         }
-        check_finite(&item, "mass", spec.mass, "kg")?;
-        if spec.mass < 0.0 {
+        // every check reads the real part: the derivatives follow the same model
+        let mass = spec.mass.re();
+        check_finite(&item, "mass", mass, "kg")?;
+        if mass < 0.0 {
             return Err(BuildError::Invalid {
                 item,
-                message: format!("negative mass ({} kg)", readable(spec.mass)),
+                message: format!("negative mass ({} kg)", readable(mass)),
             });
         }
-        check_inertia(&item, &spec.inertia)?;
+        let inertia = spec.inertia.map(|v| v.re());
+        check_inertia(&item, &inertia)?;
         if let Some(shape) = &spec.shape {
             check_shape(&item, shape)?;
         }
         let shape = spec.shape.or_else(|| {
-            let moments = spec.inertia.symmetric_eigenvalues();
-            Shape::equivalent_box(spec.mass, [moments[0], moments[1], moments[2]])
+            let moments = inertia.symmetric_eigenvalues();
+            Shape::equivalent_box(mass, [moments[0], moments[1], moments[2]])
         });
         let pose_coords = spec
             .pose
@@ -399,7 +416,7 @@ impl SystemBuilder {
     }
 
     /// Adds a wire, checking its length, stiffness and section.
-    pub fn wire(&mut self, spec: Wire) -> Result<usize, BuildError> {
+    pub fn wire(&mut self, spec: Wire<S>) -> Result<usize, BuildError> {
         let item = format!("wire '{}'", spec.name);
         if self.wire_names.contains(&spec.name) {
             return Err(BuildError::Duplicate {
@@ -410,7 +427,7 @@ impl SystemBuilder {
         for end in &spec.ends {
             self.check_end_body(&item, end.body)?;
             if let EndDirection::Explicit(v) = &end.direction
-                && (v.norm().is_nan() || v.norm() <= 0.0)
+                && (v.map(|x| x.re()).norm().is_nan() || v.map(|x| x.re()).norm() <= 0.0)
             {
                 return Err(BuildError::Invalid {
                     item,
@@ -418,23 +435,24 @@ impl SystemBuilder {
                 });
             }
         }
-        check_finite(&item, "unstretched length", spec.unstretched_length, "m")?;
-        if spec.unstretched_length <= 0.0 {
+        let (unstretched_length, stiffness) = (spec.unstretched_length.re(), spec.stiffness.re());
+        check_finite(&item, "unstretched length", unstretched_length, "m")?;
+        if unstretched_length <= 0.0 {
             return Err(BuildError::Invalid {
                 item,
                 message: format!(
                     "zero-length wire: unstretched length {} m must be positive",
-                    readable(spec.unstretched_length)
+                    readable(unstretched_length)
                 ),
             });
         }
-        check_finite(&item, "stiffness", spec.stiffness, "N/m")?;
-        if spec.stiffness <= 0.0 {
+        check_finite(&item, "stiffness", stiffness, "N/m")?;
+        if stiffness <= 0.0 {
             return Err(BuildError::Invalid {
                 item,
                 message: format!(
                     "stiffness {} N/m must be positive (check the wire's radius, Young's modulus and length)",
-                    readable(spec.stiffness)
+                    readable(stiffness)
                 ),
             });
         }
@@ -449,6 +467,7 @@ impl SystemBuilder {
             ("polar moment", s.polar_moment),
             ("linear density", s.linear_density),
         ] {
+            let v = v.re();
             check_finite(&item, what, v, "")?;
             // a wire needs material and a section; bending and torsion may be absent
             let must_be_positive = matches!(what, "Young's modulus" | "area");
@@ -471,9 +490,9 @@ impl SystemBuilder {
     pub fn spring(
         &mut self,
         name: &str,
-        ends: [SpringEnd; 2],
-        k: Matrix6<f64>,
-        f: Vector6<f64>,
+        ends: [SpringEnd<S>; 2],
+        k: Matrix6<S>,
+        f: Vector6<S>,
         tag: &str,
     ) -> Result<usize, BuildError> {
         let item = format!("spring '{name}'");
@@ -486,13 +505,14 @@ impl SystemBuilder {
         for end in &ends {
             self.check_end_body(&item, end.body)?;
         }
-        if k.iter().chain(f.iter()).any(|v| !v.is_finite()) {
+        if k.iter().chain(f.iter()).any(|v| !v.re().is_finite()) {
             return Err(BuildError::Invalid {
                 item,
                 message: "stiffness or preload is not finite".into(),
             });
         }
-        if (k - k.transpose()).abs().max() > 1e-12 * k.abs().max() {
+        let k_value = k.map(|v| v.re());
+        if (k_value - k_value.transpose()).abs().max() > 1e-12 * k_value.abs().max() {
             return Err(BuildError::Invalid {
                 item,
                 message: "stiffness matrix is not symmetric".into(),
@@ -545,7 +565,7 @@ impl SystemBuilder {
     }
 
     /// An instance of a plug-in element kind (checked against the registry at assembly).
-    pub fn plugin_element(&mut self, element: PluginElement) -> Result<(), BuildError> {
+    pub fn plugin_element(&mut self, element: PluginElement<S>) -> Result<(), BuildError> {
         let item = format!("element '{}'", element.name);
         for &b in &element.bodies {
             self.check_end_body(&item, b)?;
@@ -700,8 +720,8 @@ impl SystemBuilder {
     }
 
     /// The finished model.
-    pub fn build(self) -> Result<System, BuildError> {
-        check_finite("model", "gravity", self.system.gravity, "m/s^2")?;
+    pub fn build(self) -> Result<System<S>, BuildError> {
+        check_finite("model", "gravity", self.system.gravity.re(), "m/s^2")?;
         // an empty file, or one whose bodies are all driven, has nothing to compute
         if !self
             .system
@@ -732,7 +752,7 @@ pub const MAX_INERTIA_RATIO: f64 = 1e12;
 
 /// Refuses bodies whose masses (or principal moments of inertia) span more than
 /// [`MAX_INERTIA_RATIO`], naming the lightest and the heaviest body and the ratio.
-fn check_inertia_ratios(bodies: &[Body]) -> Result<(), BuildError> {
+fn check_inertia_ratios<S: Real>(bodies: &[Body<S>]) -> Result<(), BuildError> {
     // (value, body) of the smallest and largest positive entry
     type Extremes<'a> = Option<((f64, &'a str), (f64, &'a str))>;
     fn widen<'a>(range: &mut Extremes<'a>, value: f64, body: &'a str) {
@@ -748,9 +768,10 @@ fn check_inertia_ratios(bodies: &[Body]) -> Result<(), BuildError> {
     }
     let (mut masses, mut moments): (Extremes, Extremes) = (None, None);
     for body in bodies {
-        widen(&mut masses, body.mass, &body.name);
-        if body.inertia.abs().max() > 0.0 {
-            for m in body.inertia.symmetric_eigenvalues().iter() {
+        widen(&mut masses, body.mass.re(), &body.name);
+        let inertia = body.inertia.map(|v| v.re());
+        if inertia.abs().max() > 0.0 {
+            for m in inertia.symmetric_eigenvalues().iter() {
                 widen(&mut moments, *m, &body.name);
             }
         }
