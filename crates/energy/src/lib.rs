@@ -2,6 +2,11 @@
 //! scalar, with their derivatives (the hyper-dual reference path and the optional fast path
 //! from shared frame jets); the `Element` trait and the link-time registry of element
 //! kinds; and the numeric description of a model (`System`) that elements read.
+//!
+//! A `System`'s model numbers (masses, inertias, attachment points, wire sections,
+//! stiffnesses, spring matrices) are generic over the scalar, `f64` by default: a model
+//! built with dual numbers carries their exact derivatives with respect to an input (step
+//! 1 of docs/exact-sensitivities.md).
 
 mod core;
 mod damping;

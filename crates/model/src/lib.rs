@@ -3,7 +3,10 @@
 //! and downstream models offer default parameters and a build function.
 //!
 //! Every quantity is in SI units: lengths in m, angles in rad, masses in kg, inertias in
-//! kg m^2, stiffnesses in N/m (or N m/rad), forces in N, moduli in Pa.
+//! kg m^2, stiffnesses in N/m (or N m/rad), forces in N, moduli in Pa. The builder is
+//! generic over the scalar of the model numbers (`SystemBuilder<S = f64>`): built with
+//! dual numbers, every number it derives carries its exact derivative (the checks read the
+//! real parts and say the same as for `f64`).
 
 pub mod beads;
 mod damping;

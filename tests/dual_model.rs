@@ -1,0 +1,207 @@
+//! The model numbers generic over the scalar (step 1 of docs/exact-sensitivities.md): a
+//! model built by `SystemBuilder<Dual64>` carries the exact derivatives of every number the
+//! builder derives (a wire's stiffness and unstretched length, a round section's constants)
+//! with respect to the seeded input, checked against closed forms; its real part is the
+//! `f64` model bit for bit; and `System::map_scalars` visits every generic field (checked
+//! against a field list written out here, not the visitor's own).
+
+use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
+use num_dual::Dual64;
+use pendkit_energy::{
+    EndDirection, PluginElement, Real, SpringEnd, System, Wire, WireEnd, WireSection, WireTags,
+};
+use pendkit_model::{BodySpec, SystemBuilder};
+
+const G: f64 = 9.81;
+
+fn tags() -> WireTags {
+    WireTags {
+        stretch: "s".into(),
+        bending: "b".into(),
+        torsion: "t".into(),
+    }
+}
+
+/// A point mass `m` (kg) on one round steel wire of length `l` (m) and radius `r` (m),
+/// carrying the mass's weight, with a spring and a plug-in element so that every kind of
+/// model number is present. Every number is of type `S`, built from the three inputs.
+fn pendulum<S: Real>(m: S, l: S, r: S) -> System<S> {
+    let c = |x: f64| S::from(x);
+    let mut b = SystemBuilder::<S>::new(c(G));
+    b.support_parameters().unwrap();
+    let support = b.body(BodySpec::new("support").pose_suffix("00")).unwrap();
+    for (n, v) in [("x1", 0.0), ("y1", 0.0), ("z1", -1.0)] {
+        b.variable(n, v).unwrap();
+    }
+    let bob = b
+        .body(
+            BodySpec::new("bob")
+                .pose(["x1", "y1", "z1", "0", "0", "0"])
+                .mass(m)
+                .inertia_diag(m * 0.1, m * 0.2, m * 0.3)
+                .centre_of_mass(Vector3::new(c(0.0), c(0.0), r)),
+        )
+        .unwrap();
+    let end = |body, direction| WireEnd {
+        body,
+        point: Vector3::new(c(0.0), r, c(0.0)),
+        direction,
+    };
+    let section = WireSection::round(r, c(200e9), c(80e9), c(7800.0));
+    b.wire(Wire::from_tension(
+        "wire",
+        [
+            end(
+                support,
+                EndDirection::Explicit(Vector3::new(c(0.0), c(0.0), -l)),
+            ),
+            end(bob, EndDirection::Hinged),
+        ],
+        section,
+        l,
+        m * G,
+        tags(),
+    ))
+    .unwrap();
+    let spring_end = |body| SpringEnd {
+        body,
+        point: Vector3::new(r, c(0.0), c(0.0)),
+        angles: [c(0.0), r, c(0.0)],
+    };
+    b.spring(
+        "spring",
+        [spring_end(support), spring_end(bob)],
+        Matrix6::from_diagonal(&Vector6::from_element(m * 10.0)),
+        Vector6::from_element(l),
+        "k",
+    )
+    .unwrap();
+    b.plugin_element(PluginElement {
+        kind: "none".into(),
+        name: "extra".into(),
+        bodies: vec![bob],
+        points: vec![Vector3::new(l, l, l)],
+        values: [("a".to_string(), m), ("b".to_string(), l)].into(),
+        tag: "e".into(),
+    })
+    .unwrap();
+    b.build().unwrap()
+}
+
+const M: f64 = 10.0;
+const L: f64 = 1.0;
+const R: f64 = 0.5e-3;
+
+#[test]
+fn derived_numbers_carry_their_closed_form_derivatives() {
+    // k = E A / l and l0 = l − m g / k with A = π r²: closed-form derivatives
+    // (∂k/∂l = −k/l, ∂l0/∂l = 1 − m g/(E A), ∂l0/∂m = −g/k, ∂k/∂r = 2k/r,
+    // ∂l0/∂r = 2 m g/(k r)); to 1e-14 relative, the rounding of a few operations
+    let e = 200e9;
+    let area = std::f64::consts::PI * R * R;
+    let k = e * area / L;
+    let weight = M * G;
+    let close = |got: f64, want: f64, what: &str| {
+        assert!(
+            (got - want).abs() <= 1e-14 * want.abs(),
+            "{what}: {got} vs {want}"
+        );
+    };
+    let by_l = pendulum(Dual64::from(M), Dual64::new(L, 1.0), Dual64::from(R));
+    close(by_l.wires[0].stiffness.eps, -k / L, "dk/dl");
+    close(
+        by_l.wires[0].unstretched_length.eps,
+        1.0 - weight / (e * area),
+        "dl0/dl",
+    );
+    let by_m = pendulum(Dual64::new(M, 1.0), Dual64::from(L), Dual64::from(R));
+    close(by_m.wires[0].unstretched_length.eps, -G / k, "dl0/dm");
+    close(by_m.bodies[1].mass.eps, 1.0, "dm/dm");
+    close(by_m.bodies[1].inertia[(2, 2)].eps, 0.3, "dIzz/dm");
+    let by_r = pendulum(Dual64::from(M), Dual64::from(L), Dual64::new(R, 1.0));
+    let w = &by_r.wires[0];
+    close(w.stiffness.eps, 2.0 * k / R, "dk/dr");
+    close(w.unstretched_length.eps, 2.0 * weight / (k * R), "dl0/dr");
+    close(w.section.area.eps, 2.0 * std::f64::consts::PI * R, "dA/dr");
+    close(
+        w.section.moment_1.eps,
+        std::f64::consts::PI * R.powi(3),
+        "dI/dr",
+    );
+}
+
+#[test]
+fn the_real_part_is_the_f64_model_and_a_step_along_the_tangent_is_first_order() {
+    let f64_model = pendulum(M, L, R);
+    let dual = pendulum(Dual64::from(M), Dual64::new(L, 1.0), Dual64::from(R));
+    // the same operations on the real parts: equal bit for bit
+    let real: Vec<u64> = dual.value().scalars().iter().map(|x| x.to_bits()).collect();
+    let plain: Vec<u64> = f64_model.scalars().iter().map(|x| x.to_bits()).collect();
+    assert_eq!(real, plain);
+    // moving along the exact tangent by h agrees with the model rebuilt at l + h to O(h²):
+    // the most curved number is k = E A / l, whose relative second-order error is
+    // (h/l)² = 1e-8 at h = 1e-4 l (l0 and the points are linear in l)
+    let h = 1e-4;
+    let rebuilt = pendulum(M, L + h, R).scalars();
+    let stepped = dual.stepped(h).scalars();
+    assert_eq!(rebuilt.len(), stepped.len());
+    for (i, (a, b)) in rebuilt.iter().zip(&stepped).enumerate() {
+        assert!(
+            (a - b).abs() <= 2e-8 * a.abs().max(1.0),
+            "scalar {i}: {a} vs {b}"
+        );
+    }
+    assert_eq!(dual.tangent().len(), plain.len());
+}
+
+#[test]
+fn map_scalars_visits_every_generic_field() {
+    // every generic number of the model set to 0 by the visitor: each field listed here
+    // (from the types, not from the visitor) must then be 0; a field the visitor forgot
+    // would keep its non-zero value
+    let zeroed = pendulum(M, L, R).map_scalars(|_| 0.0);
+    let zero3 = |v: &Vector3<f64>| v.iter().all(|&x| x == 0.0);
+    assert_eq!(zeroed.gravity, 0.0);
+    for b in &zeroed.bodies {
+        assert!(b.mass == 0.0 && b.inertia == Matrix3::zeros() && zero3(&b.centre_of_mass));
+    }
+    for w in &zeroed.wires {
+        for e in &w.ends {
+            assert!(zero3(&e.point));
+            if let EndDirection::Explicit(d) = &e.direction {
+                assert!(zero3(d));
+            }
+        }
+        let s = &w.section;
+        assert_eq!(w.stiffness, 0.0);
+        assert_eq!(w.unstretched_length, 0.0);
+        for x in [
+            s.youngs_modulus,
+            s.shear_modulus,
+            s.area,
+            s.moment_1,
+            s.moment_2,
+            s.torsion_constant,
+            s.polar_moment,
+            s.linear_density,
+        ] {
+            assert_eq!(x, 0.0);
+        }
+        assert!(zero3(&s.principal_axis));
+    }
+    for sp in &zeroed.springs {
+        for e in &sp.ends {
+            assert!(zero3(&e.point) && e.angles == [0.0; 3]);
+        }
+        assert!(sp.stiffness == Matrix6::zeros() && sp.preload == Vector6::zeros());
+    }
+    for p in &zeroed.plugin_elements {
+        assert!(p.points.iter().all(zero3) && p.values.values().all(|&x| x == 0.0));
+    }
+    // and the count of visited numbers is the one the types give: gravity; a body's mass,
+    // 9 inertia and 3 centre entries (two bodies); the wire's 2 × 3 end points, 3 for its
+    // explicit direction, stiffness, l0, 8 section numbers and a 3-vector; the spring's
+    // 2 × (3 + 3) end numbers, 36 + 6; the plug-in element's 3 + 2
+    let expected = 1 + 2 * 13 + (6 + 3 + 2 + 8 + 3) + (12 + 42) + 5;
+    assert_eq!(pendulum(M, L, R).scalars().len(), expected);
+}
