@@ -46,7 +46,7 @@ use pendkit_assembly::{AssemblyOptions, assemble_with};
 use pendkit_dynamics::{
     Input, Modes, Output, Stability, StageModel, eliminate_floats, validate::check_frequencies,
 };
-use pendkit_energy::{CoordKind, Stage, System};
+use pendkit_energy::{Stage, System};
 use pendkit_model::{Defaults, parameters_with};
 use pendkit_noise::BOLTZMANN;
 
@@ -381,7 +381,7 @@ fn column(shared: &Shared, j: usize) -> Result<Option<Column>, Error> {
             .parameters
             .push((name.clone(), format!("{value:e}")));
         let built = pendkit_model::build_with(case.model, &overrides).map_err(Error::from);
-        let mut system = match built {
+        let system = match built {
             Ok((system, _)) => system,
             // a switch or a count: the model refuses any value near it
             Err(Error::Build(e)) => {
@@ -395,10 +395,7 @@ fn column(shared: &Shared, j: usize) -> Result<Option<Column>, Error> {
             Err(e) => return Err(e),
         };
         points.push(match reach[j] {
-            Reach::Mechanics => {
-                start_at_nominal(&mut system, &base_point.result);
-                stage_point(system, request.stage)?
-            }
+            Reach::Mechanics => stage_point(system, request.stage)?,
             _ => matrices_point(
                 system,
                 base_point.result.assembled.clone(),
@@ -488,27 +485,6 @@ fn column(shared: &Shared, j: usize) -> Result<Option<Column>, Error> {
         }
     }
     Ok(Some(out))
-}
-
-/// Starts a rebuilt model's equilibrium search at the nominal equilibrium: the rebuilt
-/// model differs from the nominal one by a step of 10⁻³ of one parameter, so its
-/// equilibrium is the nominal one moved by O(10⁻³), which Newton's method reaches in fewer
-/// iterations than from the nominal pose, and on the same branch as the nominal stage (the
-/// one the derivatives are of). Only free variables and floats move: a pinned coordinate or
-/// a parameter (the support) keeps the start the rebuilt model gives it, which may be what
-/// the parameter changes. A model whose coordinates differ from the nominal one's is left
-/// as it is (and refused after its stage is built).
-fn start_at_nominal(system: &mut System, nominal: &StageResult) {
-    let base = &nominal.system.coords;
-    let q = &nominal.assembled.equilibrium.coords;
-    if system.coords.len() != base.len() || q.len() != base.len() {
-        return;
-    }
-    for ((c, b), &x) in system.coords.iter_mut().zip(base).zip(q) {
-        if c.name == b.name && c.kind != CoordKind::Parameter && !c.pinned && x.is_finite() {
-            c.start = x;
-        }
-    }
 }
 
 /// `work(j)` for every j in 0..n on up to `threads` threads, the results in j order. Each
