@@ -245,6 +245,7 @@ fn pendulum_tf_and_noise_against_re_solved() {
         freqs: freqs.clone(),
         parameters: None,
         allow_unstable: false,
+        threads: 0,
     };
     let s = sensitivities(&case, &request).expect("sensitivities");
     let (tf_abs, d_tf) = s.tf_abs.as_ref().expect("tf");
@@ -305,6 +306,7 @@ fn loss_angle_moves_no_mode_but_moves_the_noise() {
         freqs: vec![2.0],
         parameters: Some(vec!["phi_fibre".into()]),
         allow_unstable: false,
+        threads: 0,
     };
     let s = sensitivities(&case, &request).expect("sensitivities");
     // the build reads φ too (the fibres' material), so the stage is rebuilt: what is left
@@ -403,4 +405,58 @@ fn unstable_equilibrium_is_refused_unless_allowed() {
     request.allow_unstable = true;
     let s = sensitivities(&case, &request).expect("allowed");
     assert!(s.warning.expect("a warning").contains("pitch3"));
+}
+
+#[test]
+fn thread_count_does_not_change_the_numbers() {
+    // each parameter's column is computed by the same code whichever thread runs it, so the
+    // results on one thread and on three are bit-identical (no tolerance: any difference
+    // would mean the threads share state they should not)
+    let quad = case("quad");
+    let mut request = SensitivityRequest::modes(Stage::S0A);
+    request.threads = 1;
+    let one = sensitivities(&quad, &request).expect("one thread");
+    request.threads = 3;
+    let three = sensitivities(&quad, &request).expect("three threads");
+    assert_eq!(one, three);
+    assert!(one.parameters.len() > 50, "{}", one.parameters.len());
+
+    let pendulum = case("pendulum");
+    let mut request = SensitivityRequest {
+        modes: true,
+        tf: Some(("x00".into(), "x1".into())),
+        noise: Some("x1".into()),
+        freqs: vec![0.3, 2.0],
+        threads: 1,
+        ..SensitivityRequest::modes(Stage::S2)
+    };
+    let one = sensitivities(&pendulum, &request).expect("one thread");
+    request.threads = 2;
+    assert_eq!(
+        one,
+        sensitivities(&pendulum, &request).expect("two threads")
+    );
+}
+
+#[test]
+fn the_first_parameter_in_order_names_the_error_whatever_the_threads() {
+    // two switches the model refuses to move, asked for by name: a loop in order stops at
+    // the first, and so must the threads, whichever finishes first
+    let quad = case("quad");
+    let mut request = SensitivityRequest::modes(Stage::S0A);
+    request.parameters = Some(vec![
+        "m3".into(),
+        "n_beads".into(),
+        "wire_terms_early".into(),
+    ]);
+    for threads in [1, 2, 3] {
+        request.threads = threads;
+        let e = sensitivities(&quad, &request)
+            .expect_err("a switch has no derivative")
+            .to_string();
+        assert!(
+            e.contains("'n_beads' has no derivative"),
+            "{threads} threads: {e}"
+        );
+    }
 }

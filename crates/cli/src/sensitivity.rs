@@ -47,6 +47,10 @@ pub struct Args {
     /// Rows of the table (0: all).
     #[arg(long, default_value_t = 40)]
     top: usize,
+    /// Threads that compute the parameters' columns (0: as many as the machine has); the
+    /// results do not depend on it.
+    #[arg(long, default_value_t = 0)]
+    threads: usize,
     /// Print JSON: {"parameters", "modes_hz", "dfdp"} (one row per mode, one column per
     /// parameter, Hz per unit), with --tf also "freqs_hz", "tf_abs", "dtf_abs_dp", with
     /// --noise "freqs_hz", "noise_asd", "dnoise_asd_dp" (one row per frequency).
@@ -86,6 +90,7 @@ pub fn run(a: Args) -> Result<String, CliError> {
         freqs,
         parameters,
         allow_unstable: a.allow_unstable,
+        threads: a.threads,
     };
     let s = sensitivities(&case, &request)?;
     if let Some(warning) = &s.warning {

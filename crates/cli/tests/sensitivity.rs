@@ -121,3 +121,13 @@ fn bad_requests_fail_with_one_line() {
         assert_eq!(err.trim_end().lines().count(), 1, "{err}");
     }
 }
+
+#[test]
+fn threads_change_nothing_printed() {
+    // the columns are computed by the same code on any thread: the JSON on one thread and
+    // on three is the same text
+    let (ok1, one, err1) = pendkit(&["sensitivity", "pendulum", "--json", "--threads", "1"]);
+    let (ok3, three, err3) = pendkit(&["sensitivity", "pendulum", "--json", "--threads", "3"]);
+    assert!(ok1 && ok3, "{err1} {err3}");
+    assert_eq!(one, three);
+}

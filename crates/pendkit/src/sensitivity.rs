@@ -39,6 +39,7 @@
 //! zero sensitivities and costs nothing.
 
 use std::collections::BTreeSet;
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 use nalgebra::{Complex, DMatrix, DVector};
 use pendkit_assembly::{AssemblyOptions, assemble_with};
@@ -80,6 +81,9 @@ pub struct SensitivityRequest {
     /// Go on when the equilibrium is unstable (the warning is in
     /// [`Sensitivities::warning`]); otherwise an unstable equilibrium is an error.
     pub allow_unstable: bool,
+    /// Threads that compute the parameters' columns (0: as many as the machine has). The
+    /// results do not depend on it.
+    pub threads: usize,
 }
 
 impl SensitivityRequest {
@@ -93,6 +97,7 @@ impl SensitivityRequest {
             freqs: Vec::new(),
             parameters: None,
             allow_unstable: false,
+            threads: 0,
         }
     }
 }
@@ -296,6 +301,255 @@ fn same_kinds(a: &Ports, b: &Ports) -> bool {
     input && output
 }
 
+/// What every parameter's column reads: the request, the nominal stage and its modes, the
+/// nominal responses' factorisations.
+struct Shared<'a> {
+    case: &'a Case,
+    request: &'a SensitivityRequest,
+    names: &'a [String],
+    values: &'a [f64],
+    reach: &'a [Reach],
+    base_point: &'a Point,
+    base_ports: Option<&'a Ports>,
+    nominal: &'a [Nominal],
+    /// The nominal modes' vectors, one column per mode.
+    vectors: &'a DMatrix<f64>,
+    clusters: &'a [Vec<usize>],
+    sizes: (usize, usize, usize),
+    responses: bool,
+}
+
+/// One parameter's derivatives (Hz, |H|'s unit, and the noise response per unit of the
+/// parameter), or why the model refuses to move it.
+struct Column {
+    /// The step of the difference (the parameter's unit).
+    step: f64,
+    /// Why the model refuses values near the parameter's (a switch or a count).
+    refused: Option<String>,
+    /// d(mode frequency)/dp, one per mode (empty when the modes were not asked for).
+    dfdp: Vec<f64>,
+    /// dH/dp, one per frequency.
+    d_tf: Vec<C>,
+    /// (dT/dp, dR/dp) of the noise, one per frequency.
+    d_noise: Vec<(f64, C)>,
+}
+
+/// Parameter `j`'s column: the stage rebuilt at the stencil's points and differenced, then
+/// the exact algebra of the module's documentation. `None` for a parameter nothing reads
+/// (every derivative exactly 0, nothing computed).
+fn column(shared: &Shared, j: usize) -> Result<Option<Column>, Error> {
+    let Shared {
+        case,
+        request,
+        names,
+        values,
+        reach,
+        base_point,
+        base_ports,
+        nominal,
+        vectors,
+        clusters,
+        sizes,
+        responses,
+    } = *shared;
+    if reach[j] == Reach::Nothing {
+        return Ok(None);
+    }
+    let name = &names[j];
+    let modes = &base_point.result.modes.modes;
+    let nf = request.freqs.len();
+    let p0 = values[j];
+    let h = if p0 == 0.0 {
+        ZERO_STEP
+    } else {
+        RELATIVE_STEP * p0.abs()
+    };
+    let mut out = Column {
+        step: h,
+        refused: None,
+        dfdp: vec![0.0; if request.modes { modes.len() } else { 0 }],
+        d_tf: vec![C::new(0.0, 0.0); nf],
+        d_noise: vec![(0.0, C::new(0.0, 0.0)); nf],
+    };
+    let mut points = Vec::with_capacity(STENCIL.len());
+    for &(k, _) in &STENCIL {
+        let value = p0 + k * h;
+        // the case's overrides and this one last (the nominal build has checked that
+        // every override is read; this one is, or it would have no step)
+        let mut overrides = case.overrides.clone();
+        overrides
+            .parameters
+            .push((name.clone(), format!("{value:e}")));
+        let built = pendkit_model::build_with(case.model, &overrides).map_err(Error::from);
+        let system = match built {
+            Ok((system, _)) => system,
+            // a switch or a count: the model refuses any value near it
+            Err(Error::Build(e)) => {
+                let why = format!("the model refuses {name} = {value:e} ({e})");
+                if request.parameters.is_some() {
+                    return Err(bad(format!("'{name}' has no derivative: {why}")));
+                }
+                out.refused = Some(why);
+                return Ok(Some(out));
+            }
+            Err(e) => return Err(e),
+        };
+        points.push(match reach[j] {
+            Reach::Mechanics => stage_point(system, request.stage)?,
+            _ => matrices_point(
+                system,
+                base_point.result.assembled.clone(),
+                base_point.result.model.clone(),
+            )?,
+        });
+    }
+    for p in &points {
+        if p.result.model.sizes != sizes {
+            return Err(bad(format!(
+                "changing '{name}' changes the model's coordinates: no derivative"
+            )));
+        }
+    }
+    if request.modes {
+        let dk = difference(&points, h, |p| p.k_eff.clone());
+        let dm = difference(&points, h, |p| p.result.assembled.mass.clone());
+        let vk = vectors.transpose() * &dk * vectors;
+        let vm = vectors.transpose() * &dm * vectors;
+        for cluster in clusters {
+            let w2: f64 =
+                cluster.iter().map(|&k| modes[k].omega_squared).sum::<f64>() / cluster.len() as f64;
+            let g = DMatrix::from_fn(cluster.len(), cluster.len(), |a, b| {
+                let (ka, kb) = (cluster[a], cluster[b]);
+                vk[(ka, kb)] - w2 * vm[(ka, kb)]
+            });
+            let g = (&g + g.transpose()) * 0.5;
+            let mut d: Vec<f64> = g.symmetric_eigenvalues().iter().copied().collect();
+            d.sort_by(f64::total_cmp);
+            for (&k, dw2) in cluster.iter().zip(d) {
+                let mode = &modes[k];
+                if mode.omega_squared == 0.0 {
+                    return Err(bad(format!(
+                        "mode {} ({}) is neutral (ω² = 0): its frequency has no derivative",
+                        k + 1,
+                        mode.label
+                    )));
+                }
+                out.dfdp[k] = dw2 / (4.0 * std::f64::consts::PI * mode.omega_squared.abs().sqrt());
+            }
+        }
+    }
+    if responses {
+        let tf_ports: Vec<Ports> = match &request.tf {
+            Some(tf) => points
+                .iter()
+                .map(|p| ports(p, tf))
+                .collect::<Result<_, _>>()?,
+            None => Vec::new(),
+        };
+        let noise_ports: Vec<Ports> = match &request.noise {
+            Some(name) => points
+                .iter()
+                .map(|p| noise_port(p, name))
+                .collect::<Result<_, _>>()?,
+            None => Vec::new(),
+        };
+        if let Some(b) = base_ports
+            && tf_ports.iter().any(|p| !same_kinds(p, b))
+        {
+            return Err(bad(format!(
+                "changing '{name}' changes the kind of the transfer function's input or output"
+            )));
+        }
+        let tf_vectors: Vec<(DVector<f64>, DVector<f64>)> =
+            tf_ports.iter().map(|p| port_vectors(p, sizes)).collect();
+        let noise_vectors: Vec<DVector<f64>> = noise_ports
+            .iter()
+            .map(|p| port_vectors(p, sizes).1)
+            .collect();
+        let db = (tf_vectors.len() == STENCIL.len())
+            .then(|| difference_of(&tf_vectors.iter().map(|v| &v.0).collect::<Vec<_>>(), h));
+        let dc = (tf_vectors.len() == STENCIL.len())
+            .then(|| difference_of(&tf_vectors.iter().map(|v| &v.1).collect::<Vec<_>>(), h));
+        let d_o = (noise_vectors.len() == STENCIL.len())
+            .then(|| difference_of(&noise_vectors.iter().collect::<Vec<_>>(), h));
+        let d_temperature = difference(&points, h, |p| p.result.system.temperature);
+        for (i, &f) in request.freqs.iter().enumerate() {
+            let da = difference(&points, h, |p| Scaled(dynamic_matrix(p, f))).0;
+            let nominal = &nominal[i];
+            if let (Some(db), Some(dc)) = (&db, &dc) {
+                out.d_tf[i] = nominal.d_transfer(&da, db, dc, sizes)?;
+            }
+            if let Some(d_o) = &d_o {
+                out.d_noise[i] = (d_temperature, nominal.d_noise_response(&da, d_o, sizes));
+            }
+        }
+    }
+    Ok(Some(out))
+}
+
+/// `work(j)` for every j in 0..n on up to `threads` threads, the results in j order. Each
+/// j is computed exactly as on one thread (the numbers do not depend on the thread count);
+/// on errors the one of the smallest j is returned, as a loop in order would, and no j
+/// after it is started.
+fn in_parallel<T: Send>(
+    n: usize,
+    threads: usize,
+    work: impl Fn(usize) -> Result<T, Error> + Sync,
+) -> Result<Vec<T>, Error> {
+    let threads = threads.clamp(1, n.max(1));
+    if threads == 1 {
+        return (0..n).map(work).collect();
+    }
+    let next = AtomicUsize::new(0);
+    let first_error = AtomicUsize::new(usize::MAX);
+    let mut slots: Vec<Option<Result<T, Error>>> = (0..n).map(|_| None).collect();
+    std::thread::scope(|scope| {
+        let workers: Vec<_> = (0..threads)
+            .map(|_| {
+                scope.spawn(|| {
+                    let mut done = Vec::new();
+                    loop {
+                        let j = next.fetch_add(1, Ordering::Relaxed);
+                        if j >= n || j > first_error.load(Ordering::Relaxed) {
+                            break;
+                        }
+                        let result = work(j);
+                        if result.is_err() {
+                            first_error.fetch_min(j, Ordering::Relaxed);
+                        }
+                        done.push((j, result));
+                    }
+                    done
+                })
+            })
+            .collect();
+        for worker in workers {
+            match worker.join() {
+                Ok(done) => {
+                    for (j, result) in done {
+                        slots[j] = Some(result);
+                    }
+                }
+                // a panic is a bug: carry it on as a loop on this thread would
+                Err(panic) => std::panic::resume_unwind(panic),
+            }
+        }
+    });
+    let mut out = Vec::with_capacity(n);
+    for slot in slots {
+        match slot {
+            Some(Ok(value)) => out.push(value),
+            Some(Err(e)) => return Err(e),
+            // not started: an error of a smaller j comes first
+            None => break,
+        }
+    }
+    match out.len() == n {
+        true => Ok(out),
+        false => Err(bad("a parameter's work was not done (internal error)")),
+    }
+}
+
 /// A = P(f) − ω² M over every master row (mass in the variables' block), complex dense.
 fn dynamic_matrix(point: &Point, f_hz: f64) -> DMatrix<C> {
     let model = &point.result.model;
@@ -459,133 +713,40 @@ pub fn sensitivities(case: &Case, request: &SensitivityRequest) -> Result<Sensit
         Vec::new()
     };
 
-    for (j, name) in names.iter().enumerate() {
-        if reach[j] == Reach::Nothing {
+    let shared = Shared {
+        case,
+        request,
+        names: &names,
+        values: &values,
+        reach: &reach,
+        base_point: &base_point,
+        base_ports: base_ports.as_ref(),
+        nominal: &nominal,
+        vectors: &vectors,
+        clusters: &clusters,
+        sizes,
+        responses,
+    };
+    let threads = match request.threads {
+        0 => std::thread::available_parallelism().map_or(1, usize::from),
+        n => n,
+    };
+    let columns = in_parallel(np, threads, |j| column(&shared, j))?;
+    for (j, col) in columns.into_iter().enumerate() {
+        let Some(col) = col else { continue };
+        steps[j] = col.step;
+        if col.refused.is_some() {
+            refused[j] = col.refused;
             continue;
         }
-        let p0 = values[j];
-        let h = if p0 == 0.0 {
-            ZERO_STEP
-        } else {
-            RELATIVE_STEP * p0.abs()
-        };
-        steps[j] = h;
-        let mut points = Vec::with_capacity(STENCIL.len());
-        for &(k, _) in &STENCIL {
-            let value = p0 + k * h;
-            // the case's overrides and this one last (the nominal build has checked that
-            // every override is read; this one is, or it would have no step)
-            let mut overrides = case.overrides.clone();
-            overrides
-                .parameters
-                .push((name.clone(), format!("{value:e}")));
-            let built = pendkit_model::build_with(case.model, &overrides).map_err(Error::from);
-            let system = match built {
-                Ok((system, _)) => system,
-                // a switch or a count: the model refuses any value near it
-                Err(Error::Build(e)) => {
-                    let why = format!("the model refuses {name} = {value:e} ({e})");
-                    if request.parameters.is_some() {
-                        return Err(bad(format!("'{name}' has no derivative: {why}")));
-                    }
-                    refused[j] = Some(why);
-                    break;
-                }
-                Err(e) => return Err(e),
-            };
-            points.push(match reach[j] {
-                Reach::Mechanics => stage_point(system, request.stage)?,
-                _ => matrices_point(
-                    system,
-                    base_point.result.assembled.clone(),
-                    base_point.result.model.clone(),
-                )?,
-            });
+        for (row, d) in dfdp.iter_mut().zip(col.dfdp) {
+            row[j] = d;
         }
-        if refused[j].is_some() {
-            continue;
+        for (row, d) in d_tf.iter_mut().zip(col.d_tf) {
+            row[j] = d;
         }
-        for p in &points {
-            if p.result.model.sizes != sizes {
-                return Err(bad(format!(
-                    "changing '{name}' changes the model's coordinates: no derivative"
-                )));
-            }
-        }
-        if request.modes {
-            let dk = difference(&points, h, |p| p.k_eff.clone());
-            let dm = difference(&points, h, |p| p.result.assembled.mass.clone());
-            let vk = vectors.transpose() * &dk * &vectors;
-            let vm = vectors.transpose() * &dm * &vectors;
-            for cluster in &clusters {
-                let w2: f64 = cluster.iter().map(|&k| modes[k].omega_squared).sum::<f64>()
-                    / cluster.len() as f64;
-                let g = DMatrix::from_fn(cluster.len(), cluster.len(), |a, b| {
-                    let (ka, kb) = (cluster[a], cluster[b]);
-                    vk[(ka, kb)] - w2 * vm[(ka, kb)]
-                });
-                let g = (&g + g.transpose()) * 0.5;
-                let mut d: Vec<f64> = g.symmetric_eigenvalues().iter().copied().collect();
-                d.sort_by(f64::total_cmp);
-                for (&k, dw2) in cluster.iter().zip(d) {
-                    let mode = &modes[k];
-                    if mode.omega_squared == 0.0 {
-                        return Err(bad(format!(
-                            "mode {} ({}) is neutral (ω² = 0): its frequency has no derivative",
-                            k + 1,
-                            mode.label
-                        )));
-                    }
-                    dfdp[k][j] =
-                        dw2 / (4.0 * std::f64::consts::PI * mode.omega_squared.abs().sqrt());
-                }
-            }
-        }
-        if responses {
-            let tf_ports: Vec<Ports> = match &request.tf {
-                Some(tf) => points
-                    .iter()
-                    .map(|p| ports(p, tf))
-                    .collect::<Result<_, _>>()?,
-                None => Vec::new(),
-            };
-            let noise_ports: Vec<Ports> = match &request.noise {
-                Some(name) => points
-                    .iter()
-                    .map(|p| noise_port(p, name))
-                    .collect::<Result<_, _>>()?,
-                None => Vec::new(),
-            };
-            if let Some(b) = &base_ports
-                && tf_ports.iter().any(|p| !same_kinds(p, b))
-            {
-                return Err(bad(format!(
-                    "changing '{name}' changes the kind of the transfer function's input or output"
-                )));
-            }
-            let tf_vectors: Vec<(DVector<f64>, DVector<f64>)> =
-                tf_ports.iter().map(|p| port_vectors(p, sizes)).collect();
-            let noise_vectors: Vec<DVector<f64>> = noise_ports
-                .iter()
-                .map(|p| port_vectors(p, sizes).1)
-                .collect();
-            let db = (tf_vectors.len() == STENCIL.len())
-                .then(|| difference_of(&tf_vectors.iter().map(|v| &v.0).collect::<Vec<_>>(), h));
-            let dc = (tf_vectors.len() == STENCIL.len())
-                .then(|| difference_of(&tf_vectors.iter().map(|v| &v.1).collect::<Vec<_>>(), h));
-            let d_o = (noise_vectors.len() == STENCIL.len())
-                .then(|| difference_of(&noise_vectors.iter().collect::<Vec<_>>(), h));
-            let d_temperature = difference(&points, h, |p| p.result.system.temperature);
-            for (i, &f) in request.freqs.iter().enumerate() {
-                let da = difference(&points, h, |p| Scaled(dynamic_matrix(p, f))).0;
-                let nominal = &nominal[i];
-                if let (Some(db), Some(dc)) = (&db, &dc) {
-                    d_tf[i][j] = nominal.d_transfer(&da, db, dc, sizes)?;
-                }
-                if let Some(d_o) = &d_o {
-                    d_noise[i][j] = (d_temperature, nominal.d_noise_response(&da, d_o, sizes));
-                }
-            }
+        for (row, d) in d_noise.iter_mut().zip(col.d_noise) {
+            row[j] = d;
         }
     }
 

@@ -366,6 +366,7 @@ impl Model {
             freqs,
             parameters,
             allow_unstable,
+            threads: 0,
         };
         let case = &self.case;
         let s = py
