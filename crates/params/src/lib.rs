@@ -14,6 +14,7 @@
 //! ```
 
 mod resolve;
+mod tangent;
 
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -21,6 +22,7 @@ use std::sync::Arc;
 use pendkit_expr::{BinOp, Expr, ExprError, parse};
 
 pub use resolve::Resolved;
+pub use tangent::Tangent;
 
 /// How a parameter is defined.
 #[derive(Debug, Clone, PartialEq)]

@@ -1,0 +1,85 @@
+//! Parameter tangents (`ParamSet::resolve_tangent`) against closed-form derivatives and
+//! against fourth-order differences of `resolve` with the seed overridden by a number (the
+//! meaning the tangent promises).
+
+use pendkit_params::ParamSet;
+
+fn set() -> ParamSet {
+    let mut p = ParamSet::new();
+    p.define("k", "m*g/l").unwrap(); // defined before what it reads
+    p.define_value("m", 2.0).unwrap();
+    p.define_value("g", 9.81).unwrap();
+    p.define_value("l", 0.5).unwrap();
+    p.define("w", "sqrt(k/m)").unwrap();
+    p.define("odd", "exp(l)*sin(m) + l^3").unwrap();
+    p
+}
+
+#[test]
+fn closed_forms() {
+    // k = m g / l: ∂k/∂m = g/l, ∂k/∂l = −m g/l²; w = √(k/m) = √(g/l) does not depend on m;
+    // to 1e-15 relative (a few roundings)
+    let p = set();
+    let by_m = p.resolve_tangent("m").unwrap();
+    assert_eq!(by_m.seed(), "m");
+    assert_eq!(by_m.get("m").unwrap().eps, 1.0);
+    assert_eq!(by_m.get("g").unwrap().eps, 0.0);
+    let dk = by_m.get("k").unwrap().eps;
+    assert!((dk - 9.81 / 0.5).abs() <= 1e-15 * dk.abs(), "{dk}");
+    assert!(
+        by_m.get("w").unwrap().eps.abs() <= 1e-15,
+        "dw/dm must vanish"
+    );
+    let by_l = p.resolve_tangent("l").unwrap();
+    let dk = by_l.get("k").unwrap().eps;
+    let want = -2.0 * 9.81 / 0.25;
+    assert!((dk - want).abs() <= 1e-15 * want.abs(), "{dk}");
+    // seeding a derived parameter: its definition is replaced, what it reads is unmoved
+    let by_k = p.resolve_tangent("k").unwrap();
+    assert_eq!(by_k.get("m").unwrap().eps, 0.0);
+    let k: f64 = 2.0 * 9.81 / 0.5;
+    let dw = by_k.get("w").unwrap().eps;
+    let want = 0.5 / (k * 2.0).sqrt();
+    assert!((dw - want).abs() <= 1e-15 * want, "{dw} vs {want}");
+}
+
+#[test]
+fn against_differences_of_overridden_resolutions() {
+    // the fourth-order central difference with h = 1e-3 of the seed's value: truncation
+    // h⁴ f⁽⁵⁾/30, which for a 1/p dependence is 4e-12 of f/p (the largest here, k = m g/l
+    // in l: 3e-10 of 78), and rounding ~1e-16/h ~ 1e-13; asserted to 1e-10 of f/p
+    let p = set();
+    for seed in ["m", "l", "g", "k"] {
+        let tangent = p.resolve_tangent(seed).unwrap();
+        let resolved = p.resolve().unwrap();
+        let p0 = resolved.get(seed).unwrap();
+        let h = 1e-3 * p0.abs();
+        let at = |x: f64| {
+            let mut q = p.clone();
+            q.apply_text(seed, &format!("{x:e}")).unwrap();
+            q.resolve().unwrap()
+        };
+        let points: Vec<_> = [-2.0, -1.0, 1.0, 2.0]
+            .iter()
+            .map(|k| at(p0 + k * h))
+            .collect();
+        for (name, value) in tangent.iter() {
+            let v = |i: usize| points[i].get(name).unwrap();
+            let fd = (8.0 * (v(2) - v(1)) - (v(3) - v(0))) / (12.0 * h);
+            let scale = value.re.abs().max(1.0) / p0.abs();
+            assert!(
+                (value.eps - fd).abs() <= 1e-10 * scale,
+                "d{name}/d{seed}: {} vs {fd}",
+                value.eps
+            );
+            // the real part is the resolved value
+            assert!((value.re - resolved.get(name).unwrap()).abs() <= 1e-15 * value.re.abs());
+        }
+    }
+}
+
+#[test]
+fn an_unknown_seed_is_an_error() {
+    let e = set().resolve_tangent("nope").unwrap_err().to_string();
+    assert!(e.contains("nope"), "{e}");
+}
