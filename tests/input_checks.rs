@@ -502,7 +502,7 @@ fn tradeoff_comparisons_of_answers_that_do_not_fit_are_errors_naming_the_argumen
 fn a_beaded_fibre_with_more_beads_than_the_limit_is_an_error_not_an_overflow() {
     use pendkit::model::beads::{BeadJoints, BeadedFibre, MAX_BEADS, add_beaded_fibre, beads_mass};
     use pendkit_energy::{EndDirection, WireEnd, WireSection, WireTags};
-    let section = WireSection::round(1e-4, 2e11, 8e10, 7800.0);
+    let section: WireSection = WireSection::round(1e-4, 2e11, 8e10, 7800.0);
     let end = |body| WireEnd {
         body,
         point: nalgebra::Vector3::zeros(),

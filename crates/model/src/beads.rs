@@ -33,7 +33,7 @@
 //! (straight at the reference), so zero is where the joints sit.
 
 use nalgebra::Vector3;
-use pendkit_energy::{EndDirection, Wire, WireEnd, WireSection, WireTags};
+use pendkit_energy::{EndDirection, Real, Wire, WireEnd, WireSection, WireTags};
 
 use crate::{BodySpec, BuildError, FibreProfile, SystemBuilder};
 
@@ -59,33 +59,33 @@ impl BeadJoints {
 }
 
 /// A fibre between two bodies, optionally carrying violin-mode beads.
-pub struct BeadedFibre<'a> {
+pub struct BeadedFibre<'a, S: Real = f64> {
     /// Name; segments are `<name>s1 ...`, beads `<name>b1 ...` (coordinates
     /// `x<name>b1 y<name>b1 z<name>b1 ...`), clamped joints `<name>j1 ...` (floats
     /// `yaw<name>b1 pitch<name>b1 roll<name>b1 ...`).
     pub name: &'a str,
     /// The upper end: body, attachment point (m, body coordinates) and direction.
-    pub upper: WireEnd,
+    pub upper: WireEnd<S>,
     /// The lower end.
-    pub lower: WireEnd,
+    pub lower: WireEnd<S>,
     /// Lab positions of the upper and lower attachments at the nominal geometry (m).
-    pub nominal: [Vector3<f64>; 2],
+    pub nominal: [Vector3<S>; 2],
     /// Cross-section (not used with a `profile`).
-    pub section: &'a WireSection,
+    pub section: &'a WireSection<S>,
     /// Length between the attachment points (m).
-    pub length: f64,
+    pub length: S,
     /// Tension of the lowest segment (N).
-    pub tension: f64,
+    pub tension: S,
     /// Gravitational acceleration (m/s²): each segment carries the weight of the beads
     /// below it.
-    pub g: f64,
+    pub g: S,
     /// Number of beads (0: one plain fibre).
     pub beads: usize,
     /// How the segments join at the beads.
     pub joints: BeadJoints,
     /// A radius profile along the fibre (tapered fibres): each segment is then the slice of
     /// the profile it spans, and `section` is not used.
-    pub profile: Option<&'a FibreProfile>,
+    pub profile: Option<&'a FibreProfile<S>>,
 }
 
 /// Largest number of violin beads per fibre: dense linear algebra, and 200 beads on each
@@ -98,9 +98,9 @@ pub const MAX_BEADS: usize = 200;
 /// `f.lower` say; the beads join the segments as `f.joints` says; each segment carries the
 /// tension of the lowest plus the weight of the beads below it. More than [`MAX_BEADS`]
 /// beads is an error.
-pub fn add_beaded_fibre(
-    b: &mut SystemBuilder,
-    f: &BeadedFibre,
+pub fn add_beaded_fibre<S: Real>(
+    b: &mut SystemBuilder<S>,
+    f: &BeadedFibre<S>,
     tags: &WireTags,
 ) -> Result<(), BuildError> {
     if f.beads > MAX_BEADS {
@@ -113,17 +113,17 @@ pub fn add_beaded_fibre(
         });
     }
     let segment = f.length / (f.beads + 1) as f64;
-    let slices: Vec<FibreProfile> = f
+    let slices: Vec<FibreProfile<S>> = f
         .profile
         .map(|p| {
             (0..=f.beads)
-                .map(|k| p.slice(k as f64 * segment, (k + 1) as f64 * segment))
+                .map(|k| p.slice(segment * k as f64, segment * (k + 1) as f64))
                 .collect()
         })
         .unwrap_or_default();
-    let bead_masses: Vec<f64> = (0..f.beads)
+    let bead_masses: Vec<S> = (0..f.beads)
         .map(|k| match (slices.get(k), slices.get(k + 1)) {
-            (Some(upper), Some(lower)) => 0.5 * (upper.mass() + lower.mass()),
+            (Some(upper), Some(lower)) => (upper.mass() + lower.mass()) * 0.5,
             _ => f.section.linear_density * segment,
         })
         .collect();
@@ -140,7 +140,7 @@ pub fn add_beaded_fibre(
             format!("{}s{}", f.name, k + 1)
         };
         let ends = [above, below.clone()];
-        let carried = f.tension + bead_masses[k..].iter().sum::<f64>() * f.g;
+        let carried = f.tension + bead_masses[k..].iter().copied().sum::<S>() * f.g;
         let wire = match slices.get(k) {
             None => Wire::from_tension(
                 name,
@@ -188,37 +188,40 @@ pub fn add_beaded_fibre(
 /// [`add_beaded_fibre`] places them: N/(N + 1) of a uniform fibre's mass, or with a
 /// `profile`, the whole mass less half of the two end segments' (which the end bodies
 /// carry). What the wires above the fibre carry besides the bodies.
-pub fn beads_mass(
-    section: &WireSection,
-    profile: Option<&FibreProfile>,
-    length: f64,
+pub fn beads_mass<S: Real>(
+    section: &WireSection<S>,
+    profile: Option<&FibreProfile<S>>,
+    length: S,
     beads: usize,
-) -> f64 {
+) -> S {
     if beads == 0 {
-        return 0.0;
+        return S::from(0.0);
     }
     match profile {
         // N + 1 in floating point: no overflow for any count
         None => section.linear_density * length * beads as f64 / (beads as f64 + 1.0),
         Some(p) => {
             let segment = length / (beads as f64 + 1.0);
-            let ends = p.slice(0.0, segment).mass() + p.slice(length - segment, length).mass();
-            p.mass() - 0.5 * ends
+            let ends =
+                p.slice(S::from(0.0), segment).mass() + p.slice(length - segment, length).mass();
+            p.mass() - ends * 0.5
         }
     }
 }
 
 /// Bead `k` (from 0, top down) of `f` with `mass` (kg): the bead body and, with clamped
 /// joints, its joint body; returns the end the segments attach to.
-fn bead(
-    b: &mut SystemBuilder,
-    f: &BeadedFibre,
+fn bead<S: Real>(
+    b: &mut SystemBuilder<S>,
+    f: &BeadedFibre<S>,
     k: usize,
-    mass: f64,
-) -> Result<WireEnd, BuildError> {
+    mass: S,
+) -> Result<WireEnd<S>, BuildError> {
     let label = format!("{}b{}", f.name, k + 1);
     let names = ["x", "y", "z"].map(|c| format!("{c}{label}"));
-    let at = f.nominal[0] + (f.nominal[1] - f.nominal[0]) * ((k + 1) as f64 / (f.beads + 1) as f64);
+    // the beads' start positions (search starts, not model numbers: real parts)
+    let [top, bottom] = f.nominal.each_ref().map(|v| v.map(|x| x.re()));
+    let at = top + (bottom - top) * ((k + 1) as f64 / (f.beads + 1) as f64);
     for (name, value) in names.iter().zip(at.iter()) {
         b.variable(name, *value)?;
     }
@@ -244,7 +247,7 @@ fn bead(
     };
     Ok(WireEnd {
         body,
-        point: Vector3::zeros(),
+        point: Vector3::from_element(S::from(0.0)),
         direction,
     })
 }

@@ -25,26 +25,27 @@
 
 use std::f64::consts::PI;
 
-use pendkit_energy::{WireEnd, WireSection, WireTags};
+use pendkit_energy::{Real, WireEnd, WireSection, WireTags};
 
 use crate::BuildError;
 
-/// A round fibre made of pieces of different radii, with its material.
+/// A round fibre made of pieces of different radii, with its material; its numbers are
+/// generic over the scalar like the model's (`f64` by default).
 #[derive(Clone, Debug, PartialEq)]
-pub struct FibreProfile {
+pub struct FibreProfile<S: Real = f64> {
     /// (length m, radius m) of each piece, from the upper clamp down.
-    pub pieces: Vec<(f64, f64)>,
+    pub pieces: Vec<(S, S)>,
     /// Young's modulus Y (Pa).
-    pub youngs_modulus: f64,
+    pub youngs_modulus: S,
     /// Shear modulus G (Pa).
-    pub shear_modulus: f64,
+    pub shear_modulus: S,
     /// Density ρ (kg/m³).
-    pub density: f64,
+    pub density: S,
 }
 
-impl FibreProfile {
+impl<S: Real> FibreProfile<S> {
     /// A uniform round fibre of `length` and `radius` (m).
-    pub fn uniform(length: f64, radius: f64, youngs: f64, shear: f64, density: f64) -> Self {
+    pub fn uniform(length: S, radius: S, youngs: S, shear: S, density: S) -> Self {
         FibreProfile {
             pieces: vec![(length, radius)],
             youngs_modulus: youngs,
@@ -57,15 +58,15 @@ impl FibreProfile {
     /// both ends, `middle_radius` between them (pygwinc's `Fiber.EndLength`,
     /// `Fiber.EndRadius`, `Fiber.Radius`).
     pub fn tapered(
-        length: f64,
-        (neck_length, neck_radius): (f64, f64),
-        middle_radius: f64,
-        (youngs, shear, density): (f64, f64, f64),
+        length: S,
+        (neck_length, neck_radius): (S, S),
+        middle_radius: S,
+        (youngs, shear, density): (S, S, S),
     ) -> Self {
         FibreProfile {
             pieces: vec![
                 (neck_length, neck_radius),
-                (length - 2.0 * neck_length, middle_radius),
+                (length - neck_length * 2.0, middle_radius),
                 (neck_length, neck_radius),
             ],
             youngs_modulus: youngs,
@@ -85,6 +86,7 @@ impl FibreProfile {
             return Err(bad("a fibre profile needs at least one piece".into()));
         }
         for (k, &(l, r)) in self.pieces.iter().enumerate() {
+            let (l, r) = (l.re(), r.re());
             if !(l.is_finite() && l > 0.0 && r.is_finite() && r > 0.0) {
                 return Err(bad(format!(
                     "piece {} has length {l} m and radius {r} m; both must be positive \
@@ -98,6 +100,7 @@ impl FibreProfile {
             ("shear modulus (Pa)", self.shear_modulus),
             ("density (kg/m^3)", self.density),
         ] {
+            let v = v.re();
             if !(v.is_finite() && v > 0.0) {
                 return Err(bad(format!("{what} must be positive (got {v})")));
             }
@@ -106,12 +109,12 @@ impl FibreProfile {
     }
 
     /// Total length (m).
-    pub fn length(&self) -> f64 {
+    pub fn length(&self) -> S {
         self.pieces.iter().map(|p| p.0).sum()
     }
 
     /// Mass (kg), Σ ρ π rᵢ² lᵢ.
-    pub fn mass(&self) -> f64 {
+    pub fn mass(&self) -> S {
         self.pieces
             .iter()
             .map(|&(l, r)| self.density * PI * r * r * l)
@@ -119,22 +122,26 @@ impl FibreProfile {
     }
 
     /// Stretch stiffness (N/m) of the pieces in series, 1 / Σ lᵢ/(Y π rᵢ²).
-    pub fn stretch_stiffness(&self) -> f64 {
-        1.0 / self
-            .pieces
+    pub fn stretch_stiffness(&self) -> S {
+        self.pieces
             .iter()
             .map(|&(l, r)| l / (self.youngs_modulus * PI * r * r))
-            .sum::<f64>()
+            .sum::<S>()
+            .recip()
     }
 
     /// The part of the profile between `from` and `to` (m from the upper end, clamped to
     /// the profile), e.g. one segment between violin beads.
-    pub fn slice(&self, from: f64, to: f64) -> FibreProfile {
+    pub fn slice(&self, from: S, to: S) -> FibreProfile<S> {
+        // which piece ends bound the slice is decided on the values; the bounds carry their
+        // derivatives
+        let larger = |a: S, b: S| if a.re() >= b.re() { a } else { b };
+        let smaller = |a: S, b: S| if a.re() <= b.re() { a } else { b };
         let mut pieces = Vec::new();
-        let mut start = 0.0;
+        let mut start = S::from(0.0);
         for &(l, r) in &self.pieces {
-            let (a, b) = (from.max(start), to.min(start + l));
-            if b > a {
+            let (a, b) = (larger(from, start), smaller(to, start + l));
+            if b.re() > a.re() {
                 pieces.push((b - a, r));
             }
             start += l;
@@ -146,44 +153,47 @@ impl FibreProfile {
     }
 
     /// Radius at the upper and lower clamps (m).
-    pub fn clamp_radii(&self) -> (f64, f64) {
-        let first = self.pieces.first().map_or(0.0, |p| p.1);
-        let last = self.pieces.last().map_or(0.0, |p| p.1);
+    pub fn clamp_radii(&self) -> (S, S) {
+        let zero = S::from(0.0);
+        let first = self.pieces.first().map_or(zero, |p| p.1);
+        let last = self.pieces.last().map_or(zero, |p| p.1);
         (first, last)
     }
 
     /// The radius (m) of the uniform fibre with the same bending compliance as the pieces in
     /// series, r with 1/r⁴ = Σ (lᵢ/l)/rᵢ⁴: the bending constant of a segment clamped at both
     /// ends and short beside the bending length, which bends along its whole length.
-    pub fn series_bending_radius(&self) -> f64 {
-        let compliance: f64 = self.pieces.iter().map(|&(l, r)| l / r.powi(4)).sum();
+    pub fn series_bending_radius(&self) -> S {
+        let compliance: S = self.pieces.iter().map(|&(l, r)| l / r.powi(4)).sum();
         (self.length() / compliance).powf(0.25)
     }
 
     /// The shorter clamp piece's length in bending lengths λ = √(Y I/T) at tension `tension`
     /// (N): the effective bending constant is exact up to e^(−this).
     pub fn clamp_length_in_bending_lengths(&self, tension: f64) -> f64 {
+        let youngs = self.youngs_modulus.re();
         [self.pieces.first(), self.pieces.last()]
             .into_iter()
             .flatten()
-            .map(|&(l, r)| l / (self.youngs_modulus * PI * r.powi(4) / 4.0 / tension).sqrt())
+            .map(|&(l, r)| l.re() / (youngs * PI * r.re().powi(4) / 4.0 / tension).sqrt())
             .fold(f64::INFINITY, f64::min)
     }
 
     /// Σ wᵢ/rᵢ (1/m) with wᵢ each piece's share of the stretch energy (∝ lᵢ/rᵢ², the
     /// compliance share of springs in series): the 1/r of the surface loss of stretching.
-    pub fn stretch_inverse_radius(&self) -> f64 {
+    pub fn stretch_inverse_radius(&self) -> S {
         self.weighted_inverse_radius(2)
     }
 
     /// Σ wᵢ/rᵢ (1/m) with wᵢ each piece's share of the torsion energy (∝ lᵢ/rᵢ⁴, the
     /// compliance share of the unloaded twist G J).
-    pub fn torsion_inverse_radius(&self) -> f64 {
+    pub fn torsion_inverse_radius(&self) -> S {
         self.weighted_inverse_radius(4)
     }
 
-    fn weighted_inverse_radius(&self, power: i32) -> f64 {
-        let (num, den) = self.pieces.iter().fold((0.0, 0.0), |(n, d), &(l, r)| {
+    fn weighted_inverse_radius(&self, power: i32) -> S {
+        let zero = S::from(0.0);
+        let (num, den) = self.pieces.iter().fold((zero, zero), |(n, d), &(l, r)| {
             let w = l / r.powi(power);
             (n + w / r, d + w)
         });
@@ -194,43 +204,38 @@ impl FibreProfile {
     /// the upper clamp's piece (both clamps are alike in a symmetric profile; the bending
     /// term takes one section), torsion constants that give the series twist stiffness and
     /// its tension slope, and the mean linear density.
-    pub fn section(&self, tension: f64) -> WireSection {
+    pub fn section(&self, tension: S) -> WireSection<S> {
         self.section_bent_at(tension, self.clamp_radii().0)
     }
 
     /// [`FibreProfile::section`] with the moments of area of radius `r_clamp` (m): the
     /// radius at the end that is clamped, when only one is (a segment between a clamp and
     /// a hinged bead).
-    pub fn section_bent_at(&self, tension: f64, r_clamp: f64) -> WireSection {
+    pub fn section_bent_at(&self, tension: S, r_clamp: S) -> WireSection<S> {
         let g = self.shear_modulus;
         // per piece: c = G J + T J/A with J = π r⁴/2, J/A = r²/2
-        let compliance: f64 = self
-            .pieces
-            .iter()
-            .map(|&(l, r)| l / (g * PI * r.powi(4) / 2.0 + tension * r * r / 2.0))
-            .sum();
+        let c = |r: S| g * PI * r.powi(4) / 2.0 + tension * r * r / 2.0;
+        let compliance: S = self.pieces.iter().map(|&(l, r)| l / c(r)).sum();
         let length = self.length();
         let kappa_l = length / compliance; // κ l = G J_e + T J/A (N m²)
         // dκ/dT = κ² Σ lᵢ (Jᵢ/Aᵢ)/cᵢ²
-        let slope: f64 = self
+        let slope: S = self
             .pieces
             .iter()
-            .map(|&(l, r)| {
-                let c = g * PI * r.powi(4) / 2.0 + tension * r * r / 2.0;
-                l * (r * r / 2.0) / (c * c)
-            })
-            .sum::<f64>()
+            .map(|&(l, r)| l * (r * r / 2.0) / (c(r) * c(r)))
+            .sum::<S>()
             / (compliance * compliance)
             * length;
-        let area = PI * r_clamp * r_clamp;
-        let moment = PI * r_clamp.powi(4) / 4.0;
+        let area = S::from(PI) * r_clamp * r_clamp;
+        let moment = S::from(PI) * r_clamp.powi(4) / 4.0;
+        let (zero, one) = (S::from(0.0), S::from(1.0));
         WireSection {
             youngs_modulus: self.youngs_modulus,
             shear_modulus: g,
             area,
             moment_1: moment,
             moment_2: moment,
-            principal_axis: nalgebra::Vector3::x(),
+            principal_axis: nalgebra::Vector3::new(one, zero, zero),
             // G J_e + T (J/A) = κ l with J/A = slope
             torsion_constant: (kappa_l - tension * slope) / g,
             polar_moment: slope * area,
@@ -244,10 +249,10 @@ impl FibreProfile {
     pub fn wire(
         &self,
         name: impl Into<String>,
-        ends: [WireEnd; 2],
-        tension: f64,
+        ends: [WireEnd<S>; 2],
+        tension: S,
         tags: WireTags,
-    ) -> pendkit_energy::Wire {
+    ) -> pendkit_energy::Wire<S> {
         self.wire_with_section(name, ends, tension, self.section(tension), tags)
     }
 
@@ -256,11 +261,11 @@ impl FibreProfile {
     pub fn wire_with_section(
         &self,
         name: impl Into<String>,
-        ends: [WireEnd; 2],
-        tension: f64,
-        section: WireSection,
+        ends: [WireEnd<S>; 2],
+        tension: S,
+        section: WireSection<S>,
         tags: WireTags,
-    ) -> pendkit_energy::Wire {
+    ) -> pendkit_energy::Wire<S> {
         let length = self.length();
         let stiffness = self.stretch_stiffness();
         pendkit_energy::Wire {
@@ -307,7 +312,7 @@ mod tests {
     #[test]
     fn a_uniform_profile_is_a_round_wire() {
         // one piece: the effective section must be WireSection::round exactly (to rounding)
-        let p = FibreProfile::uniform(0.6, 2e-4, 7e10, 3e10, 2200.0);
+        let p: FibreProfile = FibreProfile::uniform(0.6, 2e-4, 7e10, 3e10, 2200.0);
         let s = p.section(97.0);
         let round = WireSection::round(2e-4, 7e10, 3e10, 2200.0);
         for (a, b) in [
