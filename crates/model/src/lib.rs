@@ -805,19 +805,20 @@ fn check_inertia_ratios<S: Real>(bodies: &[Body<S>]) -> Result<(), BuildError> {
 /// Shear modulus G = E / (2 (1 + ν)) (Pa) from Young's modulus `youngs_modulus` (Pa) and
 /// Poisson's ratio `poisson_ratio`, which must lie in (-1, 0.5) for an isotropic solid (G
 /// and the bulk modulus positive); `item` names where it is read, for the error.
-pub fn shear_modulus(
+pub fn shear_modulus<S: Real>(
     item: &str,
-    youngs_modulus: f64,
-    poisson_ratio: f64,
-) -> Result<f64, BuildError> {
-    if poisson_ratio > -1.0 && poisson_ratio < 0.5 {
-        Ok(youngs_modulus / (2.0 * (1.0 + poisson_ratio)))
+    youngs_modulus: S,
+    poisson_ratio: S,
+) -> Result<S, BuildError> {
+    let nu = poisson_ratio.re();
+    if nu > -1.0 && nu < 0.5 {
+        Ok(youngs_modulus / ((poisson_ratio + 1.0) * 2.0))
     } else {
         Err(BuildError::Invalid {
             item: item.to_string(),
             message: format!(
                 "Poisson's ratio {} must lie in (-1, 0.5) for an isotropic material",
-                readable(poisson_ratio)
+                readable(nu)
             ),
         })
     }

@@ -22,7 +22,7 @@ use std::sync::Arc;
 use pendkit_expr::{BinOp, Expr, ExprError, parse};
 
 pub use resolve::Resolved;
-pub use tangent::Tangent;
+pub use tangent::{Tangent, Values};
 
 /// How a parameter is defined.
 #[derive(Debug, Clone, PartialEq)]

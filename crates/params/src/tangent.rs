@@ -89,3 +89,22 @@ impl ParamSet {
         Ok(value)
     }
 }
+
+/// Parameter values of one scalar type, as a model's build reads them: the resolved
+/// numbers (`f64`) or a [`Tangent`] (`Dual64`).
+pub trait Values<S> {
+    /// The value of `name`, if it is a numeric parameter.
+    fn value(&self, name: &str) -> Option<S>;
+}
+
+impl Values<f64> for crate::Resolved {
+    fn value(&self, name: &str) -> Option<f64> {
+        self.get(name).ok()
+    }
+}
+
+impl Values<Dual64> for Tangent {
+    fn value(&self, name: &str) -> Option<Dual64> {
+        self.get(name).ok()
+    }
+}

@@ -12,14 +12,15 @@ use std::cell::RefCell;
 use std::collections::{BTreeSet, HashMap};
 
 use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
+use num_dual::Dual64;
 use pendkit_energy::{
-    BodyId, CoordKind, EndDirection, ExtraPhase, NamedSignal, SignalTerm, SpringEnd, Stage, System,
-    WireEnd, WireSection, WireTags,
+    BodyId, CoordKind, EndDirection, ExtraPhase, NamedSignal, Real, SignalTerm, SpringEnd, Stage,
+    System, WireEnd, WireSection, WireTags,
 };
 use pendkit_expr::Expr;
 use pendkit_model::beads::{BeadedFibre, add_beaded_fibre, beads_mass};
 use pendkit_model::{BodySpec, BuildError, FibreProfile, Shape, SystemBuilder};
-use pendkit_params::Resolved;
+use pendkit_params::{Resolved, Values};
 
 use crate::damping::{Hanging, blade_tag, find_material};
 use crate::read::Ex;
@@ -77,15 +78,43 @@ fn placed(at: &At) -> impl Fn(BuildError) -> BuildError + '_ {
     move |e| invalid(at, e.to_string())
 }
 
+/// The scalar a suspension file is built in: `f64` (the model), or `Dual64` (the model
+/// with the exact derivative of every number with respect to one parameter).
+pub trait BuildScalar: Real {
+    /// Whether the number has a derivative: then it must not become the text of an
+    /// expression, a count or a switch, where the derivative would be lost.
+    fn moves(&self) -> bool;
+}
+
+impl BuildScalar for f64 {
+    fn moves(&self) -> bool {
+        false
+    }
+}
+
+impl BuildScalar for Dual64 {
+    fn moves(&self) -> bool {
+        self.eps != 0.0
+    }
+}
+
+/// The error for a number whose derivative would be lost at `at` (`what` says how).
+fn no_derivative(at: &At, what: &str) -> BuildError {
+    invalid(at, format!("no exact derivative: {what}"))
+}
+
 /// Evaluation of the file's expressions against resolved parameters.
-pub struct Ctx<'a> {
-    /// Parameter values.
+pub struct Ctx<'a, S: BuildScalar = f64> {
+    /// Parameter values (what is recorded as read, and the messages).
     pub params: &'a Resolved,
     /// Where reads are recorded, if they are.
     pub reads: Option<&'a RefCell<Reads>>,
+    /// The values the expressions evaluate with, of the build's scalar: `params` itself
+    /// for `f64`, a [`pendkit_params::Tangent`] for `Dual64`.
+    pub values: &'a dyn Values<S>,
 }
 
-impl Ctx<'_> {
+impl<S: BuildScalar> Ctx<'_, S> {
     /// Records that `field` reads the symbols of `expr` that are parameters.
     pub fn record(&self, expr: &Expr, field: &str) {
         if let Some(reads) = self.reads {
@@ -99,12 +128,22 @@ impl Ctx<'_> {
     }
 
     /// The value of `ex` (the field's unit is the caller's).
-    pub fn eval(&self, ex: &Ex) -> Result<f64, BuildError> {
+    pub fn eval(&self, ex: &Ex) -> Result<S, BuildError> {
         self.eval_for(ex, None)
     }
 
+    /// The value of `ex` where only a plain number can go (`what`: a count, a switch, a
+    /// constant the model keeps in `f64`): an error if it has a derivative.
+    fn fixed(&self, ex: &Ex, what: &str) -> Result<f64, BuildError> {
+        let v = self.eval(ex)?;
+        if v.moves() {
+            return Err(no_derivative(&ex.at, &format!("`{}` is {what}", ex.text)));
+        }
+        Ok(v.re())
+    }
+
     /// [`Ctx::eval`], recording the read as made for `user` (a part using a material).
-    pub fn eval_for(&self, ex: &Ex, user: Option<&str>) -> Result<f64, BuildError> {
+    pub fn eval_for(&self, ex: &Ex, user: Option<&str>) -> Result<S, BuildError> {
         if self.reads.is_some() {
             let field = match user {
                 Some(u) => format!("{} (for {u})", ex.at.path),
@@ -114,7 +153,7 @@ impl Ctx<'_> {
         }
         let value = ex
             .expr
-            .eval(&|s| self.params.get(s).ok())
+            .eval(&|s| self.values.value(s))
             .map_err(|e| match e {
                 pendkit_expr::ExprError::UnknownSymbol { name } => {
                     // the parameter set says why: unknown (with a suggestion) or symbolic
@@ -127,32 +166,32 @@ impl Ctx<'_> {
                 }
                 other => invalid(&ex.at, format!("`{}`: {other}", ex.text)),
             })?;
-        if value.is_finite() {
+        if value.re().is_finite() {
             Ok(value)
         } else {
             Err(invalid(
                 &ex.at,
-                format!("`{}` = {value} is not a finite number", ex.text),
+                format!("`{}` = {} is not a finite number", ex.text, value.re()),
             ))
         }
     }
 
     /// A value that must be positive (`unit` for the message).
-    fn positive(&self, ex: &Ex, unit: &str) -> Result<f64, BuildError> {
+    fn positive(&self, ex: &Ex, unit: &str) -> Result<S, BuildError> {
         let v = self.eval(ex)?;
-        if v > 0.0 {
+        if v.re() > 0.0 {
             Ok(v)
         } else {
             Err(invalid(
                 &ex.at,
-                format!("`{}` = {v} {unit} must be positive", ex.text),
+                format!("`{}` = {} {unit} must be positive", ex.text, v.re()),
             ))
         }
     }
 
     /// Three values.
-    fn vec3(&self, list: &Located<Vec<Ex>>) -> Result<Vector3<f64>, BuildError> {
-        let mut v = Vector3::zeros();
+    fn vec3(&self, list: &Located<Vec<Ex>>) -> Result<Vector3<S>, BuildError> {
+        let mut v = zero3();
         for (k, ex) in list.value.iter().enumerate().take(3) {
             v[k] = self.eval(ex)?;
         }
@@ -161,7 +200,7 @@ impl Ctx<'_> {
 
     /// A whole number in `range`.
     fn count(&self, ex: &Ex, range: std::ops::RangeInclusive<usize>) -> Result<usize, BuildError> {
-        let v = self.eval(ex)?;
+        let v = self.fixed(ex, "a count")?;
         let (low, high) = (*range.start(), *range.end());
         if v.fract() == 0.0 && v >= low as f64 && v <= high as f64 {
             Ok(v as usize)
@@ -178,14 +217,14 @@ impl Ctx<'_> {
 
     /// The points of `p` (m): the base points, each mirror doubling the list (the mirrored
     /// copies follow the originals, so `mirror = ["x", "y"]` gives (+,+), (−,+), (+,−), (−,−)).
-    pub fn points(&self, p: &Points) -> Result<Vec<Vector3<f64>>, BuildError> {
+    pub fn points(&self, p: &Points) -> Result<Vec<Vector3<S>>, BuildError> {
         let mut out = p
             .base
             .iter()
             .map(|b| self.vec3(b))
             .collect::<Result<Vec<_>, _>>()?;
         for &axis in &p.mirror {
-            let copies: Vec<Vector3<f64>> = out
+            let copies: Vec<Vector3<S>> = out
                 .iter()
                 .map(|v| {
                     let mut m = *v;
@@ -199,10 +238,10 @@ impl Ctx<'_> {
     }
 
     /// How a wire leaves the points of `p`.
-    fn end_direction(&self, p: &Points) -> Result<EndDirection, BuildError> {
+    fn end_direction(&self, p: &Points) -> Result<EndDirection<S>, BuildError> {
         if let Some(h) = &p.hinged {
             // a switch: 0 or 1, nothing else silently read as "on"
-            match self.eval(h)? {
+            match self.fixed(h, "a switch")? {
                 0.0 => {}
                 1.0 => return Ok(EndDirection::Hinged),
                 other => {
@@ -225,107 +264,124 @@ fn num(x: f64) -> String {
     format!("({x})")
 }
 
+/// [`num`] of a model number, which must have no derivative (the text would lose it);
+/// `at` and `what` name it in the error.
+fn num_of<S: BuildScalar>(x: S, at: &At, what: &str) -> Result<String, BuildError> {
+    if x.moves() {
+        return Err(no_derivative(
+            at,
+            &format!("{what} is written into a pose's expression"),
+        ));
+    }
+    Ok(num(x.re()))
+}
+
+/// The zero vector of the build's scalar.
+fn zero3<S: Real>() -> Vector3<S> {
+    Vector3::from_element(S::from(0.0))
+}
+
 /// One wire of a set, planned: ends (m, body coordinates), geometry at the nominal pose.
-struct PlannedWire {
+struct PlannedWire<S: Real> {
     name: String,
     /// Blade tip carrying the upper end, if the stage has blades.
     tip: Option<usize>,
     /// Upper end in the tip's (or upper body's) coordinates.
-    upper: Vector3<f64>,
+    upper: Vector3<S>,
     /// Lower end in the hung body's coordinates.
-    lower: Vector3<f64>,
+    lower: Vector3<S>,
     /// Lab components of (lower end − upper end) across, at the nominal geometry (m).
-    across: (f64, f64),
+    across: (S, S),
     /// Vertical extent at the nominal geometry (m).
-    vertical: f64,
+    vertical: S,
     /// Lab positions of the ends at the nominal geometry (m).
-    nominal: [Vector3<f64>; 2],
+    nominal: [Vector3<S>; 2],
 }
 
 /// A wire set, planned.
-struct PlannedSet<'s> {
+struct PlannedSet<'s, S: Real> {
     set: &'s WireSet,
-    wires: Vec<PlannedWire>,
-    ends: [EndDirection; 2],
-    length: f64,
-    section: WireSection,
+    wires: Vec<PlannedWire<S>>,
+    ends: [EndDirection<S>; 2],
+    length: S,
+    section: WireSection<S>,
     beads: usize,
     /// A tapered fibre's profile (`profile`): each wire is one effective wire of it, or
     /// with beads, each segment the slice of it that it spans.
-    profile: Option<FibreProfile>,
+    profile: Option<FibreProfile<S>>,
 }
 
 /// A blade set, planned.
-struct PlannedBlades<'s> {
+struct PlannedBlades<'s, S: Real> {
     set: &'s BladeSet,
     fields: BladeFields,
     tag: String,
     names: Vec<String>,
-    tips: Vec<Vector3<f64>>,
+    tips: Vec<Vector3<S>>,
     form: BladeForm,
-    tip_mass: f64,
+    tip_mass: S,
 }
 
 /// A stage, planned before any of its parts is built.
-struct PlannedStage<'s> {
+struct PlannedStage<'s, S: Real> {
     stage: &'s StageFile,
     upper: usize,
     lower: usize,
-    blades: Option<PlannedBlades<'s>>,
-    sets: Vec<PlannedSet<'s>>,
+    blades: Option<PlannedBlades<'s, S>>,
+    sets: Vec<PlannedSet<'s, S>>,
 }
 
-impl PlannedStage<'_> {
+impl<S: Real> PlannedStage<'_, S> {
     fn wire_count(&self) -> usize {
         self.sets.iter().map(|s| s.wires.len()).sum()
     }
 
     /// Mass (kg) of the blade tips this stage's blades add to the upper body.
-    fn tips_mass(&self) -> f64 {
+    fn tips_mass(&self) -> S {
         self.blades
             .as_ref()
-            .map_or(0.0, |b| b.names.len() as f64 * b.tip_mass)
+            .map_or(S::from(0.0), |b| b.tip_mass * b.names.len() as f64)
     }
 
     /// Mass (kg) of this stage's violin beads.
-    fn beads_mass(&self) -> f64 {
+    fn beads_mass(&self) -> S {
         self.sets
             .iter()
             .map(|s| {
-                s.wires.len() as f64 * beads_mass(&s.section, s.profile.as_ref(), s.length, s.beads)
+                beads_mass(&s.section, s.profile.as_ref(), s.length, s.beads) * s.wires.len() as f64
             })
             .sum()
     }
 }
 
 /// The built system of `spec` at the parameter values of `ctx`.
-pub fn build(spec: &Spec, ctx: &Ctx) -> Result<System, BuildError> {
+pub fn build<S: BuildScalar>(spec: &Spec, ctx: &Ctx<S>) -> Result<System<S>, BuildError> {
     Interpreter::new(spec, ctx)?.run()
 }
 
-struct Interpreter<'s, 'c> {
+struct Interpreter<'s, 'c, S: BuildScalar> {
     spec: &'s Spec,
-    ctx: &'c Ctx<'c>,
-    b: SystemBuilder,
-    g: f64,
+    ctx: &'c Ctx<'c, S>,
+    b: SystemBuilder<S>,
+    g: S,
     /// Start values of the coordinates defined so far (for nominal poses).
     starts: HashMap<String, f64>,
     /// Per body (spec order): id, nominal position (m), mass (kg).
-    bodies: Vec<(BodyId, Vector3<f64>, f64)>,
+    bodies: Vec<(BodyId, Vector3<S>, S)>,
     /// Index of each body's stage in `spec.stages`.
     stage_of: HashMap<&'s str, usize>,
     /// Index of each body in `spec.bodies`.
     index: HashMap<&'s str, usize>,
-    plans: Vec<Option<PlannedStage<'s>>>,
+    plans: Vec<Option<PlannedStage<'s, S>>>,
     /// Which bodies hang from which.
     hanging: Hanging<'s>,
 }
 
-impl<'s, 'c> Interpreter<'s, 'c> {
-    fn new(spec: &'s Spec, ctx: &'c Ctx<'c>) -> Result<Self, BuildError> {
+impl<'s, 'c, S: BuildScalar> Interpreter<'s, 'c, S> {
+    fn new(spec: &'s Spec, ctx: &'c Ctx<'c, S>) -> Result<Self, BuildError> {
         let g = match &spec.gravity {
             Some(ex) => ctx.eval(ex)?,
-            None => 9.81,
+            None => S::from(9.81),
         };
         let index: HashMap<&str, usize> = spec
             .bodies
@@ -376,11 +432,17 @@ impl<'s, 'c> Interpreter<'s, 'c> {
         })
     }
 
-    fn run(mut self) -> Result<System, BuildError> {
+    fn run(mut self) -> Result<System<S>, BuildError> {
         let ctx = self.ctx;
         for p in &self.spec.parameters {
             // only a switch's value is looked up here: a look-up counts as a read, and an
             // override of a parameter nothing reads is refused
+            if p.allowed.is_some() && ctx.values.value(&p.name).is_some_and(|v| v.moves()) {
+                return Err(no_derivative(
+                    &p.at,
+                    &format!("{} is a switch (its values are listed)", p.name),
+                ));
+            }
             if let Some(allowed) = &p.allowed
                 && let Ok(value) = ctx.params.get(&p.name)
                 && !allowed.value.contains(&value)
@@ -393,8 +455,9 @@ impl<'s, 'c> Interpreter<'s, 'c> {
             }
         }
         for c in &self.spec.coordinates {
+            // a search start, not a model number: its real part
             let start = c.start.as_ref().map(|s| ctx.eval(s)).transpose()?;
-            let start = start.unwrap_or(0.0);
+            let start = start.map_or(0.0, |s| s.re());
             let b = &mut self.b;
             match c.kind {
                 CoordKind::Variable => b.variable(&c.name, start),
@@ -457,7 +520,7 @@ impl<'s, 'c> Interpreter<'s, 'c> {
     fn body(&mut self, body: &'s BodyFile) -> Result<(), BuildError> {
         let ctx = self.ctx;
         let stage = self.stage_of.get(body.name.as_str()).copied();
-        let mut nominal = Vector3::zeros();
+        let mut nominal = zero3();
         let mut parent = None;
         let mut linked = None;
         if let Some(k) = stage {
@@ -478,7 +541,7 @@ impl<'s, 'c> Interpreter<'s, 'c> {
                 let offset = ctx.vec3(&link.offset)?;
                 let angles = match &link.angles {
                     Some(a) => ctx.vec3(a)?,
-                    None => Vector3::zeros(),
+                    None => zero3(),
                 };
                 nominal = upper_at + offset;
                 linked = Some((upper_id, offset, angles));
@@ -512,13 +575,15 @@ impl<'s, 'c> Interpreter<'s, 'c> {
         }
         let mut spec = BodySpec::new(&body.name);
         if let Some((upper, offset, angles)) = linked {
+            let at = &body.at;
+            let what = "the link's offset or angles";
             spec = spec.on(upper).pose([
-                &num(offset.x),
-                &num(offset.y),
-                &num(offset.z),
-                &num(angles.x),
-                &num(angles.y),
-                &num(angles.z),
+                &num_of(offset.x, at, what)?,
+                &num_of(offset.y, at, what)?,
+                &num_of(offset.z, at, what)?,
+                &num_of(angles.x, at, what)?,
+                &num_of(angles.y, at, what)?,
+                &num_of(angles.z, at, what)?,
             ]);
         } else if let Some(suffix) = &body.coordinates {
             spec = spec.pose(
@@ -544,7 +609,7 @@ impl<'s, 'c> Interpreter<'s, 'c> {
         }
         let mass = match &body.mass {
             Some(m) => ctx.eval(m)?,
-            None => 0.0,
+            None => S::from(0.0),
         };
         spec = spec.mass(mass);
         match &body.inertia {
@@ -554,7 +619,7 @@ impl<'s, 'c> Interpreter<'s, 'c> {
                 spec = spec.inertia_diag(v.x, v.y, v.z);
             }
             Some(Inertia::Tensor(_, rows)) => {
-                let mut m = Matrix3::zeros();
+                let mut m = Matrix3::from_element(S::from(0.0));
                 for (i, row) in rows.iter().enumerate() {
                     for (j, ex) in row.iter().enumerate() {
                         m[(i, j)] = ctx.eval(ex)?;
@@ -601,7 +666,7 @@ impl<'s, 'c> Interpreter<'s, 'c> {
         body: &BodyFile,
         suffix: &str,
         at: &At,
-        nominal: Vector3<f64>,
+        nominal: Vector3<S>,
     ) -> Result<[String; 6], BuildError> {
         let dof: Vec<usize> = body
             .dof
@@ -609,7 +674,10 @@ impl<'s, 'c> Interpreter<'s, 'c> {
             .map_or_else(|| (0..6).collect(), |d| d.value.clone());
         let mut pose: [String; 6] = std::array::from_fn(|_| "0".to_string());
         for (k, entry) in pose.iter_mut().enumerate() {
-            let start = if k < 3 { nominal[k] } else { 0.0 };
+            let nominal_k = if k < 3 { nominal[k] } else { S::from(0.0) };
+            // a degree of freedom starts there (a search start: its real part); a fixed
+            // axis is there (a number in the pose's text)
+            let start = nominal_k.re();
             if dof.contains(&k) {
                 let name = format!("{}{suffix}", AXES[k]);
                 if body.driven {
@@ -620,8 +688,12 @@ impl<'s, 'c> Interpreter<'s, 'c> {
                 .map_err(placed(at))?;
                 self.starts.insert(name.clone(), start);
                 *entry = name;
-            } else if start != 0.0 {
-                *entry = num(start);
+            } else if start != 0.0 || nominal_k.moves() {
+                *entry = num_of(
+                    nominal_k,
+                    at,
+                    "the nominal position of an axis that is not a degree of freedom",
+                )?;
             }
         }
         Ok(pose)
@@ -649,6 +721,12 @@ impl<'s, 'c> Interpreter<'s, 'c> {
             self.b.find_coordinate(base).is_some()
         };
         for s in ex.expr.symbols() {
+            if !is_coordinate(&s) && self.ctx.values.value(&s).is_some_and(|v| v.moves()) {
+                return Err(no_derivative(
+                    &ex.at,
+                    &format!("'{s}' is written into the expression `{}`", ex.text),
+                ));
+            }
             if !is_coordinate(&s) && self.ctx.params.get(&s).is_err() {
                 return Err(invalid(
                     &ex.at,
@@ -670,16 +748,16 @@ impl<'s, 'c> Interpreter<'s, 'c> {
     }
 
     /// Translation (m) of an explicit pose at the coordinates' start values.
-    fn pose_translation(&self, pose: &Located<Vec<Ex>>) -> Result<Vector3<f64>, BuildError> {
-        let mut v = Vector3::zeros();
+    fn pose_translation(&self, pose: &Located<Vec<Ex>>) -> Result<Vector3<S>, BuildError> {
+        let mut v = zero3();
         for (k, ex) in pose.value.iter().take(3).enumerate() {
             v[k] = ex
                 .expr
                 .eval(&|s| {
                     self.starts
                         .get(s)
-                        .copied()
-                        .or_else(|| self.ctx.params.get(s).ok())
+                        .map(|&x| S::from(x))
+                        .or_else(|| self.ctx.values.value(s))
                 })
                 .map_err(|e| invalid(&ex.at, format!("`{}`: {e}", ex.text)))?;
         }
@@ -692,8 +770,8 @@ impl<'s, 'c> Interpreter<'s, 'c> {
         &self,
         k: usize,
         upper: usize,
-        upper_at: Vector3<f64>,
-    ) -> Result<PlannedStage<'s>, BuildError> {
+        upper_at: Vector3<S>,
+    ) -> Result<PlannedStage<'s, S>, BuildError> {
         let ctx = self.ctx;
         let stage = &self.spec.stages[k];
         let blades = match &stage.blades {
@@ -731,12 +809,12 @@ impl<'s, 'c> Interpreter<'s, 'c> {
             }
             let names_first = names.first().cloned();
             let length = ctx.eval(&set.length)?;
-            if length <= 0.0 {
+            if length.re() <= 0.0 {
                 // named after the set's first wire, and said plainly when it is zero
                 let first = names
                     .first()
                     .map_or(String::new(), |n| format!("wire '{n}': "));
-                let zero = if length == 0.0 {
+                let zero = if length.re() == 0.0 {
                     " (a zero-length wire)"
                 } else {
                     ""
@@ -744,8 +822,9 @@ impl<'s, 'c> Interpreter<'s, 'c> {
                 return Err(invalid(
                     &set.length.at,
                     format!(
-                        "{first}`{}` = {length} m must be positive{zero}",
-                        set.length.text
+                        "{first}`{}` = {} m must be positive{zero}",
+                        set.length.text,
+                        length.re()
                     ),
                 ));
             }
@@ -763,12 +842,13 @@ impl<'s, 'c> Interpreter<'s, 'c> {
                 // the hung body sits below the one above (x and y), at a height to be found
                 let (dx, dy) = (upper_at.x + lower.x - up.x, upper_at.y + lower.y - up.y);
                 let across2 = dx * dx + dy * dy;
-                if length * length <= across2 {
+                if (length * length).re() <= across2.re() {
                     return Err(invalid(
                         &set.length.at,
                         format!(
-                            "wire '{name}': length {length} m does not reach across {} m",
-                            across2.sqrt()
+                            "wire '{name}': length {} m does not reach across {} m",
+                            length.re(),
+                            across2.re().sqrt()
                         ),
                     ));
                 }
@@ -780,7 +860,7 @@ impl<'s, 'c> Interpreter<'s, 'c> {
                     lower: *lower,
                     across: (dx, dy),
                     vertical,
-                    nominal: [up, Vector3::zeros()],
+                    nominal: [up, zero3()],
                 });
             }
             let ends = [
@@ -818,22 +898,27 @@ impl<'s, 'c> Interpreter<'s, 'c> {
 
     /// The height (m) of stage `k`'s hung body: below each wire's upper end by its vertical
     /// extent and the lower end's height on the body; every wire must agree.
-    fn hung_height(&mut self, k: usize, plan_xy: Vector3<f64>) -> Result<f64, BuildError> {
+    fn hung_height(&mut self, k: usize, plan_xy: Vector3<S>) -> Result<S, BuildError> {
         let Some(plan) = self.plans[k].as_mut() else {
-            return Ok(0.0);
+            return Ok(S::from(0.0));
         };
-        let mut height: Option<(f64, String)> = None;
+        let mut height: Option<(S, String)> = None;
         for set in &mut plan.sets {
             for w in &mut set.wires {
                 let z = w.nominal[0].z - w.vertical - w.lower.z;
                 match &height {
                     None => height = Some((z, w.name.clone())),
-                    Some((z0, first)) if (z - z0).abs() > 1e-9 * z0.abs().max(1.0) => {
+                    Some((z0, first))
+                        if (z.re() - z0.re()).abs() > 1e-9 * z0.re().abs().max(1.0) =>
+                    {
                         return Err(invalid(
                             &set.set.at,
                             format!(
-                                "wire '{}' puts '{}' at z = {z} m but wire '{first}' at {z0} m: the wires of a stage must agree on its height",
-                                w.name, plan.stage.body
+                                "wire '{}' puts '{}' at z = {} m but wire '{first}' at {} m: the wires of a stage must agree on its height",
+                                w.name,
+                                plan.stage.body,
+                                z.re(),
+                                z0.re()
                             ),
                         ));
                     }
@@ -841,7 +926,7 @@ impl<'s, 'c> Interpreter<'s, 'c> {
                 }
             }
         }
-        let z = height.map_or(0.0, |(z, _)| z);
+        let z = height.map_or(S::from(0.0), |(z, _)| z);
         // the hung body sits under the one above it, level
         let below = Vector3::new(plan_xy.x, plan_xy.y, z);
         for set in &mut plan.sets {
@@ -856,7 +941,7 @@ impl<'s, 'c> Interpreter<'s, 'c> {
         &self,
         stage: &StageFile,
         set: &'s BladeSet,
-    ) -> Result<PlannedBlades<'s>, BuildError> {
+    ) -> Result<PlannedBlades<'s, S>, BuildError> {
         let ctx = self.ctx;
         let fields = set.fields.or(&self.spec.blade_defaults);
         let tag = blade_tag(stage, &fields.tag);
@@ -876,7 +961,7 @@ impl<'s, 'c> Interpreter<'s, 'c> {
                 })?;
                 ctx.eval(m)?
             }
-            BladeForm::XtraLite | BladeForm::Lateral => 0.0,
+            BladeForm::XtraLite | BladeForm::Lateral => S::from(0.0),
         };
         // read here so that a bad value is reported by the build (the damping reads them)
         for ex in [&fields.thickness, &fields.temperature]
@@ -901,9 +986,9 @@ impl<'s, 'c> Interpreter<'s, 'c> {
     fn profile(
         &self,
         set: &WireSet,
-        section: &WireSection,
-        length: f64,
-    ) -> Result<Option<FibreProfile>, BuildError> {
+        section: &WireSection<S>,
+        length: S,
+    ) -> Result<Option<FibreProfile<S>>, BuildError> {
         let (Some(p), Some(radius)) = (&set.profile, &set.radius) else {
             return Ok(None);
         };
@@ -925,7 +1010,7 @@ impl<'s, 'c> Interpreter<'s, 'c> {
     }
 
     /// The section of a wire set from its radius (or section) and material.
-    fn section(&self, set: &WireSet, first: Option<&str>) -> Result<WireSection, BuildError> {
+    fn section(&self, set: &WireSet, first: Option<&str>) -> Result<WireSection<S>, BuildError> {
         let ctx = self.ctx;
         let material = match &set.material {
             Some(m) => Some(
@@ -935,7 +1020,7 @@ impl<'s, 'c> Interpreter<'s, 'c> {
         };
         let user = set.at.path.as_str();
         let of_material =
-            |pick: fn(&MaterialSpec) -> &Option<Ex>| -> Result<Option<f64>, BuildError> {
+            |pick: fn(&MaterialSpec) -> &Option<Ex>| -> Result<Option<S>, BuildError> {
                 material
                     .and_then(|m| pick(m).as_ref())
                     .map(|ex| ctx.eval_for(ex, Some(user)))
@@ -977,7 +1062,7 @@ impl<'s, 'c> Interpreter<'s, 'c> {
                 ));
             }
         };
-        let rho = of_material(|m| &m.density)?.unwrap_or(0.0);
+        let rho = of_material(|m| &m.density)?.unwrap_or(S::from(0.0));
         // the material's remaining constants are read here too, so that a typo in any of
         // them is reported by the build (the loss physics reads them later)
         for pick in [
@@ -993,11 +1078,15 @@ impl<'s, 'c> Interpreter<'s, 'c> {
         if let Some(r) = &set.radius {
             let radius = ctx.eval(r)?;
             // zero passes on to the wire's stiffness check, which names the wire too
-            if radius < 0.0 {
+            if radius.re() < 0.0 {
                 let wire = first.map_or(String::new(), |n| format!("wire '{n}': "));
                 return Err(invalid(
                     &r.at,
-                    format!("{wire}`{}` = {radius} m: a radius must be positive", r.text),
+                    format!(
+                        "{wire}`{}` = {} m: a radius must be positive",
+                        r.text,
+                        radius.re()
+                    ),
                 ));
             }
             Ok(WireSection::round(radius, e, g, rho))
@@ -1005,7 +1094,7 @@ impl<'s, 'c> Interpreter<'s, 'c> {
             let area = ctx.eval(&s.area)?;
             let axis = match &s.principal_axis {
                 Some(a) => ctx.vec3(a)?,
-                None => Vector3::x(),
+                None => Vector3::new(S::from(1.0), S::from(0.0), S::from(0.0)),
             };
             Ok(WireSection {
                 youngs_modulus: e,
@@ -1025,27 +1114,27 @@ impl<'s, 'c> Interpreter<'s, 'c> {
 
     /// Weight (N) hung from stage `plan`'s wires: the bodies from its hung body down, the
     /// blade tips on them and the beads below them.
-    fn hung_weight(&self, plan: &PlannedStage, plans: &[Option<PlannedStage>]) -> f64 {
+    fn hung_weight(&self, plan: &PlannedStage<S>, plans: &[Option<PlannedStage<S>>]) -> S {
         let names = self.hanging.subtree(&plan.stage.body);
         let hung: std::collections::HashSet<&str> = names.iter().copied().collect();
         let inside = |b: usize| hung.contains(self.spec.bodies[b].name.as_str());
-        let mut bodies = 0.0;
+        let mut bodies = S::from(0.0);
         for name in &names {
             bodies += self.bodies[self.index[name]].2;
         }
         // parts mounted on those bodies (the stages hanging from them): tips, then beads
-        let below: Vec<&PlannedStage> =
+        let below: Vec<&PlannedStage<S>> =
             plans.iter().flatten().filter(|p| inside(p.upper)).collect();
-        let tips: f64 = below.iter().map(|p| p.tips_mass()).sum();
-        let beads: f64 = below.iter().map(|p| p.beads_mass()).sum();
+        let tips: S = below.iter().map(|p| p.tips_mass()).sum();
+        let beads: S = below.iter().map(|p| p.beads_mass()).sum();
         (bodies + tips + beads) * self.g
     }
 
     /// Builds a planned stage's blades and wires.
     fn parts(
         &mut self,
-        plan: &PlannedStage<'s>,
-        plans: &[Option<PlannedStage<'s>>],
+        plan: &PlannedStage<'s, S>,
+        plans: &[Option<PlannedStage<'s, S>>],
     ) -> Result<(), BuildError> {
         let weight = self.hung_weight(plan, plans);
         // each wire carries an equal share of the weight vertically
@@ -1056,7 +1145,7 @@ impl<'s, 'c> Interpreter<'s, 'c> {
         if let Some(blades) = &plan.blades {
             for (t, name) in blades.names.iter().enumerate() {
                 // the wires' pull on this tip at the nominal geometry (parent axes; level)
-                let mut pull = Vector3::zeros();
+                let mut pull = zero3();
                 for set in &plan.sets {
                     for w in set.wires.iter().filter(|w| w.tip == Some(t)) {
                         pull += Vector3::new(
@@ -1077,7 +1166,7 @@ impl<'s, 'c> Interpreter<'s, 'c> {
                     Some(t) => (tips[t], w.upper),
                     None => (upper, w.upper),
                 };
-                let tension = if w.vertical == set.length {
+                let tension = if w.vertical.re() == set.length.re() {
                     share
                 } else {
                     share * set.length / w.vertical
@@ -1093,17 +1182,17 @@ impl<'s, 'c> Interpreter<'s, 'c> {
     /// the tip is in equilibrium at the nominal geometry.
     fn blade(
         &mut self,
-        blades: &PlannedBlades,
+        blades: &PlannedBlades<S>,
         t: usize,
         name: &str,
         parent: BodyId,
-        parent_at: Vector3<f64>,
-        pull: Vector3<f64>,
+        parent_at: Vector3<S>,
+        pull: Vector3<S>,
     ) -> Result<BodyId, BuildError> {
         let ctx = self.ctx;
         let f = &blades.fields;
         let at = &blades.set.at;
-        let need = |ex: &Option<Ex>, what: &str| -> Result<f64, BuildError> {
+        let need = |ex: &Option<Ex>, what: &str| -> Result<S, BuildError> {
             match ex {
                 Some(ex) => ctx.eval(ex),
                 None => Err(invalid(at, format!("this blade form needs `{what}`"))),
@@ -1116,8 +1205,10 @@ impl<'s, 'c> Interpreter<'s, 'c> {
         let tip_at = blades.tips[t];
         let (z, x) = (format!("zb{name}"), format!("xb{name}"));
         let tip_name = format!("blade{name}");
-        let mut stiffness = Vector6::new(0.0, 0.0, kc, 0.0, 0.0, 0.0);
-        let mut tip_weight = 0.0;
+        let zero = S::from(0.0);
+        let mut stiffness = Vector6::new(zero, zero, kc, zero, zero, zero);
+        let mut tip_weight = zero;
+        let tip_text = "a blade tip's position";
         let b = &mut self.b;
         let tip = match blades.form {
             BladeForm::XtraLite | BladeForm::Lateral | BladeForm::Lite => {
@@ -1133,14 +1224,14 @@ impl<'s, 'c> Interpreter<'s, 'c> {
                             ));
                         }
                     };
-                    format!("{} + {x}", num(tip_at.x))
+                    format!("{} + {x}", num_of(tip_at.x, at, tip_text)?)
                 } else {
-                    num(tip_at.x)
+                    num_of(tip_at.x, at, tip_text)?
                 };
                 let mut spec = BodySpec::new(&tip_name).on(parent).pose([
                     &x_expr,
-                    &num(tip_at.y),
-                    &format!("{} + {z}", num(tip_at.z)),
+                    &num_of(tip_at.y, at, tip_text)?,
+                    &format!("{} + {z}", num_of(tip_at.z, at, tip_text)?),
                     "0",
                     "0",
                     "0",
@@ -1158,7 +1249,8 @@ impl<'s, 'c> Interpreter<'s, 'c> {
                 let lab = parent_at + tip_at;
                 let names = AXES.map(|n| format!("{n}b{name}"));
                 for (k, n) in names.iter().enumerate() {
-                    b.variable(n, if k < 3 { lab[k] } else { 0.0 })
+                    // search starts: real parts
+                    b.variable(n, if k < 3 { lab[k].re() } else { 0.0 })
                         .map_err(placed(at))?;
                 }
                 let m = blades.tip_mass;
@@ -1172,7 +1264,7 @@ impl<'s, 'c> Interpreter<'s, 'c> {
                         BodySpec::new(&tip_name)
                             .pose(names.each_ref().map(String::as_str))
                             .mass(m)
-                            .inertia(Matrix3::identity() * i),
+                            .inertia(Matrix3::from_diagonal_element(i)),
                     )
                     .map_err(placed(at))?
             }
@@ -1182,12 +1274,12 @@ impl<'s, 'c> Interpreter<'s, 'c> {
             SpringEnd {
                 body: parent,
                 point: tip_at,
-                angles: [0.0; 3],
+                angles: [zero; 3],
             },
             SpringEnd {
                 body: tip,
-                point: Vector3::zeros(),
-                angles: [0.0; 3],
+                point: zero3(),
+                angles: [zero; 3],
             },
         ];
         self.b
@@ -1195,7 +1287,7 @@ impl<'s, 'c> Interpreter<'s, 'c> {
                 &tip_name,
                 ends,
                 Matrix6::from_diagonal(&stiffness),
-                Vector6::new(pull.x, pull.y, pull.z - tip_weight, 0.0, 0.0, 0.0),
+                Vector6::new(pull.x, pull.y, pull.z - tip_weight, zero, zero, zero),
                 &blades.tag,
             )
             .map_err(placed(at))?;
@@ -1208,14 +1300,14 @@ impl<'s, 'c> Interpreter<'s, 'c> {
     /// tension of the lowest plus the weight of the beads below it.
     fn wire(
         &mut self,
-        set: &PlannedSet,
-        w: &PlannedWire,
-        upper: (BodyId, Vector3<f64>),
-        lower: (BodyId, Vector3<f64>),
-        tension: f64,
+        set: &PlannedSet<S>,
+        w: &PlannedWire<S>,
+        upper: (BodyId, Vector3<S>),
+        lower: (BodyId, Vector3<S>),
+        tension: S,
         tags: &WireTags,
     ) -> Result<(), BuildError> {
-        let end = |(body, point): (BodyId, Vector3<f64>), direction: &EndDirection| WireEnd {
+        let end = |(body, point): (BodyId, Vector3<S>), direction: &EndDirection<S>| WireEnd {
             body,
             point,
             direction: direction.clone(),
@@ -1244,13 +1336,14 @@ impl<'s, 'c> Interpreter<'s, 'c> {
         let ctx = self.ctx;
         let upper = self.bodies[self.index[stage.from.value.as_str()]].0;
         let lower = self.bodies[self.index[stage.body.as_str()]].0;
-        let ends = |p: &Option<Points>| -> Result<(Vec<Vector3<f64>>, [f64; 3]), BuildError> {
+        let zero = S::from(0.0);
+        let ends = |p: &Option<Points>| -> Result<(Vec<Vector3<S>>, [S; 3]), BuildError> {
             match p {
-                None => Ok((vec![Vector3::zeros()], [0.0; 3])),
+                None => Ok((vec![zero3()], [zero; 3])),
                 Some(p) => {
                     let angles = match &p.angles {
                         Some(a) => ctx.vec3(a)?.into(),
-                        None => [0.0; 3],
+                        None => [zero; 3],
                     };
                     Ok((ctx.points(p)?, angles))
                 }
@@ -1259,8 +1352,7 @@ impl<'s, 'c> Interpreter<'s, 'c> {
         let (ups, up_angles) = ends(&set.upper)?;
         let (lows, low_angles) = ends(&set.lower)?;
         let count = ups.len().max(lows.len());
-        let pick =
-            |list: &[Vector3<f64>], k: usize| if list.len() == 1 { list[0] } else { list[k] };
+        let pick = |list: &[Vector3<S>], k: usize| if list.len() == 1 { list[0] } else { list[k] };
         if (ups.len() != 1 && ups.len() != count) || (lows.len() != 1 && lows.len() != count) {
             return Err(invalid(
                 &set.at,
@@ -1275,7 +1367,7 @@ impl<'s, 'c> Interpreter<'s, 'c> {
             .names
             .expand(count, &set.at)
             .map_err(|e| invalid(&set.at, e.message))?;
-        let mut k = Matrix6::zeros();
+        let mut k = Matrix6::from_element(zero);
         if set.diagonal {
             for (i, ex) in set.stiffness[0].iter().enumerate() {
                 k[(i, i)] = ctx.eval(ex)?;
@@ -1287,7 +1379,7 @@ impl<'s, 'c> Interpreter<'s, 'c> {
                 }
             }
         }
-        let mut preload = Vector6::zeros();
+        let mut preload = Vector6::from_element(zero);
         if let Some(p) = &set.preload {
             for (i, ex) in p.value.iter().enumerate() {
                 preload[i] = ctx.eval(ex)?;
@@ -1364,7 +1456,7 @@ impl<'s, 'c> Interpreter<'s, 'c> {
                 .map_err(placed(&t.at))?;
         }
         for (name, stiffness) in &self.spec.constraints {
-            let k = ctx.eval(stiffness)?;
+            let k = ctx.fixed(stiffness, "a constraint stiffness (kept in f64)")?;
             self.b
                 .constraint_stiffness(&name.value, k)
                 .map_err(placed(&name.at))?;
@@ -1382,7 +1474,14 @@ impl<'s, 'c> Interpreter<'s, 'c> {
             Some(rest) => (true, rest.trim()),
             None => (false, text.value.trim()),
         };
-        let value = |s: &str| self.ctx.params.get(s).ok();
+        // signals are kept in f64: a parameter they read must not carry a derivative
+        let moved = std::cell::Cell::new(None::<String>);
+        let value = |s: &str| {
+            if self.ctx.values.value(s).is_some_and(|v| v.moves()) {
+                moved.set(Some(s.to_string()));
+            }
+            self.ctx.params.get(s).ok()
+        };
         let terms = if let Some(point) = point_form(body_text, &value) {
             let (body, point, direction) = point.map_err(|m| invalid(at, m))?;
             let body_id = self
@@ -1425,6 +1524,12 @@ impl<'s, 'c> Interpreter<'s, 'c> {
                 })
                 .collect()
         };
+        if let Some(s) = moved.take() {
+            return Err(no_derivative(
+                at,
+                &format!("'{s}' is read by signal '{name}', which is kept in f64"),
+            ));
+        }
         Ok(NamedSignal {
             name: name.to_string(),
             force,
@@ -1451,12 +1556,16 @@ fn known_bodies(spec: &Spec) -> String {
 }
 
 /// Evaluates and checks a shape.
-pub fn evaluate_shape(ctx: &Ctx, shape: &ShapeFile) -> Result<Shape, BuildError> {
+pub fn evaluate_shape<S: BuildScalar>(
+    ctx: &Ctx<S>,
+    shape: &ShapeFile,
+) -> Result<Shape, BuildError> {
+    // a drawing's shape, not a model number: real parts
     match shape {
         ShapeFile::Box { half_sizes } => {
             let mut half_sizes_m = Vector3::zeros();
             for (k, ex) in half_sizes.value.iter().enumerate().take(3) {
-                half_sizes_m[k] = ctx.positive(ex, "m")?;
+                half_sizes_m[k] = ctx.positive(ex, "m")?.re();
             }
             Ok(Shape::Box {
                 half_sizes: half_sizes_m,
@@ -1467,8 +1576,8 @@ pub fn evaluate_shape(ctx: &Ctx, shape: &ShapeFile) -> Result<Shape, BuildError>
             half_length,
             axis,
         } => Ok(Shape::Cylinder {
-            radius: ctx.positive(radius, "m")?,
-            half_length: ctx.positive(half_length, "m")?,
+            radius: ctx.positive(radius, "m")?.re(),
+            half_length: ctx.positive(half_length, "m")?.re(),
             axis: *axis,
         }),
     }

@@ -296,6 +296,7 @@ impl Suspension {
         let ctx = Ctx {
             params,
             reads: None,
+            values: params,
         };
         self.spec
             .bodies
@@ -312,6 +313,7 @@ impl Suspension {
         let ctx = Ctx {
             params,
             reads: Some(&reads),
+            values: params,
         };
         let system = build::build(&spec, &ctx)?;
         if let Some(g) = &self.generator {
@@ -526,6 +528,7 @@ impl Model for Suspension {
             &Ctx {
                 params,
                 reads: None,
+                values: params,
             },
         )
     }
