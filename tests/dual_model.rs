@@ -205,3 +205,94 @@ fn map_scalars_visits_every_generic_field() {
     let expected = 1 + 2 * 13 + (6 + 3 + 2 + 8 + 3) + (12 + 42) + 5;
     assert_eq!(pendulum(M, L, R).scalars().len(), expected);
 }
+
+/// The model numbers of `model` built in `f64` with `parameter` overridden by `value`.
+fn f64_numbers(model: &dyn pendkit_model::Model, parameter: &str, value: f64) -> Option<Vec<f64>> {
+    let mut overrides = pendkit_model::Overrides::default();
+    overrides
+        .parameters
+        .push((parameter.to_string(), format!("{value:e}")));
+    pendkit_model::build_with(model, &overrides)
+        .ok()
+        .map(|(system, _)| system.scalars())
+}
+
+#[test]
+fn every_bundled_model_differentiates_its_build_exactly() {
+    // For every bundled model and every parameter: the dual-number build (one parameter
+    // seeded) either says why it has no exact derivative, or its tangent agrees with the
+    // fourth-order central difference of f64 builds at p ± h, p ± 2h (h = 1e-3 |p|, 1e-6
+    // at p = 0). The difference's truncation h⁴x⁽⁵⁾/30 is ~4e-12 of x/p for a 1/p
+    // dependence (the steepest the builds have: k = E A / l, T/k) and its rounding
+    // ~2e-16·x/h = 2e-13·x/p, both relative to the size of the number x itself, not of its
+    // derivative (l0 = l − T/k is a difference of large terms): asserted to 1e-9 of |x|/h
+    // per step, with room for the few numbers that are sums of many roundings (a hung
+    // weight over a chain). The real parts equal the f64 build to a few roundings: the
+    // same operations on the same values, except that num-dual divides by multiplying
+    // with the reciprocal (one rounding more).
+    let mut checked = 0;
+    let mut refused = Vec::new();
+    for model in pendkit::models() {
+        let defaults = pendkit_model::Defaults::of(model).unwrap();
+        let (_, resolved) = pendkit_model::parameters_with(&defaults, &Default::default()).unwrap();
+        let nominal = f64_numbers(model, "g", resolved.get("g").unwrap_or(9.81));
+        let names: Vec<(String, f64)> = resolved.iter().map(|(n, v)| (n.to_string(), v)).collect();
+        let base = pendkit_model::build_with(model, &Default::default())
+            .unwrap()
+            .0
+            .scalars();
+        let _ = nominal;
+        for (name, p0) in names {
+            let dual = match pendkit_model::build_tangent(model, &Default::default(), &name) {
+                Ok(d) => d,
+                Err(e) => {
+                    let e = e.to_string();
+                    assert!(
+                        e.contains("no exact derivative"),
+                        "{} {name}: {e}",
+                        model.name()
+                    );
+                    refused.push(format!("{} {name}: {e}", model.name()));
+                    continue;
+                }
+            };
+            for (i, (r, x)) in dual.value().scalars().iter().zip(&base).enumerate() {
+                assert!(
+                    (r - x).abs() <= 4.0 * f64::EPSILON * x.abs(),
+                    "{} {name}: real part of number {i}: {r} vs {x}",
+                    model.name()
+                );
+            }
+            let h = if p0 == 0.0 { 1e-6 } else { 1e-3 * p0.abs() };
+            let at: Vec<Option<Vec<f64>>> = [-2.0, -1.0, 1.0, 2.0]
+                .iter()
+                .map(|k| f64_numbers(model, &name, p0 + k * h))
+                .collect();
+            let tangent = dual.tangent();
+            let Some(at) = at.into_iter().collect::<Option<Vec<_>>>() else {
+                // the f64 model refuses a value near p0: a count or a switch, which the
+                // dual build must have refused too, unless only what the build adds to the
+                // mechanics reads it (`wire_terms_early`): then nothing moves
+                assert!(
+                    tangent.iter().all(|&d| d == 0.0),
+                    "{} {name}: f64 builds refuse p ± h, the dual build did not",
+                    model.name()
+                );
+                continue;
+            };
+            for (i, d) in tangent.iter().enumerate() {
+                let fd = (8.0 * (at[2][i] - at[1][i]) - (at[3][i] - at[0][i])) / (12.0 * h);
+                let scale = base[i].abs().max(at[3][i].abs()) / h;
+                assert!(
+                    (d - fd).abs() <= 1e-9 * scale,
+                    "{} d(number {i})/d{name}: {d} vs {fd} (number {})",
+                    model.name(),
+                    base[i]
+                );
+            }
+            checked += 1;
+        }
+    }
+    eprintln!("{checked} parameters differentiated exactly; refused: {refused:?}");
+    assert!(checked > 200, "{checked}");
+}

@@ -17,6 +17,7 @@ use std::collections::{BTreeMap, HashMap, HashSet};
 use std::sync::{Arc, OnceLock};
 
 use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
+use num_dual::Dual64;
 use pendkit_energy::Real;
 use pendkit_energy::{
     Body, BodyId, CoordId, CoordKind, Coordinate, EarlyWireTerms, EndDirection, ExtraPhase,
@@ -24,7 +25,7 @@ use pendkit_energy::{
 };
 use pendkit_expr::{ExprError, Slot};
 use pendkit_geometry::{FrameMap, PoseMap};
-use pendkit_params::{ParamError, ParamSet, Resolved};
+use pendkit_params::{ParamError, ParamSet, Resolved, Tangent};
 
 pub use damping::{DampingSpec, ParsedDamping};
 pub use fibre::{FibreProfile, fibre_inverse_radius};
@@ -923,6 +924,21 @@ pub trait Model: Sync {
     }
     /// Builds the numeric model from resolved parameters.
     fn build(&self, params: &Resolved) -> Result<System, BuildError>;
+    /// Builds the model with dual numbers seeded in the direction of one parameter
+    /// (`tangent`, resolved from the same set as `params`): every model number with its exact
+    /// derivative with respect to that parameter (docs/exact-sensitivities.md). The default
+    /// says the model offers none; suspension files do.
+    fn build_tangent(
+        &self,
+        params: &Resolved,
+        tangent: &Tangent,
+    ) -> Result<System<Dual64>, BuildError> {
+        let _ = (params, tangent);
+        Err(BuildError::Invalid {
+            item: format!("model '{}'", self.name()),
+            message: "offers no exact derivatives of its build".into(),
+        })
+    }
     /// Where this model keeps its parsed [`Defaults`] from one build to the next, if it
     /// does (a `DefaultsCache` of its own, e.g. in a `static`). A model that returns one
     /// promises that [`Model::parameters`] and [`Model::damping`] always give the same
@@ -1068,6 +1084,22 @@ pub fn parameters_with(
     }
     let resolved = params.resolve()?;
     Ok((params, resolved))
+}
+
+/// `model` with `overrides` built with dual numbers seeded in the direction of `parameter`
+/// (see [`Model::build_tangent`]): the dual part of every model number is its exact
+/// derivative with respect to `parameter`, moved as an override of it would move it. Only
+/// the mechanical model: no damping, temperature or early-terms switch (what
+/// [`build_with`] adds).
+pub fn build_tangent(
+    model: &dyn Model,
+    overrides: &Overrides,
+    parameter: &str,
+) -> Result<System<Dual64>, BuildError> {
+    let defaults = Defaults::of(model)?;
+    let (set, resolved) = parameters_with(&defaults, overrides)?;
+    let tangent = set.resolve_tangent(parameter)?;
+    model.build_tangent(&resolved, &tangent)
 }
 
 /// Resolves `model`'s defaults with `overrides` applied, builds the system and attaches

@@ -62,9 +62,10 @@ use std::collections::BTreeMap;
 use std::path::Path;
 use std::sync::Arc;
 
+use num_dual::Dual64;
 use pendkit_energy::System;
 use pendkit_model::{BuildError, DampingSpec, DefaultsCache, Model, ParameterInfo, whole_number};
-use pendkit_params::{ParamError, ParamSet, Resolved};
+use pendkit_params::{ParamError, ParamSet, Resolved, Tangent};
 
 pub use build::Reads;
 pub use pendkit_model::Shape;
@@ -535,6 +536,30 @@ impl Model for Suspension {
 
     fn defaults_cache(&self) -> Option<&DefaultsCache> {
         Some(&self.cache)
+    }
+
+    fn build_tangent(
+        &self,
+        params: &Resolved,
+        tangent: &Tangent,
+    ) -> Result<System<Dual64>, BuildError> {
+        if let Some(g) = &self.generator
+            && g.parameter == tangent.seed()
+        {
+            return Err(BuildError::Invalid {
+                item: format!("parameter '{}'", g.parameter),
+                message: "no exact derivative: it is a count (the generator's)".into(),
+            });
+        }
+        let spec = self.spec_for(params)?;
+        build::build(
+            &spec,
+            &Ctx {
+                params,
+                reads: None,
+                values: tangent,
+            },
+        )
     }
 
     fn parameter_info(&self, params: &Resolved) -> Result<Vec<ParameterInfo>, BuildError> {

@@ -121,6 +121,16 @@ impl Model for BundledModel {
         self.suspension().map_err(|e| self.broken(e))?.build(params)
     }
 
+    fn build_tangent(
+        &self,
+        params: &Resolved,
+        tangent: &pendkit_params::Tangent,
+    ) -> Result<System<num_dual::Dual64>, BuildError> {
+        self.suspension()
+            .map_err(|e| self.broken(e))?
+            .build_tangent(params, tangent)
+    }
+
     fn defaults_cache(&self) -> Option<&DefaultsCache> {
         self.suspension().ok().and_then(|s| s.defaults_cache())
     }
