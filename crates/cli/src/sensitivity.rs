@@ -51,8 +51,9 @@ pub struct Args {
     /// results do not depend on it.
     #[arg(long, default_value_t = 0)]
     threads: usize,
-    /// Print JSON: {"parameters", "modes_hz", "dfdp"} (one row per mode, one column per
-    /// parameter, Hz per unit), with --tf also "freqs_hz", "tf_abs", "dtf_abs_dp", with
+    /// Print JSON: {"parameters", "modes_hz", "dfdp", "exact_build"} (one row per mode, one
+    /// column per parameter, Hz per unit; per parameter whether the model's numbers moved
+    /// along their exact tangent), with --tf also "freqs_hz", "tf_abs", "dtf_abs_dp", with
     /// --noise "freqs_hz", "noise_asd", "dnoise_asd_dp" (one row per frequency).
     #[arg(long)]
     json: bool,
@@ -108,6 +109,7 @@ fn to_json(s: &Sensitivities, request: &SensitivityRequest) -> String {
         "parameters": s.parameters,
         "modes_hz": s.modes_hz,
         "dfdp": s.dfdp,
+        "exact_build": s.exact_build,
     });
     if let Some((abs, d)) = &s.tf_abs {
         out["freqs_hz"] = json!(request.freqs);

@@ -1112,7 +1112,20 @@ pub fn build_with(
 ) -> Result<(System, Resolved), BuildError> {
     let defaults = Defaults::of(model)?;
     let (_, resolved) = parameters_with(&defaults, overrides)?;
-    let mut system = model.build(&resolved)?;
+    let system = model.build(&resolved)?;
+    let system = attach_to_build(system, &defaults, overrides, &resolved)?;
+    Ok((system, resolved))
+}
+
+/// What [`build_with`] adds to the model's mechanical build `system`: the damping
+/// multipliers of its tags (the model's defaults with `overrides`), the temperature and
+/// the "wire terms early" switch, at the parameter values `resolved`.
+pub fn attach_to_build(
+    mut system: System,
+    defaults: &Defaults,
+    overrides: &Overrides,
+    resolved: &Resolved,
+) -> Result<System, BuildError> {
     if !overrides.damping.is_empty() {
         let used = system.tags();
         if let Some(tag) = overrides.damping.keys().find(|t| !used.contains(*t)) {
@@ -1135,8 +1148,8 @@ pub fn build_with(
     for tag in defaults.damping.keys().chain(case_only) {
         let (damping, temperature) = match (defaults.damping.get(tag), overrides.damping.get(tag)) {
             (Some(parsed), None) => (
-                parsed.compile(tag, &resolved)?,
-                parsed.spec().temperature_value(tag, &resolved)?,
+                parsed.compile(tag, resolved)?,
+                parsed.spec().temperature_value(tag, resolved)?,
             ),
             (parsed, over) => {
                 let mut spec = parsed.map(|p| p.spec().clone()).unwrap_or_default();
@@ -1144,8 +1157,8 @@ pub fn build_with(
                     spec.merge(over);
                 }
                 (
-                    spec.resolve(tag, &resolved)?,
-                    spec.temperature_value(tag, &resolved)?,
+                    spec.resolve(tag, resolved)?,
+                    spec.temperature_value(tag, resolved)?,
                 )
             }
         };
@@ -1172,5 +1185,5 @@ pub fn build_with(
             });
         }
     };
-    Ok((system, resolved))
+    Ok(system)
 }

@@ -114,6 +114,11 @@ pub struct Sensitivities {
     /// The steps used for the differences of the stage's matrices, in the parameters'
     /// units (0 for a parameter nothing reads).
     pub steps: Vec<f64>,
+    /// Per parameter, whether the model's numbers were moved along their exact tangent (a
+    /// dual-number build, [`pendkit_model::build_tangent`]) rather than rebuilt at each
+    /// step (a parameter that reaches the model through a pose's text, a count or a
+    /// switch, or one only the damping reads).
+    pub exact_build: Vec<bool>,
     /// Mode frequencies (Hz), ascending in ω² (the rows of `dfdp`).
     pub modes_hz: Vec<f64>,
     /// Mode labels (dominant coordinate).
@@ -305,6 +310,7 @@ fn same_kinds(a: &Ports, b: &Ports) -> bool {
 /// nominal responses' factorisations.
 struct Shared<'a> {
     case: &'a Case,
+    defaults: &'a Defaults,
     request: &'a SensitivityRequest,
     names: &'a [String],
     values: &'a [f64],
@@ -324,6 +330,8 @@ struct Shared<'a> {
 struct Column {
     /// The step of the difference (the parameter's unit).
     step: f64,
+    /// Whether the model's numbers moved along their exact tangent.
+    exact_build: bool,
     /// Why the model refuses values near the parameter's (a switch or a count).
     refused: Option<String>,
     /// d(mode frequency)/dp, one per mode (empty when the modes were not asked for).
@@ -340,6 +348,7 @@ struct Column {
 fn column(shared: &Shared, j: usize) -> Result<Option<Column>, Error> {
     let Shared {
         case,
+        defaults,
         request,
         names,
         values,
@@ -364,8 +373,15 @@ fn column(shared: &Shared, j: usize) -> Result<Option<Column>, Error> {
     } else {
         RELATIVE_STEP * p0.abs()
     };
+    // the model's numbers along their exact tangent, where the build offers one (else each
+    // step rebuilds the model)
+    let tangent = match reach[j] {
+        Reach::Mechanics => pendkit_model::build_tangent(case.model, &case.overrides, name).ok(),
+        _ => None,
+    };
     let mut out = Column {
         step: h,
+        exact_build: tangent.is_some(),
         refused: None,
         dfdp: vec![0.0; if request.modes { modes.len() } else { 0 }],
         d_tf: vec![C::new(0.0, 0.0); nf],
@@ -380,9 +396,13 @@ fn column(shared: &Shared, j: usize) -> Result<Option<Column>, Error> {
         overrides
             .parameters
             .push((name.clone(), format!("{value:e}")));
-        let built = pendkit_model::build_with(case.model, &overrides).map_err(Error::from);
+        let built = match &tangent {
+            Some(dual) => stepped(dual, k * h, defaults, &overrides),
+            None => pendkit_model::build_with(case.model, &overrides).map(|(system, _)| system),
+        }
+        .map_err(Error::from);
         let system = match built {
-            Ok((system, _)) => system,
+            Ok(system) => system,
             // a switch or a count: the model refuses any value near it
             Err(Error::Build(e)) => {
                 let why = format!("the model refuses {name} = {value:e} ({e})");
@@ -485,6 +505,27 @@ fn column(shared: &Shared, j: usize) -> Result<Option<Column>, Error> {
         }
     }
     Ok(Some(out))
+}
+
+/// The model moved by `step` along its exact tangent `dual` (the mechanical numbers to
+/// first order, which is all a central difference sees of them), with what the build adds
+/// (damping, temperature, switches) evaluated at the overridden parameters.
+fn stepped(
+    dual: &System<num_dual::Dual64>,
+    step: f64,
+    defaults: &Defaults,
+    overrides: &pendkit_model::Overrides,
+) -> Result<System, pendkit_model::BuildError> {
+    let (_, resolved) = parameters_with(defaults, overrides)?;
+    pendkit_model::attach_to_build(dual.stepped(step), defaults, overrides, &resolved)
+}
+
+/// The entries of `v` whose `keep` is true.
+fn kept<T>(v: Vec<T>, keep: &[bool]) -> Vec<T> {
+    v.into_iter()
+        .zip(keep)
+        .filter_map(|(x, &k)| k.then_some(x))
+        .collect()
 }
 
 /// `work(j)` for every j in 0..n on up to `threads` threads, the results in j order. Each
@@ -692,6 +733,7 @@ pub fn sensitivities(case: &Case, request: &SensitivityRequest) -> Result<Sensit
     let mut d_tf: Vec<Vec<C>> = vec![vec![C::new(0.0, 0.0); np]; nf];
     let mut d_noise: Vec<Vec<(f64, C)>> = vec![vec![(0.0, C::new(0.0, 0.0)); np]; nf];
     let mut steps = vec![0.0; np];
+    let mut exact_build = vec![false; np];
     let mut refused: Vec<Option<String>> = vec![None; np];
 
     // the nominal responses' factorisations, once per frequency
@@ -715,6 +757,7 @@ pub fn sensitivities(case: &Case, request: &SensitivityRequest) -> Result<Sensit
 
     let shared = Shared {
         case,
+        defaults: &defaults,
         request,
         names: &names,
         values: &values,
@@ -735,6 +778,7 @@ pub fn sensitivities(case: &Case, request: &SensitivityRequest) -> Result<Sensit
     for (j, col) in columns.into_iter().enumerate() {
         let Some(col) = col else { continue };
         steps[j] = col.step;
+        exact_build[j] = col.exact_build;
         if col.refused.is_some() {
             refused[j] = col.refused;
             continue;
@@ -827,31 +871,18 @@ pub fn sensitivities(case: &Case, request: &SensitivityRequest) -> Result<Sensit
         .zip(&refused)
         .filter_map(|(n, r)| r.as_ref().map(|r| (n.clone(), r.clone())))
         .collect();
-    let kept = |v: Vec<f64>| -> Vec<f64> {
-        v.into_iter()
-            .zip(&keep)
-            .filter_map(|(x, &k)| k.then_some(x))
-            .collect()
-    };
-    let tf_abs = tf_abs.map(|(a, d)| (a, d.into_iter().map(kept).collect()));
-    let noise_asd = noise_asd.map(|(a, d)| (a, d.into_iter().map(kept).collect()));
-    let dfdp: Vec<Vec<f64>> = dfdp.into_iter().map(kept).collect();
-    let names: Vec<String> = names
-        .into_iter()
-        .zip(&keep)
-        .filter_map(|(x, &k)| k.then_some(x))
-        .collect();
-    let units: Vec<String> = units
-        .into_iter()
-        .zip(&keep)
-        .filter_map(|(x, &k)| k.then_some(x))
-        .collect();
+    let tf_abs = tf_abs.map(|(a, d)| (a, d.into_iter().map(|r| kept(r, &keep)).collect()));
+    let noise_asd = noise_asd.map(|(a, d)| (a, d.into_iter().map(|r| kept(r, &keep)).collect()));
+    let dfdp: Vec<Vec<f64>> = dfdp.into_iter().map(|r| kept(r, &keep)).collect();
+    let names = kept(names, &keep);
+    let units = kept(units, &keep);
     let out = Sensitivities {
         not_differentiable,
         parameters: names,
-        values: kept(values),
+        values: kept(values, &keep),
         units,
-        steps: kept(steps),
+        steps: kept(steps, &keep),
+        exact_build: kept(exact_build, &keep),
         modes_hz,
         mode_labels,
         dfdp,
