@@ -16,7 +16,7 @@ fn json_has_one_row_per_mode_and_one_column_per_parameter() {
     let object = v.as_object().expect("an object");
     let mut keys: Vec<&str> = object.keys().map(String::as_str).collect();
     keys.sort_unstable();
-    assert_eq!(keys, ["dfdp", "modes_hz", "parameters"]);
+    assert_eq!(keys, ["dfdp", "exact_build", "modes_hz", "parameters"]);
     let parameters: Vec<&str> = v["parameters"]
         .as_array()
         .expect("parameters")

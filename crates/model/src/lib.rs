@@ -1099,7 +1099,15 @@ pub fn build_tangent(
     let defaults = Defaults::of(model)?;
     let (set, resolved) = parameters_with(&defaults, overrides)?;
     let tangent = set.resolve_tangent(parameter)?;
-    model.build_tangent(&resolved, &tangent)
+    let system = model.build_tangent(&resolved, &tangent)?;
+    // a derivative that overflows or is undefined (a square root at zero) is not exact
+    if system.scalars().iter().any(|x| !x.eps.is_finite()) {
+        return Err(BuildError::Invalid {
+            item: format!("parameter '{parameter}'"),
+            message: "no exact derivative: a model number's derivative is not finite".into(),
+        });
+    }
+    Ok(system)
 }
 
 /// Resolves `model`'s defaults with `overrides` applied, builds the system and attaches

@@ -4,12 +4,18 @@
 //!
 //! # Method, and what is exact
 //!
-//! The model's numbers (masses, attachment points, wire sections, tensions) come from
-//! `f64` builders, so there is no dual-number path from a parameter into the energies. The
-//! split is:
+//! The energies' constants are `f64` (the element terms are not yet generic over their
+//! constants, docs/exact-sensitivities.md), so the split is:
 //!
+//! 0. **The model's numbers, exactly where the build allows.** The build runs once with the
+//!    parameter a dual number ([`pendkit_model::build_tangent`]): the tangent of every
+//!    mass, inertia, point, section constant, stiffness and unstretched length. The model
+//!    at each step below is the nominal one moved along that tangent
+//!    ([`System::stepped`]), which has the same derivative at p₀ as the rebuilt one. A
+//!    parameter the dual build cannot follow (written into a pose's text, a count, a
+//!    switch) rebuilds the model at each step ([`Sensitivities::exact_build`]).
 //! 1. **The stage's matrices, by a difference.** For each parameter p (value p₀, step h),
-//!    the whole stage is rebuilt and re-solved at p₀ ± h and p₀ ± 2h: parameters,
+//!    the stage is built and re-solved at p₀ ± h and p₀ ± 2h: parameters,
 //!    equilibrium (so the equilibrium's motion dq*/dp is included), Hessians of the stage,
 //!    float elimination (K_eff = K_aa − K_af K_ff⁻¹ K_fa), mass matrix, damping. The
 //!    derivatives dK_eff/dp, dM/dp and dP(f)/dp (the complex master matrix with damping)
