@@ -307,6 +307,24 @@ impl Suspension {
             .collect()
     }
 
+    /// The model at `params`, its expressions evaluated with `values` of the build's scalar
+    /// (`params` itself for the `f64` model, a tangent for the dual-number one).
+    fn build_in<S: build::BuildScalar>(
+        &self,
+        params: &Resolved,
+        values: &dyn pendkit_params::Values<S>,
+    ) -> Result<System<S>, BuildError> {
+        let spec = self.spec_for(params)?;
+        build::build(
+            &spec,
+            &Ctx {
+                params,
+                reads: None,
+                values,
+            },
+        )
+    }
+
     /// Builds at `params`, recording which field read which parameter.
     pub fn build_recorded(&self, params: &Resolved) -> Result<(System, Reads), BuildError> {
         let reads = RefCell::new(Reads::default());
@@ -523,15 +541,7 @@ impl Model for Suspension {
     }
 
     fn build(&self, params: &Resolved) -> Result<System, BuildError> {
-        let spec = self.spec_for(params)?;
-        build::build(
-            &spec,
-            &Ctx {
-                params,
-                reads: None,
-                values: params,
-            },
-        )
+        self.build_in(params, params)
     }
 
     fn defaults_cache(&self) -> Option<&DefaultsCache> {
@@ -551,15 +561,7 @@ impl Model for Suspension {
                 message: "no exact derivative: it is a count (the generator's)".into(),
             });
         }
-        let spec = self.spec_for(params)?;
-        build::build(
-            &spec,
-            &Ctx {
-                params,
-                reads: None,
-                values: tangent,
-            },
-        )
+        self.build_in(params, tangent)
     }
 
     fn parameter_info(&self, params: &Resolved) -> Result<Vec<ParameterInfo>, BuildError> {
