@@ -5,29 +5,47 @@
 //! deflection Δ, whose derivatives come from the two frames' jets.
 
 use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
+use num_dual::Dual64;
 use pendkit_geometry::{Frame, FrameMap};
-use pendkit_rotations::{ANGLE_ENTRIES, Real, angle_derivatives, angles, c, rotation};
+use pendkit_rotations::{
+    ANGLE_ENTRIES, Constant, Lift, Real, angle_derivatives, angles, c, rotation,
+};
 
 use crate::{
     Attached, Derivatives, Element, EnergyError, JetPoint, LocalFrames, OffForm, Potential,
-    Reference, SpringEnd, Stage, TensionOff, Term, add_curvature, add_jacobian,
+    Reference, SpringEnd, Stage, System, TangentPotential, TangentTerm, TensionOff, Term, Wire,
+    add_curvature, add_jacobian,
 };
 
 /// Tag of gravity terms (lossless whatever multipliers the tag is given).
 pub const GRAVITY_TAG: &str = "gravity";
 
-/// Gravitational energy m g z of one body's centre of mass.
+/// Gravitational energy m g z of one body's centre of mass (constants `f64`, or `Dual64`
+/// for the parameter derivatives).
 #[derive(Clone, Debug)]
-pub struct GravityEnergy {
+pub struct GravityEnergy<C = f64> {
     frame: FrameMap,
-    centre_of_mass: Vector3<f64>,
+    centre_of_mass: Vector3<C>,
     /// m g (N).
-    weight: f64,
+    weight: C,
+}
+
+impl<C: Constant> GravityEnergy<C> {
+    /// m g z (J) at local coordinates `x`: the one energy body of both constant types.
+    fn energy_at<D: Lift<C>>(&self, x: &[D]) -> D {
+        self.frame.eval(x).point(&self.centre_of_mass)[2].times(self.weight)
+    }
+}
+
+impl TangentPotential for GravityEnergy<Dual64> {
+    fn energy<D: Lift<Dual64>>(&self, x: &[D]) -> D {
+        self.energy_at(x)
+    }
 }
 
 impl Potential for GravityEnergy {
     fn energy<D: Real>(&self, x: &[D]) -> D {
-        self.frame.eval(x).point(&self.centre_of_mass)[2] * self.weight
+        self.energy_at(x)
     }
 
     /// Gravity stores energy without deforming anything: it is lossless.
@@ -85,53 +103,79 @@ impl Element for Gravity {
         "m g z of every massive body (lossless)"
     }
     fn terms(&self, reference: &Reference) -> Result<Vec<Term>, EnergyError> {
-        let system = reference.system;
-        Ok((0..system.bodies.len())
-            .filter(|&b| system.bodies[b].mass != 0.0)
-            .map(|b| {
-                let body = &system.bodies[b];
-                let local = LocalFrames::new(system, &[b]);
-                let energy = GravityEnergy {
-                    frame: local.frames[0].clone(),
-                    centre_of_mass: body.centre_of_mass,
-                    weight: body.mass * system.gravity,
-                };
-                Term::on_frames(
-                    format!("gravity {}", body.name),
-                    "gravity",
-                    GRAVITY_TAG,
-                    local,
-                    energy,
-                )
+        Ok(gravity_energies(reference.system)
+            .map(|(label, local, energy)| {
+                Term::on_frames(label, "gravity", GRAVITY_TAG, local, energy)
             })
             .collect())
     }
+    fn tangent_terms(
+        &self,
+        reference: &Reference<Dual64>,
+    ) -> Result<Option<Vec<TangentTerm>>, EnergyError> {
+        Ok(Some(
+            gravity_energies(reference.system)
+                .map(|(label, local, energy)| {
+                    TangentTerm::on_frames(label, "gravity", GRAVITY_TAG, &local, energy)
+                })
+                .collect(),
+        ))
+    }
+}
+
+/// The gravity term of every body with mass (or whose mass moves with the parameter).
+fn gravity_energies<S: Constant>(
+    system: &System<S>,
+) -> impl Iterator<Item = (String, LocalFrames, GravityEnergy<S>)> + '_ {
+    (0..system.bodies.len())
+        .filter(|&b| !system.bodies[b].mass.is_exactly_zero())
+        .map(|b| {
+            let body = &system.bodies[b];
+            let local = LocalFrames::new(system, &[b]);
+            let energy = GravityEnergy {
+                frame: local.frames[0].clone(),
+                centre_of_mass: body.centre_of_mass,
+                weight: body.mass * system.gravity,
+            };
+            (format!("gravity {}", body.name), local, energy)
+        })
 }
 
 /// Energy ½ k (l - l0)² of a wire's straight-line stretch between its attachment points.
 #[derive(Clone, Debug)]
-pub struct WireStretchEnergy {
+pub struct WireStretchEnergy<C = f64> {
     frames: [FrameMap; 2],
-    points: [Vector3<f64>; 2],
+    points: [Vector3<C>; 2],
     /// k (N/m).
-    stiffness: f64,
+    stiffness: C,
     /// l0 (m).
-    unstretched_length: f64,
+    unstretched_length: C,
 }
 
-impl WireStretchEnergy {
+impl<C: Constant> WireStretchEnergy<C> {
     /// Chord length (m) at local coordinates `x`.
-    pub fn length<D: Real>(&self, x: &[D]) -> D {
+    pub fn length<D: Lift<C>>(&self, x: &[D]) -> D {
         let p0 = self.frames[0].eval(x).point(&self.points[0]);
         let p1 = self.frames[1].eval(x).point(&self.points[1]);
         (p1 - p0).map(|v| v * v).sum().sqrt()
+    }
+
+    /// ½ k (l − l0)² (J) at local coordinates `x`.
+    fn energy_at<D: Lift<C>>(&self, x: &[D]) -> D {
+        let stretch = self.length(x) - D::lift(self.unstretched_length);
+        (stretch * stretch).times(self.stiffness * 0.5)
+    }
+}
+
+impl TangentPotential for WireStretchEnergy<Dual64> {
+    fn energy<D: Lift<Dual64>>(&self, x: &[D]) -> D {
+        self.energy_at(x)
     }
 }
 
 impl Potential for WireStretchEnergy {
     fn energy<D: Real>(&self, x: &[D]) -> D {
-        let stretch = self.length(x) - self.unstretched_length;
-        stretch * stretch * (0.5 * self.stiffness)
+        self.energy_at(x)
     }
 
     /// With the tension off the wire is unstretched at its equilibrium length, so only
@@ -214,49 +258,72 @@ impl Element for WireStretch {
         "½ k (l - l0)² of each wire's chord length"
     }
     fn terms(&self, reference: &Reference) -> Result<Vec<Term>, EnergyError> {
-        let system = reference.system;
-        system
+        reference
+            .system
             .wires
             .iter()
             .map(|wire| {
-                let length = reference.wire_length(wire);
-                if length.is_nan() || length <= 0.0 {
-                    return Err(EnergyError::ZeroLengthWire {
-                        wire: wire.name.clone(),
-                    });
-                }
-                let local = LocalFrames::new(system, &[wire.ends[0].body, wire.ends[1].body]);
-                let energy = WireStretchEnergy {
-                    frames: [local.frames[0].clone(), local.frames[1].clone()],
-                    points: [wire.ends[0].point, wire.ends[1].point],
-                    stiffness: wire.stiffness,
-                    unstretched_length: wire.unstretched_length,
-                };
-                Ok(Term::on_frames(
-                    format!("wire-stretch {}", wire.name),
-                    "wire-stretch",
-                    wire.tags.stretch.clone(),
-                    local,
-                    energy,
-                ))
+                let (local, energy) = wire_stretch_energy(reference, wire)?;
+                let label = format!("wire-stretch {}", wire.name);
+                let tag = wire.tags.stretch.clone();
+                Ok(Term::on_frames(label, "wire-stretch", tag, local, energy))
             })
             .collect()
     }
+    fn tangent_terms(
+        &self,
+        reference: &Reference<Dual64>,
+    ) -> Result<Option<Vec<TangentTerm>>, EnergyError> {
+        let terms = reference.system.wires.iter().map(|wire| {
+            let (local, energy) = wire_stretch_energy(reference, wire)?;
+            let label = format!("wire-stretch {}", wire.name);
+            let tag = wire.tags.stretch.clone();
+            Ok(TangentTerm::on_frames(
+                label,
+                "wire-stretch",
+                tag,
+                &local,
+                energy,
+            ))
+        });
+        terms.collect::<Result<_, _>>().map(Some)
+    }
+}
+
+/// The stretch energy of `wire`, which must have a positive length at the reference.
+fn wire_stretch_energy<S: Constant>(
+    reference: &Reference<S>,
+    wire: &Wire<S>,
+) -> Result<(LocalFrames, WireStretchEnergy<S>), EnergyError> {
+    let length = reference.wire_length(wire).re();
+    if length.is_nan() || length <= 0.0 {
+        return Err(EnergyError::ZeroLengthWire {
+            wire: wire.name.clone(),
+        });
+    }
+    let local = LocalFrames::new(reference.system, &[wire.ends[0].body, wire.ends[1].body]);
+    let energy = WireStretchEnergy {
+        frames: [local.frames[0].clone(), local.frames[1].clone()],
+        points: [wire.ends[0].point, wire.ends[1].point],
+        stiffness: wire.stiffness,
+        unstretched_length: wire.unstretched_length,
+    };
+    Ok((local, energy))
 }
 
 /// Energy ½ Δᵀ K Δ + fᵀ Δ of a six-axis spring, Δ = (x, y, z, yaw, pitch, roll) of end 1's
 /// attachment frame seen from end 0's.
 #[derive(Clone, Debug)]
-pub struct SpringEnergy {
+pub struct SpringEnergy<C: Constant = f64> {
     frames: [FrameMap; 2],
-    ends: [SpringEnd; 2],
-    stiffness: Matrix6<f64>,
-    preload: Vector6<f64>,
+    ends: [SpringEnd<C>; 2],
+    stiffness: Matrix6<C>,
+    preload: Vector6<C>,
 }
 
-impl SpringEnergy {
+impl<C: Constant> SpringEnergy<C> {
     /// Deflection Δ (m, rad) at local coordinates `x`.
-    pub fn deflection<D: Real>(&self, x: &[D]) -> Vector6<D> {
+    pub fn deflection<D: Lift<C>>(&self, x: &[D]) -> Vector6<D> {
         let attach = |k: usize| -> Frame<D> {
             let body = self.frames[k].eval(x);
             let at_point = Frame {
@@ -278,17 +345,23 @@ impl SpringEnergy {
     }
 
     /// ½ Δᵀ K Δ + fᵀ Δ for a deflection Δ.
-    fn energy_of<D: Real>(&self, d: &Vector6<D>) -> D {
+    fn energy_of<D: Lift<C>>(&self, d: &Vector6<D>) -> D {
         let mut e = c::<D>(0.0);
         for i in 0..6 {
-            e += d[i] * self.preload[i];
+            e += d[i].times(self.preload[i]);
             for j in 0..6 {
-                if self.stiffness[(i, j)] != 0.0 {
-                    e += d[i] * d[j] * (0.5 * self.stiffness[(i, j)]);
+                if !self.stiffness[(i, j)].is_exactly_zero() {
+                    e += (d[i] * d[j]).times(self.stiffness[(i, j)] * 0.5);
                 }
             }
         }
         e
+    }
+}
+
+impl TangentPotential for SpringEnergy<Dual64> {
+    fn energy<D: Lift<Dual64>>(&self, x: &[D]) -> D {
+        self.energy_of(&self.deflection(x))
     }
 }
 
@@ -499,28 +572,38 @@ impl Element for SpringKind {
         "six-axis spring ½ Δᵀ K Δ + fᵀ Δ between two attachment frames"
     }
     fn terms(&self, reference: &Reference) -> Result<Vec<Term>, EnergyError> {
-        let system = reference.system;
-        Ok(system
-            .springs
-            .iter()
-            .map(|s| {
-                let local = LocalFrames::new(system, &[s.ends[0].body, s.ends[1].body]);
-                let energy = SpringEnergy {
-                    frames: [local.frames[0].clone(), local.frames[1].clone()],
-                    ends: s.ends.clone(),
-                    stiffness: s.stiffness,
-                    preload: s.preload,
-                };
-                Term::on_frames(
-                    format!("spring {}", s.name),
-                    "spring",
-                    s.tag.clone(),
-                    local,
-                    energy,
-                )
-            })
+        Ok(spring_energies(reference.system)
+            .map(|(label, tag, local, energy)| Term::on_frames(label, "spring", tag, local, energy))
             .collect())
     }
+    fn tangent_terms(
+        &self,
+        reference: &Reference<Dual64>,
+    ) -> Result<Option<Vec<TangentTerm>>, EnergyError> {
+        Ok(Some(
+            spring_energies(reference.system)
+                .map(|(label, tag, local, energy)| {
+                    TangentTerm::on_frames(label, "spring", tag, &local, energy)
+                })
+                .collect(),
+        ))
+    }
+}
+
+/// Every spring's energy, with its label and tag.
+fn spring_energies<S: Constant>(
+    system: &System<S>,
+) -> impl Iterator<Item = (String, String, LocalFrames, SpringEnergy<S>)> + '_ {
+    system.springs.iter().map(|s| {
+        let local = LocalFrames::new(system, &[s.ends[0].body, s.ends[1].body]);
+        let energy = SpringEnergy {
+            frames: [local.frames[0].clone(), local.frames[1].clone()],
+            ends: s.ends.clone(),
+            stiffness: s.stiffness,
+            preload: s.preload,
+        };
+        (format!("spring {}", s.name), s.tag.clone(), local, energy)
+    })
 }
 
 crate::register_element!(Gravity);

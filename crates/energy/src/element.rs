@@ -11,23 +11,27 @@ use std::cell::RefCell;
 use std::sync::Arc;
 
 use nalgebra::Vector3;
+use num_dual::Dual64;
 use pendkit_geometry::FrameMap;
+use pendkit_rotations::{Constant, norm, tr_mul_vec};
 
-use crate::{BodyId, EndDirection, EnergyError, Stage, System, Term, Wire};
+use crate::{BodyId, EndDirection, EnergyError, Stage, System, TangentTerm, Term, Wire};
 
 /// The configuration an element builds its terms around: the equilibrium, or the start
-/// position when plug-in terms join the equilibrium search early.
+/// position when plug-in terms join the equilibrium search early. With `S = Dual64` the
+/// model's numbers and the coordinates carry their derivatives with respect to one
+/// parameter (the exact sensitivities, docs/exact-sensitivities.md).
 #[derive(Clone, Copy, Debug)]
-pub struct Reference<'a> {
+pub struct Reference<'a, S: Constant = f64> {
     /// The model.
-    pub system: &'a System,
+    pub system: &'a System<S>,
     /// Full coordinate vector (m, rad).
-    pub coords: &'a [f64],
+    pub coords: &'a [S],
 }
 
-impl Reference<'_> {
+impl<S: Constant> Reference<'_, S> {
     /// Lab positions (m) of the two attachment points of `wire`.
-    pub fn wire_points(&self, wire: &Wire) -> [Vector3<f64>; 2] {
+    pub fn wire_points(&self, wire: &Wire<S>) -> [Vector3<S>; 2] {
         wire.ends.each_ref().map(|end| {
             self.system.bodies[end.body]
                 .frame
@@ -37,22 +41,23 @@ impl Reference<'_> {
     }
 
     /// Chord length (m) of `wire`.
-    pub fn wire_length(&self, wire: &Wire) -> f64 {
+    pub fn wire_length(&self, wire: &Wire<S>) -> S {
         let [p0, p1] = self.wire_points(wire);
-        (p1 - p0).norm()
+        norm(&(p1 - p0))
     }
 
     /// Static tension (N) of `wire`: k (l - l0).
-    pub fn wire_tension(&self, wire: &Wire) -> f64 {
+    pub fn wire_tension(&self, wire: &Wire<S>) -> S {
         wire.stiffness * (self.wire_length(wire) - wire.unstretched_length)
     }
 
     /// Clamp direction of each end in that end's body coordinates, pointing into the wire;
     /// `Auto` ends get the direction of the chord here (straight wire); hinged ends give
     /// `None`.
-    pub fn wire_end_directions(&self, wire: &Wire) -> [Option<Vector3<f64>>; 2] {
+    pub fn wire_end_directions(&self, wire: &Wire<S>) -> [Option<Vector3<S>>; 2] {
         let [p0, p1] = self.wire_points(wire);
-        let chord = (p1 - p0).normalize();
+        let chord = p1 - p0;
+        let chord = chord / norm(&chord);
         std::array::from_fn(|k| {
             let end = &wire.ends[k];
             let rotation = self.system.bodies[end.body]
@@ -62,8 +67,8 @@ impl Reference<'_> {
             let into_wire = if k == 0 { chord } else { -chord };
             match &end.direction {
                 EndDirection::Hinged => None,
-                EndDirection::Auto => Some(rotation.transpose() * into_wire),
-                EndDirection::Explicit(v) => Some(v.normalize()),
+                EndDirection::Auto => Some(tr_mul_vec(&rotation, &into_wire)),
+                EndDirection::Explicit(v) => Some(v / norm(v)),
             }
         })
     }
@@ -79,6 +84,18 @@ pub trait Element: Sync {
     fn summary(&self) -> &'static str;
     /// The kind's terms for `reference.system`, built around `reference`.
     fn terms(&self, reference: &Reference) -> Result<Vec<Term>, EnergyError>;
+
+    /// The kind's terms built from a model whose numbers, and around coordinates which,
+    /// carry their derivatives with respect to one parameter: the terms' constants carry
+    /// theirs, and [`TangentTerm::derivatives`] gives the energy's derivatives with their
+    /// parameter derivatives (docs/exact-sensitivities.md). `None` (the default): the kind
+    /// has no such terms, and the sensitivities fall back to differences.
+    fn tangent_terms(
+        &self,
+        _reference: &Reference<Dual64>,
+    ) -> Result<Option<Vec<TangentTerm>>, EnergyError> {
+        Ok(None)
+    }
 
     /// The kind's terms, with energy bodies shared with other kinds built around the same
     /// reference taken from (or put into) `shared`. Kinds that share nothing keep the
@@ -115,7 +132,7 @@ impl SharedBodies {
 
     /// The frames of `bodies` of `system` over one local vector, shared by every term on
     /// the same bodies (a wire's torsion and beam).
-    pub fn frames(&self, system: &System, bodies: &[BodyId]) -> Arc<LocalFrames> {
+    pub fn frames<S: Constant>(&self, system: &System<S>, bodies: &[BodyId]) -> Arc<LocalFrames> {
         let found = self
             .frames
             .borrow()
@@ -247,7 +264,7 @@ pub struct LocalFrames {
 
 impl LocalFrames {
     /// Collects the frames of `bodies` of `system`.
-    pub fn new(system: &System, bodies: &[BodyId]) -> Self {
+    pub fn new<S: Constant>(system: &System<S>, bodies: &[BodyId]) -> Self {
         let mut coords: Vec<usize> = bodies
             .iter()
             .flat_map(|&b| system.bodies[b].frame.var_list().iter().copied())

@@ -15,6 +15,7 @@ mod extra;
 mod fast;
 mod stage;
 mod system;
+mod tangent;
 mod term;
 
 pub use crate::core::{GRAVITY_TAG, GravityEnergy, SpringEnergy, WireStretchEnergy};
@@ -31,6 +32,10 @@ pub use fast::{
 pub use pendkit_rotations::Real;
 pub use stage::{Stage, UnknownStage};
 pub use system::*;
+pub use tangent::{
+    DualTangent, HyperTangent, TangentDerivatives, TangentPotential, TangentSharedPotential,
+    TangentTerm,
+};
 pub use term::{
     LocalDerivatives, OffHessian, PartOff, Potential, SharedPotential, TensionOff, Term,
 };

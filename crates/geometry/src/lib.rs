@@ -16,7 +16,7 @@ use nalgebra::{Matrix3, Matrix3xX, Vector3};
 use num_dual::Dual64;
 use pendkit_expr::Compiled;
 use pendkit_rotations::{
-    Real, c, mul, mul_const, mul_const_vec, mul_vec, rotation, tr_mul, tr_mul_vec, vee,
+    Lift, Real, c, mul, mul_const, mul_const_vec, mul_vec, rotation, tr_mul, tr_mul_vec, vee,
 };
 
 pub use jet::{FrameJet, JetError, JetOrder};
@@ -62,14 +62,21 @@ impl<D: Real> Frame<D> {
         }
     }
 
-    /// Lab position (m) of a point given in frame coordinates (m): X + R p.
-    pub fn point(&self, p: &Vector3<f64>) -> Vector3<D> {
+    /// Lab position (m) of a point given in frame coordinates (m): X + R p. The point is a
+    /// model constant: `f64`, or a dual number carrying a parameter derivative ([`Lift`]).
+    pub fn point<C: Copy>(&self, p: &Vector3<C>) -> Vector3<D>
+    where
+        D: Lift<C>,
+    {
         self.origin + self.direction(p)
     }
 
-    /// Lab components of a vector given in frame coordinates: R v (the constant vector is
-    /// not lifted to the scalar type).
-    pub fn direction(&self, v: &Vector3<f64>) -> Vector3<D> {
+    /// Lab components of a vector given in frame coordinates: R v (an `f64` vector is not
+    /// lifted to the scalar type).
+    pub fn direction<C: Copy>(&self, v: &Vector3<C>) -> Vector3<D>
+    where
+        D: Lift<C>,
+    {
         mul_const_vec(&self.rotation, v)
     }
 
@@ -89,9 +96,12 @@ impl<D: Real> Frame<D> {
         }
     }
 
-    /// The same frame turned by fixed attachment angles (yaw, pitch, roll in rad) about its
-    /// own axes.
-    pub fn turned(&self, angles: &[f64; 3]) -> Frame<D> {
+    /// The same frame turned by fixed attachment angles (yaw, pitch, roll in rad, model
+    /// constants) about its own axes.
+    pub fn turned<C: Real>(&self, angles: &[C; 3]) -> Frame<D>
+    where
+        D: Lift<C>,
+    {
         Frame {
             origin: self.origin,
             rotation: mul_const(&self.rotation, &rotation(angles[0], angles[1], angles[2])),

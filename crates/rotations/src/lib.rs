@@ -5,7 +5,7 @@
 //! coordinates sits at X + R p in space. Angles are in radians.
 
 use nalgebra::{Matrix3, Vector3};
-use num_dual::DualNum;
+use num_dual::{Dual, Dual64, DualNum, HyperDual};
 
 /// The scalar every generic energy body is written over: `f64` for values, a dual number
 /// for derivatives (num-dual 0.15 writes the bound `DualNum<Primitive = f64> + Copy`).
@@ -16,6 +16,89 @@ impl<T: DualNum<Primitive = f64> + Copy> Real for T {}
 #[inline]
 pub fn c<D: Real>(x: f64) -> D {
     D::from(x)
+}
+
+/// An evaluation scalar that can take a model constant of type `C`: every [`Real`] takes an
+/// `f64` constant (no derivative), and the scalars of the parameter-derivative passes take a
+/// `Dual64` constant, whose dual part is the constant's derivative with respect to one
+/// parameter (docs/exact-sensitivities.md). Energy bodies whose constants are generic write
+/// `k.lift()` or `x.times(k)` where they would write `c(k)` or `x * k`.
+pub trait Lift<C>: Real {
+    /// The constant as a scalar of this type.
+    fn lift(constant: C) -> Self;
+    /// This scalar times the constant (for `f64` the cheap scalar product).
+    fn times(self, constant: C) -> Self;
+}
+
+impl<D: Real> Lift<f64> for D {
+    #[inline]
+    fn lift(constant: f64) -> Self {
+        D::from(constant)
+    }
+    #[inline]
+    fn times(self, constant: f64) -> Self {
+        self * constant
+    }
+}
+
+impl Lift<Dual64> for Dual64 {
+    #[inline]
+    fn lift(constant: Dual64) -> Self {
+        constant
+    }
+    #[inline]
+    fn times(self, constant: Dual64) -> Self {
+        self * constant
+    }
+}
+
+/// The scalar of a model's constants: `f64`, or `Dual64` when the model was built with one
+/// parameter seeded (each constant carrying its derivative with respect to it).
+pub trait Constant: Real + Lift<Self> + Send + Sync + std::fmt::Debug + 'static {
+    /// Whether the constant is zero and stays zero as the parameter moves (a term it
+    /// multiplies can be skipped).
+    fn is_exactly_zero(self) -> bool;
+}
+impl Constant for f64 {
+    fn is_exactly_zero(self) -> bool {
+        self == 0.0
+    }
+}
+impl Constant for Dual64 {
+    fn is_exactly_zero(self) -> bool {
+        self.re == 0.0 && self.eps == 0.0
+    }
+}
+
+/// First derivatives over the coordinates of a function whose constants carry a parameter
+/// derivative (the ∂g/∂p pass).
+impl Lift<Dual64> for Dual<Dual64> {
+    #[inline]
+    fn lift(constant: Dual64) -> Self {
+        Dual::from_re(constant)
+    }
+    #[inline]
+    fn times(self, constant: Dual64) -> Self {
+        Dual::new(self.re * constant, self.eps * constant)
+    }
+}
+
+/// Second derivatives over the coordinates of a function whose constants carry a parameter
+/// derivative (the dK/dp pass).
+impl Lift<Dual64> for HyperDual<Dual64> {
+    #[inline]
+    fn lift(constant: Dual64) -> Self {
+        HyperDual::from_re(constant)
+    }
+    #[inline]
+    fn times(self, constant: Dual64) -> Self {
+        HyperDual::new(
+            self.re * constant,
+            self.eps1 * constant,
+            self.eps2 * constant,
+            self.eps1eps2 * constant,
+        )
+    }
 }
 
 /// Rotation matrix R = Rz(yaw) · Ry(pitch) · Rx(roll) (angles in rad).
@@ -112,16 +195,20 @@ pub fn tr_mul<D: Real>(a: &Matrix3<D>, b: &Matrix3<D>) -> Matrix3<D> {
     Matrix3::from_fn(|i, j| a[(0, i)] * b[(0, j)] + a[(1, i)] * b[(1, j)] + a[(2, i)] * b[(2, j)])
 }
 
-/// A · Bᵀ for 3×3 matrices, with B constant (f64): no derivative is carried through B.
+/// A · Bᵀ for 3×3 matrices, with B a model constant (see [`Lift`]).
 #[inline]
-pub fn mul_tr_const<D: Real>(a: &Matrix3<D>, b: &Matrix3<f64>) -> Matrix3<D> {
-    Matrix3::from_fn(|i, j| a[(i, 0)] * b[(j, 0)] + a[(i, 1)] * b[(j, 1)] + a[(i, 2)] * b[(j, 2)])
+pub fn mul_tr_const<C: Copy, D: Lift<C>>(a: &Matrix3<D>, b: &Matrix3<C>) -> Matrix3<D> {
+    Matrix3::from_fn(|i, j| {
+        a[(i, 0)].times(b[(j, 0)]) + a[(i, 1)].times(b[(j, 1)]) + a[(i, 2)].times(b[(j, 2)])
+    })
 }
 
-/// A · B for 3×3 matrices, with B constant (f64).
+/// A · B for 3×3 matrices, with B a model constant (see [`Lift`]).
 #[inline]
-pub fn mul_const<D: Real>(a: &Matrix3<D>, b: &Matrix3<f64>) -> Matrix3<D> {
-    Matrix3::from_fn(|i, j| a[(i, 0)] * b[(0, j)] + a[(i, 1)] * b[(1, j)] + a[(i, 2)] * b[(2, j)])
+pub fn mul_const<C: Copy, D: Lift<C>>(a: &Matrix3<D>, b: &Matrix3<C>) -> Matrix3<D> {
+    Matrix3::from_fn(|i, j| {
+        a[(i, 0)].times(b[(0, j)]) + a[(i, 1)].times(b[(1, j)]) + a[(i, 2)].times(b[(2, j)])
+    })
 }
 
 /// A · v, written out.
@@ -136,10 +223,17 @@ pub fn tr_mul_vec<D: Real>(a: &Matrix3<D>, v: &Vector3<D>) -> Vector3<D> {
     Vector3::from_fn(|i, _| a[(0, i)] * v[0] + a[(1, i)] * v[1] + a[(2, i)] * v[2])
 }
 
-/// A · v with a constant (f64) vector v: the vector is not lifted to the scalar type.
+/// A · v with v a model constant (see [`Lift`]): an `f64` vector is not lifted to the
+/// scalar type.
 #[inline]
-pub fn mul_const_vec<D: Real>(a: &Matrix3<D>, v: &Vector3<f64>) -> Vector3<D> {
-    Vector3::from_fn(|i, _| a[(i, 0)] * v[0] + a[(i, 1)] * v[1] + a[(i, 2)] * v[2])
+pub fn mul_const_vec<C: Copy, D: Lift<C>>(a: &Matrix3<D>, v: &Vector3<C>) -> Vector3<D> {
+    Vector3::from_fn(|i, _| a[(i, 0)].times(v[0]) + a[(i, 1)].times(v[1]) + a[(i, 2)].times(v[2]))
+}
+
+/// |v|, written out (nalgebra's norm asks for a field trait not every dual number has).
+#[inline]
+pub fn norm<D: Real>(v: &Vector3<D>) -> D {
+    dot(v, v).sqrt()
 }
 
 /// u · v, written out.
