@@ -246,6 +246,7 @@ fn pendulum_tf_and_noise_against_re_solved() {
         parameters: None,
         allow_unstable: false,
         threads: 0,
+        differences: false,
     };
     let s = sensitivities(&case, &request).expect("sensitivities");
     let (tf_abs, d_tf) = s.tf_abs.as_ref().expect("tf");
@@ -307,6 +308,7 @@ fn loss_angle_moves_no_mode_but_moves_the_noise() {
         parameters: Some(vec!["phi_fibre".into()]),
         allow_unstable: false,
         threads: 0,
+        differences: false,
     };
     let s = sensitivities(&case, &request).expect("sensitivities");
     // the build reads φ too (the fibres' material), so the stage is rebuilt: what is left

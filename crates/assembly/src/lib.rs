@@ -12,6 +12,7 @@
 mod equilibrium;
 mod evaluate;
 mod redundant;
+mod tangent;
 mod timing;
 
 use std::collections::BTreeMap;
@@ -26,6 +27,7 @@ use pendkit_geometry::FrameJet;
 pub use equilibrium::{Equilibrium, EquilibriumOptions, find_equilibrium};
 pub use evaluate::DerivativePath;
 pub use pendkit_energy::OffHessian;
+pub use tangent::{StageTangent, stage_tangent};
 pub use timing::{Phase, PhaseTimes, timed};
 
 use evaluate::Evaluator;
@@ -78,6 +80,12 @@ pub enum AssemblyError {
         /// The length given.
         given: usize,
     },
+    /// The equilibrium's stiffness over the free coordinates is singular, so the
+    /// equilibrium's motion with a parameter is not defined.
+    #[error(
+        "the equilibrium is neutral (its stiffness over the free coordinates is singular): it has no derivative with respect to a parameter"
+    )]
+    SingularEquilibrium,
     /// A float moves a body with mass or inertia (floats must be massless).
     #[error("float '{float}' moves body '{body}', which has mass: make it a variable")]
     MassiveFloat {

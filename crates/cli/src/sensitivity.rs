@@ -51,9 +51,13 @@ pub struct Args {
     /// results do not depend on it.
     #[arg(long, default_value_t = 0)]
     threads: usize,
-    /// Print JSON: {"parameters", "modes_hz", "dfdp", "exact_build"} (one row per mode, one
-    /// column per parameter, Hz per unit; per parameter whether the model's numbers moved
-    /// along their exact tangent), with --tf also "freqs_hz", "tf_abs", "dtf_abs_dp", with
+    /// Difference the stage's matrices for every parameter, even where the exact route
+    /// (dual numbers and the implicit function theorem) is open: a check, and a timing.
+    #[arg(long)]
+    differences: bool,
+    /// Print JSON: {"parameters", "modes_hz", "dfdp", "exact_build", "exact"} (one row per
+    /// mode, one column per parameter, Hz per unit; per parameter whether the model's
+    /// numbers moved along their exact tangent, and whether the derivative is exact), with --tf also "freqs_hz", "tf_abs", "dtf_abs_dp", with
     /// --noise "freqs_hz", "noise_asd", "dnoise_asd_dp" (one row per frequency).
     #[arg(long)]
     json: bool,
@@ -92,6 +96,7 @@ pub fn run(a: Args) -> Result<String, CliError> {
         parameters,
         allow_unstable: a.allow_unstable,
         threads: a.threads,
+        differences: a.differences,
     };
     let s = sensitivities(&case, &request)?;
     if let Some(warning) = &s.warning {
@@ -110,6 +115,7 @@ fn to_json(s: &Sensitivities, request: &SensitivityRequest) -> String {
         "modes_hz": s.modes_hz,
         "dfdp": s.dfdp,
         "exact_build": s.exact_build,
+        "exact": s.exact,
     });
     if let Some((abs, d)) = &s.tf_abs {
         out["freqs_hz"] = json!(request.freqs);

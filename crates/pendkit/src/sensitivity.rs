@@ -90,6 +90,9 @@ pub struct SensitivityRequest {
     /// Threads that compute the parameters' columns (0: as many as the machine has). The
     /// results do not depend on it.
     pub threads: usize,
+    /// Difference the stage's matrices for every parameter, even where the exact route is
+    /// open (to check one against the other, or to time them).
+    pub differences: bool,
 }
 
 impl SensitivityRequest {
@@ -104,6 +107,7 @@ impl SensitivityRequest {
             parameters: None,
             allow_unstable: false,
             threads: 0,
+            differences: false,
         }
     }
 }
@@ -125,6 +129,12 @@ pub struct Sensitivities {
     /// step (a parameter that reaches the model through a pose's text, a count or a
     /// switch, or one only the damping reads).
     pub exact_build: Vec<bool>,
+    /// Per parameter, whether its derivatives are exact: the stage's matrices differentiated
+    /// by dual numbers through the build, the terms and the equilibrium (the implicit
+    /// function theorem), no difference anywhere (`steps` then says what a difference
+    /// would use). Otherwise the matrices are differenced (see the module's
+    /// documentation).
+    pub exact: Vec<bool>,
     /// Mode frequencies (Hz), ascending in ω² (the rows of `dfdp`).
     pub modes_hz: Vec<f64>,
     /// Mode labels (dominant coordinate).
@@ -329,6 +339,11 @@ struct Shared<'a> {
     clusters: &'a [Vec<usize>],
     sizes: (usize, usize, usize),
     responses: bool,
+    /// X = Q⁻¹ C_QX of the nominal real stiffness (floats by variables), for the derivative
+    /// of the float elimination; `None` when the exact route is closed to every parameter
+    /// (a damping tag whose real multiplier at DC is not 1, so the real stiffness is not
+    /// the tension-on Hessian).
+    float_map: Option<&'a DMatrix<f64>>,
 }
 
 /// One parameter's derivatives (Hz, |H|'s unit, and the noise response per unit of the
@@ -338,6 +353,8 @@ struct Column {
     step: f64,
     /// Whether the model's numbers moved along their exact tangent.
     exact_build: bool,
+    /// Whether the stage's matrices were differentiated exactly (no difference at all).
+    exact: bool,
     /// Why the model refuses values near the parameter's (a switch or a count).
     refused: Option<String>,
     /// d(mode frequency)/dp, one per mode (empty when the modes were not asked for).
@@ -362,10 +379,9 @@ fn column(shared: &Shared, j: usize) -> Result<Option<Column>, Error> {
         base_point,
         base_ports,
         nominal,
-        vectors,
-        clusters,
         sizes,
         responses,
+        ..
     } = *shared;
     if reach[j] == Reach::Nothing {
         return Ok(None);
@@ -388,20 +404,27 @@ fn column(shared: &Shared, j: usize) -> Result<Option<Column>, Error> {
     let mut out = Column {
         step: h,
         exact_build: tangent.is_some(),
+        exact: false,
         refused: None,
         dfdp: vec![0.0; if request.modes { modes.len() } else { 0 }],
         d_tf: vec![C::new(0.0, 0.0); nf],
         d_noise: vec![(0.0, C::new(0.0, 0.0)); nf],
     };
+    // the exact route: the stage's matrices differentiated by the implicit function theorem
+    if request.modes
+        && !responses
+        && !request.differences
+        && let Some(dual) = &tangent
+        && let Some((dk, dm)) = exact_matrices(shared, name, p0, h, dual)?
+    {
+        out.dfdp = mode_derivatives(shared, &dk, &dm)?;
+        out.exact = true;
+        return Ok(Some(out));
+    }
     let mut points = Vec::with_capacity(STENCIL.len());
     for &(k, _) in &STENCIL {
         let value = p0 + k * h;
-        // the case's overrides and this one last (the nominal build has checked that
-        // every override is read; this one is, or it would have no step)
-        let mut overrides = case.overrides.clone();
-        overrides
-            .parameters
-            .push((name.clone(), format!("{value:e}")));
+        let overrides = overridden(case, name, value);
         let built = match &tangent {
             Some(dual) => stepped(dual, k * h, defaults, &overrides),
             None => pendkit_model::build_with(case.model, &overrides).map(|(system, _)| system),
@@ -439,30 +462,7 @@ fn column(shared: &Shared, j: usize) -> Result<Option<Column>, Error> {
     if request.modes {
         let dk = difference(&points, h, |p| p.k_eff.clone());
         let dm = difference(&points, h, |p| p.result.assembled.mass.clone());
-        let vk = vectors.transpose() * &dk * vectors;
-        let vm = vectors.transpose() * &dm * vectors;
-        for cluster in clusters {
-            let w2: f64 =
-                cluster.iter().map(|&k| modes[k].omega_squared).sum::<f64>() / cluster.len() as f64;
-            let g = DMatrix::from_fn(cluster.len(), cluster.len(), |a, b| {
-                let (ka, kb) = (cluster[a], cluster[b]);
-                vk[(ka, kb)] - w2 * vm[(ka, kb)]
-            });
-            let g = (&g + g.transpose()) * 0.5;
-            let mut d: Vec<f64> = g.symmetric_eigenvalues().iter().copied().collect();
-            d.sort_by(f64::total_cmp);
-            for (&k, dw2) in cluster.iter().zip(d) {
-                let mode = &modes[k];
-                if mode.omega_squared == 0.0 {
-                    return Err(bad(format!(
-                        "mode {} ({}) is neutral (ω² = 0): its frequency has no derivative",
-                        k + 1,
-                        mode.label
-                    )));
-                }
-                out.dfdp[k] = dw2 / (4.0 * std::f64::consts::PI * mode.omega_squared.abs().sqrt());
-            }
-        }
+        out.dfdp = mode_derivatives(shared, &dk, &dm)?;
     }
     if responses {
         let tf_ports: Vec<Ports> = match &request.tf {
@@ -511,6 +511,134 @@ fn column(shared: &Shared, j: usize) -> Result<Option<Column>, Error> {
         }
     }
     Ok(Some(out))
+}
+
+/// X = Q⁻¹ C_QX of the real stiffness `real` (layout order x, q, s) of `base`; `None` when
+/// a damping tag's real multiplier at DC is not 1 (the exact route needs the real
+/// stiffness to be the tension-on Hessian) or Q is singular.
+fn float_map(base: &StageResult, real: &DMatrix<f64>) -> Option<DMatrix<f64>> {
+    let damping = &base.system.damping;
+    if base
+        .model
+        .by_tag
+        .iter()
+        .any(|(tag, _)| damping.at(tag, 0.0).0 != 1.0)
+    {
+        return None;
+    }
+    let (nx, nq, _) = base.model.sizes;
+    let q = real.view((nx, nx), (nq, nq)).into_owned();
+    let c_qx = real.view((nx, 0), (nq, nx)).into_owned();
+    if nq == 0 {
+        return Some(DMatrix::zeros(0, nx));
+    }
+    q.lu().solve(&c_qx)
+}
+
+/// The case's overrides with `name = value` last (the nominal build has checked that every
+/// override is read; this one is, or it would have no derivative).
+fn overridden(case: &Case, name: &str, value: f64) -> pendkit_model::Overrides {
+    let mut overrides = case.overrides.clone();
+    overrides
+        .parameters
+        .push((name.to_string(), format!("{value:e}")));
+    overrides
+}
+
+/// dK_eff/dp and dM/dp exactly (docs/exact-sensitivities.md, step 4): the equilibrium's
+/// motion by the implicit function theorem and the stage's stiffness and mass
+/// differentiated along it ([`pendkit_assembly::stage_tangent`]) from the model `dual`
+/// built with the parameter seeded, then the derivative of the float elimination,
+/// dK_eff = dK_xx − dK_xq X − Xᵀ dK_qx + Xᵀ dQ X (X = Q⁻¹ C_QX). `None` where the route
+/// is closed: a kind without tangent terms, user-written terms, or a damping tag whose
+/// real multiplier at DC is not 1 at the nominal value and at p₀ ± h.
+fn exact_matrices(
+    shared: &Shared,
+    name: &str,
+    p0: f64,
+    h: f64,
+    dual: &System<num_dual::Dual64>,
+) -> Result<Option<(DMatrix<f64>, DMatrix<f64>)>, Error> {
+    let Some(x_map) = shared.float_map else {
+        return Ok(None);
+    };
+    let base = &shared.base_point.result;
+    // the real stiffness is the tension-on Hessian only while every ε'(0) is 1
+    for k in [-1.0, 1.0] {
+        let overrides = overridden(shared.case, name, p0 + k * h);
+        let Ok(system) = stepped(dual, k * h, shared.defaults, &overrides) else {
+            return Ok(None);
+        };
+        if base
+            .model
+            .by_tag
+            .iter()
+            .any(|(tag, _)| system.damping.at(tag, 0.0).0 != 1.0)
+        {
+            return Ok(None);
+        }
+    }
+    let assembled = &base.assembled;
+    let layout = &assembled.layout;
+    let Some(tangent) = pendkit_assembly::stage_tangent(
+        dual,
+        shared.request.stage,
+        &assembled.equilibrium.coords,
+        layout,
+    )?
+    else {
+        return Ok(None);
+    };
+    let (vars, floats) = (&layout.variables, &layout.floats);
+    let block = |r: &[usize], c: &[usize]| {
+        DMatrix::from_fn(r.len(), c.len(), |a, b| tangent.stiffness[(r[a], c[b])])
+    };
+    let mut dk = block(vars, vars);
+    if !floats.is_empty() {
+        let dk_xq = block(vars, floats);
+        let dq = block(floats, floats);
+        let coupled = &dk_xq * x_map;
+        dk -= &coupled + coupled.transpose();
+        dk += x_map.transpose() * dq * x_map;
+    }
+    Ok(Some((dk, tangent.mass)))
+}
+
+/// d(mode frequency)/dp (Hz per unit of the parameter) of every mode from dK_eff/dp and
+/// dM/dp: dω² = vᵀ(dK_eff − ω² dM)v with the mass-normalised mode v, or over a cluster of
+/// (nearly) equal ω² the eigenvalues of that matrix projected on the cluster.
+fn mode_derivatives(
+    shared: &Shared,
+    dk: &DMatrix<f64>,
+    dm: &DMatrix<f64>,
+) -> Result<Vec<f64>, Error> {
+    let (vectors, modes) = (shared.vectors, &shared.base_point.result.modes.modes);
+    let vk = vectors.transpose() * dk * vectors;
+    let vm = vectors.transpose() * dm * vectors;
+    let mut dfdp = vec![0.0; modes.len()];
+    for cluster in shared.clusters {
+        let w2: f64 =
+            cluster.iter().map(|&k| modes[k].omega_squared).sum::<f64>() / cluster.len() as f64;
+        let g = DMatrix::from_fn(cluster.len(), cluster.len(), |a, b| {
+            let (ka, kb) = (cluster[a], cluster[b]);
+            vk[(ka, kb)] - w2 * vm[(ka, kb)]
+        });
+        let g = (&g + g.transpose()) * 0.5;
+        let mut d: Vec<f64> = g.symmetric_eigenvalues().iter().copied().collect();
+        d.sort_by(f64::total_cmp);
+        for (&k, dw2) in cluster.iter().zip(d) {
+            let mode = &modes[k];
+            if mode.omega_squared == 0.0 {
+                return Err(bad(format!(
+                    "mode {} ({}) is neutral (ω² = 0): its frequency has no derivative",
+                    k + 1,
+                    mode.label
+                )));
+            }
+            dfdp[k] = dw2 / (4.0 * std::f64::consts::PI * mode.omega_squared.abs().sqrt());
+        }
+    }
+    Ok(dfdp)
 }
 
 /// The model moved by `step` along its exact tangent `dual` (the mechanical numbers to
@@ -702,12 +830,9 @@ pub fn sensitivities(case: &Case, request: &SensitivityRequest) -> Result<Sensit
 
     let base = run_stage(system, request.stage)?;
     let warning = base.require_stable(request.allow_unstable)?;
-    let base_k = eliminate_floats(
-        &base.model.real_stiffness(&base.system.damping),
-        &base.assembled.layout,
-        &base.system,
-    )?
-    .k_eff;
+    let base_real = base.model.real_stiffness(&base.system.damping);
+    let base_k = eliminate_floats(&base_real, &base.assembled.layout, &base.system)?.k_eff;
+    let float_map = float_map(&base, &base_real);
     let base_point = Point {
         k_eff: base_k,
         result: base,
@@ -740,6 +865,7 @@ pub fn sensitivities(case: &Case, request: &SensitivityRequest) -> Result<Sensit
     let mut d_noise: Vec<Vec<(f64, C)>> = vec![vec![(0.0, C::new(0.0, 0.0)); np]; nf];
     let mut steps = vec![0.0; np];
     let mut exact_build = vec![false; np];
+    let mut exact = vec![false; np];
     let mut refused: Vec<Option<String>> = vec![None; np];
 
     // the nominal responses' factorisations, once per frequency
@@ -775,6 +901,7 @@ pub fn sensitivities(case: &Case, request: &SensitivityRequest) -> Result<Sensit
         clusters: &clusters,
         sizes,
         responses,
+        float_map: float_map.as_ref(),
     };
     let threads = match request.threads {
         0 => std::thread::available_parallelism().map_or(1, usize::from),
@@ -785,6 +912,7 @@ pub fn sensitivities(case: &Case, request: &SensitivityRequest) -> Result<Sensit
         let Some(col) = col else { continue };
         steps[j] = col.step;
         exact_build[j] = col.exact_build;
+        exact[j] = col.exact;
         if col.refused.is_some() {
             refused[j] = col.refused;
             continue;
@@ -889,6 +1017,7 @@ pub fn sensitivities(case: &Case, request: &SensitivityRequest) -> Result<Sensit
         units,
         steps: kept(steps, &keep),
         exact_build: kept(exact_build, &keep),
+        exact: kept(exact, &keep),
         modes_hz,
         mode_labels,
         dfdp,

@@ -367,6 +367,7 @@ impl Model {
             parameters,
             allow_unstable,
             threads: 0,
+            differences: false,
         };
         let case = &self.case;
         let s = py

@@ -9,32 +9,36 @@
 //! elsewhere the energy is differentiated over frames rebuilt from the bodies' jets.
 
 use nalgebra::{Matrix3, Vector3};
+use num_dual::Dual64;
 use pendkit_energy::{
-    Derivatives, Element, EnergyError, JetPoint, OffForm, Potential, Reference, SharedBodies,
-    Stage, TensionOff, Term, hyper_dual_over_frames,
+    Derivatives, Element, EnergyError, JetPoint, LocalFrames, OffForm, Potential, Reference,
+    SharedBodies, Stage, TangentPotential, TangentTerm, TensionOff, Term, Wire,
+    hyper_dual_over_frames,
 };
 use pendkit_geometry::{Frame, FrameMap};
-use pendkit_rotations::{Real, dot, mul_tr_const, small_rotation, tr_mul, tr_mul_vec, vee};
+use pendkit_rotations::{
+    Constant, Lift, Real, dot, mul_tr_const, small_rotation, tr_mul, tr_mul_vec, vee,
+};
 
-/// Twist energy of one wire.
+/// Twist energy of one wire (constants `f64`, or `Dual64` for the parameter derivatives).
 #[derive(Clone, Debug)]
-struct TorsionEnergy {
+struct TorsionEnergy<C = f64> {
     frames: [FrameMap; 2],
-    points: [Vector3<f64>; 2],
+    points: [Vector3<C>; 2],
     /// Orientation of end 1's body seen from end 0's body at the reference.
-    reference_relative: Matrix3<f64>,
+    reference_relative: Matrix3<C>,
     /// κ (N m/rad).
-    stiffness: f64,
+    stiffness: C,
     /// G J_e / l (N m/rad): κ with the tension off.
-    stiffness_unloaded: f64,
-    /// The local coordinates of the reference, where the twist vanishes.
+    stiffness_unloaded: C,
+    /// The local coordinates of the reference (their values), where the twist vanishes.
     reference: Vec<f64>,
 }
 
-impl TorsionEnergy {
+impl<C: Constant> TorsionEnergy<C> {
     /// Δθ (rad): the rotation of end 1 relative to end 0 since the reference, in end 0's
     /// axes, about the wire.
-    fn twist<D: Real>(&self, f0: &Frame<D>, f1: &Frame<D>) -> D {
+    fn twist<D: Lift<C>>(&self, f0: &Frame<D>, f1: &Frame<D>) -> D {
         let change = mul_tr_const(
             &tr_mul(&f0.rotation, &f1.rotation),
             &self.reference_relative,
@@ -45,6 +49,20 @@ impl TorsionEnergy {
         dot(&w, &axis) / dot(&axis, &axis).sqrt()
     }
 
+    /// ½ κ Δθ² (J) at local coordinates `x`.
+    fn energy_at<D: Lift<C>>(&self, x: &[D]) -> D {
+        let twist = self.twist(&self.frames[0].eval(x), &self.frames[1].eval(x));
+        (twist * twist).times(self.stiffness * 0.5)
+    }
+}
+
+impl TangentPotential for TorsionEnergy<Dual64> {
+    fn energy<D: Lift<Dual64>>(&self, x: &[D]) -> D {
+        self.energy_at(x)
+    }
+}
+
+impl TorsionEnergy {
     /// The Hessian at the reference. There Δθ = 0 identically (the change of relative
     /// orientation is the identity), so every term of ∇²(½κΔθ²) = κ(∇Δθ∇Δθᵀ + Δθ∇²Δθ) but
     /// the first vanishes and the gradient κΔθ∇Δθ is zero: H = κ ∇Δθ ∇Δθᵀ exactly. And
@@ -85,8 +103,7 @@ impl TorsionEnergy {
 
 impl Potential for TorsionEnergy {
     fn energy<D: Real>(&self, x: &[D]) -> D {
-        let twist = self.twist(&self.frames[0].eval(x), &self.frames[1].eval(x));
-        twist * twist * (0.5 * self.stiffness)
+        self.energy_at(x)
     }
 
     fn tension_off(&self, _x_eq: &[f64]) -> TensionOff<Self> {
@@ -151,45 +168,78 @@ impl Element for WireTorsion {
         let system = reference.system;
         let mut terms = Vec::new();
         for wire in &system.wires {
-            let s = &wire.section;
-            if s.shear_modulus * s.torsion_constant == 0.0 && s.polar_moment == 0.0 {
-                continue;
-            }
-            let l = reference.wire_length(wire);
-            let tension = reference.wire_tension(wire);
-            let unloaded = s.shear_modulus * s.torsion_constant / l;
-            let stiffening = if s.area > 0.0 {
-                tension * s.polar_moment / s.area / l
-            } else {
-                0.0
-            };
             let local = shared.frames(system, &[wire.ends[0].body, wire.ends[1].body]);
-            let r0 = system.bodies[wire.ends[0].body]
-                .frame
-                .eval(reference.coords)
-                .rotation;
-            let r1 = system.bodies[wire.ends[1].body]
-                .frame
-                .eval(reference.coords)
-                .rotation;
-            let energy = TorsionEnergy {
-                frames: [local.frames[0].clone(), local.frames[1].clone()],
-                points: [wire.ends[0].point, wire.ends[1].point],
-                reference_relative: r0.transpose() * r1,
-                stiffness: unloaded + stiffening,
-                stiffness_unloaded: unloaded,
-                reference: local.coords.iter().map(|&g| reference.coords[g]).collect(),
-            };
-            terms.push(Term::on_frames(
-                format!("wire-torsion {}", wire.name),
-                "wire-torsion",
-                wire.tags.torsion.clone(),
-                local,
-                energy,
-            ));
+            if let Some(energy) = torsion_energy(reference, wire, &local) {
+                let label = format!("wire-torsion {}", wire.name);
+                let tag = wire.tags.torsion.clone();
+                terms.push(Term::on_frames(label, "wire-torsion", tag, local, energy));
+            }
         }
         Ok(terms)
     }
+    fn tangent_terms(
+        &self,
+        reference: &Reference<Dual64>,
+    ) -> Result<Option<Vec<TangentTerm>>, EnergyError> {
+        let system = reference.system;
+        let mut terms = Vec::new();
+        for wire in &system.wires {
+            let local = LocalFrames::new(system, &[wire.ends[0].body, wire.ends[1].body]);
+            if let Some(energy) = torsion_energy(reference, wire, &local) {
+                let label = format!("wire-torsion {}", wire.name);
+                let tag = wire.tags.torsion.clone();
+                terms.push(TangentTerm::on_frames(
+                    label,
+                    "wire-torsion",
+                    tag,
+                    &local,
+                    energy,
+                ));
+            }
+        }
+        Ok(Some(terms))
+    }
+}
+
+/// The twist energy of `wire` on the frames `local`, built around `reference`; `None` for
+/// a wire with neither torsion constant nor polar moment.
+fn torsion_energy<S: Constant>(
+    reference: &Reference<S>,
+    wire: &Wire<S>,
+    local: &LocalFrames,
+) -> Option<TorsionEnergy<S>> {
+    let s = &wire.section;
+    if (s.shear_modulus * s.torsion_constant).is_exactly_zero() && s.polar_moment.is_exactly_zero()
+    {
+        return None;
+    }
+    let system = reference.system;
+    let l = reference.wire_length(wire);
+    let tension = reference.wire_tension(wire);
+    let unloaded = s.shear_modulus * s.torsion_constant / l;
+    let stiffening = if s.area.re() > 0.0 {
+        tension * s.polar_moment / s.area / l
+    } else {
+        S::from(0.0)
+    };
+    let rotation = |k: usize| {
+        system.bodies[wire.ends[k].body]
+            .frame
+            .eval(reference.coords)
+            .rotation
+    };
+    Some(TorsionEnergy {
+        frames: [local.frames[0].clone(), local.frames[1].clone()],
+        points: [wire.ends[0].point, wire.ends[1].point],
+        reference_relative: tr_mul(&rotation(0), &rotation(1)),
+        stiffness: unloaded + stiffening,
+        stiffness_unloaded: unloaded,
+        reference: local
+            .coords
+            .iter()
+            .map(|&g| reference.coords[g].re())
+            .collect(),
+    })
 }
 
 pendkit_energy::register_element!(WireTorsion);
