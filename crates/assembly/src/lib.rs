@@ -27,7 +27,7 @@ use pendkit_geometry::FrameJet;
 pub use equilibrium::{Equilibrium, EquilibriumOptions, find_equilibrium};
 pub use evaluate::DerivativePath;
 pub use pendkit_energy::OffHessian;
-pub use tangent::{StageTangent, stage_tangent};
+pub use tangent::{Along, Balance, StageTangent, stage_tangent};
 pub use timing::{Phase, PhaseTimes, timed};
 
 use evaluate::Evaluator;

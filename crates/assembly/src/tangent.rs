@@ -28,14 +28,15 @@ pub struct StageTangent {
     /// dq*/dp, one entry per coordinate (m or rad per unit of the parameter; 0 on the
     /// coordinates Newton does not move: parameters and pinned ones).
     pub equilibrium: Vec<f64>,
-    /// dK/dp (tension on) over all coordinates, global order (n × n), along the moving
-    /// equilibrium (N/m, N, N m/rad per unit of the parameter).
+    /// dK/dp (tension on) along the moving equilibrium (N/m, N, N m/rad per unit of the
+    /// parameter): over all coordinates, global order (n × n), or projected on the
+    /// directions asked for ([`Along`]).
     pub stiffness: DMatrix<f64>,
     /// dM/dp over the layout's variables (kg, kg m, kg m² per unit of the parameter).
     pub mass: DMatrix<f64>,
     /// The largest |dg/dp| on a free coordinate once the equilibrium moves along δq,
-    /// relative to the largest |∂g/∂p|: the implicit function theorem's own check, zero
-    /// but for rounding.
+    /// relative to the largest sum over the terms of their |∂g/∂p| on one coordinate: the
+    /// implicit function theorem's own check, zero but for rounding.
     pub residual: f64,
 }
 
@@ -60,13 +61,31 @@ fn kind_tangent_terms(
     Ok(Some(terms))
 }
 
-/// Adds each term's Hessian (or, when `hessian` is false, gradient) at `x` into `matrix`
-/// (or `vector`), global order; value parts into `.re`, parameter derivatives into `.eps`.
+/// Sums of the terms' derivatives over the full coordinate vector: Hessian and gradient
+/// (value parts in `.re`, parameter derivatives in `.eps`), and per coordinate the sum of
+/// the terms' |∂g/∂p|, the scale the sum's rounding is measured against.
+struct Sums {
+    hessian: DMatrix<Dual64>,
+    gradient: DVector<Dual64>,
+    magnitude: DVector<f64>,
+}
+
+impl Sums {
+    fn new(n: usize) -> Self {
+        let zero = Dual64::from_re(0.0);
+        Sums {
+            hessian: DMatrix::from_element(n, n, zero),
+            gradient: DVector::from_element(n, zero),
+            magnitude: DVector::zeros(n),
+        }
+    }
+}
+
+/// Adds each term's Hessian (or, when `hessian` is false, its gradient only) at `x`.
 fn accumulate(
     terms: &[TangentTerm],
     x: &[Dual64],
-    matrix: &mut DMatrix<Dual64>,
-    vector: &mut DVector<Dual64>,
+    sums: &mut Sums,
     hessian: bool,
 ) -> Result<(), EnergyError> {
     for term in terms {
@@ -77,10 +96,11 @@ fn accumulate(
         };
         let m = term.coords.len();
         for (a, &ga) in term.coords.iter().enumerate() {
-            vector[ga] += d.gradient[a];
+            sums.gradient[ga] += d.gradient[a];
+            sums.magnitude[ga] += d.gradient[a].eps.abs();
             if hessian {
                 for (b, &gb) in term.coords.iter().enumerate() {
-                    matrix[(ga, gb)] += d.hessian[a * m + b];
+                    sums.hessian[(ga, gb)] += d.hessian[a * m + b];
                 }
             }
         }
@@ -88,17 +108,59 @@ fn accumulate(
     Ok(())
 }
 
-/// The exact derivatives of stage `stage`'s stiffness and mass with respect to the
-/// parameter `system` was built with seeded, at the equilibrium `equilibrium` (the `f64`
-/// model's, full coordinate vector) with the stage's `layout`. `None` when the model has
-/// terms without such derivatives (a kind without tangent terms, user-written terms),
-/// for which the caller keeps to differences.
-pub fn stage_tangent(
-    system: &System<Dual64>,
-    stage: Stage,
-    equilibrium: &[f64],
-    layout: &Layout,
-) -> Result<Option<StageTangent>, AssemblyError> {
+/// The stiffness of the terms Newton balances, over the free coordinates (not parameters,
+/// not pinned), at the equilibrium, factorised: the same for every parameter, so built
+/// once per stage ([`Balance::new`]) and shared by [`stage_tangent`]'s calls.
+pub struct Balance {
+    free: Vec<usize>,
+    lu: nalgebra::LU<f64, nalgebra::Dyn, nalgebra::Dyn>,
+}
+
+impl Balance {
+    /// The balance of `system` at `equilibrium` (its full coordinate vector); `None` when the
+    /// model has terms without parameter derivatives (see [`stage_tangent`]).
+    pub fn new(system: &System, equilibrium: &[f64]) -> Result<Option<Balance>, AssemblyError> {
+        let system = system.map_scalars(Dual64::from_re);
+        check_equilibrium(&system, equilibrium)?;
+        let Some(balanced) = balanced_terms(&system)? else {
+            return Ok(None);
+        };
+        let n = system.coords.len();
+        let at_rest: Vec<Dual64> = equilibrium.iter().map(|&v| Dual64::from_re(v)).collect();
+        let mut sums = Sums::new(n);
+        accumulate(&balanced, &at_rest, &mut sums, true)?;
+        let free = free_coordinates(&system);
+        let k = DMatrix::from_fn(free.len(), free.len(), |a, b| {
+            sums.hessian[(free[a], free[b])].re
+        });
+        Ok(Some(Balance { free, lu: k.lu() }))
+    }
+}
+
+/// The coordinates Newton moves: neither parameters nor pinned.
+fn free_coordinates(system: &System<Dual64>) -> Vec<usize> {
+    (0..system.coords.len())
+        .filter(|&g| {
+            let c = &system.coords[g];
+            c.kind != CoordKind::Parameter && !c.pinned
+        })
+        .collect()
+}
+
+/// The terms Newton minimised: stage-0A kinds (their constants do not depend on the
+/// reference) and, when plug-in terms join early, all of those, built around the start.
+/// `None` when some kind has no tangent terms or the model has user-written terms (text:
+/// whether their numbers move with the parameter is unknown).
+fn balanced_terms(system: &System<Dual64>) -> Result<Option<Vec<TangentTerm>>, EnergyError> {
+    if !system.extra_terms.is_empty() {
+        return Ok(None);
+    }
+    let start: Vec<Dual64> = system.start().into_iter().map(Dual64::from_re).collect();
+    let early = system.early_wire_terms != EarlyWireTerms::No;
+    kind_tangent_terms(system, &start, |s| s == Stage::S0A || early)
+}
+
+fn check_equilibrium(system: &System<Dual64>, equilibrium: &[f64]) -> Result<(), AssemblyError> {
     let n = system.coords.len();
     if equilibrium.len() != n {
         return Err(AssemblyError::Length {
@@ -108,40 +170,67 @@ pub fn stage_tangent(
             given: equilibrium.len(),
         });
     }
-    system.check_indices()?;
-    // user-written terms are text: whether their numbers move with the parameter is unknown
-    if !system.extra_terms.is_empty() {
-        return Ok(None);
+    Ok(system.check_indices()?)
+}
+
+/// Which part of dK/dp [`stage_tangent`] computes.
+#[derive(Clone, Copy, Debug)]
+pub enum Along<'a> {
+    /// Every entry (n × n, global order): one evaluation per entry of each term's upper
+    /// triangle.
+    Full,
+    /// The entries (a, b) of Wᵀ (dK/dp) W listed in `pairs` (the rest 0), W's columns full
+    /// coordinate vectors: one evaluation per pair and term, for the few directions a mode
+    /// sensitivity needs (the modes, lifted to the floats).
+    Pairs {
+        /// The directions, one column each (n rows).
+        vectors: &'a DMatrix<f64>,
+        /// The entries wanted (a, b), a ≤ b.
+        pairs: &'a [(usize, usize)],
+    },
+}
+
+/// The exact derivatives of stage `stage`'s stiffness and mass with respect to the
+/// parameter `system` was built with seeded, at the equilibrium `equilibrium` (the `f64`
+/// model's, full coordinate vector) with the stage's `layout` and the equilibrium's
+/// `balance` (from the `f64` model). `None` when the model has terms without such
+/// derivatives (a kind without tangent terms, user-written terms), for which the caller
+/// keeps to differences.
+pub fn stage_tangent(
+    system: &System<Dual64>,
+    stage: Stage,
+    equilibrium: &[f64],
+    layout: &Layout,
+    balance: &Balance,
+    along: Along,
+) -> Result<Option<StageTangent>, AssemblyError> {
+    check_equilibrium(system, equilibrium)?;
+    let n = system.coords.len();
+    let free = &balance.free;
+    if free.iter().any(|&g| g >= n) {
+        return Err(AssemblyError::Length {
+            function: "stage_tangent",
+            argument: "balance (of another model)",
+            expected: n,
+            given: free.iter().max().map_or(0, |g| g + 1),
+        });
     }
-    let zero = Dual64::from_re(0.0);
-    let start: Vec<Dual64> = system.start().into_iter().map(Dual64::from_re).collect();
-    // the terms Newton minimised: stage-0A kinds (their constants do not depend on the
-    // reference) and, when plug-in terms join early, all of those built around the start
-    let early = system.early_wire_terms != EarlyWireTerms::No;
-    let Some(balanced) = kind_tangent_terms(system, &start, |s| s == Stage::S0A || early)? else {
+    let Some(balanced) = balanced_terms(system)? else {
         return Ok(None);
     };
-    let free: Vec<usize> = (0..n)
-        .filter(|&g| {
-            let c = &system.coords[g];
-            c.kind != CoordKind::Parameter && !c.pinned
-        })
-        .collect();
-    // ∂g/∂p and K at the fixed equilibrium
+    // ∂g/∂p at the fixed equilibrium, and δq = −K⁻¹ ∂g/∂p
     let at_rest: Vec<Dual64> = equilibrium.iter().map(|&v| Dual64::from_re(v)).collect();
-    let mut k = DMatrix::from_element(n, n, zero);
-    let mut g = DVector::from_element(n, zero);
-    accumulate(&balanced, &at_rest, &mut k, &mut g, true)?;
-    let k_free = DMatrix::from_fn(free.len(), free.len(), |a, b| k[(free[a], free[b])].re);
-    let dg_free = DVector::from_fn(free.len(), |a, _| g[free[a]].eps);
-    let scale = dg_free.amax();
-    let delta_free = if scale == 0.0 {
+    let mut rest = Sums::new(n);
+    accumulate(&balanced, &at_rest, &mut rest, false)?;
+    let dg_free = DVector::from_fn(free.len(), |a, _| rest.gradient[free[a]].eps);
+    let scale = free.iter().map(|&g| rest.magnitude[g]).fold(0.0, f64::max);
+    let delta_free = if dg_free.amax() == 0.0 {
         DVector::zeros(free.len())
     } else {
-        let Some(solved) = k_free.lu().solve(&(-&dg_free)) else {
-            return Err(AssemblyError::SingularEquilibrium);
-        };
-        solved
+        balance
+            .lu
+            .solve(&(-&dg_free))
+            .ok_or(AssemblyError::SingularEquilibrium)?
     };
     let mut delta = vec![0.0; n];
     for (a, &gi) in free.iter().enumerate() {
@@ -161,15 +250,57 @@ pub fn stage_tangent(
     let Some(stage_terms) = stage_terms else {
         return Ok(None);
     };
-    let mut dk = DMatrix::from_element(n, n, zero);
-    let mut dg = DVector::from_element(n, zero);
-    accumulate(&balanced, &moving, &mut dk, &mut dg, true)?;
-    let balanced_residual = free.iter().map(|&gi| dg[gi].eps.abs()).fold(0.0, f64::max);
-    let mut unused = DVector::from_element(n, zero);
-    accumulate(&stage_terms, &moving, &mut dk, &mut unused, true)?;
+    let mut moved = Sums::new(n);
+    accumulate(&balanced, &moving, &mut moved, false)?;
+    let balanced_residual = free
+        .iter()
+        .map(|&g| moved.gradient[g].eps.abs())
+        .fold(0.0, f64::max);
+    let all = || balanced.iter().chain(&stage_terms);
+    let stiffness = match along {
+        Along::Full => {
+            let mut sums = Sums::new(n);
+            for term in all() {
+                add_hessian(term, &moving, &mut sums)?;
+            }
+            sums.hessian.map(|v| v.eps)
+        }
+        Along::Pairs { vectors, pairs } => {
+            if vectors.nrows() != n {
+                return Err(AssemblyError::Length {
+                    function: "stage_tangent",
+                    argument: "along: vectors (rows)",
+                    expected: n,
+                    given: vectors.nrows(),
+                });
+            }
+            let m = vectors.ncols();
+            let mut out = DMatrix::zeros(m, m);
+            let columns: Vec<Vec<f64>> = (0..m)
+                .map(|a| vectors.column(a).iter().copied().collect())
+                .collect();
+            for &(a, b) in pairs {
+                let (Some(u), Some(v)) = (columns.get(a), columns.get(b)) else {
+                    return Err(AssemblyError::Length {
+                        function: "stage_tangent",
+                        argument: "along: pairs (a direction's index)",
+                        expected: m,
+                        given: a.max(b) + 1,
+                    });
+                };
+                let mut sum = 0.0;
+                for term in all() {
+                    sum += term.second_along(&moving, u, v)?.eps;
+                }
+                out[(a, b)] = sum;
+                out[(b, a)] = sum;
+            }
+            out
+        }
+    };
     Ok(Some(StageTangent {
         equilibrium: delta,
-        stiffness: dk.map(|v| v.eps),
+        stiffness,
         mass: mass_tangent(system, layout, &moving),
         residual: if scale == 0.0 {
             balanced_residual
@@ -177,6 +308,11 @@ pub fn stage_tangent(
             balanced_residual / scale
         },
     }))
+}
+
+/// Adds one term's Hessian at `x` into `sums`.
+fn add_hessian(term: &TangentTerm, x: &[Dual64], sums: &mut Sums) -> Result<(), EnergyError> {
+    accumulate(std::slice::from_ref(term), x, sums, true)
 }
 
 /// dM/dp over the layout's variables: M = Σ_b m J_pᵀ J_p + J_ωᵀ I J_ω with the velocity

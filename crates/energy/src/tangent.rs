@@ -215,6 +215,37 @@ impl TangentTerm {
         Ok(out)
     }
 
+    /// The second derivative uᵀ H v of the energy along two directions `u`, `v` (full
+    /// coordinate vectors, read on the term's coordinates) at `x_global`, by one nested
+    /// hyper-dual evaluation, with its derivative with respect to the parameter along the
+    /// coordinates' own derivative.
+    pub fn second_along(
+        &self,
+        x_global: &[Dual64],
+        u: &[f64],
+        v: &[f64],
+    ) -> Result<Dual64, EnergyError> {
+        self.check_length("TangentTerm::second_along", x_global)?;
+        let short = u.len().min(v.len());
+        if let Some(&needed) = self.coords.iter().find(|&&i| i >= short) {
+            return Err(EnergyError::Length {
+                function: "TangentTerm::second_along",
+                argument: "u, v (directions)",
+                expected: needed + 1,
+                given: short,
+            });
+        }
+        let x: Vec<HyperTangent> = self
+            .coords
+            .iter()
+            .map(|&i| {
+                let (du, dv) = (Dual64::from_re(u[i]), Dual64::from_re(v[i]));
+                HyperTangent::new(x_global[i], du, dv, Dual64::from_re(0.0))
+            })
+            .collect();
+        Ok(self.body.value_hd(&x).eps1eps2)
+    }
+
     /// Value, gradient and Hessian over the term's own coordinates at `x_global`, by one
     /// nested hyper-dual evaluation per entry of the upper triangle; each entry's dual part
     /// is its derivative with respect to the parameter along the coordinates' own

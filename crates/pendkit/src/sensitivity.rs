@@ -48,7 +48,7 @@ use std::collections::BTreeSet;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use nalgebra::{Complex, DMatrix, DVector};
-use pendkit_assembly::{AssemblyOptions, assemble_with};
+use pendkit_assembly::{Along, AssemblyOptions, Balance, assemble_with};
 use pendkit_dynamics::{
     Input, Modes, Output, Stability, StageModel, eliminate_floats, validate::check_frequencies,
 };
@@ -339,11 +339,8 @@ struct Shared<'a> {
     clusters: &'a [Vec<usize>],
     sizes: (usize, usize, usize),
     responses: bool,
-    /// X = Q⁻¹ C_QX of the nominal real stiffness (floats by variables), for the derivative
-    /// of the float elimination; `None` when the exact route is closed to every parameter
-    /// (a damping tag whose real multiplier at DC is not 1, so the real stiffness is not
-    /// the tension-on Hessian).
-    float_map: Option<&'a DMatrix<f64>>,
+    /// What the exact route shares between parameters; `None` when it is closed to all.
+    exact: Option<ExactRoute>,
 }
 
 /// One parameter's derivatives (Hz, |H|'s unit, and the noise response per unit of the
@@ -415,9 +412,9 @@ fn column(shared: &Shared, j: usize) -> Result<Option<Column>, Error> {
         && !responses
         && !request.differences
         && let Some(dual) = &tangent
-        && let Some((dk, dm)) = exact_matrices(shared, name, p0, h, dual)?
+        && let Some((vk, vm)) = exact_projections(shared, name, p0, h, dual)?
     {
-        out.dfdp = mode_derivatives(shared, &dk, &dm)?;
+        out.dfdp = mode_derivatives(shared, &vk, &vm)?;
         out.exact = true;
         return Ok(Some(out));
     }
@@ -462,7 +459,10 @@ fn column(shared: &Shared, j: usize) -> Result<Option<Column>, Error> {
     if request.modes {
         let dk = difference(&points, h, |p| p.k_eff.clone());
         let dm = difference(&points, h, |p| p.result.assembled.mass.clone());
-        out.dfdp = mode_derivatives(shared, &dk, &dm)?;
+        let vectors = shared.vectors;
+        let vk = vectors.transpose() * &dk * vectors;
+        let vm = vectors.transpose() * &dm * vectors;
+        out.dfdp = mode_derivatives(shared, &vk, &vm)?;
     }
     if responses {
         let tf_ports: Vec<Ports> = match &request.tf {
@@ -513,28 +513,6 @@ fn column(shared: &Shared, j: usize) -> Result<Option<Column>, Error> {
     Ok(Some(out))
 }
 
-/// X = Q⁻¹ C_QX of the real stiffness `real` (layout order x, q, s) of `base`; `None` when
-/// a damping tag's real multiplier at DC is not 1 (the exact route needs the real
-/// stiffness to be the tension-on Hessian) or Q is singular.
-fn float_map(base: &StageResult, real: &DMatrix<f64>) -> Option<DMatrix<f64>> {
-    let damping = &base.system.damping;
-    if base
-        .model
-        .by_tag
-        .iter()
-        .any(|(tag, _)| damping.at(tag, 0.0).0 != 1.0)
-    {
-        return None;
-    }
-    let (nx, nq, _) = base.model.sizes;
-    let q = real.view((nx, nx), (nq, nq)).into_owned();
-    let c_qx = real.view((nx, 0), (nq, nx)).into_owned();
-    if nq == 0 {
-        return Some(DMatrix::zeros(0, nx));
-    }
-    q.lu().solve(&c_qx)
-}
-
 /// The case's overrides with `name = value` last (the nominal build has checked that every
 /// override is read; this one is, or it would have no derivative).
 fn overridden(case: &Case, name: &str, value: f64) -> pendkit_model::Overrides {
@@ -545,21 +523,23 @@ fn overridden(case: &Case, name: &str, value: f64) -> pendkit_model::Overrides {
     overrides
 }
 
-/// dK_eff/dp and dM/dp exactly (docs/exact-sensitivities.md, step 4): the equilibrium's
-/// motion by the implicit function theorem and the stage's stiffness and mass
-/// differentiated along it ([`pendkit_assembly::stage_tangent`]) from the model `dual`
-/// built with the parameter seeded, then the derivative of the float elimination,
-/// dK_eff = dK_xx − dK_xq X − Xᵀ dK_qx + Xᵀ dQ X (X = Q⁻¹ C_QX). `None` where the route
-/// is closed: a kind without tangent terms, user-written terms, or a damping tag whose
-/// real multiplier at DC is not 1 at the nominal value and at p₀ ± h.
-fn exact_matrices(
+/// The modes' projections Vᵀ(dK_eff/dp)V and Vᵀ(dM/dp)V, exactly (docs/exact-sensitivities.md,
+/// step 4): the equilibrium's motion by the implicit function theorem and the stage's
+/// stiffness and mass differentiated along it ([`pendkit_assembly::stage_tangent`]) from
+/// the model `dual` built with the parameter seeded. The float elimination's derivative
+/// projected on a mode v is that of the full stiffness on w = (v, −X v) (X = Q⁻¹ C_QX):
+/// vᵀ dK_eff v' = wᵀ dK w', so only the modes' directions (and the pairs within a cluster
+/// of equal ω²) are differentiated. `None` where the route is closed: a kind without
+/// tangent terms, user-written terms, or a damping tag whose real multiplier at DC is not
+/// 1 at the nominal value and at p₀ ± h.
+fn exact_projections(
     shared: &Shared,
     name: &str,
     p0: f64,
     h: f64,
     dual: &System<num_dual::Dual64>,
 ) -> Result<Option<(DMatrix<f64>, DMatrix<f64>)>, Error> {
-    let Some(x_map) = shared.float_map else {
+    let Some(exact) = &shared.exact else {
         return Ok(None);
     };
     let base = &shared.base_point.result;
@@ -579,42 +559,103 @@ fn exact_matrices(
         }
     }
     let assembled = &base.assembled;
-    let layout = &assembled.layout;
     let Some(tangent) = pendkit_assembly::stage_tangent(
         dual,
         shared.request.stage,
         &assembled.equilibrium.coords,
-        layout,
+        &assembled.layout,
+        &exact.balance,
+        Along::Pairs {
+            vectors: &exact.directions,
+            pairs: &exact.pairs,
+        },
     )?
     else {
         return Ok(None);
     };
-    let (vars, floats) = (&layout.variables, &layout.floats);
-    let block = |r: &[usize], c: &[usize]| {
-        DMatrix::from_fn(r.len(), c.len(), |a, b| tangent.stiffness[(r[a], c[b])])
-    };
-    let mut dk = block(vars, vars);
-    if !floats.is_empty() {
-        let dk_xq = block(vars, floats);
-        let dq = block(floats, floats);
-        let coupled = &dk_xq * x_map;
-        dk -= &coupled + coupled.transpose();
-        dk += x_map.transpose() * dq * x_map;
-    }
-    Ok(Some((dk, tangent.mass)))
+    let vectors = shared.vectors;
+    let vm = vectors.transpose() * &tangent.mass * vectors;
+    Ok(Some((tangent.stiffness, vm)))
 }
 
-/// d(mode frequency)/dp (Hz per unit of the parameter) of every mode from dK_eff/dp and
-/// dM/dp: dω² = vᵀ(dK_eff − ω² dM)v with the mass-normalised mode v, or over a cluster of
+/// What the exact route shares between parameters: the equilibrium's factorised stiffness,
+/// the modes lifted to the floats as full coordinate vectors, and the pairs of modes whose
+/// cross derivative a cluster needs.
+struct ExactRoute {
+    balance: Balance,
+    directions: DMatrix<f64>,
+    pairs: Vec<(usize, usize)>,
+}
+
+impl ExactRoute {
+    /// `None` when the route is closed to every parameter: a damping tag whose real
+    /// multiplier at DC is not 1 (so the real stiffness the modes use is not the
+    /// tension-on Hessian), a model with terms without parameter derivatives, or a
+    /// singular float block.
+    fn new(
+        base: &StageResult,
+        real: &DMatrix<f64>,
+        vectors: &DMatrix<f64>,
+        clusters: &[Vec<usize>],
+    ) -> Result<Option<ExactRoute>, Error> {
+        let damping = &base.system.damping;
+        if base
+            .model
+            .by_tag
+            .iter()
+            .any(|(tag, _)| damping.at(tag, 0.0).0 != 1.0)
+        {
+            return Ok(None);
+        }
+        let layout = &base.assembled.layout;
+        let (nx, nq, _) = base.model.sizes;
+        let q = real.view((nx, nx), (nq, nq)).into_owned();
+        let c_qx = real.view((nx, 0), (nq, nx)).into_owned();
+        let float_map = if nq == 0 {
+            DMatrix::zeros(0, nx)
+        } else {
+            match q.lu().solve(&c_qx) {
+                Some(x) => x,
+                None => return Ok(None),
+            }
+        };
+        let Some(balance) = Balance::new(&base.system, &base.assembled.equilibrium.coords)? else {
+            return Ok(None);
+        };
+        let lifted = -(&float_map * vectors);
+        let mut directions = DMatrix::zeros(base.system.coords.len(), vectors.ncols());
+        for (row, &g) in layout.variables.iter().enumerate() {
+            directions.row_mut(g).copy_from(&vectors.row(row));
+        }
+        for (row, &g) in layout.floats.iter().enumerate() {
+            directions.row_mut(g).copy_from(&lifted.row(row));
+        }
+        let pairs = clusters
+            .iter()
+            .flat_map(|c| {
+                c.iter()
+                    .enumerate()
+                    .flat_map(move |(i, &a)| c[i..].iter().map(move |&b| (a, b)))
+            })
+            .collect();
+        Ok(Some(ExactRoute {
+            balance,
+            directions,
+            pairs,
+        }))
+    }
+}
+
+/// d(mode frequency)/dp (Hz per unit of the parameter) of every mode from the modes'
+/// projections vk = Vᵀ(dK_eff/dp)V and vm = Vᵀ(dM/dp)V (mass-normalised modes V; only the
+/// entries within a cluster are read): dω² = vᵀ(dK_eff − ω² dM)v, or over a cluster of
 /// (nearly) equal ω² the eigenvalues of that matrix projected on the cluster.
 fn mode_derivatives(
     shared: &Shared,
-    dk: &DMatrix<f64>,
-    dm: &DMatrix<f64>,
+    vk: &DMatrix<f64>,
+    vm: &DMatrix<f64>,
 ) -> Result<Vec<f64>, Error> {
-    let (vectors, modes) = (shared.vectors, &shared.base_point.result.modes.modes);
-    let vk = vectors.transpose() * dk * vectors;
-    let vm = vectors.transpose() * dm * vectors;
+    let modes = &shared.base_point.result.modes.modes;
     let mut dfdp = vec![0.0; modes.len()];
     for cluster in shared.clusters {
         let w2: f64 =
@@ -832,7 +873,6 @@ pub fn sensitivities(case: &Case, request: &SensitivityRequest) -> Result<Sensit
     let warning = base.require_stable(request.allow_unstable)?;
     let base_real = base.model.real_stiffness(&base.system.damping);
     let base_k = eliminate_floats(&base_real, &base.assembled.layout, &base.system)?.k_eff;
-    let float_map = float_map(&base, &base_real);
     let base_point = Point {
         k_eff: base_k,
         result: base,
@@ -856,6 +896,11 @@ pub fn sensitivities(case: &Case, request: &SensitivityRequest) -> Result<Sensit
         modes[k].vector.get(i).copied().unwrap_or(0.0)
     });
     let clusters = mode_clusters(modes);
+    let exact_route = if request.modes && !responses && !request.differences {
+        ExactRoute::new(&base_point.result, &base_real, &vectors, &clusters)?
+    } else {
+        None
+    };
 
     let np = names.len();
     let nf = request.freqs.len();
@@ -901,7 +946,7 @@ pub fn sensitivities(case: &Case, request: &SensitivityRequest) -> Result<Sensit
         clusters: &clusters,
         sizes,
         responses,
-        float_map: float_map.as_ref(),
+        exact: exact_route,
     };
     let threads = match request.threads {
         0 => std::thread::available_parallelism().map_or(1, usize::from),

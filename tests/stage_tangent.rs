@@ -1,0 +1,169 @@
+//! The exact derivatives of a stage's equilibrium, stiffness and mass with respect to one
+//! parameter (`pendkit_assembly::stage_tangent`: the model built with the parameter seeded,
+//! the equilibrium's motion by the implicit function theorem, the matrices differentiated
+//! along it) against fourth-order central differences of the same quantities from the
+//! `f64` model rebuilt and re-solved from scratch at p₀ ± h, p₀ ± 2h (`Case::with_sets`):
+//! the two share the energies, nothing of the derivative.
+//!
+//! Step h = 10⁻⁴ |p₀|: truncation h⁴ X⁽⁵⁾/30 ~ 10⁻¹⁶ of X; rounding ~ε|X|/h ~ 10⁻¹² of X,
+//! plus the re-solved equilibria's own convergence (Newton stops at rounding-level
+//! residuals, ~10⁻¹³ m). Tolerance: 10⁻⁷ of the largest entry of the difference plus 10⁻⁹
+//! of the largest entry of X itself per unit relative change of p (the floor rounding
+//! allows for a parameter that barely moves X).
+
+use nalgebra::DMatrix;
+use pendkit::{Case, Stage};
+use pendkit_assembly::{Along, AssemblyOptions, Balance, assemble_with, stage_tangent};
+
+struct Solved {
+    coords: Vec<f64>,
+    stiffness: DMatrix<f64>,
+    mass: DMatrix<f64>,
+}
+
+/// The stage re-solved from scratch with `name = value`: equilibrium, tension-on stiffness
+/// over all coordinates (global order) and mass over the variables.
+fn solved(case: &Case, stage: Stage, name: &str, value: Option<f64>) -> Solved {
+    let case = match value {
+        Some(v) => case
+            .clone()
+            .with_sets(&[format!("{name}={v:e}")])
+            .expect("set"),
+        None => case.clone(),
+    };
+    let (system, _) = case.build().expect("build");
+    let a = assemble_with(&system, stage, &AssemblyOptions::default(), None).expect("assemble");
+    let n = system.coords.len();
+    let mut k = DMatrix::zeros(n, n);
+    for t in &a.terms {
+        let m = t.coords.len();
+        for (i, &gi) in t.coords.iter().enumerate() {
+            for (j, &gj) in t.coords.iter().enumerate() {
+                k[(gi, gj)] += t.on[i * m + j];
+            }
+        }
+    }
+    Solved {
+        coords: a.equilibrium.coords,
+        stiffness: k,
+        mass: a.mass,
+    }
+}
+
+fn difference(values: [&DMatrix<f64>; 4], h: f64) -> DMatrix<f64> {
+    let [m2, m1, p1, p2] = values;
+    ((p1 - m1) * 8.0 - (p2 - m2)) / (12.0 * h)
+}
+
+fn close(what: &str, exact: &DMatrix<f64>, reference: &DMatrix<f64>, nominal: &DMatrix<f64>) {
+    let tol = 1e-7 * reference.amax() + 1e-9 * nominal.amax();
+    let worst = (exact - reference).amax();
+    assert!(
+        worst <= tol,
+        "{what}: exact vs re-solved differences differ by {worst:e} (tolerance {tol:e}; largest entry {:e})",
+        reference.amax()
+    );
+}
+
+/// Every parameter of `spec` whose build has an exact tangent, at `stage`.
+fn check(spec: &str, stage: Stage, parameters: &[&str]) {
+    let case = Case::open(spec).expect("case");
+    let nominal = solved(&case, stage, "", None);
+    let (system, _) = case.build().expect("build");
+    let a = assemble_with(&system, stage, &AssemblyOptions::default(), None).expect("assemble");
+    let (_, resolved) = case.build().expect("build");
+    let balance = Balance::new(&system, &a.equilibrium.coords)
+        .expect("balance")
+        .expect("the exact route is open");
+    for &name in parameters {
+        let p0 = resolved.get(name).expect("parameter");
+        let h = 1e-4 * p0.abs();
+        let dual = pendkit_model::build_tangent(case.model, &case.overrides, name)
+            .unwrap_or_else(|e| panic!("{spec} {name}: no exact build: {e}"));
+        let tangent = |along| {
+            stage_tangent(
+                &dual,
+                stage,
+                &a.equilibrium.coords,
+                &a.layout,
+                &balance,
+                along,
+            )
+            .expect("stage tangent")
+            .unwrap_or_else(|| panic!("{spec} {name}: the exact route is closed"))
+        };
+        let t = tangent(Along::Full);
+        let at: Vec<Solved> = [-2.0, -1.0, 1.0, 2.0]
+            .iter()
+            .map(|k| solved(&case, stage, name, Some(p0 + k * h)))
+            .collect();
+        let vector = |s: &Solved| DMatrix::from_column_slice(s.coords.len(), 1, &s.coords);
+        let q: Vec<DMatrix<f64>> = at.iter().map(vector).collect();
+        let dq = difference([&q[0], &q[1], &q[2], &q[3]], h);
+        let exact_dq = DMatrix::from_column_slice(t.equilibrium.len(), 1, &t.equilibrium);
+        let what = |x: &str| format!("{spec} stage {stage} d{x}/d{name}");
+        close(
+            &what("q*"),
+            &exact_dq,
+            &dq,
+            &DMatrix::from_element(1, 1, 1e-3 / p0.abs()),
+        );
+        let k: Vec<&DMatrix<f64>> = at.iter().map(|s| &s.stiffness).collect();
+        let dk = difference([k[0], k[1], k[2], k[3]], h);
+        close(
+            &what("K"),
+            &t.stiffness,
+            &dk,
+            &(&nominal.stiffness / p0.abs()),
+        );
+        let m: Vec<&DMatrix<f64>> = at.iter().map(|s| &s.mass).collect();
+        let dm = difference([m[0], m[1], m[2], m[3]], h);
+        close(&what("M"), &t.mass, &dm, &(&nominal.mass / p0.abs()));
+        // the implicit function theorem's own check: the moved equilibrium is balanced
+        assert!(
+            t.residual < 1e-8,
+            "{spec} {name}: residual {:e}",
+            t.residual
+        );
+        // the directional route (one evaluation per pair of directions) against the full
+        // matrix (one per entry) projected on the same directions: the same derivative by
+        // two evaluations, equal to rounding (10⁻¹⁰ of the projection's largest entry)
+        let n = system.coords.len();
+        let w = DMatrix::from_fn(n, 3, |i, k| ((i * 7 + k * 3) % 5) as f64 - 2.0);
+        let pairs = [(0, 0), (0, 1), (1, 1), (1, 2), (2, 2), (0, 2)];
+        let projected = tangent(Along::Pairs {
+            vectors: &w,
+            pairs: &pairs,
+        });
+        let full = w.transpose() * &t.stiffness * &w;
+        let worst = (&projected.stiffness - &full).amax();
+        assert!(
+            worst <= 1e-10 * full.amax(),
+            "{spec} {name}: directional vs full dK differ by {worst:e} of {:e}",
+            full.amax()
+        );
+    }
+}
+
+#[test]
+fn pendulum_at_stage_0a_and_1a() {
+    // the fibre length, the mass, the fibres' separation, radius and modulus, gravity
+    for stage in [Stage::S0A, Stage::S1A] {
+        check(
+            "pendulum",
+            stage,
+            &["l_fibre", "m1", "a_fibre", "r_fibre", "E_fibre", "g"],
+        );
+    }
+}
+
+#[test]
+fn quad_at_stage_1a() {
+    // a wire length, a mass, a Young's modulus, a wire radius, an inertia, a height and two
+    // wire separations
+    check(
+        "quad",
+        Stage::S1A,
+        &["l1", "m1", "Y1", "r1", "I1x", "d0", "su", "ln"],
+    );
+}
