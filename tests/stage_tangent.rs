@@ -65,9 +65,13 @@ fn close(what: &str, exact: &DMatrix<f64>, reference: &DMatrix<f64>, nominal: &D
     );
 }
 
-/// Every parameter of `spec` whose build has an exact tangent, at `stage`.
-fn check(spec: &str, stage: Stage, parameters: &[&str]) {
-    let case = Case::open(spec).expect("case");
+/// The parameters `parameters` of `spec` (with the settings `sets`) at `stage`.
+fn check(spec: &str, sets: &[&str], stage: Stage, parameters: &[&str]) {
+    let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
+    let case = Case::open(spec)
+        .expect("case")
+        .with_sets(&sets)
+        .expect("sets");
     let nominal = solved(&case, stage, "", None);
     let (system, _) = case.build().expect("build");
     let a = assemble_with(&system, stage, &AssemblyOptions::default(), None).expect("assemble");
@@ -146,24 +150,37 @@ fn check(spec: &str, stage: Stage, parameters: &[&str]) {
 }
 
 #[test]
-fn pendulum_at_stage_0a_and_1a() {
-    // the fibre length, the mass, the fibres' separation, radius and modulus, gravity
-    for stage in [Stage::S0A, Stage::S1A] {
-        check(
-            "pendulum",
-            stage,
-            &["l_fibre", "m1", "a_fibre", "r_fibre", "E_fibre", "g"],
-        );
+fn pendulum_every_stage_hinged_and_clamped() {
+    // the fibre length, the mass, the fibres' separation, radius and modulus, gravity; at
+    // stage 2 the beam (bending and extra stretch) with the fibres hinged at the mass
+    // (one bending point) and clamped (two)
+    let parameters = ["l_fibre", "m1", "a_fibre", "r_fibre", "E_fibre", "g"];
+    for stage in [Stage::S0A, Stage::S1A, Stage::S1B, Stage::S2] {
+        check("pendulum", &[], stage, &parameters);
     }
+    check("pendulum", &["hinged_bottom=0"], Stage::S2, &parameters);
 }
 
 #[test]
-fn quad_at_stage_1a() {
+fn quad_at_stage_2() {
     // a wire length, a mass, a Young's modulus, a wire radius, an inertia, a height and two
     // wire separations
     check(
         "quad",
-        Stage::S1A,
+        &[],
+        Stage::S2,
         &["l1", "m1", "Y1", "r1", "I1x", "d0", "su", "ln"],
+    );
+}
+
+#[test]
+fn triple_at_stage_2() {
+    // a wire length, a mass, a height, an inertia, a blade's uncoupled frequency and silica's
+    // Young's modulus
+    check(
+        "triple",
+        &[],
+        Stage::S2,
+        &["l1", "m2", "d0", "I1x", "ufc1", "silica_Y"],
     );
 }

@@ -523,6 +523,9 @@ fn overridden(case: &Case, name: &str, value: f64) -> pendkit_model::Overrides {
     overrides
 }
 
+/// The modes' projections (Vᵀ(dK_eff/dp)V, Vᵀ(dM/dp)V).
+type Projections = (DMatrix<f64>, DMatrix<f64>);
+
 /// The modes' projections Vᵀ(dK_eff/dp)V and Vᵀ(dM/dp)V, exactly (docs/exact-sensitivities.md,
 /// step 4): the equilibrium's motion by the implicit function theorem and the stage's
 /// stiffness and mass differentiated along it ([`pendkit_assembly::stage_tangent`]) from
@@ -538,7 +541,7 @@ fn exact_projections(
     p0: f64,
     h: f64,
     dual: &System<num_dual::Dual64>,
-) -> Result<Option<(DMatrix<f64>, DMatrix<f64>)>, Error> {
+) -> Result<Option<Projections>, Error> {
     let Some(exact) = &shared.exact else {
         return Ok(None);
     };

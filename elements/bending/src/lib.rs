@@ -27,13 +27,14 @@ pub mod beam;
 use std::sync::Arc;
 
 use nalgebra::Vector3;
+use num_dual::Dual64;
 use pendkit_energy::{
     Attached, Derivatives, Element, EndDirection, EnergyError, JetPoint, LocalFrames, PartOff,
-    Reference, SharedBodies, SharedPotential, Stage, Term, Wire, add_jacobian,
-    hyper_dual_over_frames,
+    Reference, SharedBodies, SharedPotential, Stage, TangentSharedPotential, TangentTerm, Term,
+    Wire, add_jacobian, hyper_dual_over_frames,
 };
 use pendkit_geometry::{Frame, FrameMap};
-use pendkit_rotations::{Real, c, dot};
+use pendkit_rotations::{Constant, Lift, Real, c, dot};
 
 /// Index of the bending strain energy U_b among a beam's energy parts.
 pub const BENDING_PART: usize = 0;
@@ -42,24 +43,25 @@ pub const EXTRA_STRETCH_PART: usize = 1;
 
 /// How the wire resists bending across its section.
 #[derive(Clone, Debug)]
-enum Section {
+enum Section<C> {
     /// Same EI (N m²) in every direction.
-    Round { ei: f64 },
+    Round { ei: C },
     /// EI along the principal axis (body coordinates of end 0) and across it (N m²).
-    Oblong { axis: Vector3<f64>, ei: [f64; 2] },
+    Oblong { axis: Vector3<C>, ei: [C; 2] },
 }
 
-/// The geometry and section of one wire, as a function of its bodies' coordinates.
+/// The geometry and section of one wire, as a function of its bodies' coordinates (its
+/// constants `f64`, or `Dual64` for the parameter derivatives).
 #[derive(Clone, Debug)]
-pub struct WireBeam {
+pub struct WireBeam<C: Constant = f64> {
     frames: [FrameMap; 2],
-    points: [Vector3<f64>; 2],
+    points: [Vector3<C>; 2],
     /// Clamp directions in each end's body coordinates, pointing into the wire; None for
     /// a hinged end.
-    directions: [Option<Vector3<f64>>; 2],
-    section: Section,
+    directions: [Option<Vector3<C>>; 2],
+    section: Section<C>,
     /// Static tension at the reference configuration (N).
-    tension: f64,
+    tension: C,
     /// Local coordinates of the reference configuration.
     reference: Vec<f64>,
     /// Whether every clamped end is "auto": then the slopes vanish at the reference.
@@ -102,34 +104,62 @@ pub fn beam_terms(
     let mut terms = Vec::new();
     for (index, wire) in reference.system.wires.iter().enumerate() {
         if let Some((beam, frames)) = shared_beam(reference, shared, index)?.as_ref() {
-            let (tag, off) = if part == BENDING_PART {
-                (&wire.tags.bending, PartOff::Unchanged)
-            } else {
-                (&wire.tags.stretch, PartOff::Vanishes)
-            };
-            terms.push(Term::part(
-                format!("{kind} {}", wire.name),
+            let (tag, off) = part_tag(wire, part);
+            let label = format!("{kind} {}", wire.name);
+            let (frames, beam) = (frames.clone(), beam.clone());
+            terms.push(Term::part(label, kind, tag, frames, beam, part, off));
+        }
+    }
+    Ok(terms)
+}
+
+/// The damping tag and tension-off form of a beam's part: the bending strain energy is
+/// lossy and carries the bending tag, the work against tension is lossless and carries
+/// the stretch tag.
+fn part_tag<S: Constant>(wire: &Wire<S>, part: usize) -> (String, PartOff) {
+    if part == BENDING_PART {
+        (wire.tags.bending.clone(), PartOff::Unchanged)
+    } else {
+        (wire.tags.stretch.clone(), PartOff::Vanishes)
+    }
+}
+
+/// [`beam_terms`] for a model built with one parameter seeded: each wire's beam with its
+/// constants' derivatives, built around `reference` (whose coordinates move with the
+/// parameter), part `part` as kind `kind`.
+pub fn beam_tangent_terms(
+    reference: &Reference<Dual64>,
+    kind: &'static str,
+    part: usize,
+) -> Result<Vec<TangentTerm>, EnergyError> {
+    let mut terms = Vec::new();
+    for wire in &reference.system.wires {
+        let frames = LocalFrames::new(reference.system, &[wire.ends[0].body, wire.ends[1].body]);
+        if let Some(beam) = WireBeam::new(reference, wire, &frames)? {
+            let (tag, _) = part_tag(wire, part);
+            let label = format!("{kind} {}", wire.name);
+            terms.push(TangentTerm::part(
+                label,
                 kind,
-                tag.clone(),
-                frames.clone(),
-                beam.clone(),
+                tag,
+                &frames,
+                Arc::new(beam),
                 part,
-                off,
             ));
         }
     }
     Ok(terms)
 }
 
-impl WireBeam {
+impl<C: Constant> WireBeam<C> {
     /// The beam of `wire` built around `reference`, reading the frames `local` of the
     /// wire's two end bodies; `None` when the wire has no bending stiffness or both ends
     /// are hinged (no bending energy).
     pub fn new(
-        reference: &Reference,
-        wire: &Wire,
+        reference: &Reference<C>,
+        wire: &Wire<C>,
         local: &LocalFrames,
-    ) -> Result<Option<WireBeam>, EnergyError> {
+    ) -> Result<Option<WireBeam<C>>, EnergyError> {
         let sec = &wire.section;
         let fail = |message: String| EnergyError::Element {
             kind: "wire-bending",
@@ -141,30 +171,32 @@ impl WireBeam {
             sec.youngs_modulus * sec.moment_1,
             sec.youngs_modulus * sec.moment_2,
         ];
-        if directions.iter().all(Option::is_none) || ei.iter().all(|&e| e == 0.0) {
+        if directions.iter().all(Option::is_none) || ei.iter().all(|e| e.is_exactly_zero()) {
             return Ok(None);
         }
         // a tension within rounding of the stretch (k l ε) is zero, not compression
-        let rounding = 1e-12 * wire.stiffness * reference.wire_length(wire);
+        let rounding = 1e-12 * (wire.stiffness * reference.wire_length(wire)).re();
         let tension = match reference.wire_tension(wire) {
-            t if t.abs() <= rounding => 0.0,
+            t if t.re().abs() <= rounding => C::from(0.0),
             t => t,
         };
-        if tension.is_nan() || tension < 0.0 {
+        if tension.re().is_nan() || tension.re() < 0.0 {
             return Err(fail(format!(
-                "not under tension (T = {tension:.4e} N): the beam model needs a taut wire"
+                "not under tension (T = {:.4e} N): the beam model needs a taut wire",
+                tension.re()
             )));
         }
-        let section = if ei[0] == ei[1] {
+        let section = if (ei[0] - ei[1]).is_exactly_zero() {
             Section::Round { ei: ei[0] }
         } else {
             let rotation = reference.system.bodies[wire.ends[0].body]
                 .frame
                 .eval(reference.coords)
-                .rotation;
-            let [p0, p1] = reference.wire_points(wire);
+                .rotation
+                .map(|v| v.re());
+            let [p0, p1] = reference.wire_points(wire).map(|p| p.map(|v| v.re()));
             let chord = (p1 - p0).normalize();
-            let axis = rotation * sec.principal_axis;
+            let axis = rotation * sec.principal_axis.map(|v| v.re());
             if (axis - chord * axis.dot(&chord)).norm() < 1e-6 * axis.norm() {
                 return Err(fail("principal axis is parallel to the wire".into()));
             }
@@ -179,7 +211,11 @@ impl WireBeam {
             directions,
             section,
             tension,
-            reference: local.coords.iter().map(|&g| reference.coords[g]).collect(),
+            reference: local
+                .coords
+                .iter()
+                .map(|&g| reference.coords[g].re())
+                .collect(),
             straight_at_reference: wire
                 .ends
                 .iter()
@@ -189,12 +225,12 @@ impl WireBeam {
     }
 
     /// Total and bending energy at local coordinates `x`.
-    pub fn energy<D: Real>(&self, x: &[D]) -> BeamEnergy<D> {
+    pub fn energy<D: Lift<C>>(&self, x: &[D]) -> BeamEnergy<D> {
         self.energy_of_frames(&self.frames[0].eval(x), &self.frames[1].eval(x))
     }
 
     /// Total and bending energy with the two bodies' frames at `f0` and `f1`.
-    pub fn energy_of_frames<D: Real>(&self, f0: &Frame<D>, f1: &Frame<D>) -> BeamEnergy<D> {
+    pub fn energy_of_frames<D: Lift<C>>(&self, f0: &Frame<D>, f1: &Frame<D>) -> BeamEnergy<D> {
         let chord = f1.point(&self.points[1]) - f0.point(&self.points[0]);
         let zero = Vector3::from_element(c(0.0));
         // the wire's tangent runs from end 0 to end 1: at end 1 it is minus the clamp
@@ -213,7 +249,7 @@ impl WireBeam {
     /// Total and bending energy from the beam's geometric inputs in lab axes: the chord
     /// c = p1 − p0 (m), the clamp tangents (R0 d0 at end 0, −R1 d1 at end 1; ignored at a
     /// hinged end) and, for an oblong section, the principal axis R0 a (ignored otherwise).
-    pub fn energy_of_inputs<D: Real>(
+    pub fn energy_of_inputs<D: Lift<C>>(
         &self,
         chord: &Vector3<D>,
         tangents: &[Vector3<D>; 2],
@@ -234,10 +270,10 @@ impl WireBeam {
         let (t0, t1) = (slope(0), slope(1));
         let clamped = [self.directions[0].is_some(), self.directions[1].is_some()];
         // one principal direction: (EI, component of a slope along it)
-        let axis_energy = |ei: f64, a: D, b: D, ab: D| -> BeamEnergy<D> {
-            let u = l * (self.tension / ei).sqrt();
+        let axis_energy = |ei: C, a: D, b: D, ab: D| -> BeamEnergy<D> {
+            let u = l.times((self.tension / ei).sqrt());
             let (tot, bend) = beam::coefficients(u, clamped);
-            let scale = (l * 2.0).recip() * ei;
+            let scale = (l * 2.0).recip().times(ei);
             let q = |k: &beam::Coefficients<D>| (k.c11 * a + k.c22 * b + k.c12 * ab * 2.0) * scale;
             BeamEnergy {
                 total: q(&tot),
@@ -355,6 +391,19 @@ impl WireBeam {
     }
 }
 
+/// The beam with constants carrying their parameter derivatives: the same two parts.
+impl TangentSharedPotential for WireBeam<Dual64> {
+    fn parts(&self) -> usize {
+        2
+    }
+
+    fn energies<D: Lift<Dual64>>(&self, x: &[D], out: &mut [D]) {
+        let e = self.energy(x);
+        out[BENDING_PART] = e.bending;
+        out[EXTRA_STRETCH_PART] = e.total - e.bending;
+    }
+}
+
 /// The beam yields U_b ([`BENDING_PART`]) and U − U_b ([`EXTRA_STRETCH_PART`]).
 impl SharedPotential for WireBeam {
     fn parts(&self) -> usize {
@@ -408,6 +457,12 @@ impl Element for WireBending {
         shared: &SharedBodies,
     ) -> Result<Vec<Term>, EnergyError> {
         beam_terms(reference, shared, self.kind(), BENDING_PART)
+    }
+    fn tangent_terms(
+        &self,
+        reference: &Reference<Dual64>,
+    ) -> Result<Option<Vec<TangentTerm>>, EnergyError> {
+        beam_tangent_terms(reference, self.kind(), BENDING_PART).map(Some)
     }
 }
 

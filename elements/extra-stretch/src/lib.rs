@@ -3,8 +3,9 @@
 //! from its chord. It is pure tension work, so it is lossless (it vanishes with the
 //! tension off) and carries the wire's stretch tag. The beam itself is the bending crate's.
 
-use pendkit_element_bending::{EXTRA_STRETCH_PART, beam_terms};
-use pendkit_energy::{Element, EnergyError, Reference, SharedBodies, Stage, Term};
+use num_dual::Dual64;
+use pendkit_element_bending::{EXTRA_STRETCH_PART, beam_tangent_terms, beam_terms};
+use pendkit_energy::{Element, EnergyError, Reference, SharedBodies, Stage, TangentTerm, Term};
 
 /// The wire-extra-stretch element kind (stage 2): part [`EXTRA_STRETCH_PART`] of each
 /// wire's beam, shared with the bending kind (so one evaluation gives both).
@@ -30,6 +31,12 @@ impl Element for WireExtraStretch {
         shared: &SharedBodies,
     ) -> Result<Vec<Term>, EnergyError> {
         beam_terms(reference, shared, self.kind(), EXTRA_STRETCH_PART)
+    }
+    fn tangent_terms(
+        &self,
+        reference: &Reference<Dual64>,
+    ) -> Result<Option<Vec<TangentTerm>>, EnergyError> {
+        beam_tangent_terms(reference, self.kind(), EXTRA_STRETCH_PART).map(Some)
     }
 }
 
