@@ -9,14 +9,18 @@ use common::pendkit;
 fn json_has_one_row_per_mode_and_one_column_per_parameter() {
     // the toy (a mass on springs k1, k2 in series): f = √(k/m)/2π, k = k1 k2/(k1 + k2), so
     // df/dm = −f/(2m) and df/dk1 = f/(2k)·(k/k1)² (closed forms; 1e-9 relative: the
-    // springs are linear, the matrices' difference is exact but for rounding)
+    // derivatives are exact, dual numbers through the build, the springs and the
+    // equilibrium, so only rounding remains)
     let (ok, out, err) = pendkit(&["sensitivity", "toy", "--stage", "0a", "--json"]);
     assert!(ok, "{err}");
     let v: serde_json::Value = serde_json::from_str(&out).expect("JSON");
     let object = v.as_object().expect("an object");
     let mut keys: Vec<&str> = object.keys().map(String::as_str).collect();
     keys.sort_unstable();
-    assert_eq!(keys, ["dfdp", "exact_build", "modes_hz", "parameters"]);
+    assert_eq!(
+        keys,
+        ["dfdp", "exact", "exact_build", "modes_hz", "parameters"]
+    );
     let parameters: Vec<&str> = v["parameters"]
         .as_array()
         .expect("parameters")
@@ -24,6 +28,9 @@ fn json_has_one_row_per_mode_and_one_column_per_parameter() {
         .map(|p| p.as_str().expect("a name"))
         .collect();
     assert_eq!(parameters[..3], ["m", "k1", "k2"]);
+    // the toy's masses and springs have exact derivatives
+    assert_eq!(v["exact"][0], true);
+    assert_eq!(v["exact"][1], true);
     let f = v["modes_hz"][0].as_f64().expect("f");
     let row = v["dfdp"][0].as_array().expect("a row");
     assert_eq!(row.len(), parameters.len());

@@ -339,8 +339,9 @@ impl Model {
     /// output `noise`, at `freqs` (Hz, array-like; needed with `tf` or `noise`).
     /// `parameters` (names) restricts the columns (default: every parameter).
     /// `allow_unstable=True` goes on from an unstable equilibrium (the warning is in
-    /// `Sensitivities.warning`). Returns a `Sensitivities`.
-    #[pyo3(signature = (stage = None, *, modes = true, tf = None, noise = None, freqs = None, parameters = None, allow_unstable = false))]
+    /// `Sensitivities.warning`). `differences=True` differences the stage's matrices for
+    /// every parameter, even where the exact route is open. Returns a `Sensitivities`.
+    #[pyo3(signature = (stage = None, *, modes = true, tf = None, noise = None, freqs = None, parameters = None, allow_unstable = false, differences = false))]
     #[allow(clippy::too_many_arguments)]
     fn sensitivities(
         &self,
@@ -352,6 +353,7 @@ impl Model {
         freqs: Option<&Bound<'_, PyAny>>,
         parameters: Option<Vec<String>>,
         allow_unstable: bool,
+        differences: bool,
     ) -> PyResult<Sensitivities> {
         let stage = stage_or_complete(stage)?;
         let freqs = match freqs {
@@ -367,7 +369,7 @@ impl Model {
             parameters,
             allow_unstable,
             threads: 0,
-            differences: false,
+            differences,
         };
         let case = &self.case;
         let s = py
@@ -404,6 +406,7 @@ impl Model {
             noise_asd,
             dnoise_asd_dp,
             not_differentiable: s.not_differentiable,
+            exact: s.exact,
             warning: s.warning,
         })
     }
@@ -414,7 +417,9 @@ impl Model {
 /// `dfdp`), `dfdp` (modes × parameters, Hz per unit of the parameter; no rows when the
 /// modes were not asked for), `freqs` (Hz), `tf_abs` and `dtf_abs_dp` (frequencies ×
 /// parameters), `noise_asd` and `dnoise_asd_dp` (None unless asked for),
-/// `not_differentiable` ((name, why) of switches and counts left out) and `warning`.
+/// `not_differentiable` ((name, why) of switches and counts left out), `exact` (per
+/// parameter: differentiated exactly by dual numbers and the implicit function theorem,
+/// else by differences of the stage's matrices) and `warning`.
 #[pyclass(module = "pendkit._pendkit", frozen, get_all)]
 struct Sensitivities {
     parameters: Vec<String>,
@@ -429,6 +434,7 @@ struct Sensitivities {
     noise_asd: Option<Py<PyArray1<f64>>>,
     dnoise_asd_dp: Option<Py<PyArray2<f64>>>,
     not_differentiable: Vec<(String, String)>,
+    exact: Vec<bool>,
     warning: Option<String>,
 }
 

@@ -19,6 +19,7 @@ def test_modes_match_the_command_line(cli):
     assert s.dfdp.shape == (len(ref["modes_hz"]), len(ref["parameters"]))
     assert np.array_equal(s.modes_hz, np.array(ref["modes_hz"]))
     assert np.array_equal(s.dfdp, np.array(ref["dfdp"]))
+    assert s.exact == ref["exact"]
 
 
 def test_tf_and_noise_match_the_command_line(cli):
@@ -39,10 +40,15 @@ def test_tf_and_noise_match_the_command_line(cli):
 
 def test_mass_on_springs_closed_form():
     # the toy: f = √(k/m)/2π for springs in series, so df/dm = −f/(2m) exactly (1e-9:
-    # linear springs, the matrices' difference is exact but for rounding)
+    # exact derivatives, or the matrices' difference of linear springs, exact but for
+    # rounding)
     s = pendkit.Model("toy").sensitivities("0a", parameters=["m"])
     f = s.modes_hz[0]
     assert s.dfdp[0, 0] == pytest.approx(-f / (2 * s.values[0]), rel=1e-9)
+    # the difference route gives the same within its own accuracy
+    d = pendkit.Model("toy").sensitivities("0a", parameters=["m"], differences=True)
+    assert d.exact == [False]
+    assert d.dfdp[0, 0] == pytest.approx(-f / (2 * s.values[0]), rel=1e-9)
 
 
 def test_bad_parameter_is_an_error(cli):

@@ -77,6 +77,7 @@ class Model:
         freqs: Optional[Frequencies] = None,
         parameters: Optional[Sequence[str]] = None,
         allow_unstable: bool = False,
+        differences: bool = False,
     ) -> "Sensitivities":
         """Derivatives of the mode frequencies (and of |H| of `tf` and the noise ASD of
         `noise` at `freqs`, Hz) with respect to the parameters, as `pendkit sensitivity`."""
@@ -105,6 +106,8 @@ class Sensitivities:
     """frequencies × parameters."""
     not_differentiable: List[Tuple[str, str]]
     """Switches and counts left out, with why."""
+    exact: List[bool]
+    """Per parameter: exact (dual numbers, implicit function theorem) or differenced."""
     warning: Optional[str]
 
 class Modes:
