@@ -17,6 +17,7 @@ use nalgebra::{DMatrix, DVector, Vector3};
 use num_dual::{Dual, Dual64};
 use pendkit_energy::{
     CoordKind, EarlyWireTerms, EnergyError, Reference, Stage, System, TangentTerm, registry,
+    tangent_frames,
 };
 use pendkit_rotations::{Constant, tr_mul, vee};
 
@@ -288,9 +289,11 @@ pub fn stage_tangent(
                         given: a.max(b) + 1,
                     });
                 };
+                // each body's frame once for every term on it
+                let frames = tangent_frames(system, &moving, u, v)?;
                 let mut sum = 0.0;
                 for term in all() {
-                    sum += term.second_along(&moving, u, v)?.eps;
+                    sum += term.second_along_frames(&frames)?.eps;
                 }
                 out[(a, b)] = sum;
                 out[(b, a)] = sum;

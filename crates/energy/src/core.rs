@@ -31,21 +31,21 @@ pub struct GravityEnergy<C = f64> {
 }
 
 impl<C: Constant> GravityEnergy<C> {
-    /// m g z (J) at local coordinates `x`: the one energy body of both constant types.
-    fn energy_at<D: Lift<C>>(&self, x: &[D]) -> D {
-        self.frame.eval(x).point(&self.centre_of_mass)[2].times(self.weight)
+    /// m g z (J) with the body at `frame`: the one energy body of both constant types.
+    fn energy_on<D: Lift<C>>(&self, frame: &Frame<D>) -> D {
+        frame.point(&self.centre_of_mass)[2].times(self.weight)
     }
 }
 
 impl TangentPotential for GravityEnergy<Dual64> {
-    fn energy<D: Lift<Dual64>>(&self, x: &[D]) -> D {
-        self.energy_at(x)
+    fn energy_on_frames<D: Lift<Dual64>>(&self, frames: &[Frame<D>]) -> D {
+        self.energy_on(&frames[0])
     }
 }
 
 impl Potential for GravityEnergy {
     fn energy<D: Real>(&self, x: &[D]) -> D {
-        self.energy_at(x)
+        self.energy_on(&self.frame.eval(x))
     }
 
     /// Gravity stores energy without deforming anything: it is lossless.
@@ -155,27 +155,32 @@ pub struct WireStretchEnergy<C = f64> {
 impl<C: Constant> WireStretchEnergy<C> {
     /// Chord length (m) at local coordinates `x`.
     pub fn length<D: Lift<C>>(&self, x: &[D]) -> D {
-        let p0 = self.frames[0].eval(x).point(&self.points[0]);
-        let p1 = self.frames[1].eval(x).point(&self.points[1]);
+        self.length_between(&self.frames[0].eval(x), &self.frames[1].eval(x))
+    }
+
+    /// Chord length (m) with the end bodies at `f0`, `f1`.
+    fn length_between<D: Lift<C>>(&self, f0: &Frame<D>, f1: &Frame<D>) -> D {
+        let p0 = f0.point(&self.points[0]);
+        let p1 = f1.point(&self.points[1]);
         (p1 - p0).map(|v| v * v).sum().sqrt()
     }
 
-    /// ½ k (l − l0)² (J) at local coordinates `x`.
-    fn energy_at<D: Lift<C>>(&self, x: &[D]) -> D {
-        let stretch = self.length(x) - D::lift(self.unstretched_length);
+    /// ½ k (l − l0)² (J) with the end bodies at `f0`, `f1`.
+    fn energy_on<D: Lift<C>>(&self, f0: &Frame<D>, f1: &Frame<D>) -> D {
+        let stretch = self.length_between(f0, f1) - D::lift(self.unstretched_length);
         (stretch * stretch).times(self.stiffness * 0.5)
     }
 }
 
 impl TangentPotential for WireStretchEnergy<Dual64> {
-    fn energy<D: Lift<Dual64>>(&self, x: &[D]) -> D {
-        self.energy_at(x)
+    fn energy_on_frames<D: Lift<Dual64>>(&self, frames: &[Frame<D>]) -> D {
+        self.energy_on(&frames[0], &frames[1])
     }
 }
 
 impl Potential for WireStretchEnergy {
     fn energy<D: Real>(&self, x: &[D]) -> D {
-        self.energy_at(x)
+        self.energy_on(&self.frames[0].eval(x), &self.frames[1].eval(x))
     }
 
     /// With the tension off the wire is unstretched at its equilibrium length, so only
@@ -324,8 +329,13 @@ pub struct SpringEnergy<C: Constant = f64> {
 impl<C: Constant> SpringEnergy<C> {
     /// Deflection Δ (m, rad) at local coordinates `x`.
     pub fn deflection<D: Lift<C>>(&self, x: &[D]) -> Vector6<D> {
+        self.deflection_between(&self.frames[0].eval(x), &self.frames[1].eval(x))
+    }
+
+    /// Deflection Δ (m, rad) with the end bodies at `f0`, `f1`.
+    fn deflection_between<D: Lift<C>>(&self, f0: &Frame<D>, f1: &Frame<D>) -> Vector6<D> {
         let attach = |k: usize| -> Frame<D> {
-            let body = self.frames[k].eval(x);
+            let body = if k == 0 { f0 } else { f1 };
             let at_point = Frame {
                 origin: body.point(&self.ends[k].point),
                 rotation: body.rotation,
@@ -360,8 +370,8 @@ impl<C: Constant> SpringEnergy<C> {
 }
 
 impl TangentPotential for SpringEnergy<Dual64> {
-    fn energy<D: Lift<Dual64>>(&self, x: &[D]) -> D {
-        self.energy_of(&self.deflection(x))
+    fn energy_on_frames<D: Lift<Dual64>>(&self, frames: &[Frame<D>]) -> D {
+        self.energy_of(&self.deflection_between(&frames[0], &frames[1]))
     }
 }
 

@@ -34,7 +34,7 @@ pub use stage::{Stage, UnknownStage};
 pub use system::*;
 pub use tangent::{
     DualTangent, HyperTangent, TangentDerivatives, TangentPotential, TangentSharedPotential,
-    TangentTerm,
+    TangentTerm, tangent_frames,
 };
 pub use term::{
     LocalDerivatives, OffHessian, PartOff, Potential, SharedPotential, TensionOff, Term,

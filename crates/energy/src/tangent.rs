@@ -7,16 +7,17 @@
 //! The coordinates may carry a derivative too (a configuration moving with the parameter,
 //! q* + ε δq): then the Hessian's derivative is the total one, the third derivatives of
 //! the energy along δq included. The energy bodies are the kinds' own, written once over
-//! the scalar and over their constants' type ([`Lift`]); a term whose constants do not
-//! depend on the parameter (a user's expression, a constraint spring) is evaluated as it
-//! is ([`TangentTerm::fixed`]).
+//! the scalar and over their constants' type ([`Lift`]), as functions of their bodies'
+//! frames, so that a pass along given directions evaluates each body's frame once for all
+//! the terms on it ([`tangent_frames`]).
 
 use std::sync::Arc;
 
 use num_dual::{Dual, Dual64, HyperDual};
-use pendkit_rotations::Lift;
+use pendkit_geometry::Frame;
+use pendkit_rotations::{Lift, Real};
 
-use crate::{EnergyError, LocalFrames, Term};
+use crate::{BodyId, EnergyError, LocalFrames};
 
 /// The scalar of the parameter-derivative Hessian pass: second derivatives over two
 /// coordinates, each part carrying its derivative with respect to the parameter.
@@ -26,10 +27,13 @@ pub type HyperTangent = HyperDual<Dual64>;
 pub type DualTangent = Dual<Dual64>;
 
 /// An energy body whose constants are `Dual64` (a value and its derivative with respect to
-/// one parameter), written once over every scalar that can take such constants.
+/// one parameter), written once over every scalar that can take such constants, as a
+/// function of its bodies' frames: so that one evaluation of each body's frame serves
+/// every term on it ([`TangentTerm::second_along_frames`]).
 pub trait TangentPotential: Send + Sync + 'static {
-    /// Potential energy (J) at local coordinates `x` (m or rad).
-    fn energy<D: Lift<Dual64>>(&self, x: &[D]) -> D;
+    /// Potential energy (J) with the term's bodies at `frames` (in the order of its
+    /// [`LocalFrames::bodies`]).
+    fn energy_on_frames<D: Lift<Dual64>>(&self, frames: &[Frame<D>]) -> D;
 }
 
 /// A [`TangentPotential`] that yields several energies in one evaluation, each that of its
@@ -37,22 +41,22 @@ pub trait TangentPotential: Send + Sync + 'static {
 pub trait TangentSharedPotential: Send + Sync + 'static {
     /// Number of energy parts.
     fn parts(&self) -> usize;
-    /// The energy (J) of every part at local coordinates `x`, written into `out`.
-    fn energies<D: Lift<Dual64>>(&self, x: &[D], out: &mut [D]);
+    /// The energy (J) of every part with the bodies at `frames`, written into `out`.
+    fn energies_on_frames<D: Lift<Dual64>>(&self, frames: &[Frame<D>], out: &mut [D]);
 }
 
 /// Object-safe view of the two scalars the passes use.
 trait DynTangent: Send + Sync {
-    fn value_d(&self, x: &[DualTangent]) -> DualTangent;
-    fn value_hd(&self, x: &[HyperTangent]) -> HyperTangent;
+    fn value_d(&self, frames: &[Frame<DualTangent>]) -> DualTangent;
+    fn value_hd(&self, frames: &[Frame<HyperTangent>]) -> HyperTangent;
 }
 
 impl<P: TangentPotential> DynTangent for P {
-    fn value_d(&self, x: &[DualTangent]) -> DualTangent {
-        self.energy(x)
+    fn value_d(&self, frames: &[Frame<DualTangent>]) -> DualTangent {
+        self.energy_on_frames(frames)
     }
-    fn value_hd(&self, x: &[HyperTangent]) -> HyperTangent {
-        self.energy(x)
+    fn value_hd(&self, frames: &[Frame<HyperTangent>]) -> HyperTangent {
+        self.energy_on_frames(frames)
     }
 }
 
@@ -64,27 +68,15 @@ struct PartOf<S> {
 }
 
 impl<S: TangentSharedPotential> DynTangent for PartOf<S> {
-    fn value_d(&self, x: &[DualTangent]) -> DualTangent {
+    fn value_d(&self, frames: &[Frame<DualTangent>]) -> DualTangent {
         let mut out = vec![DualTangent::from_re(Dual64::from_re(0.0)); self.shared.parts()];
-        self.shared.energies(x, &mut out);
+        self.shared.energies_on_frames(frames, &mut out);
         out[self.part]
     }
-    fn value_hd(&self, x: &[HyperTangent]) -> HyperTangent {
+    fn value_hd(&self, frames: &[Frame<HyperTangent>]) -> HyperTangent {
         let mut out = vec![HyperTangent::from_re(Dual64::from_re(0.0)); self.shared.parts()];
-        self.shared.energies(x, &mut out);
+        self.shared.energies_on_frames(frames, &mut out);
         out[self.part]
-    }
-}
-
-/// A term of constants that do not depend on the parameter, evaluated with them as they are.
-struct Fixed(Term);
-
-impl DynTangent for Fixed {
-    fn value_d(&self, x: &[DualTangent]) -> DualTangent {
-        self.0.value_dual_tangent(x)
-    }
-    fn value_hd(&self, x: &[HyperTangent]) -> HyperTangent {
-        self.0.value_hyper_tangent(x)
     }
 }
 
@@ -111,6 +103,7 @@ pub struct TangentTerm {
     pub tag: String,
     /// Global coordinate indices, in the order of the body's local vector.
     pub coords: Vec<usize>,
+    frames: LocalFrames,
     body: Arc<dyn DynTangent>,
 }
 
@@ -138,6 +131,7 @@ impl TangentTerm {
             kind,
             tag: tag.into(),
             coords: frames.coords.clone(),
+            frames: frames.clone(),
             body: Arc::new(body),
         }
     }
@@ -156,20 +150,19 @@ impl TangentTerm {
             kind,
             tag: tag.into(),
             coords: frames.coords.clone(),
+            frames: frames.clone(),
             body: Arc::new(PartOf { shared, part }),
         }
     }
 
-    /// A term whose constants do not depend on the parameter (a user's expression, a
-    /// constraint spring), evaluated as it is.
-    pub fn fixed(term: Term) -> Self {
-        TangentTerm {
-            label: term.label.clone(),
-            kind: term.kind,
-            tag: term.tag.clone(),
-            coords: term.coords.clone(),
-            body: Arc::new(Fixed(term)),
-        }
+    /// The bodies the term reads, in the order its energy takes their frames.
+    pub fn bodies(&self) -> &[BodyId] {
+        &self.frames.bodies
+    }
+
+    /// The term's frames at local coordinates `x`.
+    fn local_frames<D: Real>(&self, x: &[D]) -> Vec<Frame<D>> {
+        self.frames.frames.iter().map(|f| f.eval(x)).collect()
     }
 
     /// `x_global` covers every coordinate of the term.
@@ -204,46 +197,40 @@ impl TangentTerm {
         };
         for i in 0..x.len() {
             x[i].eps = Dual64::from_re(1.0);
-            let r = self.body.value_d(&x);
+            let r = self.body.value_d(&self.local_frames(&x));
             x[i].eps = zero;
             out.value = r.re;
             out.gradient[i] = r.eps;
         }
         if x.is_empty() {
-            out.value = self.body.value_d(&x).re;
+            out.value = self.body.value_d(&self.local_frames(&x)).re;
         }
         Ok(out)
     }
 
-    /// The second derivative uᵀ H v of the energy along two directions `u`, `v` (full
-    /// coordinate vectors, read on the term's coordinates) at `x_global`, by one nested
-    /// hyper-dual evaluation, with its derivative with respect to the parameter along the
-    /// coordinates' own derivative.
-    pub fn second_along(
+    /// The second derivative uᵀ H v of the energy along two directions u, v, given every
+    /// body's frame at x + ε₁u + ε₂v (`frames`, indexed by body, as [`tangent_frames`]
+    /// gives them): its value part, with its derivative with respect to the parameter
+    /// along the coordinates' own derivative in the dual part. One evaluation of each
+    /// body's frame serves every term on it.
+    pub fn second_along_frames(
         &self,
-        x_global: &[Dual64],
-        u: &[f64],
-        v: &[f64],
+        frames: &[Frame<HyperTangent>],
     ) -> Result<Dual64, EnergyError> {
-        self.check_length("TangentTerm::second_along", x_global)?;
-        let short = u.len().min(v.len());
-        if let Some(&needed) = self.coords.iter().find(|&&i| i >= short) {
-            return Err(EnergyError::Length {
-                function: "TangentTerm::second_along",
-                argument: "u, v (directions)",
-                expected: needed + 1,
-                given: short,
-            });
-        }
-        let x: Vec<HyperTangent> = self
-            .coords
+        let mine: Vec<Frame<HyperTangent>> = self
+            .frames
+            .bodies
             .iter()
-            .map(|&i| {
-                let (du, dv) = (Dual64::from_re(u[i]), Dual64::from_re(v[i]));
-                HyperTangent::new(x_global[i], du, dv, Dual64::from_re(0.0))
+            .map(|&b| {
+                frames.get(b).cloned().ok_or_else(|| EnergyError::Index {
+                    item: format!("term '{}'", self.label),
+                    what: "body (frames given)",
+                    index: b,
+                    len: frames.len(),
+                })
             })
-            .collect();
-        Ok(self.body.value_hd(&x).eps1eps2)
+            .collect::<Result<_, _>>()?;
+        Ok(self.body.value_hd(&mine).eps1eps2)
     }
 
     /// Value, gradient and Hessian over the term's own coordinates at `x_global`, by one
@@ -260,7 +247,7 @@ impl TangentTerm {
             .collect();
         let (zero, one) = (Dual64::from_re(0.0), Dual64::from_re(1.0));
         let mut out = TangentDerivatives {
-            value: self.body.value_hd(&x).re,
+            value: self.body.value_hd(&self.local_frames(&x)).re,
             gradient: vec![zero; n],
             hessian: vec![zero; n * n],
         };
@@ -268,7 +255,7 @@ impl TangentTerm {
             x[i].eps1 = one;
             for j in i..n {
                 x[j].eps2 = one;
-                let r = self.body.value_hd(&x);
+                let r = self.body.value_hd(&self.local_frames(&x));
                 x[j].eps2 = zero;
                 if j == i {
                     out.gradient[i] = r.eps1;
@@ -280,4 +267,32 @@ impl TangentTerm {
         }
         Ok(out)
     }
+}
+
+/// Every body's frame of `system` at x + ε₁u + ε₂v, `x` carrying its own parameter
+/// derivative and `u`, `v` full coordinate vectors: the frames
+/// [`TangentTerm::second_along_frames`] reads. A vector shorter than the coordinates is an
+/// error naming it.
+pub fn tangent_frames<S: Real>(
+    system: &crate::System<S>,
+    x: &[Dual64],
+    u: &[f64],
+    v: &[f64],
+) -> Result<Vec<Frame<HyperTangent>>, EnergyError> {
+    let n = system.coords.len();
+    for (argument, given) in [("x", x.len()), ("u", u.len()), ("v", v.len())] {
+        if given < n {
+            return Err(EnergyError::Length {
+                function: "tangent_frames",
+                argument,
+                expected: n,
+                given,
+            });
+        }
+    }
+    let zero = Dual64::from_re(0.0);
+    let at: Vec<HyperTangent> = (0..n)
+        .map(|i| HyperTangent::new(x[i], Dual64::from_re(u[i]), Dual64::from_re(v[i]), zero))
+        .collect();
+    Ok(system.bodies.iter().map(|b| b.frame.eval(&at)).collect())
 }

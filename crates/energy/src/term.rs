@@ -11,12 +11,11 @@
 
 use std::sync::Arc;
 
-use num_dual::{Dual64, HyperDual64};
+use num_dual::HyperDual64;
 use pendkit_geometry::{FrameJet, JetOrder};
 use pendkit_rotations::Real;
 
 use crate::fast::{Derivatives, FrameAt, JetPoint, OffForm, Scratch, on_stack};
-use crate::tangent::{DualTangent, HyperTangent};
 use crate::{EnergyError, LocalFrames};
 
 /// The energy of one term as a function of its own (local) coordinate vector, written once
@@ -94,8 +93,6 @@ pub enum PartOff {
 trait DynPotential: Send + Sync {
     fn value(&self, x: &[f64]) -> f64;
     fn value_hd(&self, x: &[HyperDual64]) -> HyperDual64;
-    fn value_dt(&self, x: &[DualTangent]) -> DualTangent;
-    fn value_ht(&self, x: &[HyperTangent]) -> HyperTangent;
     fn tension_off(&self, x_eq: &[f64]) -> TensionOff<Arc<dyn DynPotential>>;
     fn fast(&self, at: &JetPoint, out: &mut Derivatives) -> bool;
 }
@@ -105,12 +102,6 @@ impl<P: Potential> DynPotential for P {
         self.energy(x)
     }
     fn value_hd(&self, x: &[HyperDual64]) -> HyperDual64 {
-        self.energy(x)
-    }
-    fn value_dt(&self, x: &[DualTangent]) -> DualTangent {
-        self.energy(x)
-    }
-    fn value_ht(&self, x: &[HyperTangent]) -> HyperTangent {
         self.energy(x)
     }
     fn tension_off(&self, x_eq: &[f64]) -> TensionOff<Arc<dyn DynPotential>> {
@@ -130,8 +121,6 @@ trait DynShared: Send + Sync {
     fn parts(&self) -> usize;
     fn values(&self, x: &[f64], out: &mut [f64]);
     fn values_hd(&self, x: &[HyperDual64], out: &mut [HyperDual64]);
-    fn values_dt(&self, x: &[DualTangent], out: &mut [DualTangent]);
-    fn values_ht(&self, x: &[HyperTangent], out: &mut [HyperTangent]);
     fn fast(&self, at: &JetPoint, out: &mut Derivatives) -> bool;
 }
 
@@ -143,12 +132,6 @@ impl<S: SharedPotential> DynShared for S {
         self.energies(x, out)
     }
     fn values_hd(&self, x: &[HyperDual64], out: &mut [HyperDual64]) {
-        self.energies(x, out)
-    }
-    fn values_dt(&self, x: &[DualTangent], out: &mut [DualTangent]) {
-        self.energies(x, out)
-    }
-    fn values_ht(&self, x: &[HyperTangent], out: &mut [HyperTangent]) {
         self.energies(x, out)
     }
     fn fast(&self, at: &JetPoint, out: &mut Derivatives) -> bool {
@@ -187,32 +170,6 @@ impl Body {
                 parts.resize(shared.parts(), HyperDual64::from_re(0.0));
                 shared.values_hd(x, parts);
                 parts[*part]
-            }
-        }
-    }
-}
-
-impl Body {
-    /// The energy at tangent coordinates, the constants as they are (no derivative).
-    fn value_dt(&self, x: &[DualTangent]) -> DualTangent {
-        match self {
-            Body::Own(p) => p.value_dt(x),
-            Body::Part { shared, part, .. } => {
-                let mut e = vec![DualTangent::from_re(Dual64::from_re(0.0)); shared.parts()];
-                shared.values_dt(x, &mut e);
-                e[*part]
-            }
-        }
-    }
-
-    /// [`Body::value_dt`] for the Hessian pass.
-    fn value_ht(&self, x: &[HyperTangent]) -> HyperTangent {
-        match self {
-            Body::Own(p) => p.value_ht(x),
-            Body::Part { shared, part, .. } => {
-                let mut e = vec![HyperTangent::from_re(Dual64::from_re(0.0)); shared.parts()];
-                shared.values_ht(x, &mut e);
-                e[*part]
             }
         }
     }
@@ -340,17 +297,6 @@ impl Term {
             body: Body::Part { shared, part, off },
             frames: Some(frames),
         }
-    }
-
-    /// The energy at local tangent coordinates (the parameter-derivative gradient pass), the
-    /// term's constants as they are.
-    pub(crate) fn value_dual_tangent(&self, x: &[DualTangent]) -> DualTangent {
-        self.body.value_dt(x)
-    }
-
-    /// [`Term::value_dual_tangent`] for the Hessian pass.
-    pub(crate) fn value_hyper_tangent(&self, x: &[HyperTangent]) -> HyperTangent {
-        self.body.value_ht(x)
     }
 
     /// The frames the term reads, when it was built on them.

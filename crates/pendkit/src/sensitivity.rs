@@ -4,8 +4,26 @@
 //!
 //! # Method, and what is exact
 //!
-//! The energies' constants are `f64` (the element terms are not yet generic over their
-//! constants, docs/exact-sensitivities.md), so the split is:
+//! **The exact route** (mode sensitivities; [`Sensitivities::exact`] says which parameters
+//! took it). The build runs with the parameter a dual number
+//! ([`pendkit_model::build_tangent`]), so every mass, inertia, point, section constant,
+//! stiffness and unstretched length carries its exact derivative; the element terms are
+//! built from that model with `Dual64` constants ([`pendkit_energy::TangentTerm`]); the
+//! equilibrium's motion is δq = dq*/dp = −K⁻¹ ∂g/∂p by the implicit function theorem (∂g/∂p
+//! the dual part of the balanced terms' gradient at the fixed equilibrium, K factorised
+//! once per request); every term of the stage is rebuilt around q* + ε δq and
+//! differentiated there by nested hyper-dual numbers, whose ε part is the total dK/dp
+//! (third derivatives of the energies along δq included), and likewise dM/dp
+//! ([`pendkit_assembly::stage_tangent`]). Only what the modes need is differentiated: the
+//! second derivatives along w = (v, −Q⁻¹C_QX v), the mode v lifted to the floats (then
+//! wᵀ dK w = vᵀ dK_eff v), for each mode and each pair within a cluster. No step, no
+//! difference. The route is closed (and the parameter goes the difference route below) for
+//! a parameter the dual build cannot follow (written into a pose's text, a count, a
+//! switch), one read only by the damping, a model with user-written terms or a kind
+//! without tangent terms, a damping tag whose real multiplier at DC is not 1, and for
+//! transfer-function and noise sensitivities, which need the tension-off Hessians too.
+//!
+//! **The difference route** (and what it shares with the exact one):
 //!
 //! 0. **The model's numbers, exactly where the build allows.** The build runs once with the
 //!    parameter a dual number ([`pendkit_model::build_tangent`]): the tangent of every
@@ -25,7 +43,7 @@
 //!    dependence on the scale of p₀, below the rounding of the matrices' entries
 //!    (~10⁻¹⁶ |X| / h ≈ 10⁻¹³ relative). A parameter whose value is 0 is stepped by
 //!    [`ZERO_STEP`] (in its own unit).
-//! 2. **Everything after the matrices, exactly.** Mode frequencies: dω²/dp =
+//! 2. **Everything after the matrices, exactly** (both routes). Mode frequencies: dω²/dp =
 //!    vᵀ(dK_eff/dp − ω² dM/dp)v with the mass-normalised mode v (Hellmann–Feynman); for a
 //!    cluster of (nearly) equal ω² the derivatives are the eigenvalues of that projected
 //!    matrix over the cluster, so degenerate modes get the right derivatives. Transfer

@@ -49,16 +49,16 @@ impl<C: Constant> TorsionEnergy<C> {
         dot(&w, &axis) / dot(&axis, &axis).sqrt()
     }
 
-    /// ½ κ Δθ² (J) at local coordinates `x`.
-    fn energy_at<D: Lift<C>>(&self, x: &[D]) -> D {
-        let twist = self.twist(&self.frames[0].eval(x), &self.frames[1].eval(x));
+    /// ½ κ Δθ² (J) with the end bodies at `f0`, `f1`.
+    fn energy_on<D: Lift<C>>(&self, f0: &Frame<D>, f1: &Frame<D>) -> D {
+        let twist = self.twist(f0, f1);
         (twist * twist).times(self.stiffness * 0.5)
     }
 }
 
 impl TangentPotential for TorsionEnergy<Dual64> {
-    fn energy<D: Lift<Dual64>>(&self, x: &[D]) -> D {
-        self.energy_at(x)
+    fn energy_on_frames<D: Lift<Dual64>>(&self, frames: &[Frame<D>]) -> D {
+        self.energy_on(&frames[0], &frames[1])
     }
 }
 
@@ -103,7 +103,7 @@ impl TorsionEnergy {
 
 impl Potential for TorsionEnergy {
     fn energy<D: Real>(&self, x: &[D]) -> D {
-        self.energy_at(x)
+        self.energy_on(&self.frames[0].eval(x), &self.frames[1].eval(x))
     }
 
     fn tension_off(&self, _x_eq: &[f64]) -> TensionOff<Self> {
