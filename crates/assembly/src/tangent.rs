@@ -17,7 +17,7 @@ use nalgebra::{DMatrix, DVector, Vector3};
 use num_dual::{Dual, Dual64};
 use pendkit_energy::{
     CoordKind, EarlyWireTerms, EnergyError, Reference, Stage, System, TangentTerm, registry,
-    tangent_frames,
+    tangent_frames, tangent_frames_along,
 };
 use pendkit_rotations::{Constant, tr_mul, vee};
 
@@ -289,11 +289,19 @@ pub fn stage_tangent(
                         given: a.max(b) + 1,
                     });
                 };
-                // each body's frame once for every term on it
-                let frames = tangent_frames(system, &moving, u, v)?;
+                // each body's frame once for every term on it; along one direction the
+                // cheaper second-order dual number
                 let mut sum = 0.0;
-                for term in all() {
-                    sum += term.second_along_frames(&frames)?.eps;
+                if a == b {
+                    let frames = tangent_frames_along(system, &moving, u)?;
+                    for term in all() {
+                        sum += term.second_along_frames_once(&frames)?.eps;
+                    }
+                } else {
+                    let frames = tangent_frames(system, &moving, u, v)?;
+                    for term in all() {
+                        sum += term.second_along_frames(&frames)?.eps;
+                    }
                 }
                 out[(a, b)] = sum;
                 out[(b, a)] = sum;

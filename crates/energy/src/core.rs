@@ -38,8 +38,8 @@ impl<C: Constant> GravityEnergy<C> {
 }
 
 impl TangentPotential for GravityEnergy<Dual64> {
-    fn energy_on_frames<D: Lift<Dual64>>(&self, frames: &[Frame<D>]) -> D {
-        self.energy_on(&frames[0])
+    fn energy_on_frames<D: Lift<Dual64>>(&self, frames: &[&Frame<D>]) -> D {
+        self.energy_on(frames[0])
     }
 }
 
@@ -173,8 +173,8 @@ impl<C: Constant> WireStretchEnergy<C> {
 }
 
 impl TangentPotential for WireStretchEnergy<Dual64> {
-    fn energy_on_frames<D: Lift<Dual64>>(&self, frames: &[Frame<D>]) -> D {
-        self.energy_on(&frames[0], &frames[1])
+    fn energy_on_frames<D: Lift<Dual64>>(&self, frames: &[&Frame<D>]) -> D {
+        self.energy_on(frames[0], frames[1])
     }
 }
 
@@ -370,8 +370,8 @@ impl<C: Constant> SpringEnergy<C> {
 }
 
 impl TangentPotential for SpringEnergy<Dual64> {
-    fn energy_on_frames<D: Lift<Dual64>>(&self, frames: &[Frame<D>]) -> D {
-        self.energy_of(&self.deflection_between(&frames[0], &frames[1]))
+    fn energy_on_frames<D: Lift<Dual64>>(&self, frames: &[&Frame<D>]) -> D {
+        self.energy_of(&self.deflection_between(frames[0], frames[1]))
     }
 }
 

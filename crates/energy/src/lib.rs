@@ -33,8 +33,8 @@ pub use pendkit_rotations::Real;
 pub use stage::{Stage, UnknownStage};
 pub use system::*;
 pub use tangent::{
-    DualTangent, HyperTangent, TangentDerivatives, TangentPotential, TangentSharedPotential,
-    TangentTerm, tangent_frames,
+    DualTangent, HyperTangent, SecondTangent, TangentDerivatives, TangentPotential,
+    TangentSharedPotential, TangentTerm, tangent_frames, tangent_frames_along,
 };
 pub use term::{
     LocalDerivatives, OffHessian, PartOff, Potential, SharedPotential, TensionOff, Term,

@@ -13,11 +13,11 @@
 
 use std::sync::Arc;
 
-use num_dual::{Dual, Dual64, HyperDual};
+use num_dual::{Dual, Dual2, Dual64, HyperDual};
 use pendkit_geometry::Frame;
 use pendkit_rotations::{Lift, Real};
 
-use crate::{BodyId, EnergyError, LocalFrames};
+use crate::{BodyId, EnergyError, LocalFrames, MAX_FRAMES, MAX_PARTS};
 
 /// The scalar of the parameter-derivative Hessian pass: second derivatives over two
 /// coordinates, each part carrying its derivative with respect to the parameter.
@@ -26,6 +26,10 @@ pub type HyperTangent = HyperDual<Dual64>;
 /// The scalar of the parameter-derivative gradient pass.
 pub type DualTangent = Dual<Dual64>;
 
+/// The scalar of the parameter-derivative pass along one direction (a mode): the second
+/// derivative along it, with its derivative with respect to the parameter.
+pub type SecondTangent = Dual2<Dual64>;
+
 /// An energy body whose constants are `Dual64` (a value and its derivative with respect to
 /// one parameter), written once over every scalar that can take such constants, as a
 /// function of its bodies' frames: so that one evaluation of each body's frame serves
@@ -33,7 +37,7 @@ pub type DualTangent = Dual<Dual64>;
 pub trait TangentPotential: Send + Sync + 'static {
     /// Potential energy (J) with the term's bodies at `frames` (in the order of its
     /// [`LocalFrames::bodies`]).
-    fn energy_on_frames<D: Lift<Dual64>>(&self, frames: &[Frame<D>]) -> D;
+    fn energy_on_frames<D: Lift<Dual64>>(&self, frames: &[&Frame<D>]) -> D;
 }
 
 /// A [`TangentPotential`] that yields several energies in one evaluation, each that of its
@@ -42,20 +46,24 @@ pub trait TangentSharedPotential: Send + Sync + 'static {
     /// Number of energy parts.
     fn parts(&self) -> usize;
     /// The energy (J) of every part with the bodies at `frames`, written into `out`.
-    fn energies_on_frames<D: Lift<Dual64>>(&self, frames: &[Frame<D>], out: &mut [D]);
+    fn energies_on_frames<D: Lift<Dual64>>(&self, frames: &[&Frame<D>], out: &mut [D]);
 }
 
 /// Object-safe view of the two scalars the passes use.
 trait DynTangent: Send + Sync {
-    fn value_d(&self, frames: &[Frame<DualTangent>]) -> DualTangent;
-    fn value_hd(&self, frames: &[Frame<HyperTangent>]) -> HyperTangent;
+    fn value_d(&self, frames: &[&Frame<DualTangent>]) -> DualTangent;
+    fn value_d2(&self, frames: &[&Frame<SecondTangent>]) -> SecondTangent;
+    fn value_hd(&self, frames: &[&Frame<HyperTangent>]) -> HyperTangent;
 }
 
 impl<P: TangentPotential> DynTangent for P {
-    fn value_d(&self, frames: &[Frame<DualTangent>]) -> DualTangent {
+    fn value_d(&self, frames: &[&Frame<DualTangent>]) -> DualTangent {
         self.energy_on_frames(frames)
     }
-    fn value_hd(&self, frames: &[Frame<HyperTangent>]) -> HyperTangent {
+    fn value_d2(&self, frames: &[&Frame<SecondTangent>]) -> SecondTangent {
+        self.energy_on_frames(frames)
+    }
+    fn value_hd(&self, frames: &[&Frame<HyperTangent>]) -> HyperTangent {
         self.energy_on_frames(frames)
     }
 }
@@ -67,16 +75,31 @@ struct PartOf<S> {
     part: usize,
 }
 
-impl<S: TangentSharedPotential> DynTangent for PartOf<S> {
-    fn value_d(&self, frames: &[Frame<DualTangent>]) -> DualTangent {
-        let mut out = vec![DualTangent::from_re(Dual64::from_re(0.0)); self.shared.parts()];
+impl<S: TangentSharedPotential> PartOf<S> {
+    /// This part's energy, all parts evaluated.
+    fn value<D: Lift<Dual64>>(&self, frames: &[&Frame<D>]) -> D {
+        let parts = self.shared.parts();
+        if parts <= MAX_PARTS {
+            // on the stack: this runs once per term and direction
+            let mut out = [D::from(0.0); MAX_PARTS];
+            self.shared.energies_on_frames(frames, &mut out[..parts]);
+            return out[self.part];
+        }
+        let mut out = vec![D::from(0.0); parts];
         self.shared.energies_on_frames(frames, &mut out);
         out[self.part]
     }
-    fn value_hd(&self, frames: &[Frame<HyperTangent>]) -> HyperTangent {
-        let mut out = vec![HyperTangent::from_re(Dual64::from_re(0.0)); self.shared.parts()];
-        self.shared.energies_on_frames(frames, &mut out);
-        out[self.part]
+}
+
+impl<S: TangentSharedPotential> DynTangent for PartOf<S> {
+    fn value_d(&self, frames: &[&Frame<DualTangent>]) -> DualTangent {
+        self.value(frames)
+    }
+    fn value_d2(&self, frames: &[&Frame<SecondTangent>]) -> SecondTangent {
+        self.value(frames)
+    }
+    fn value_hd(&self, frames: &[&Frame<HyperTangent>]) -> HyperTangent {
+        self.value(frames)
     }
 }
 
@@ -160,9 +183,11 @@ impl TangentTerm {
         &self.frames.bodies
     }
 
-    /// The term's frames at local coordinates `x`.
-    fn local_frames<D: Real>(&self, x: &[D]) -> Vec<Frame<D>> {
-        self.frames.frames.iter().map(|f| f.eval(x)).collect()
+    /// The term's frames at local coordinates `x`, and `f` of them.
+    fn on_local_frames<D: Real, R>(&self, x: &[D], f: impl FnOnce(&[&Frame<D>]) -> R) -> R {
+        let frames: Vec<Frame<D>> = self.frames.frames.iter().map(|m| m.eval(x)).collect();
+        let refs: Vec<&Frame<D>> = frames.iter().collect();
+        f(&refs)
     }
 
     /// `x_global` covers every coordinate of the term.
@@ -197,13 +222,13 @@ impl TangentTerm {
         };
         for i in 0..x.len() {
             x[i].eps = Dual64::from_re(1.0);
-            let r = self.body.value_d(&self.local_frames(&x));
+            let r = self.on_local_frames(&x, |f| self.body.value_d(f));
             x[i].eps = zero;
             out.value = r.re;
             out.gradient[i] = r.eps;
         }
         if x.is_empty() {
-            out.value = self.body.value_d(&self.local_frames(&x)).re;
+            out.value = self.on_local_frames(&x, |f| self.body.value_d(f)).re;
         }
         Ok(out)
     }
@@ -217,20 +242,43 @@ impl TangentTerm {
         &self,
         frames: &[Frame<HyperTangent>],
     ) -> Result<Dual64, EnergyError> {
-        let mine: Vec<Frame<HyperTangent>> = self
-            .frames
-            .bodies
-            .iter()
-            .map(|&b| {
-                frames.get(b).cloned().ok_or_else(|| EnergyError::Index {
-                    item: format!("term '{}'", self.label),
-                    what: "body (frames given)",
-                    index: b,
-                    len: frames.len(),
-                })
-            })
-            .collect::<Result<_, _>>()?;
-        Ok(self.body.value_hd(&mine).eps1eps2)
+        self.with_frames(frames, |mine| self.body.value_hd(mine).eps1eps2)
+    }
+
+    /// [`TangentTerm::second_along_frames`] with u = v, given every body's frame at x + εu
+    /// ([`tangent_frames_along`]): uᵀ H u by the cheaper second-order dual number.
+    pub fn second_along_frames_once(
+        &self,
+        frames: &[Frame<SecondTangent>],
+    ) -> Result<Dual64, EnergyError> {
+        self.with_frames(frames, |mine| self.body.value_d2(mine).v2)
+    }
+
+    /// `f` of the frames of the term's bodies picked out of every body's `frames`, without
+    /// copying or allocating (this runs once per term and direction).
+    fn with_frames<T, R>(
+        &self,
+        frames: &[Frame<T>],
+        f: impl FnOnce(&[&Frame<T>]) -> R,
+    ) -> Result<R, EnergyError> {
+        let bodies = &self.frames.bodies;
+        let missing = |index: usize| EnergyError::Index {
+            item: format!("term '{}'", self.label),
+            what: "body (frames given)",
+            index,
+            len: frames.len(),
+        };
+        let Some(&first) = bodies.first() else {
+            return Ok(f(&[]));
+        };
+        if bodies.len() > MAX_FRAMES {
+            return Err(missing(bodies[MAX_FRAMES]));
+        }
+        let mut mine = [frames.get(first).ok_or_else(|| missing(first))?; MAX_FRAMES];
+        for (slot, &b) in mine.iter_mut().zip(bodies) {
+            *slot = frames.get(b).ok_or_else(|| missing(b))?;
+        }
+        Ok(f(&mine[..bodies.len()]))
     }
 
     /// Value, gradient and Hessian over the term's own coordinates at `x_global`, by one
@@ -247,7 +295,7 @@ impl TangentTerm {
             .collect();
         let (zero, one) = (Dual64::from_re(0.0), Dual64::from_re(1.0));
         let mut out = TangentDerivatives {
-            value: self.body.value_hd(&self.local_frames(&x)).re,
+            value: self.on_local_frames(&x, |f| self.body.value_hd(f)).re,
             gradient: vec![zero; n],
             hessian: vec![zero; n * n],
         };
@@ -255,7 +303,7 @@ impl TangentTerm {
             x[i].eps1 = one;
             for j in i..n {
                 x[j].eps2 = one;
-                let r = self.body.value_hd(&self.local_frames(&x));
+                let r = self.on_local_frames(&x, |f| self.body.value_hd(f));
                 x[j].eps2 = zero;
                 if j == i {
                     out.gradient[i] = r.eps1;
@@ -279,20 +327,43 @@ pub fn tangent_frames<S: Real>(
     u: &[f64],
     v: &[f64],
 ) -> Result<Vec<Frame<HyperTangent>>, EnergyError> {
-    let n = system.coords.len();
-    for (argument, given) in [("x", x.len()), ("u", u.len()), ("v", v.len())] {
-        if given < n {
-            return Err(EnergyError::Length {
-                function: "tangent_frames",
-                argument,
-                expected: n,
-                given,
-            });
-        }
-    }
     let zero = Dual64::from_re(0.0);
-    let at: Vec<HyperTangent> = (0..n)
-        .map(|i| HyperTangent::new(x[i], Dual64::from_re(u[i]), Dual64::from_re(v[i]), zero))
-        .collect();
+    frames_at(
+        system,
+        [("x", x.len()), ("u", u.len()), ("v", v.len())],
+        |i| HyperTangent::new(x[i], Dual64::from_re(u[i]), Dual64::from_re(v[i]), zero),
+    )
+}
+
+/// Every body's frame of `system` at x + εu: the frames
+/// [`TangentTerm::second_along_frames_once`] reads.
+pub fn tangent_frames_along<S: Real>(
+    system: &crate::System<S>,
+    x: &[Dual64],
+    u: &[f64],
+) -> Result<Vec<Frame<SecondTangent>>, EnergyError> {
+    let zero = Dual64::from_re(0.0);
+    frames_at(system, [("x", x.len()), ("u", u.len())], |i| {
+        SecondTangent::new(x[i], Dual64::from_re(u[i]), zero)
+    })
+}
+
+/// Every body's frame at the coordinates `seed(i)`, after checking that each named vector
+/// covers the coordinates.
+fn frames_at<S: Real, T: Real, const K: usize>(
+    system: &crate::System<S>,
+    lengths: [(&'static str, usize); K],
+    seed: impl Fn(usize) -> T,
+) -> Result<Vec<Frame<T>>, EnergyError> {
+    let n = system.coords.len();
+    if let Some(&(argument, given)) = lengths.iter().find(|(_, given)| *given < n) {
+        return Err(EnergyError::Length {
+            function: "tangent_frames",
+            argument,
+            expected: n,
+            given,
+        });
+    }
+    let at: Vec<T> = (0..n).map(seed).collect();
     Ok(system.bodies.iter().map(|b| b.frame.eval(&at)).collect())
 }

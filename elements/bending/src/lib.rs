@@ -397,8 +397,8 @@ impl TangentSharedPotential for WireBeam<Dual64> {
         2
     }
 
-    fn energies_on_frames<D: Lift<Dual64>>(&self, frames: &[Frame<D>], out: &mut [D]) {
-        let e = self.energy_of_frames(&frames[0], &frames[1]);
+    fn energies_on_frames<D: Lift<Dual64>>(&self, frames: &[&Frame<D>], out: &mut [D]) {
+        let e = self.energy_of_frames(frames[0], frames[1]);
         out[BENDING_PART] = e.bending;
         out[EXTRA_STRETCH_PART] = e.total - e.bending;
     }

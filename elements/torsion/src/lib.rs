@@ -57,8 +57,8 @@ impl<C: Constant> TorsionEnergy<C> {
 }
 
 impl TangentPotential for TorsionEnergy<Dual64> {
-    fn energy_on_frames<D: Lift<Dual64>>(&self, frames: &[Frame<D>]) -> D {
-        self.energy_on(&frames[0], &frames[1])
+    fn energy_on_frames<D: Lift<Dual64>>(&self, frames: &[&Frame<D>]) -> D {
+        self.energy_on(frames[0], frames[1])
     }
 }
 
