@@ -501,3 +501,55 @@ fn mode_sensitivities_are_exact_wherever_the_build_has_a_tangent() {
     let s = sensitivities(&quad, &request).expect("sensitivities");
     assert_eq!(s.exact, vec![false]);
 }
+
+#[test]
+fn every_bundled_model_exact_against_the_difference_route() {
+    // every bundled model at stage 2, every parameter that takes the exact route, against
+    // the difference route of the same library (a second method: the stage rebuilt and
+    // re-solved at p ± h, p ± 2h and its matrices differenced, sharing with the exact route
+    // only the energies and the eigenvector algebra). The difference route's error is its
+    // rounding, ~10⁻¹⁶|X|/h = 10⁻¹³ of the matrices, and its truncation ~10⁻¹²; measured,
+    // the two agree to 10⁻⁷ of a column's largest |df/dp| on the quad. Tolerance: 10⁻⁶ of
+    // that largest entry, plus a floor for columns the modes barely feel, where the
+    // difference is rounding noise around the exact value: 10⁻¹⁰ of the highest frequency
+    // per unit relative change of p, and for a parameter whose value is 0 (stepped by
+    // pendkit::sensitivity::ZERO_STEP = 10⁻⁶ of its unit) ε·f_max/10⁻⁶ ≈ 2·10⁻¹⁰ f_max
+    // with a margin of 50: 10⁻⁸ f_max (the quad's top-wire separation sn = 0, whose
+    // derivative is exactly 0 by symmetry, differences to ~10⁻⁸ Hz/m).
+    for model in pendkit::models() {
+        let name = model.name();
+        let case = case(name);
+        let run = |differences: bool| {
+            let mut request = SensitivityRequest::modes(Stage::S2);
+            request.allow_unstable = true;
+            request.differences = differences;
+            sensitivities(&case, &request).unwrap_or_else(|e| panic!("{name}: {e}"))
+        };
+        let (exact, differenced) = (run(false), run(true));
+        assert_eq!(exact.parameters, differenced.parameters, "{name}");
+        let mut compared = 0;
+        for (j, p) in exact.parameters.iter().enumerate() {
+            if !exact.exact[j] {
+                continue;
+            }
+            let column = |s: &Sensitivities| -> Vec<f64> { s.dfdp.iter().map(|r| r[j]).collect() };
+            let (a, b) = (column(&exact), column(&differenced));
+            let largest = b.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+            let f_max = exact.modes_hz.iter().fold(0.0_f64, |m, f| m.max(f.abs()));
+            let floor = if exact.values[j] == 0.0 {
+                1e-8 * f_max
+            } else {
+                1e-10 * f_max / exact.values[j].abs()
+            };
+            for (k, (x, y)) in a.iter().zip(&b).enumerate() {
+                let tol = 1e-6 * largest + floor;
+                assert!(
+                    (x - y).abs() <= tol,
+                    "{name} d f{k}/d {p}: exact {x:e}, differenced {y:e} (tolerance {tol:e})"
+                );
+            }
+            compared += 1;
+        }
+        assert!(compared > 0, "{name}: no parameter took the exact route");
+    }
+}

@@ -184,3 +184,86 @@ fn triple_at_stage_2() {
         &["l1", "m2", "d0", "I1x", "ufc1", "silica_Y"],
     );
 }
+
+#[test]
+fn wrong_sizes_are_errors_naming_what_and_where() {
+    // inputs of the wrong size (another model's layout or balance, short vectors, a pair
+    // naming a direction that does not exist) give one-line errors, never a panic
+    let pendulum = Case::open("pendulum").expect("case");
+    let quad = Case::open("quad").expect("case");
+    let solved = |case: &Case| {
+        let (system, _) = case.build().expect("build");
+        let a =
+            assemble_with(&system, Stage::S2, &AssemblyOptions::default(), None).expect("assemble");
+        let balance = Balance::new(&system, &a.equilibrium.coords)
+            .expect("balance")
+            .expect("open");
+        (system, a, balance)
+    };
+    let (_, pa, pb) = solved(&pendulum);
+    let (qs, qa, qb) = solved(&quad);
+    let dual = pendkit_model::build_tangent(quad.model, &quad.overrides, "m1").expect("dual");
+    let q = &qa.equilibrium.coords;
+    let err = |r: Result<Option<pendkit_assembly::StageTangent>, _>| match r {
+        Err(e) => pendkit_assembly::AssemblyError::to_string(&e),
+        Ok(_) => panic!("must fail"),
+    };
+    let e = err(stage_tangent(
+        &dual,
+        Stage::S2,
+        &q[1..],
+        &qa.layout,
+        &qb,
+        Along::Full,
+    ));
+    assert!(
+        e.contains("stage_tangent") && e.contains("equilibrium"),
+        "{e}"
+    );
+    let e = err(stage_tangent(
+        &dual,
+        Stage::S2,
+        q,
+        &pa.layout,
+        &qb,
+        Along::Full,
+    ));
+    assert!(e.contains("stage_tangent") && e.contains("layout"), "{e}");
+    let e = err(stage_tangent(
+        &dual,
+        Stage::S2,
+        q,
+        &qa.layout,
+        &pb,
+        Along::Full,
+    ));
+    assert!(e.contains("balance") && !e.contains('\n'), "{e}");
+    let n = qs.coords.len();
+    let w = DMatrix::zeros(n, 2);
+    let e = err(stage_tangent(
+        &dual,
+        Stage::S2,
+        q,
+        &qa.layout,
+        &qb,
+        Along::Pairs {
+            vectors: &w,
+            pairs: &[(0, 2)],
+        },
+    ));
+    assert!(e.contains("pairs"), "{e}");
+    let short = DMatrix::zeros(n - 1, 2);
+    let e = err(stage_tangent(
+        &dual,
+        Stage::S2,
+        q,
+        &qa.layout,
+        &qb,
+        Along::Pairs {
+            vectors: &short,
+            pairs: &[(0, 0)],
+        },
+    ));
+    assert!(e.contains("vectors"), "{e}");
+    assert!(Balance::new(&qs, &q[1..]).is_err());
+}

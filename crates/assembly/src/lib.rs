@@ -86,6 +86,9 @@ pub enum AssemblyError {
         "the equilibrium is neutral (its stiffness over the free coordinates is singular): it has no derivative with respect to a parameter"
     )]
     SingularEquilibrium,
+    /// A [`Balance`] used with a model whose coordinates are not those it was built for.
+    #[error("stage_tangent: the balance was built for a model with other coordinates")]
+    ForeignBalance,
     /// A float moves a body with mass or inertia (floats must be massless).
     #[error("float '{float}' moves body '{body}', which has mass: make it a variable")]
     MassiveFloat {
@@ -600,7 +603,7 @@ pub fn mass_matrix(
 ) -> Result<DMatrix<f64>, AssemblyError> {
     check_length(system, "mass_matrix", "x", x)?;
     system.check_indices()?;
-    check_layout(system, layout)?;
+    check_layout("mass_matrix", system, layout)?;
     let mut jet = FrameJet::new();
     mass_from(system, layout, |b, columns| {
         // cannot fail: every frame reads coordinates of `x` (checked above)
@@ -633,11 +636,15 @@ fn check_length(
 }
 
 /// `layout` is one of `system`: a row for every coordinate, and variables of the system.
-fn check_layout(system: &System, layout: &Layout) -> Result<(), AssemblyError> {
+pub(crate) fn check_layout<S: pendkit_rotations::Real>(
+    function: &'static str,
+    system: &System<S>,
+    layout: &Layout,
+) -> Result<(), AssemblyError> {
     let n = system.coords.len();
     if layout.position.len() != n {
         return Err(AssemblyError::Length {
-            function: "mass_matrix",
+            function,
             argument: "layout.position",
             expected: n,
             given: layout.position.len(),
@@ -655,6 +662,18 @@ fn check_layout(system: &System, layout: &Layout) -> Result<(), AssemblyError> {
             what: "coordinate",
             index: bad,
             len: n,
+        }));
+    }
+    // every variable of the system has a row of the mass matrix
+    let nx = layout.variables.len();
+    if let Some(g) =
+        (0..n).find(|&g| system.coords[g].kind == CoordKind::Variable && layout.position[g] >= nx)
+    {
+        return Err(AssemblyError::Energy(EnergyError::Index {
+            item: format!("layout: variable '{}'", system.coords[g].name),
+            what: "row of the mass matrix",
+            index: layout.position[g],
+            len: nx,
         }));
     }
     Ok(())

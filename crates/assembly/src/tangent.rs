@@ -113,6 +113,8 @@ fn accumulate(
 /// not pinned), at the equilibrium, factorised: the same for every parameter, so built
 /// once per stage ([`Balance::new`]) and shared by [`stage_tangent`]'s calls.
 pub struct Balance {
+    /// The model's coordinate names (a balance belongs to one model).
+    coords: Vec<String>,
     free: Vec<usize>,
     lu: nalgebra::LU<f64, nalgebra::Dyn, nalgebra::Dyn>,
 }
@@ -134,7 +136,12 @@ impl Balance {
         let k = DMatrix::from_fn(free.len(), free.len(), |a, b| {
             sums.hessian[(free[a], free[b])].re
         });
-        Ok(Some(Balance { free, lu: k.lu() }))
+        let coords = system.coords.iter().map(|c| c.name.clone()).collect();
+        Ok(Some(Balance {
+            coords,
+            free,
+            lu: k.lu(),
+        }))
     }
 }
 
@@ -206,15 +213,15 @@ pub fn stage_tangent(
     along: Along,
 ) -> Result<Option<StageTangent>, AssemblyError> {
     check_equilibrium(system, equilibrium)?;
+    crate::check_layout("stage_tangent", system, layout)?;
     let n = system.coords.len();
     let free = &balance.free;
-    if free.iter().any(|&g| g >= n) {
-        return Err(AssemblyError::Length {
-            function: "stage_tangent",
-            argument: "balance (of another model)",
-            expected: n,
-            given: free.iter().max().map_or(0, |g| g + 1),
-        });
+    if !balance
+        .coords
+        .iter()
+        .eq(system.coords.iter().map(|c| &c.name))
+    {
+        return Err(AssemblyError::ForeignBalance);
     }
     let Some(balanced) = balanced_terms(system)? else {
         return Ok(None);
