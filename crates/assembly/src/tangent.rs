@@ -83,8 +83,8 @@ impl Sums {
 }
 
 /// Adds each term's Hessian (or, when `hessian` is false, its gradient only) at `x`.
-fn accumulate(
-    terms: &[TangentTerm],
+fn accumulate<'t>(
+    terms: impl IntoIterator<Item = &'t TangentTerm>,
     x: &[Dual64],
     sums: &mut Sums,
     hessian: bool,
@@ -155,17 +155,19 @@ fn free_coordinates(system: &System<Dual64>) -> Vec<usize> {
         .collect()
 }
 
-/// The terms Newton minimised: stage-0A kinds (their constants do not depend on the
-/// reference) and, when plug-in terms join early, all of those, built around the start.
-/// `None` when some kind has no tangent terms or the model has user-written terms (text:
-/// whether their numbers move with the parameter is unknown).
+/// The terms Newton minimised: the stage-0A kinds' (their constants do not depend on the
+/// configuration they are built around). `None` when some kind has no tangent terms, when
+/// the model has user-written terms (text: whether their numbers move with the parameter
+/// is unknown), or when plug-in terms join the equilibrium: those are built around the
+/// start position, which moves with the parameters (the nominal geometry) but whose
+/// derivative the model does not carry (`Coordinate::start` is a number, not a model
+/// constant).
 fn balanced_terms(system: &System<Dual64>) -> Result<Option<Vec<TangentTerm>>, EnergyError> {
-    if !system.extra_terms.is_empty() {
+    if !system.extra_terms.is_empty() || system.early_wire_terms != EarlyWireTerms::No {
         return Ok(None);
     }
     let start: Vec<Dual64> = system.start().into_iter().map(Dual64::from_re).collect();
-    let early = system.early_wire_terms != EarlyWireTerms::No;
-    kind_tangent_terms(system, &start, |s| s == Stage::S0A || early)
+    kind_tangent_terms(system, &start, |s| s == Stage::S0A)
 }
 
 fn check_equilibrium(system: &System<Dual64>, equilibrium: &[f64]) -> Result<(), AssemblyError> {
@@ -250,12 +252,9 @@ pub fn stage_tangent(
         .zip(&delta)
         .map(|(&v, &d)| Dual64::new(v, d))
         .collect();
-    let stage_terms = if system.early_wire_terms == EarlyWireTerms::Yes {
-        Some(Vec::new())
-    } else {
-        kind_tangent_terms(system, &moving, |s| s != Stage::S0A && s <= stage)?
-    };
-    let Some(stage_terms) = stage_terms else {
+    // the stage's plug-in terms, built around the moving equilibrium
+    let Some(plugins) = kind_tangent_terms(system, &moving, |s| s != Stage::S0A && s <= stage)?
+    else {
         return Ok(None);
     };
     let mut moved = Sums::new(n);
@@ -264,7 +263,7 @@ pub fn stage_tangent(
         .iter()
         .map(|&g| moved.gradient[g].eps.abs())
         .fold(0.0, f64::max);
-    let all = || balanced.iter().chain(&stage_terms);
+    let all = || balanced.iter().chain(&plugins);
     let stiffness = match along {
         Along::Full => {
             let mut sums = Sums::new(n);
@@ -330,7 +329,7 @@ pub fn stage_tangent(
 
 /// Adds one term's Hessian at `x` into `sums`.
 fn add_hessian(term: &TangentTerm, x: &[Dual64], sums: &mut Sums) -> Result<(), EnergyError> {
-    accumulate(std::slice::from_ref(term), x, sums, true)
+    accumulate([term], x, sums, true)
 }
 
 /// dM/dp over the layout's variables: M = Σ_b m J_pᵀ J_p + J_ωᵀ I J_ω with the velocity

@@ -20,8 +20,10 @@
 //! difference. The route is closed (and the parameter goes the difference route below) for
 //! a parameter the dual build cannot follow (written into a pose's text, a count, a
 //! switch), one read only by the damping, a model with user-written terms or a kind
-//! without tangent terms, a damping tag whose real multiplier at DC is not 1, and for
-//! transfer-function and noise sensitivities, which need the tension-off Hessians too.
+//! without tangent terms, plug-in terms that join the equilibrium (built around the start
+//! position, whose derivative the model does not carry), a damping tag whose real
+//! multiplier at DC is not 1, and for transfer-function and noise sensitivities, which
+//! need the tension-off Hessians too.
 //!
 //! **The difference route** (and what it shares with the exact one):
 //!
