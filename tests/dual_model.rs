@@ -297,3 +297,39 @@ fn every_bundled_model_differentiates_its_build_exactly() {
     // (a collapse of this count would mean the dual build refuses what it should not)
     assert!(checked > 900, "{checked}");
 }
+
+#[test]
+fn a_driven_body_placed_by_a_parameter_has_no_exact_derivative() {
+    // a driven body's coordinates are fixed at their values, which are numbers: a
+    // parameter that places it cannot be followed by the dual build, which must say so
+    // (not drop the derivative); the sensitivities then difference it
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../models/basic/pendulum.toml"
+    ))
+    .unwrap()
+    .replace(
+        "[bodies.support]\ncoordinates = \"00\"\ndriven = true",
+        "[bodies.support]\ncoordinates = \"00\"\ndriven = true\nposition = [0, 0, \"h_support\"]",
+    )
+    .replace(
+        "[parameters]\n",
+        "[parameters]\nh_support = { value = 0.1, unit = \"m\", description = \"support height\" }\n",
+    );
+    assert!(text.contains("h_support\"]"), "the edit applies");
+    let case = pendkit::Case::from_text(std::path::Path::new("moved-support.toml"), &text)
+        .expect("the file builds");
+    let e = pendkit_model::build_tangent(case.model, &case.overrides, "h_support")
+        .expect_err("no exact derivative")
+        .to_string();
+    assert!(
+        e.contains("no exact derivative") && e.contains("driven body"),
+        "{e}"
+    );
+    // the fibre length still has one
+    assert!(pendkit_model::build_tangent(case.model, &case.overrides, "l_fibre").is_ok());
+    let mut request = pendkit::SensitivityRequest::modes(pendkit::Stage::S2);
+    request.parameters = Some(vec!["h_support".into(), "l_fibre".into()]);
+    let s = pendkit::sensitivities(&case, &request).expect("sensitivities");
+    assert_eq!(s.exact, vec![false, true]);
+}

@@ -680,6 +680,13 @@ impl<'s, 'c, S: BuildScalar> Interpreter<'s, 'c, S> {
             let start = nominal_k.re();
             if dof.contains(&k) {
                 let name = format!("{}{suffix}", AXES[k]);
+                if body.driven && nominal_k.moves() {
+                    // a driven coordinate's value is where it starts: a number
+                    return Err(no_derivative(
+                        at,
+                        "the position of a driven body (its coordinates' values) moves with it",
+                    ));
+                }
                 if body.driven {
                     self.b.parameter(&name, start)
                 } else {
