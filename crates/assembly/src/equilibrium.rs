@@ -181,12 +181,7 @@ pub(crate) fn newton(
     start: &[f64],
     options: &EquilibriumOptions,
 ) -> Result<Equilibrium, AssemblyError> {
-    let free: Vec<usize> = (0..system.coords.len())
-        .filter(|&i| {
-            let c = &system.coords[i];
-            c.kind != CoordKind::Parameter && !c.pinned
-        })
-        .collect();
+    let free = free_coordinates(system);
     let mut slot = vec![None; system.coords.len()];
     for (k, &i) in free.iter().enumerate() {
         slot[i] = Some(k);
@@ -288,4 +283,14 @@ pub(crate) fn newton(
         }
         iteration += 1;
     }
+}
+
+/// The coordinates Newton moves: neither parameters (fixed by the caller) nor pinned.
+pub(crate) fn free_coordinates<S: pendkit_rotations::Real>(system: &System<S>) -> Vec<usize> {
+    (0..system.coords.len())
+        .filter(|&i| {
+            let c = &system.coords[i];
+            c.kind != CoordKind::Parameter && !c.pinned
+        })
+        .collect()
 }

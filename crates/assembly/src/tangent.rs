@@ -21,6 +21,7 @@ use pendkit_energy::{
 };
 use pendkit_rotations::{Constant, tr_mul, vee};
 
+use crate::equilibrium::free_coordinates;
 use crate::{AssemblyError, Layout};
 
 /// dq*/dp, dK/dp and dM/dp of one stage with respect to one parameter.
@@ -143,16 +144,6 @@ impl Balance {
             lu: k.lu(),
         }))
     }
-}
-
-/// The coordinates Newton moves: neither parameters nor pinned.
-fn free_coordinates(system: &System<Dual64>) -> Vec<usize> {
-    (0..system.coords.len())
-        .filter(|&g| {
-            let c = &system.coords[g];
-            c.kind != CoordKind::Parameter && !c.pinned
-        })
-        .collect()
 }
 
 /// The terms Newton minimised: the stage-0A kinds' (their constants do not depend on the
