@@ -36,10 +36,13 @@ pub struct StageTangent {
     pub stiffness: DMatrix<f64>,
     /// dM/dp over the layout's variables (kg, kg m, kg m² per unit of the parameter).
     pub mass: DMatrix<f64>,
-    /// The largest |dg/dp| on a free coordinate once the equilibrium moves along δq,
-    /// relative to the largest sum over the terms of their |∂g/∂p| on one coordinate: the
-    /// implicit function theorem's own check, zero but for rounding.
+    /// The largest |dg/dp| on a free coordinate once the equilibrium moves along δq (N or
+    /// N m per unit of the parameter): the implicit function theorem's own check, zero but
+    /// for rounding, which is measured against `forces`.
     pub residual: f64,
+    /// The largest sum over the balanced terms of their |force| on one free coordinate at
+    /// the equilibrium (N or N m): the scale of the forces' rounding.
+    pub forces: f64,
 }
 
 /// The kinds' tangent terms whose stage passes `include`, built around `coords`; `None`
@@ -65,7 +68,7 @@ fn kind_tangent_terms(
 
 /// Sums of the terms' derivatives over the full coordinate vector: Hessian and gradient
 /// (value parts in `.re`, parameter derivatives in `.eps`), and per coordinate the sum of
-/// the terms' |∂g/∂p|, the scale the sum's rounding is measured against.
+/// the terms' |force|, the scale the sum's rounding is measured against.
 struct Sums {
     hessian: DMatrix<Dual64>,
     gradient: DVector<Dual64>,
@@ -99,7 +102,7 @@ fn accumulate<'t>(
         let m = term.coords.len();
         for (a, &ga) in term.coords.iter().enumerate() {
             sums.gradient[ga] += d.gradient[a];
-            sums.magnitude[ga] += d.gradient[a].eps.abs();
+            sums.magnitude[ga] += d.gradient[a].re.abs();
             if hessian {
                 for (b, &gb) in term.coords.iter().enumerate() {
                     sums.hessian[(ga, gb)] += d.hessian[a * m + b];
@@ -195,8 +198,8 @@ pub enum Along<'a> {
 /// parameter `system` was built with seeded, at the equilibrium `equilibrium` (the `f64`
 /// model's, full coordinate vector) with the stage's `layout` and the equilibrium's
 /// `balance` (from the `f64` model). `None` when the model has terms without such
-/// derivatives (a kind without tangent terms, user-written terms), for which the caller
-/// keeps to differences.
+/// derivatives (a kind without tangent terms, user-written terms, wire terms that join the
+/// equilibrium), for which the caller keeps to differences.
 pub fn stage_tangent(
     system: &System<Dual64>,
     stage: Stage,
@@ -224,7 +227,7 @@ pub fn stage_tangent(
     let mut rest = Sums::new(n);
     accumulate(&balanced, &at_rest, &mut rest, false)?;
     let dg_free = DVector::from_fn(free.len(), |a, _| rest.gradient[free[a]].eps);
-    let scale = free.iter().map(|&g| rest.magnitude[g]).fold(0.0, f64::max);
+    let forces = free.iter().map(|&g| rest.magnitude[g]).fold(0.0, f64::max);
     let delta_free = if dg_free.amax() == 0.0 {
         DVector::zeros(free.len())
     } else {
@@ -310,11 +313,8 @@ pub fn stage_tangent(
         equilibrium: delta,
         stiffness,
         mass: mass_tangent(system, layout, &moving),
-        residual: if scale == 0.0 {
-            balanced_residual
-        } else {
-            balanced_residual / scale
-        },
+        residual: balanced_residual,
+        forces,
     }))
 }
 

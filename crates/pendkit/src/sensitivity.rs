@@ -84,6 +84,11 @@ pub const RELATIVE_STEP: f64 = 1e-3;
 /// Step of a parameter whose value is exactly 0, in the parameter's own unit.
 pub const ZERO_STEP: f64 = 1e-6;
 
+/// Largest imbalance of the moved equilibrium per relative change of the parameter, as a
+/// fraction of the forces, that the exact route accepts
+/// ([`pendkit_assembly::StageTangent::residual`]).
+const EXACT_RESIDUAL: f64 = 1e-6;
+
 /// Relative gap of ω² below which modes are one cluster for their derivatives.
 const CLUSTER_GAP: f64 = 1e-8;
 
@@ -596,6 +601,15 @@ fn exact_projections(
     else {
         return Ok(None);
     };
+    // the implicit function theorem's own check: the equilibrium moved along dq*/dp is
+    // balanced to rounding (a relative change of p unbalances the forces by ≲ 1e-12 of
+    // their size in every test; a parameter of value 0 is taken on the scale of its unit);
+    // a model where it is not gets the difference route rather than a wrong number
+    let p_scale = if p0 == 0.0 { 1.0 } else { p0.abs() };
+    let imbalance = tangent.residual * p_scale;
+    if imbalance.is_nan() || imbalance > EXACT_RESIDUAL * tangent.forces {
+        return Ok(None);
+    }
     let vectors = shared.vectors;
     let vm = vectors.transpose() * &tangent.mass * vectors;
     Ok(Some((tangent.stiffness, vm)))
