@@ -167,14 +167,11 @@ fn pendulum_every_stage_hinged_and_clamped() {
 
 #[test]
 fn quad_at_stage_2() {
-    // a wire length, a mass, a Young's modulus, a wire radius, an inertia, a height and two
-    // wire separations
-    check(
-        "quad",
-        &[],
-        Stage::S2,
-        &["l1", "m1", "Y1", "r1", "I1x", "d0", "su", "ln"],
-    );
+    // a wire length, a mass, a Young's modulus, a wire radius, an inertia, a height, two
+    // wire separations and two blade tips' positions (numbers in the tips' poses, whose
+    // derivatives move the points on the tips)
+    let quad = ["l1", "m1", "Y1", "r1", "I1x", "d0", "su", "ln", "nn0", "d1"];
+    check("quad", &[], Stage::S2, &quad);
 }
 
 #[test]

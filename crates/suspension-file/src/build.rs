@@ -1170,7 +1170,11 @@ impl<'s, 'c, S: BuildScalar> Interpreter<'s, 'c, S> {
             let tags = wire_tags(&set.set.tags.value);
             for w in &set.wires {
                 let upper_end = match w.tip {
-                    Some(t) => (tips[t], w.upper),
+                    // a point on the tip, moved with the tip's derivative (see `blade`)
+                    Some(t) => {
+                        let (tip, moved) = tips[t];
+                        (tip, w.upper + moved)
+                    }
                     None => (upper, w.upper),
                 };
                 let tension = if w.vertical.re() == set.length.re() {
@@ -1185,8 +1189,16 @@ impl<'s, 'c, S: BuildScalar> Interpreter<'s, 'c, S> {
     }
 
     /// Adds blade tip `t` of `blades` (T020205 §6.3–§6.4) on body `parent` and returns the
-    /// tip body. Its spring's preload balances the wires' pull and the tip's weight, so that
-    /// the tip is in equilibrium at the nominal geometry.
+    /// tip body, with the derivative of the tip's position that the points on it carry. Its
+    /// spring's preload balances the wires' pull and the tip's weight, so that the tip is in
+    /// equilibrium at the nominal geometry.
+    ///
+    /// The tip's position on its parent is a constant of the tip's pose, written into its
+    /// text as a number: the number is its value, and its derivative (which text cannot
+    /// carry) moves every point on the tip instead (the spring's end, the wires' ends, the
+    /// lite tip's centre of mass). The tip's axes are its parent's (its pose turns nothing),
+    /// so moving the tip's origin by δ and moving every point on it by δ in its own axes are
+    /// the same. The shift's value is exactly 0: an `f64` build is unchanged.
     fn blade(
         &mut self,
         blades: &PlannedBlades<S>,
@@ -1195,7 +1207,7 @@ impl<'s, 'c, S: BuildScalar> Interpreter<'s, 'c, S> {
         parent: BodyId,
         parent_at: Vector3<S>,
         pull: Vector3<S>,
-    ) -> Result<BodyId, BuildError> {
+    ) -> Result<(BodyId, Vector3<S>), BuildError> {
         let ctx = self.ctx;
         let f = &blades.fields;
         let at = &blades.set.at;
@@ -1210,12 +1222,18 @@ impl<'s, 'c, S: BuildScalar> Interpreter<'s, 'c, S> {
             None => return Err(invalid(at, "needs `stiffness` (N/m, vertical, per blade)")),
         };
         let tip_at = blades.tips[t];
+        let value = |v: S| num(v.re());
         let (z, x) = (format!("zb{name}"), format!("xb{name}"));
         let tip_name = format!("blade{name}");
         let zero = S::from(0.0);
         let mut stiffness = Vector6::new(zero, zero, kc, zero, zero, zero);
         let mut tip_weight = zero;
-        let tip_text = "a blade tip's position";
+        // the derivative of the tip's position, carried by the points on the tip (zero for
+        // the full form, whose tip is placed by its own coordinates)
+        let moved = match blades.form {
+            BladeForm::Full => zero3(),
+            _ => tip_at.map(|v| v - S::from(v.re())),
+        };
         let b = &mut self.b;
         let tip = match blades.form {
             BladeForm::XtraLite | BladeForm::Lateral | BladeForm::Lite => {
@@ -1231,18 +1249,21 @@ impl<'s, 'c, S: BuildScalar> Interpreter<'s, 'c, S> {
                             ));
                         }
                     };
-                    format!("{} + {x}", num_of(tip_at.x, at, tip_text)?)
+                    format!("{} + {x}", value(tip_at.x))
                 } else {
-                    num_of(tip_at.x, at, tip_text)?
+                    value(tip_at.x)
                 };
-                let mut spec = BodySpec::new(&tip_name).on(parent).pose([
-                    &x_expr,
-                    &num_of(tip_at.y, at, tip_text)?,
-                    &format!("{} + {z}", num_of(tip_at.z, at, tip_text)?),
-                    "0",
-                    "0",
-                    "0",
-                ]);
+                let mut spec = BodySpec::new(&tip_name)
+                    .on(parent)
+                    .pose([
+                        &x_expr,
+                        &value(tip_at.y),
+                        &format!("{} + {z}", value(tip_at.z)),
+                        "0",
+                        "0",
+                        "0",
+                    ])
+                    .centre_of_mass(moved);
                 if blades.form == BladeForm::Lite {
                     b.variable(&z, 0.0).map_err(placed(at))?;
                     spec = spec.mass(blades.tip_mass);
@@ -1285,7 +1306,7 @@ impl<'s, 'c, S: BuildScalar> Interpreter<'s, 'c, S> {
             },
             SpringEnd {
                 body: tip,
-                point: zero3(),
+                point: moved,
                 angles: [zero; 3],
             },
         ];
@@ -1298,7 +1319,7 @@ impl<'s, 'c, S: BuildScalar> Interpreter<'s, 'c, S> {
                 &blades.tag,
             )
             .map_err(placed(at))?;
-        Ok(tip)
+        Ok((tip, moved))
     }
 
     /// Adds one wire of a set, the shared beaded fibre ([`add_beaded_fibre`]): without beads
