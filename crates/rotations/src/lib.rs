@@ -22,7 +22,7 @@ pub fn c<D: Real>(x: f64) -> D {
 /// `f64` constant (no derivative), and the scalars of the parameter-derivative passes take a
 /// `Dual64` constant, whose dual part is the constant's derivative with respect to one
 /// parameter (docs/exact-sensitivities.md). Energy bodies whose constants are generic write
-/// `k.lift()` or `x.times(k)` where they would write `c(k)` or `x * k`.
+/// `D::lift(k)` or `x.times(k)` where they would write `c(k)` or `x * k`.
 pub trait Lift<C>: Real {
     /// The constant as a scalar of this type.
     fn lift(constant: C) -> Self;
