@@ -13,7 +13,7 @@
 
 use nalgebra::DMatrix;
 use pendkit::{Case, Stage};
-use pendkit_assembly::{Along, AssemblyOptions, Balance, assemble_with, stage_tangent};
+use pendkit_assembly::{Along, AssemblyOptions, Balance, Projection, assemble_with, stage_tangent};
 
 struct Solved {
     coords: Vec<f64>,
@@ -79,6 +79,19 @@ fn check(spec: &str, sets: &[&str], stage: Stage, parameters: &[&str]) {
     let balance = Balance::new(&system, &a.equilibrium.coords)
         .expect("balance")
         .expect("the exact route is open");
+    let n = system.coords.len();
+    let w = DMatrix::from_fn(n, 3, |i, k| ((i * 7 + k * 3) % 5) as f64 - 2.0);
+    let pairs = [(0, 0), (0, 1), (1, 1), (1, 2), (2, 2), (0, 2)];
+    let projection = Projection::new(
+        &system,
+        stage,
+        &a.equilibrium.coords,
+        &balance,
+        (&w, &pairs),
+        0,
+    )
+    .expect("projection")
+    .expect("the exact route is open");
     for &name in parameters {
         let p0 = resolved.get(name).expect("parameter");
         let h = 1e-4 * p0.abs();
@@ -133,16 +146,13 @@ fn check(spec: &str, sets: &[&str], stage: Stage, parameters: &[&str]) {
             t.residual,
             t.forces
         );
-        // the directional route (one evaluation per pair of directions) against the full
-        // matrix (one per entry) projected on the same directions: the same derivative by
-        // two evaluations, equal to rounding (10⁻¹⁰ of the projection's largest entry)
-        let n = system.coords.len();
-        let w = DMatrix::from_fn(n, 3, |i, k| ((i * 7 + k * 3) % 5) as f64 - 2.0);
-        let pairs = [(0, 0), (0, 1), (1, 1), (1, 2), (2, 2), (0, 2)];
-        let projected = tangent(Along::Pairs {
-            vectors: &w,
-            pairs: &pairs,
-        });
+        // the projected route (the terms whose constants move at the fixed equilibrium,
+        // plus the equilibrium's motion through coefficients computed once per stage by
+        // one pass per free coordinate) against the full matrix (every term rebuilt around
+        // the moving equilibrium, one evaluation per entry) projected on the same
+        // directions: the same derivative by two evaluations and two orders of the chain
+        // rule, equal to rounding (10⁻¹⁰ of the projection's largest entry)
+        let projected = tangent(Along::Projected(&projection));
         let full = w.transpose() * &t.stiffness * &w;
         let worst = (&projected.stiffness - &full).amax();
         assert!(
@@ -240,31 +250,130 @@ fn wrong_sizes_are_errors_naming_what_and_where() {
     ));
     assert!(e.contains("balance") && !e.contains('\n'), "{e}");
     let n = qs.coords.len();
+    let project = |vectors: &DMatrix<f64>, pairs: &[(usize, usize)], balance: &Balance| {
+        match Projection::new(&qs, Stage::S2, q, balance, (vectors, pairs), 1) {
+            Err(e) => e.to_string(),
+            Ok(_) => panic!("must fail"),
+        }
+    };
     let w = DMatrix::zeros(n, 2);
+    let e = project(&w, &[(0, 2)], &qb);
+    assert!(e.contains("Projection::new") && e.contains("pairs"), "{e}");
+    let e = project(&DMatrix::zeros(n - 1, 2), &[(0, 0)], &qb);
+    assert!(
+        e.contains("Projection::new") && e.contains("vectors"),
+        "{e}"
+    );
+    let e = project(&w, &[(0, 0)], &pb);
+    assert!(e.contains("balance") && !e.contains('\n'), "{e}");
+    // a projection of another stage (or model) is refused by stage_tangent
+    let other_stage = Projection::new(&qs, Stage::S1A, q, &qb, (&w, &[(0, 0)]), 1)
+        .expect("projection")
+        .expect("open");
     let e = err(stage_tangent(
         &dual,
         Stage::S2,
         q,
         &qa.layout,
         &qb,
-        Along::Pairs {
-            vectors: &w,
-            pairs: &[(0, 2)],
-        },
+        Along::Projected(&other_stage),
     ));
-    assert!(e.contains("pairs"), "{e}");
-    let short = DMatrix::zeros(n - 1, 2);
-    let e = err(stage_tangent(
-        &dual,
-        Stage::S2,
-        q,
-        &qa.layout,
-        &qb,
-        Along::Pairs {
-            vectors: &short,
-            pairs: &[(0, 0)],
-        },
-    ));
-    assert!(e.contains("vectors"), "{e}");
+    assert!(e.contains("projection") && !e.contains('\n'), "{e}");
     assert!(Balance::new(&qs, &q[1..]).is_err());
+    // a NaN anywhere in the inputs is a one-line error naming the argument and the entry,
+    // never NaN derivatives
+    let mut nan_q = q.clone();
+    nan_q[3] = f64::NAN;
+    let e = err(stage_tangent(
+        &dual,
+        Stage::S2,
+        &nan_q,
+        &qa.layout,
+        &qb,
+        Along::Full,
+    ));
+    assert!(e.contains("equilibrium entry 3 is not finite"), "{e}");
+    let e = match Balance::new(&qs, &nan_q) {
+        Err(e) => e.to_string(),
+        Ok(_) => panic!("must fail"),
+    };
+    assert!(
+        e.contains("Balance::new") && e.contains("not finite"),
+        "{e}"
+    );
+    let mut nan_w = DMatrix::zeros(n, 2);
+    nan_w[(1, 1)] = f64::INFINITY;
+    let e = project(&nan_w, &[(0, 1)], &qb);
+    assert!(e.contains("vectors") && e.contains("not finite"), "{e}");
+}
+
+#[test]
+fn terms_that_do_not_move_have_no_derivative_at_fixed_coordinates() {
+    // the projected route evaluates, at the fixed equilibrium, only the terms that say
+    // their constants move with the parameter (`TangentTerm::moves`): sound only if every
+    // other term has no derivative there, every dual part of its value, gradient and
+    // Hessian exactly 0 (no tolerance: the dual parts of constants that do not move are
+    // exact zeros, and so is all arithmetic on them). Every term of every kind at stage 2,
+    // built around the equilibrium, for parameters that each move a few terms (a mass, a
+    // wire's length, radius and modulus, a blade tip's position, a blade's frequency).
+    use pendkit_energy::{Reference, SharedBodies, registry};
+    use pendkit_rotations::Constant;
+    let cases: [(&str, &[&str]); 3] = [
+        ("pendulum", &["m1", "l_fibre", "r_fibre", "E_fibre"]),
+        (
+            "quad",
+            &["m3", "mn", "l3", "r1", "Y2", "nn0", "d1", "I2y", "ufc1"],
+        ),
+        ("triple", &["m3", "l2", "ufc1", "d0"]),
+    ];
+    let (mut skipped, mut kept) = (0, 0);
+    for (model, parameters) in cases {
+        let case = Case::open(model).expect("case");
+        let (system, _) = case.build().expect("build");
+        let a =
+            assemble_with(&system, Stage::S2, &AssemblyOptions::default(), None).expect("assemble");
+        let at_rest: Vec<num_dual::Dual64> = a
+            .equilibrium
+            .coords
+            .iter()
+            .map(|&v| num_dual::Dual64::from_re(v))
+            .collect();
+        for &name in parameters {
+            let dual = pendkit_model::build_tangent(case.model, &case.overrides, name)
+                .unwrap_or_else(|e| panic!("{model} {name}: {e}"));
+            let reference = Reference {
+                system: &dual,
+                coords: &at_rest,
+            };
+            let shared = SharedBodies::new();
+            for kind in registry() {
+                if dual.element_stage(kind).is_none_or(|s| s > Stage::S2) {
+                    continue;
+                }
+                let terms = kind
+                    .tangent_terms(&reference, &shared)
+                    .expect("terms")
+                    .expect("every bundled kind has tangent terms");
+                for term in terms.iter() {
+                    if term.moves() {
+                        kept += 1;
+                        continue;
+                    }
+                    skipped += 1;
+                    let d = term.derivatives(&at_rest).expect("derivatives");
+                    let moving = std::iter::once(&d.value)
+                        .chain(&d.gradient)
+                        .chain(&d.hessian)
+                        .any(|v| v.moves());
+                    assert!(
+                        !moving,
+                        "{model} {name}: '{}' says its constants do not move, yet has a derivative",
+                        term.label
+                    );
+                }
+            }
+        }
+    }
+    // not vacuous: most terms are skipped for each of these parameters, and some kept
+    assert!(skipped > kept && kept > 0, "skipped {skipped}, kept {kept}");
 }

@@ -11,6 +11,7 @@
 
 mod equilibrium;
 mod evaluate;
+mod parallel;
 mod redundant;
 mod tangent;
 mod timing;
@@ -26,8 +27,9 @@ use pendkit_geometry::FrameJet;
 
 pub use equilibrium::{Equilibrium, EquilibriumOptions, find_equilibrium};
 pub use evaluate::DerivativePath;
+pub use parallel::{in_parallel, thread_count};
 pub use pendkit_energy::OffHessian;
-pub use tangent::{Along, Balance, StageTangent, stage_tangent};
+pub use tangent::{Along, Balance, Projection, StageTangent, stage_tangent};
 pub use timing::{Phase, PhaseTimes, timed};
 
 use evaluate::Evaluator;
@@ -89,6 +91,19 @@ pub enum AssemblyError {
     /// A [`Balance`] used with a model whose coordinates are not those it was built for.
     #[error("stage_tangent: the balance was built for a model with other coordinates")]
     ForeignBalance,
+    /// An input with a NaN or infinite entry.
+    #[error("{function}: {argument} entry {index} is not finite")]
+    NotFiniteInput {
+        /// The function called, e.g. `stage_tangent`.
+        function: &'static str,
+        /// The argument, e.g. `equilibrium`.
+        argument: &'static str,
+        /// The first entry that is not finite.
+        index: usize,
+    },
+    /// A [`Projection`] used with another model, stage or equilibrium than its own.
+    #[error("stage_tangent: the projection was built for another model, stage or equilibrium")]
+    ForeignProjection,
     /// A float moves a body with mass or inertia (floats must be massless).
     #[error("float '{float}' moves body '{body}', which has mass: make it a variable")]
     MassiveFloat {

@@ -12,17 +12,27 @@
 //! evaluated there, whose dual part is the total dK/dp = ∂K/∂p + ∂K/∂q · δq (the third
 //! derivatives of the energies along δq included). The mass matrix likewise, from the
 //! bodies' velocity Jacobians at q* + ε δq and their dual masses and inertias.
+//!
+//! Projected on a few directions (the modes), the total derivative splits by the chain
+//! rule: Wᵀ(dK/dp)W = Wᵀ(∂K/∂p)W + Σᵢ δqᵢ Wᵀ(∂K/∂qᵢ)W, the first at the fixed
+//! equilibrium, the second with the terms rebuilt around q* + ε eᵢ. The second's
+//! coefficients do not depend on the parameter: a [`Projection`] computes them once per
+//! stage (one pass per free coordinate, over the terms on it), and each parameter then
+//! evaluates only the terms whose constants move with it ([`TangentTerm::moves`]).
 
 use nalgebra::{DMatrix, DVector, Vector3};
 use num_dual::{Dual, Dual64};
 use pendkit_energy::{
-    CoordKind, EarlyWireTerms, EnergyError, Reference, Stage, System, TangentTerm, registry,
-    tangent_frames, tangent_frames_along,
+    CoordKind, EarlyWireTerms, EnergyError, HyperTangent, Reference, SecondTangent, SharedBodies,
+    Stage, System, TangentSum, TangentTerm, registry, tangent_frames_first,
 };
-use pendkit_rotations::{Constant, tr_mul, vee};
+use pendkit_geometry::Frame;
+use pendkit_rotations::{Constant, Real, tr_mul, vee};
 
 use crate::equilibrium::free_coordinates;
+use crate::evaluate::Evaluator;
 use crate::{AssemblyError, Layout};
+use crate::{DerivativePath, in_parallel};
 
 /// dq*/dp, dK/dp and dM/dp of one stage with respect to one parameter.
 #[derive(Clone, Debug)]
@@ -36,9 +46,13 @@ pub struct StageTangent {
     pub stiffness: DMatrix<f64>,
     /// dM/dp over the layout's variables (kg, kg m, kg m² per unit of the parameter).
     pub mass: DMatrix<f64>,
-    /// The largest |dg/dp| on a free coordinate once the equilibrium moves along δq (N or
-    /// N m per unit of the parameter): the implicit function theorem's own check, zero but
-    /// for rounding, which is measured against `forces`.
+    /// |zᵀ dg/dp| once the equilibrium moves along δq, the larger of two fixed weightings z
+    /// of the free coordinates with |zᵢ| in [½, 1] and mixed signs (N or N m per unit of
+    /// the parameter; at most the sum of |dg/dp| over the free coordinates): the implicit
+    /// function theorem's own check, zero but for rounding, which is measured against
+    /// `forces`. Two weighted sums instead of every entry: one evaluation per term instead
+    /// of one per term and coordinate; an imbalance hides from both only if it is
+    /// orthogonal to both weightings.
     pub residual: f64,
     /// The largest sum over the balanced terms of their |force| on one free coordinate at
     /// the equilibrium (N or N m): the scale of the forces' rounding.
@@ -53,12 +67,14 @@ fn kind_tangent_terms(
     include: impl Fn(Stage) -> bool,
 ) -> Result<Option<Vec<TangentTerm>>, EnergyError> {
     let reference = Reference { system, coords };
+    // one beam per wire for its bending and extra-stretch terms, as in the f64 assembly
+    let shared = SharedBodies::new();
     let mut terms = Vec::new();
     for kind in registry()
         .into_iter()
         .filter(|k| system.element_stage(*k).is_some_and(&include))
     {
-        match kind.tangent_terms(&reference)? {
+        match kind.tangent_terms(&reference, &shared)? {
             Some(t) => terms.extend(t),
             None => return Ok(None),
         }
@@ -67,12 +83,10 @@ fn kind_tangent_terms(
 }
 
 /// Sums of the terms' derivatives over the full coordinate vector: Hessian and gradient
-/// (value parts in `.re`, parameter derivatives in `.eps`), and per coordinate the sum of
-/// the terms' |force|, the scale the sum's rounding is measured against.
+/// (value parts in `.re`, parameter derivatives in `.eps`).
 struct Sums {
     hessian: DMatrix<Dual64>,
     gradient: DVector<Dual64>,
-    magnitude: DVector<f64>,
 }
 
 impl Sums {
@@ -81,7 +95,6 @@ impl Sums {
         Sums {
             hessian: DMatrix::from_element(n, n, zero),
             gradient: DVector::from_element(n, zero),
-            magnitude: DVector::zeros(n),
         }
     }
 }
@@ -102,7 +115,6 @@ fn accumulate<'t>(
         let m = term.coords.len();
         for (a, &ga) in term.coords.iter().enumerate() {
             sums.gradient[ga] += d.gradient[a];
-            sums.magnitude[ga] += d.gradient[a].re.abs();
             if hessian {
                 for (b, &gb) in term.coords.iter().enumerate() {
                     sums.hessian[(ga, gb)] += d.hessian[a * m + b];
@@ -121,32 +133,61 @@ pub struct Balance {
     coords: Vec<String>,
     free: Vec<usize>,
     lu: nalgebra::LU<f64, nalgebra::Dyn, nalgebra::Dyn>,
+    /// The largest sum over the balanced terms of their |force| on one free coordinate
+    /// (N or N m).
+    forces: f64,
 }
 
 impl Balance {
     /// The balance of `system` at `equilibrium` (its full coordinate vector); `None` when the
     /// model has terms without parameter derivatives (see [`stage_tangent`]).
     pub fn new(system: &System, equilibrium: &[f64]) -> Result<Option<Balance>, AssemblyError> {
-        let system = system.map_scalars(Dual64::from_re);
-        check_equilibrium(&system, equilibrium)?;
-        let Some(balanced) = balanced_terms(&system)? else {
+        let lifted = system.map_scalars(Dual64::from_re);
+        check_equilibrium("Balance::new", &lifted, equilibrium)?;
+        if balanced_terms(&lifted)?.is_none() {
             return Ok(None);
-        };
+        }
+        // the same terms in f64 (the stage-0A kinds built around the start), whose fast
+        // Hessians are the stiffness: the dual forms would give it too, at ten times the
+        // cost, to rounding
+        let terms = crate::kind_terms(system, &system.start(), &SharedBodies::new(), |s| {
+            s == Stage::S0A
+        })?;
+        let mut evaluator = Evaluator::new(system, DerivativePath::Fast);
+        evaluator.extend(terms);
+        evaluator.evaluate(equilibrium, true);
         let n = system.coords.len();
-        let at_rest: Vec<Dual64> = equilibrium.iter().map(|&v| Dual64::from_re(v)).collect();
-        let mut sums = Sums::new(n);
-        accumulate(&balanced, &at_rest, &mut sums, true)?;
-        let free = free_coordinates(&system);
-        let k = DMatrix::from_fn(free.len(), free.len(), |a, b| {
-            sums.hessian[(free[a], free[b])].re
-        });
-        let coords = system.coords.iter().map(|c| c.name.clone()).collect();
+        let mut k = DMatrix::zeros(n, n);
+        let mut magnitude = vec![0.0; n];
+        for (t, term) in evaluator.terms().iter().enumerate() {
+            let (gradient, hessian) = (evaluator.gradient(t), evaluator.on(t));
+            let m = term.coords.len();
+            for (a, &ga) in term.coords.iter().enumerate() {
+                magnitude[ga] += gradient[a].abs();
+                for (b, &gb) in term.coords.iter().enumerate() {
+                    k[(ga, gb)] += hessian[a * m + b];
+                }
+            }
+        }
+        let free = free_coordinates(system);
+        let k_free = DMatrix::from_fn(free.len(), free.len(), |a, b| k[(free[a], free[b])]);
+        let forces = free.iter().map(|&g| magnitude[g]).fold(0.0, f64::max);
         Ok(Some(Balance {
-            coords,
+            coords: coordinate_names(system),
             free,
-            lu: k.lu(),
+            lu: k_free.lu(),
+            forces,
         }))
     }
+
+    /// Whether `system` has the coordinates this balance was built for.
+    fn fits<S: Real>(&self, system: &System<S>) -> bool {
+        self.coords.iter().eq(system.coords.iter().map(|c| &c.name))
+    }
+}
+
+fn coordinate_names<S: Real>(system: &System<S>) -> Vec<String> {
+    system.coords.iter().map(|c| c.name.clone()).collect()
 }
 
 /// The terms Newton minimised: the stage-0A kinds' (their constants do not depend on the
@@ -164,17 +205,39 @@ fn balanced_terms(system: &System<Dual64>) -> Result<Option<Vec<TangentTerm>>, E
     kind_tangent_terms(system, &start, |s| s == Stage::S0A)
 }
 
-fn check_equilibrium(system: &System<Dual64>, equilibrium: &[f64]) -> Result<(), AssemblyError> {
+/// `equilibrium` is a finite full coordinate vector of `system`, whose indices are valid.
+fn check_equilibrium(
+    function: &'static str,
+    system: &System<Dual64>,
+    equilibrium: &[f64],
+) -> Result<(), AssemblyError> {
     let n = system.coords.len();
     if equilibrium.len() != n {
         return Err(AssemblyError::Length {
-            function: "stage_tangent",
+            function,
             argument: "equilibrium",
             expected: n,
             given: equilibrium.len(),
         });
     }
+    check_finite(function, "equilibrium", equilibrium)?;
     Ok(system.check_indices()?)
+}
+
+/// Every entry of `values` is finite.
+fn check_finite(
+    function: &'static str,
+    argument: &'static str,
+    values: &[f64],
+) -> Result<(), AssemblyError> {
+    match values.iter().position(|v| !v.is_finite()) {
+        Some(index) => Err(AssemblyError::NotFiniteInput {
+            function,
+            argument,
+            index,
+        }),
+        None => Ok(()),
+    }
 }
 
 /// Which part of dK/dp [`stage_tangent`] computes.
@@ -183,15 +246,285 @@ pub enum Along<'a> {
     /// Every entry (n × n, global order): one evaluation per entry of each term's upper
     /// triangle.
     Full,
-    /// The entries (a, b) of Wᵀ (dK/dp) W listed in `pairs` (the rest 0), W's columns full
-    /// coordinate vectors: one evaluation per pair and term, for the few directions a mode
-    /// sensitivity needs (the modes, lifted to the floats).
-    Pairs {
-        /// The directions, one column each (n rows).
-        vectors: &'a DMatrix<f64>,
-        /// The entries wanted (a, b), a ≤ b.
-        pairs: &'a [(usize, usize)],
-    },
+    /// The entries (a, b) of Wᵀ (dK/dp) W that `projection` lists (the rest 0): one
+    /// evaluation per pair and term whose constants move with the parameter, the rest from
+    /// the projection's coefficients.
+    Projected(&'a Projection),
+}
+
+/// Every body's frame at the equilibrium along a pair of directions (a, b): what one
+/// entry of Wᵀ(dK/dp)W evaluates the terms on. Along one direction (a = b) the cheaper
+/// second-order dual number.
+#[derive(Debug)]
+enum PairFrames {
+    Along(Vec<Frame<SecondTangent>>),
+    Across(Vec<Frame<HyperTangent>>),
+}
+
+/// The scalars of [`PairFrames`]: a coordinate seeded with its value (carrying its
+/// derivative with respect to the parameter) and the two directions' entries, and the
+/// second derivative of a term along the directions.
+trait PairScalar: Real {
+    fn seed(x: Dual64, u: f64, v: f64) -> Self;
+    fn second(terms: &TangentSum, frames: &[Frame<Self>]) -> Result<Dual64, EnergyError>;
+}
+
+impl PairScalar for SecondTangent {
+    fn seed(x: Dual64, u: f64, _v: f64) -> Self {
+        SecondTangent::new(x, Dual64::from_re(u), Dual64::from_re(0.0))
+    }
+    fn second(terms: &TangentSum, frames: &[Frame<Self>]) -> Result<Dual64, EnergyError> {
+        terms.second_along_frames_once(frames)
+    }
+}
+
+impl PairScalar for HyperTangent {
+    fn seed(x: Dual64, u: f64, v: f64) -> Self {
+        let zero = Dual64::from_re(0.0);
+        HyperTangent::new(x, Dual64::from_re(u), Dual64::from_re(v), zero)
+    }
+    fn second(terms: &TangentSum, frames: &[Frame<Self>]) -> Result<Dual64, EnergyError> {
+        terms.second_along_frames(frames)
+    }
+}
+
+/// Wᵀ(∂K/∂qᵢ)W for one pair and every free coordinate i of `coordinates` (each with the
+/// bodies it moves and the terms whose energy it changes: the terms on it, and the terms
+/// built around x + ε eᵢ whose constants moved with it): the pair's frames with those
+/// bodies re-evaluated at x + ε eᵢ, and the terms summed there. `frames` is restored.
+fn geometric_row<T: PairScalar>(
+    system: &System,
+    x: &[f64],
+    (u, v): (&[f64], &[f64]),
+    frames: &mut [Frame<T>],
+    coordinates: &[(usize, Vec<usize>, TangentSum)],
+) -> Result<Vec<(usize, f64)>, EnergyError> {
+    let mut seeds: Vec<T> = (0..x.len())
+        .map(|j| T::seed(Dual64::from_re(x[j]), u[j], v[j]))
+        .collect();
+    let mut row = Vec::with_capacity(coordinates.len());
+    for (i, bodies, terms) in coordinates {
+        let i = *i;
+        seeds[i] = T::seed(Dual64::new(x[i], 1.0), u[i], v[i]);
+        let saved: Vec<(usize, Frame<T>)> = bodies
+            .iter()
+            .map(|&b| {
+                let moved = system.bodies[b].frame.eval(&seeds);
+                (b, std::mem::replace(&mut frames[b], moved))
+            })
+            .collect();
+        let sum = T::second(terms, frames);
+        for (b, frame) in saved {
+            frames[b] = frame;
+        }
+        seeds[i] = T::seed(Dual64::from_re(x[i]), u[i], v[i]);
+        row.push((i, sum?.eps));
+    }
+    Ok(row)
+}
+
+/// What the directional derivatives Wᵀ(dK/dp)W of one stage share between parameters:
+/// the directions W (full coordinate vectors, e.g. the modes lifted to the floats), the
+/// pairs (a, b) wanted, every body's frame at the equilibrium along each pair, and the
+/// coefficients Wₐᵀ(∂K/∂qᵢ)W_b of the equilibrium's motion, one per pair and free
+/// coordinate (the terms rebuilt around q* + ε eᵢ: their dependence on the configuration
+/// they are built around included).
+#[derive(Debug)]
+pub struct Projection {
+    coords: Vec<String>,
+    stage: Stage,
+    equilibrium: Vec<f64>,
+    pairs: Vec<(usize, usize)>,
+    directions: usize,
+    frames: Vec<PairFrames>,
+    /// One row per pair, one column per coordinate (0 on the coordinates that are not free).
+    geometric: DMatrix<f64>,
+}
+
+impl Projection {
+    /// The projection of `system`'s stage `stage` at `equilibrium` (its full coordinate
+    /// vector, with the equilibrium's `balance`) on the directions `vectors` (one column
+    /// each, n rows) for the entries `pairs` (a ≤ b), computed on `threads` threads (0: as
+    /// many as the machine has; the numbers do not depend on it). `None` when the model has
+    /// terms without parameter derivatives (see [`stage_tangent`]). Costs one build of the
+    /// plug-in terms and one pass over the terms on it per free coordinate, for every pair.
+    pub fn new(
+        system: &System,
+        stage: Stage,
+        equilibrium: &[f64],
+        balance: &Balance,
+        (vectors, pairs): (&DMatrix<f64>, &[(usize, usize)]),
+        threads: usize,
+    ) -> Result<Option<Projection>, AssemblyError> {
+        let lifted = system.map_scalars(Dual64::from_re);
+        check_equilibrium("Projection::new", &lifted, equilibrium)?;
+        if !balance.fits(system) {
+            return Err(AssemblyError::ForeignBalance);
+        }
+        let n = system.coords.len();
+        if vectors.nrows() != n {
+            return Err(AssemblyError::Length {
+                function: "Projection::new",
+                argument: "vectors (rows)",
+                expected: n,
+                given: vectors.nrows(),
+            });
+        }
+        check_finite("Projection::new", "vectors", vectors.as_slice())?;
+        let m = vectors.ncols();
+        if let Some(&(a, b)) = pairs.iter().find(|&&(a, b)| a.max(b) >= m) {
+            return Err(AssemblyError::Length {
+                function: "Projection::new",
+                argument: "pairs (a direction's index)",
+                expected: m,
+                given: a.max(b) + 1,
+            });
+        }
+        let Some(balanced) = balanced_terms(&lifted)? else {
+            return Ok(None);
+        };
+        let columns: Vec<Vec<f64>> = (0..m)
+            .map(|a| vectors.column(a).iter().copied().collect())
+            .collect();
+        let at = |a: usize, b: usize| (columns[a].as_slice(), columns[b].as_slice());
+        let frames_of = |a: usize, b: usize| {
+            let (u, v) = at(a, b);
+            let at_rest = |j: usize| Dual64::from_re(equilibrium[j]);
+            if a == b {
+                let seeds: Vec<SecondTangent> = (0..n)
+                    .map(|j| SecondTangent::seed(at_rest(j), u[j], v[j]))
+                    .collect();
+                PairFrames::Along(system.bodies.iter().map(|b| b.frame.eval(&seeds)).collect())
+            } else {
+                let seeds: Vec<HyperTangent> = (0..n)
+                    .map(|j| HyperTangent::seed(at_rest(j), u[j], v[j]))
+                    .collect();
+                PairFrames::Across(system.bodies.iter().map(|b| b.frame.eval(&seeds)).collect())
+            }
+        };
+        let frames: Vec<PairFrames> = pairs.iter().map(|&(a, b)| frames_of(a, b)).collect();
+        // per free coordinate: the bodies it moves, and the terms whose energy it changes
+        // (the terms on it, and the plug-in terms built around x + ε eᵢ whose constants
+        // moved with it)
+        let plugins = in_parallel(balance.free.len(), threads, |a| {
+            let mut moved: Vec<Dual64> = equilibrium.iter().map(|&v| Dual64::from_re(v)).collect();
+            moved[balance.free[a]].eps = 1.0;
+            kind_tangent_terms(&lifted, &moved, |s| s != Stage::S0A && s <= stage)
+        })?;
+        let Some(plugins) = plugins.into_iter().collect::<Option<Vec<_>>>() else {
+            return Ok(None);
+        };
+        let coordinates: Vec<(usize, Vec<usize>, TangentSum)> = balance
+            .free
+            .iter()
+            .zip(&plugins)
+            .map(|(&i, plugins)| {
+                let bodies = (0..system.bodies.len())
+                    .filter(|&b| system.bodies[b].frame.var_list().contains(&i))
+                    .collect();
+                let terms = TangentSum::new(
+                    balanced.iter().filter(|t| t.coords.contains(&i)).chain(
+                        plugins
+                            .iter()
+                            .filter(|t| t.moves() || t.coords.contains(&i)),
+                    ),
+                );
+                (i, bodies, terms)
+            })
+            .collect();
+        // each pair on its own copy of its frames (the rows move a few bodies' frames)
+        let rows = in_parallel(pairs.len(), threads, |k| {
+            let (a, b) = pairs[k];
+            match &frames[k] {
+                PairFrames::Along(f) => {
+                    geometric_row(system, equilibrium, at(a, b), &mut f.clone(), &coordinates)
+                }
+                PairFrames::Across(f) => {
+                    geometric_row(system, equilibrium, at(a, b), &mut f.clone(), &coordinates)
+                }
+            }
+        })?;
+        let mut geometric = DMatrix::zeros(pairs.len(), n);
+        for (k, row) in rows.into_iter().enumerate() {
+            for (i, value) in row {
+                geometric[(k, i)] = value;
+            }
+        }
+        Ok(Some(Projection {
+            coords: coordinate_names(system),
+            stage,
+            equilibrium: equilibrium.to_vec(),
+            pairs: pairs.to_vec(),
+            directions: m,
+            frames,
+            geometric,
+        }))
+    }
+
+    /// Wᵀ(dK/dp)W (directions × directions, the pairs' entries and their mirrors, the rest
+    /// 0): the terms whose constants move evaluated at the fixed equilibrium, plus the
+    /// coefficients times the equilibrium's motion `delta`.
+    fn derivative(&self, moving: &TangentSum, delta: &[f64]) -> Result<DMatrix<f64>, EnergyError> {
+        let mut out = DMatrix::zeros(self.directions, self.directions);
+        let motion = &self.geometric * DVector::from_column_slice(delta);
+        for (k, (&(a, b), frames)) in self.pairs.iter().zip(&self.frames).enumerate() {
+            let partial = match frames {
+                PairFrames::Along(f) => SecondTangent::second(moving, f)?.eps,
+                PairFrames::Across(f) => HyperTangent::second(moving, f)?.eps,
+            };
+            let value = partial + motion[k];
+            out[(a, b)] = value;
+            out[(b, a)] = value;
+        }
+        Ok(out)
+    }
+}
+
+/// Two fixed weightings of the free coordinates, |zᵢ| in [½, 1] with mixed signs (a
+/// low-discrepancy sequence, so that no structured residual is orthogonal to both).
+fn weightings(n: usize, free: &[usize]) -> [Vec<f64>; 2] {
+    let golden = 0.618_033_988_749_894_9;
+    let root_half = std::f64::consts::FRAC_1_SQRT_2;
+    std::array::from_fn(|w| {
+        let mut z = vec![0.0; n];
+        for (k, &i) in free.iter().enumerate() {
+            let step = if w == 0 { golden } else { root_half };
+            let size = 0.5 + 0.5 * ((k as f64 + 1.0) * step).fract();
+            let sign = if (k + w) % 2 == 0 || (k % 3 == 1 && w == 1) {
+                1.0
+            } else {
+                -1.0
+            };
+            z[i] = sign * size;
+        }
+        z
+    })
+}
+
+/// The implicit function theorem's check (see [`StageTangent::residual`]): the balanced
+/// terms' gradient at the moving equilibrium `moving`, its parameter derivative weighted
+/// by two fixed weightings of the free coordinates.
+fn imbalance(
+    system: &System<Dual64>,
+    balanced: &TangentSum,
+    moving: &[Dual64],
+    free: &[usize],
+) -> Result<f64, EnergyError> {
+    let mut worst: f64 = 0.0;
+    for z in weightings(moving.len(), free) {
+        let frames = tangent_frames_first(system, moving, &z)?;
+        let sum = balanced.first_along_frames(&frames)?.eps;
+        // NaN is kept (max would drop it): the caller refuses it
+        worst = if sum.is_nan() {
+            sum
+        } else {
+            worst.max(sum.abs())
+        };
+        if worst.is_nan() {
+            break;
+        }
+    }
+    Ok(worst)
 }
 
 /// The exact derivatives of stage `stage`'s stiffness and mass with respect to the
@@ -208,26 +541,32 @@ pub fn stage_tangent(
     balance: &Balance,
     along: Along,
 ) -> Result<Option<StageTangent>, AssemblyError> {
-    check_equilibrium(system, equilibrium)?;
+    check_equilibrium("stage_tangent", system, equilibrium)?;
     crate::check_layout("stage_tangent", system, layout)?;
     let n = system.coords.len();
     let free = &balance.free;
-    if !balance
-        .coords
-        .iter()
-        .eq(system.coords.iter().map(|c| &c.name))
-    {
+    if !balance.fits(system) {
         return Err(AssemblyError::ForeignBalance);
+    }
+    if let Along::Projected(p) = along
+        && (p.coords != balance.coords || p.stage != stage || p.equilibrium != equilibrium)
+    {
+        return Err(AssemblyError::ForeignProjection);
     }
     let Some(balanced) = balanced_terms(system)? else {
         return Ok(None);
     };
-    // ∂g/∂p at the fixed equilibrium, and δq = −K⁻¹ ∂g/∂p
+    // ∂g/∂p at the fixed equilibrium (only the terms whose constants move have one), and
+    // δq = −K⁻¹ ∂g/∂p
     let at_rest: Vec<Dual64> = equilibrium.iter().map(|&v| Dual64::from_re(v)).collect();
     let mut rest = Sums::new(n);
-    accumulate(&balanced, &at_rest, &mut rest, false)?;
+    accumulate(
+        balanced.iter().filter(|t| t.moves()),
+        &at_rest,
+        &mut rest,
+        false,
+    )?;
     let dg_free = DVector::from_fn(free.len(), |a, _| rest.gradient[free[a]].eps);
-    let forces = free.iter().map(|&g| rest.magnitude[g]).fold(0.0, f64::max);
     let delta_free = if dg_free.amax() == 0.0 {
         DVector::zeros(free.len())
     } else {
@@ -240,81 +579,44 @@ pub fn stage_tangent(
     for (a, &gi) in free.iter().enumerate() {
         delta[gi] = delta_free[a];
     }
-    // the equilibrium moving with the parameter, and every term of the stage built there
+    // the equilibrium moving with the parameter
     let moving: Vec<Dual64> = equilibrium
         .iter()
         .zip(&delta)
         .map(|(&v, &d)| Dual64::new(v, d))
         .collect();
-    // the stage's plug-in terms, built around the moving equilibrium
-    let Some(plugins) = kind_tangent_terms(system, &moving, |s| s != Stage::S0A && s <= stage)?
-    else {
-        return Ok(None);
-    };
-    let mut moved = Sums::new(n);
-    accumulate(&balanced, &moving, &mut moved, false)?;
-    let balanced_residual = free
-        .iter()
-        .map(|&g| moved.gradient[g].eps.abs())
-        .fold(0.0, f64::max);
-    let all = || balanced.iter().chain(&plugins);
+    let residual = imbalance(system, &TangentSum::new(&balanced), &moving, free)?;
+    let plugin_stage = |s: Stage| s != Stage::S0A && s <= stage;
     let stiffness = match along {
         Along::Full => {
+            // the stage's plug-in terms built around the moving equilibrium, and every
+            // term's Hessian there
+            let Some(plugins) = kind_tangent_terms(system, &moving, plugin_stage)? else {
+                return Ok(None);
+            };
             let mut sums = Sums::new(n);
-            for term in all() {
+            for term in balanced.iter().chain(&plugins) {
                 add_hessian(term, &moving, &mut sums)?;
             }
             sums.hessian.map(|v| v.eps)
         }
-        Along::Pairs { vectors, pairs } => {
-            if vectors.nrows() != n {
-                return Err(AssemblyError::Length {
-                    function: "stage_tangent",
-                    argument: "along: vectors (rows)",
-                    expected: n,
-                    given: vectors.nrows(),
-                });
-            }
-            let m = vectors.ncols();
-            let mut out = DMatrix::zeros(m, m);
-            let columns: Vec<Vec<f64>> = (0..m)
-                .map(|a| vectors.column(a).iter().copied().collect())
-                .collect();
-            for &(a, b) in pairs {
-                let (Some(u), Some(v)) = (columns.get(a), columns.get(b)) else {
-                    return Err(AssemblyError::Length {
-                        function: "stage_tangent",
-                        argument: "along: pairs (a direction's index)",
-                        expected: m,
-                        given: a.max(b) + 1,
-                    });
-                };
-                // each body's frame once for every term on it; along one direction the
-                // cheaper second-order dual number
-                let mut sum = 0.0;
-                if a == b {
-                    let frames = tangent_frames_along(system, &moving, u)?;
-                    for term in all() {
-                        sum += term.second_along_frames_once(&frames)?.eps;
-                    }
-                } else {
-                    let frames = tangent_frames(system, &moving, u, v)?;
-                    for term in all() {
-                        sum += term.second_along_frames(&frames)?.eps;
-                    }
-                }
-                out[(a, b)] = sum;
-                out[(b, a)] = sum;
-            }
-            out
+        Along::Projected(projection) => {
+            // the plug-in terms built around the fixed equilibrium: the parameter's own
+            // part; the equilibrium's motion is the projection's
+            let Some(plugins) = kind_tangent_terms(system, &at_rest, plugin_stage)? else {
+                return Ok(None);
+            };
+            let moving_terms =
+                TangentSum::new(balanced.iter().chain(&plugins).filter(|t| t.moves()));
+            projection.derivative(&moving_terms, &delta)?
         }
     };
     Ok(Some(StageTangent {
         equilibrium: delta,
         stiffness,
         mass: mass_tangent(system, layout, &moving),
-        residual: balanced_residual,
-        forces,
+        residual,
+        forces: balance.forces,
     }))
 }
 

@@ -8,13 +8,13 @@ use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
 use num_dual::Dual64;
 use pendkit_geometry::{Frame, FrameMap};
 use pendkit_rotations::{
-    ANGLE_ENTRIES, Constant, Lift, Real, angle_derivatives, angles, c, rotation,
+    ANGLE_ENTRIES, Constant, Lift, Real, angle_derivatives, angles, any_moves, c, rotation,
 };
 
 use crate::{
     Attached, Derivatives, Element, EnergyError, JetPoint, LocalFrames, OffForm, Potential,
-    Reference, SpringEnd, Stage, System, TangentPotential, TangentTerm, TensionOff, Term, Wire,
-    add_curvature, add_jacobian,
+    Reference, SharedBodies, SpringEnd, Stage, System, TangentPotential, TangentTerm, TensionOff,
+    Term, Wire, add_curvature, add_jacobian,
 };
 
 /// Tag of gravity terms (lossless whatever multipliers the tag is given).
@@ -40,6 +40,9 @@ impl<C: Constant> GravityEnergy<C> {
 impl TangentPotential for GravityEnergy<Dual64> {
     fn energy_on_frames<D: Lift<Dual64>>(&self, frames: &[&Frame<D>]) -> D {
         self.energy_on(frames[0])
+    }
+    fn moves(&self) -> bool {
+        self.weight.moves() || any_moves(&self.centre_of_mass)
     }
 }
 
@@ -112,11 +115,12 @@ impl Element for Gravity {
     fn tangent_terms(
         &self,
         reference: &Reference<Dual64>,
+        _shared: &SharedBodies,
     ) -> Result<Option<Vec<TangentTerm>>, EnergyError> {
         Ok(Some(
             gravity_energies(reference.system)
                 .map(|(label, local, energy)| {
-                    TangentTerm::on_frames(label, "gravity", GRAVITY_TAG, &local, energy)
+                    TangentTerm::on_frames(label, "gravity", GRAVITY_TAG, local, energy)
                 })
                 .collect(),
         ))
@@ -175,6 +179,11 @@ impl<C: Constant> WireStretchEnergy<C> {
 impl TangentPotential for WireStretchEnergy<Dual64> {
     fn energy_on_frames<D: Lift<Dual64>>(&self, frames: &[&Frame<D>]) -> D {
         self.energy_on(frames[0], frames[1])
+    }
+    fn moves(&self) -> bool {
+        self.stiffness.moves()
+            || self.unstretched_length.moves()
+            || self.points.iter().any(any_moves)
     }
 }
 
@@ -278,6 +287,7 @@ impl Element for WireStretch {
     fn tangent_terms(
         &self,
         reference: &Reference<Dual64>,
+        _shared: &SharedBodies,
     ) -> Result<Option<Vec<TangentTerm>>, EnergyError> {
         let terms = reference.system.wires.iter().map(|wire| {
             let (local, energy) = wire_stretch_energy(reference, wire)?;
@@ -287,7 +297,7 @@ impl Element for WireStretch {
                 label,
                 "wire-stretch",
                 tag,
-                &local,
+                local,
                 energy,
             ))
         });
@@ -372,6 +382,14 @@ impl<C: Constant> SpringEnergy<C> {
 impl TangentPotential for SpringEnergy<Dual64> {
     fn energy_on_frames<D: Lift<Dual64>>(&self, frames: &[&Frame<D>]) -> D {
         self.energy_of(&self.deflection_between(frames[0], frames[1]))
+    }
+    fn moves(&self) -> bool {
+        any_moves(&self.stiffness)
+            || any_moves(&self.preload)
+            || self
+                .ends
+                .iter()
+                .any(|e| any_moves(&e.point) || any_moves(&e.angles))
     }
 }
 
@@ -589,11 +607,12 @@ impl Element for SpringKind {
     fn tangent_terms(
         &self,
         reference: &Reference<Dual64>,
+        _shared: &SharedBodies,
     ) -> Result<Option<Vec<TangentTerm>>, EnergyError> {
         Ok(Some(
             spring_energies(reference.system)
                 .map(|(label, tag, local, energy)| {
-                    TangentTerm::on_frames(label, "spring", tag, &local, energy)
+                    TangentTerm::on_frames(label, "spring", tag, local, energy)
                 })
                 .collect(),
         ))

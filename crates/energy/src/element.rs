@@ -88,11 +88,14 @@ pub trait Element: Sync {
     /// The kind's terms built from a model whose numbers, and around coordinates which,
     /// carry their derivatives with respect to one parameter: the terms' constants carry
     /// theirs, and [`TangentTerm::derivatives`] gives the energy's derivatives with their
-    /// parameter derivatives (docs/exact-sensitivities.md). `None` (the default): the kind
-    /// has no such terms, and the sensitivities fall back to differences.
+    /// parameter derivatives (docs/exact-sensitivities.md). Energy bodies shared with other
+    /// kinds built around the same reference are taken from (or put into) `shared`, as in
+    /// [`Element::terms_shared`]. `None` (the default): the kind has no such terms, and the
+    /// sensitivities fall back to differences.
     fn tangent_terms(
         &self,
         _reference: &Reference<Dual64>,
+        _shared: &SharedBodies,
     ) -> Result<Option<Vec<TangentTerm>>, EnergyError> {
         Ok(None)
     }

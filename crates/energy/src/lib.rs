@@ -34,7 +34,8 @@ pub use stage::{Stage, UnknownStage};
 pub use system::*;
 pub use tangent::{
     DualTangent, HyperTangent, SecondTangent, TangentDerivatives, TangentPotential,
-    TangentSharedPotential, TangentTerm, tangent_frames, tangent_frames_along,
+    TangentSharedPotential, TangentSum, TangentTerm, tangent_frames, tangent_frames_along,
+    tangent_frames_first,
 };
 pub use term::{
     LocalDerivatives, OffHessian, PartOff, Potential, SharedPotential, TensionOff, Term,

@@ -38,6 +38,14 @@ pub trait TangentPotential: Send + Sync + 'static {
     /// Potential energy (J) with the term's bodies at `frames` (in the order of its
     /// [`LocalFrames::bodies`]).
     fn energy_on_frames<D: Lift<Dual64>>(&self, frames: &[&Frame<D>]) -> D;
+
+    /// Whether any of the term's constants moves with the parameter
+    /// ([`pendkit_rotations::Constant::moves`]). A term that says no has no derivative at
+    /// fixed coordinates, which the exact sensitivities then skip; the default, yes, is
+    /// always right, only slower.
+    fn moves(&self) -> bool {
+        true
+    }
 }
 
 /// A [`TangentPotential`] that yields several energies in one evaluation, each that of its
@@ -47,60 +55,87 @@ pub trait TangentSharedPotential: Send + Sync + 'static {
     fn parts(&self) -> usize;
     /// The energy (J) of every part with the bodies at `frames`, written into `out`.
     fn energies_on_frames<D: Lift<Dual64>>(&self, frames: &[&Frame<D>], out: &mut [D]);
+
+    /// Whether any constant moves with the parameter (see [`TangentPotential::moves`]).
+    fn moves(&self) -> bool {
+        true
+    }
 }
 
-/// Object-safe view of the three scalars the passes use.
+/// Object-safe view of the three scalars the passes use. `parts` lists the energy parts
+/// summed (a body with one part ignores it).
 trait DynTangent: Send + Sync {
-    fn value_d(&self, frames: &[&Frame<DualTangent>]) -> DualTangent;
-    fn value_d2(&self, frames: &[&Frame<SecondTangent>]) -> SecondTangent;
-    fn value_hd(&self, frames: &[&Frame<HyperTangent>]) -> HyperTangent;
+    fn moves(&self) -> bool;
+    /// The shared body's address, for a part of a shared body.
+    fn shared(&self) -> Option<usize>;
+    fn value_d(&self, frames: &[&Frame<DualTangent>], parts: &[usize]) -> DualTangent;
+    fn value_d2(&self, frames: &[&Frame<SecondTangent>], parts: &[usize]) -> SecondTangent;
+    fn value_hd(&self, frames: &[&Frame<HyperTangent>], parts: &[usize]) -> HyperTangent;
 }
 
 impl<P: TangentPotential> DynTangent for P {
-    fn value_d(&self, frames: &[&Frame<DualTangent>]) -> DualTangent {
+    fn moves(&self) -> bool {
+        TangentPotential::moves(self)
+    }
+    fn shared(&self) -> Option<usize> {
+        None
+    }
+    fn value_d(&self, frames: &[&Frame<DualTangent>], _parts: &[usize]) -> DualTangent {
         self.energy_on_frames(frames)
     }
-    fn value_d2(&self, frames: &[&Frame<SecondTangent>]) -> SecondTangent {
+    fn value_d2(&self, frames: &[&Frame<SecondTangent>], _parts: &[usize]) -> SecondTangent {
         self.energy_on_frames(frames)
     }
-    fn value_hd(&self, frames: &[&Frame<HyperTangent>]) -> HyperTangent {
+    fn value_hd(&self, frames: &[&Frame<HyperTangent>], _parts: &[usize]) -> HyperTangent {
         self.energy_on_frames(frames)
     }
 }
 
-/// One part of a shared body, evaluated whole for each part asked for: a wire's beam is
-/// evaluated once for its bending term and once for its extra-stretch term (the beam is
-/// about a fifth of the exact sensitivities' time; sharing it would save half of that).
+/// One part of a shared body (a wire's beam: its bending and its extra stretch). A pass
+/// that sums several parts of one body evaluates it once for all of them
+/// ([`TangentSum`]).
 struct PartOf<S> {
     shared: Arc<S>,
-    part: usize,
 }
 
 impl<S: TangentSharedPotential> PartOf<S> {
-    /// This part's energy, all parts evaluated.
-    fn value<D: Lift<Dual64>>(&self, frames: &[&Frame<D>]) -> D {
-        let parts = self.shared.parts();
-        if parts <= MAX_PARTS {
+    /// The sum of the parts in the mask `parts`, all parts evaluated at once.
+    fn value<D: Lift<Dual64>>(&self, frames: &[&Frame<D>], parts: &[usize]) -> D {
+        let count = self.shared.parts();
+        // a part the body does not have adds nothing (TangentTerm::part checks it)
+        let sum = |out: &[D]| {
+            parts
+                .iter()
+                .filter_map(|&p| out.get(p))
+                .fold(D::from(0.0), |acc, &v| acc + v)
+        };
+        if count <= MAX_PARTS {
             // on the stack: this runs once per term and direction
             let mut out = [D::from(0.0); MAX_PARTS];
-            self.shared.energies_on_frames(frames, &mut out[..parts]);
-            return out[self.part];
+            self.shared.energies_on_frames(frames, &mut out[..count]);
+            return sum(&out[..count]);
         }
-        let mut out = vec![D::from(0.0); parts];
+        let mut out = vec![D::from(0.0); count];
         self.shared.energies_on_frames(frames, &mut out);
-        out[self.part]
+        sum(&out)
     }
 }
 
 impl<S: TangentSharedPotential> DynTangent for PartOf<S> {
-    fn value_d(&self, frames: &[&Frame<DualTangent>]) -> DualTangent {
-        self.value(frames)
+    fn moves(&self) -> bool {
+        self.shared.moves()
     }
-    fn value_d2(&self, frames: &[&Frame<SecondTangent>]) -> SecondTangent {
-        self.value(frames)
+    fn shared(&self) -> Option<usize> {
+        Some(Arc::as_ptr(&self.shared) as *const () as usize)
     }
-    fn value_hd(&self, frames: &[&Frame<HyperTangent>]) -> HyperTangent {
-        self.value(frames)
+    fn value_d(&self, frames: &[&Frame<DualTangent>], parts: &[usize]) -> DualTangent {
+        self.value(frames, parts)
+    }
+    fn value_d2(&self, frames: &[&Frame<SecondTangent>], parts: &[usize]) -> SecondTangent {
+        self.value(frames, parts)
+    }
+    fn value_hd(&self, frames: &[&Frame<HyperTangent>], parts: &[usize]) -> HyperTangent {
+        self.value(frames, parts)
     }
 }
 
@@ -127,8 +162,10 @@ pub struct TangentTerm {
     pub tag: String,
     /// Global coordinate indices, in the order of the body's local vector.
     pub coords: Vec<usize>,
-    frames: LocalFrames,
+    frames: Arc<LocalFrames>,
     body: Arc<dyn DynTangent>,
+    /// The term's part of its body (0 for a body with one part).
+    part: usize,
 }
 
 impl std::fmt::Debug for TangentTerm {
@@ -147,41 +184,68 @@ impl TangentTerm {
         label: impl Into<String>,
         kind: &'static str,
         tag: impl Into<String>,
-        frames: &LocalFrames,
+        frames: impl Into<Arc<LocalFrames>>,
         body: P,
     ) -> Self {
+        let frames = frames.into();
         TangentTerm {
             label: label.into(),
             kind,
             tag: tag.into(),
             coords: frames.coords.clone(),
-            frames: frames.clone(),
+            frames,
             body: Arc::new(body),
+            part: 0,
         }
     }
 
-    /// A term whose energy is part `part` of a shared body that reads the frames `frames`.
+    /// A term whose energy is part `part` of a shared body that reads the frames `frames`
+    /// (the body and frames shared by its other parts' terms); a part the body does not
+    /// have is an error.
     pub fn part<S: TangentSharedPotential>(
         label: impl Into<String>,
         kind: &'static str,
         tag: impl Into<String>,
-        frames: &LocalFrames,
+        frames: Arc<LocalFrames>,
         shared: Arc<S>,
         part: usize,
-    ) -> Self {
-        TangentTerm {
-            label: label.into(),
+    ) -> Result<Self, EnergyError> {
+        let label = label.into();
+        if part >= shared.parts() {
+            return Err(EnergyError::Index {
+                item: format!("term '{label}'"),
+                what: "energy part",
+                index: part,
+                len: shared.parts(),
+            });
+        }
+        Ok(TangentTerm {
+            label,
             kind,
             tag: tag.into(),
             coords: frames.coords.clone(),
-            frames: frames.clone(),
-            body: Arc::new(PartOf { shared, part }),
-        }
+            frames,
+            body: Arc::new(PartOf { shared }),
+            part,
+        })
     }
 
     /// The bodies the term reads, in the order its energy takes their frames.
     pub fn bodies(&self) -> &[BodyId] {
         &self.frames.bodies
+    }
+
+    /// The term's own part (0 for a body with one part).
+    fn own_part(&self) -> &[usize] {
+        std::slice::from_ref(&self.part)
+    }
+
+    /// Whether any of the term's constants moves with the parameter: if not, its energy
+    /// at coordinates that carry no derivative has none either (every dual part exactly
+    /// 0), so a pass at fixed coordinates can skip it. A kind that does not say counts as
+    /// moving.
+    pub fn moves(&self) -> bool {
+        self.body.moves()
     }
 
     /// The term's frames at local coordinates `x`, and `f` of them.
@@ -223,13 +287,15 @@ impl TangentTerm {
         };
         for i in 0..x.len() {
             x[i].eps = Dual64::from_re(1.0);
-            let r = self.on_local_frames(&x, |f| self.body.value_d(f));
+            let r = self.on_local_frames(&x, |f| self.body.value_d(f, self.own_part()));
             x[i].eps = zero;
             out.value = r.re;
             out.gradient[i] = r.eps;
         }
         if x.is_empty() {
-            out.value = self.on_local_frames(&x, |f| self.body.value_d(f)).re;
+            out.value = self
+                .on_local_frames(&x, |f| self.body.value_d(f, self.own_part()))
+                .re;
         }
         Ok(out)
     }
@@ -243,7 +309,16 @@ impl TangentTerm {
         &self,
         frames: &[Frame<HyperTangent>],
     ) -> Result<Dual64, EnergyError> {
-        self.with_frames(frames, |mine| self.body.value_hd(mine).eps1eps2)
+        self.with_frames(frames, |mine| {
+            self.body.value_hd(mine, self.own_part()).eps1eps2
+        })
+    }
+
+    /// The first derivative of the energy along a direction z, given every body's frame at
+    /// x + εz ([`tangent_frames_first`]): its value part, with its derivative with respect
+    /// to the parameter along the coordinates' own derivative in the dual part.
+    pub fn first_along_frames(&self, frames: &[Frame<DualTangent>]) -> Result<Dual64, EnergyError> {
+        self.with_frames(frames, |mine| self.body.value_d(mine, self.own_part()).eps)
     }
 
     /// [`TangentTerm::second_along_frames`] with u = v, given every body's frame at x + εu
@@ -252,7 +327,7 @@ impl TangentTerm {
         &self,
         frames: &[Frame<SecondTangent>],
     ) -> Result<Dual64, EnergyError> {
-        self.with_frames(frames, |mine| self.body.value_d2(mine).v2)
+        self.with_frames(frames, |mine| self.body.value_d2(mine, self.own_part()).v2)
     }
 
     /// `f` of the frames of the term's bodies picked out of every body's `frames`, without
@@ -296,7 +371,9 @@ impl TangentTerm {
             .collect();
         let (zero, one) = (Dual64::from_re(0.0), Dual64::from_re(1.0));
         let mut out = TangentDerivatives {
-            value: self.on_local_frames(&x, |f| self.body.value_hd(f)).re,
+            value: self
+                .on_local_frames(&x, |f| self.body.value_hd(f, self.own_part()))
+                .re,
             gradient: vec![zero; n],
             hessian: vec![zero; n * n],
         };
@@ -304,7 +381,7 @@ impl TangentTerm {
             x[i].eps1 = one;
             for j in i..n {
                 x[j].eps2 = one;
-                let r = self.on_local_frames(&x, |f| self.body.value_hd(f));
+                let r = self.on_local_frames(&x, |f| self.body.value_hd(f, self.own_part()));
                 x[j].eps2 = zero;
                 if j == i {
                     out.gradient[i] = r.eps1;
@@ -315,6 +392,74 @@ impl TangentTerm {
             x[i].eps1 = zero;
         }
         Ok(out)
+    }
+}
+
+/// Terms summed by a pass along given directions, the parts of one shared body among them
+/// evaluated together (a wire's beam once for its bending and its extra-stretch term).
+pub struct TangentSum<'t> {
+    /// One term per body, with the parts of it summed (a term listed twice counts twice).
+    groups: Vec<(&'t TangentTerm, Vec<usize>)>,
+}
+
+impl<'t> TangentSum<'t> {
+    /// The sum of `terms`.
+    pub fn new(terms: impl IntoIterator<Item = &'t TangentTerm>) -> Self {
+        let mut groups: Vec<(&'t TangentTerm, Vec<usize>)> = Vec::new();
+        for term in terms {
+            let joined = term.body.shared().and_then(|address| {
+                groups.iter_mut().find(|(t, _)| {
+                    t.body.shared() == Some(address) && t.frames.bodies == term.frames.bodies
+                })
+            });
+            match joined {
+                Some((_, parts)) => parts.push(term.part),
+                None => groups.push((term, vec![term.part])),
+            }
+        }
+        TangentSum { groups }
+    }
+
+    /// How many evaluations a pass makes (one per body: a shared body's parts together).
+    pub fn len(&self) -> usize {
+        self.groups.len()
+    }
+
+    /// Whether there is no term to sum.
+    pub fn is_empty(&self) -> bool {
+        self.groups.is_empty()
+    }
+
+    /// Σ [`TangentTerm::first_along_frames`].
+    pub fn first_along_frames(&self, frames: &[Frame<DualTangent>]) -> Result<Dual64, EnergyError> {
+        self.sum(|(t, parts)| t.with_frames(frames, |mine| t.body.value_d(mine, parts).eps))
+    }
+
+    /// Σ [`TangentTerm::second_along_frames`].
+    pub fn second_along_frames(
+        &self,
+        frames: &[Frame<HyperTangent>],
+    ) -> Result<Dual64, EnergyError> {
+        self.sum(|(t, parts)| t.with_frames(frames, |mine| t.body.value_hd(mine, parts).eps1eps2))
+    }
+
+    /// Σ [`TangentTerm::second_along_frames_once`].
+    pub fn second_along_frames_once(
+        &self,
+        frames: &[Frame<SecondTangent>],
+    ) -> Result<Dual64, EnergyError> {
+        self.sum(|(t, parts)| t.with_frames(frames, |mine| t.body.value_d2(mine, parts).v2))
+    }
+
+    fn sum(
+        &self,
+        each: impl Fn((&TangentTerm, &[usize])) -> Result<Dual64, EnergyError>,
+    ) -> Result<Dual64, EnergyError> {
+        let mut total = Dual64::from_re(0.0);
+        for (term, parts) in &self.groups {
+            total += each((term, parts))?;
+        }
+        Ok(total)
     }
 }
 
@@ -346,6 +491,18 @@ pub fn tangent_frames_along<S: Real>(
     let zero = Dual64::from_re(0.0);
     frames_at(system, [("x", x.len()), ("u", u.len())], |i| {
         SecondTangent::new(x[i], Dual64::from_re(u[i]), zero)
+    })
+}
+
+/// Every body's frame of `system` at x + εz: the frames
+/// [`TangentTerm::first_along_frames`] reads.
+pub fn tangent_frames_first<S: Real>(
+    system: &crate::System<S>,
+    x: &[Dual64],
+    z: &[f64],
+) -> Result<Vec<Frame<DualTangent>>, EnergyError> {
+    frames_at(system, [("x", x.len()), ("z", z.len())], |i| {
+        DualTangent::new(x[i], Dual64::from_re(z[i]))
     })
 }
 

@@ -65,10 +65,9 @@
 //! zero sensitivities and costs nothing.
 
 use std::collections::BTreeSet;
-use std::sync::atomic::{AtomicUsize, Ordering};
 
 use nalgebra::{Complex, DMatrix, DVector};
-use pendkit_assembly::{Along, AssemblyOptions, Balance, assemble_with};
+use pendkit_assembly::{Along, AssemblyOptions, Balance, Projection, assemble_with, in_parallel};
 use pendkit_dynamics::{
     Input, Modes, Output, Stability, StageModel, eliminate_floats, validate::check_frequencies,
 };
@@ -356,6 +355,9 @@ struct Shared<'a> {
     names: &'a [String],
     values: &'a [f64],
     reach: &'a [Reach],
+    /// Whether what the build adds to the mechanics (damping, temperature) reads each
+    /// parameter.
+    damping_reads: &'a [bool],
     base_point: &'a Point,
     base_ports: Option<&'a Ports>,
     nominal: &'a [Nominal],
@@ -437,7 +439,7 @@ fn column(shared: &Shared, j: usize) -> Result<Option<Column>, Error> {
         && !responses
         && !request.differences
         && let Some(dual) = &tangent
-        && let Some((vk, vm)) = exact_projections(shared, name, p0, h, dual)?
+        && let Some((vk, vm)) = exact_projections(shared, j, p0, h, dual)?
     {
         out.dfdp = mode_derivatives(shared, &vk, &vm)?;
         out.exact = true;
@@ -559,10 +561,10 @@ type Projections = (DMatrix<f64>, DMatrix<f64>);
 /// vᵀ dK_eff v' = wᵀ dK w', so only the modes' directions (and the pairs within a cluster
 /// of equal ω²) are differentiated. `None` where the route is closed: a kind without
 /// tangent terms, user-written terms, or a damping tag whose real multiplier at DC is not
-/// 1 at the nominal value and at p₀ ± h.
+/// 1 at the nominal value and, where the damping reads p, at p₀ ± h.
 fn exact_projections(
     shared: &Shared,
-    name: &str,
+    j: usize,
     p0: f64,
     h: f64,
     dual: &System<num_dual::Dual64>,
@@ -570,9 +572,16 @@ fn exact_projections(
     let Some(exact) = &shared.exact else {
         return Ok(None);
     };
+    let name = &shared.names[j];
     let base = &shared.base_point.result;
-    // the real stiffness is the tension-on Hessian only while every ε'(0) is 1
-    for k in [-1.0, 1.0] {
+    // the real stiffness is the tension-on Hessian only while every ε'(0) is 1: true at the
+    // nominal value (the route is open), so checked near it where the damping reads p
+    let near = if shared.damping_reads[j] {
+        &[-1.0, 1.0][..]
+    } else {
+        &[]
+    };
+    for &k in near {
         let overrides = overridden(shared.case, name, p0 + k * h);
         let Ok(system) = stepped(dual, k * h, shared.defaults, &overrides) else {
             return Ok(None);
@@ -593,10 +602,7 @@ fn exact_projections(
         &assembled.equilibrium.coords,
         &assembled.layout,
         &exact.balance,
-        Along::Pairs {
-            vectors: &exact.directions,
-            pairs: &exact.pairs,
-        },
+        Along::Projected(&exact.projection),
     )?
     else {
         return Ok(None);
@@ -616,12 +622,11 @@ fn exact_projections(
 }
 
 /// What the exact route shares between parameters: the equilibrium's factorised stiffness,
-/// the modes lifted to the floats as full coordinate vectors, and the pairs of modes whose
-/// cross derivative a cluster needs.
+/// and the stiffness's projection on the modes lifted to the floats (full coordinate
+/// vectors) for every mode and every pair of modes whose cross derivative a cluster needs.
 struct ExactRoute {
     balance: Balance,
-    directions: DMatrix<f64>,
-    pairs: Vec<(usize, usize)>,
+    projection: Projection,
 }
 
 impl ExactRoute {
@@ -631,6 +636,8 @@ impl ExactRoute {
     /// singular float block.
     fn new(
         base: &StageResult,
+        stage: Stage,
+        threads: usize,
         real: &DMatrix<f64>,
         vectors: &DMatrix<f64>,
         clusters: &[Vec<usize>],
@@ -667,7 +674,7 @@ impl ExactRoute {
         for (row, &g) in layout.floats.iter().enumerate() {
             directions.row_mut(g).copy_from(&lifted.row(row));
         }
-        let pairs = clusters
+        let pairs: Vec<(usize, usize)> = clusters
             .iter()
             .flat_map(|c| {
                 c.iter()
@@ -675,10 +682,20 @@ impl ExactRoute {
                     .flat_map(move |(i, &a)| c[i..].iter().map(move |&b| (a, b)))
             })
             .collect();
+        let Some(projection) = Projection::new(
+            &base.system,
+            stage,
+            &base.assembled.equilibrium.coords,
+            &balance,
+            (&directions, &pairs),
+            threads,
+        )?
+        else {
+            return Ok(None);
+        };
         Ok(Some(ExactRoute {
             balance,
-            directions,
-            pairs,
+            projection,
         }))
     }
 }
@@ -738,69 +755,6 @@ fn kept<T>(v: Vec<T>, keep: &[bool]) -> Vec<T> {
         .zip(keep)
         .filter_map(|(x, &k)| k.then_some(x))
         .collect()
-}
-
-/// `work(j)` for every j in 0..n on up to `threads` threads, the results in j order. Each
-/// j is computed exactly as on one thread (the numbers do not depend on the thread count);
-/// on errors the one of the smallest j is returned, as a loop in order would, and no j
-/// after it is started.
-fn in_parallel<T: Send>(
-    n: usize,
-    threads: usize,
-    work: impl Fn(usize) -> Result<T, Error> + Sync,
-) -> Result<Vec<T>, Error> {
-    let threads = threads.clamp(1, n.max(1));
-    if threads == 1 {
-        return (0..n).map(work).collect();
-    }
-    let next = AtomicUsize::new(0);
-    let first_error = AtomicUsize::new(usize::MAX);
-    let mut slots: Vec<Option<Result<T, Error>>> = (0..n).map(|_| None).collect();
-    std::thread::scope(|scope| {
-        let workers: Vec<_> = (0..threads)
-            .map(|_| {
-                scope.spawn(|| {
-                    let mut done = Vec::new();
-                    loop {
-                        let j = next.fetch_add(1, Ordering::Relaxed);
-                        if j >= n || j > first_error.load(Ordering::Relaxed) {
-                            break;
-                        }
-                        let result = work(j);
-                        if result.is_err() {
-                            first_error.fetch_min(j, Ordering::Relaxed);
-                        }
-                        done.push((j, result));
-                    }
-                    done
-                })
-            })
-            .collect();
-        for worker in workers {
-            match worker.join() {
-                Ok(done) => {
-                    for (j, result) in done {
-                        slots[j] = Some(result);
-                    }
-                }
-                // a panic is a bug: carry it on as a loop on this thread would
-                Err(panic) => std::panic::resume_unwind(panic),
-            }
-        }
-    });
-    let mut out = Vec::with_capacity(n);
-    for slot in slots {
-        match slot {
-            Some(Ok(value)) => out.push(value),
-            Some(Err(e)) => return Err(e),
-            // not started: an error of a smaller j comes first
-            None => break,
-        }
-    }
-    match out.len() == n {
-        true => Ok(out),
-        false => Err(bad("a parameter's work was not done (internal error)")),
-    }
 }
 
 /// A = P(f) − ω² M over every master row (mass in the variables' block), complex dense.
@@ -891,8 +845,12 @@ pub fn sensitivities(case: &Case, request: &SensitivityRequest) -> Result<Sensit
     // which anything reads at all
     let read_all = case.parameters_read(&resolved)?;
     let (_, fresh) = parameters_with(&defaults, &case.overrides)?;
-    case.model.build(&fresh)?;
+    let mechanics = case.model.build(&fresh)?;
     let read_mechanics = case.parameters_read(&fresh)?;
+    let (_, fresh) = parameters_with(&defaults, &case.overrides)?;
+    pendkit_model::attach_to_build(mechanics, &defaults, &case.overrides, &fresh)?;
+    let read_by_damping = case.parameters_read(&fresh)?;
+    let damping_reads: Vec<bool> = names.iter().map(|n| read_by_damping.contains(n)).collect();
     let reach: Vec<Reach> = names
         .iter()
         .map(|n| {
@@ -905,7 +863,6 @@ pub fn sensitivities(case: &Case, request: &SensitivityRequest) -> Result<Sensit
             }
         })
         .collect();
-
     let base = run_stage(system, request.stage)?;
     let warning = base.require_stable(request.allow_unstable)?;
     let base_real = base.model.real_stiffness(&base.system.damping);
@@ -934,7 +891,14 @@ pub fn sensitivities(case: &Case, request: &SensitivityRequest) -> Result<Sensit
     });
     let clusters = mode_clusters(modes);
     let exact_route = if request.modes && !responses && !request.differences {
-        ExactRoute::new(&base_point.result, &base_real, &vectors, &clusters)?
+        ExactRoute::new(
+            &base_point.result,
+            request.stage,
+            request.threads,
+            &base_real,
+            &vectors,
+            &clusters,
+        )?
     } else {
         None
     };
@@ -976,6 +940,7 @@ pub fn sensitivities(case: &Case, request: &SensitivityRequest) -> Result<Sensit
         names: &names,
         values: &values,
         reach: &reach,
+        damping_reads: &damping_reads,
         base_point: &base_point,
         base_ports: base_ports.as_ref(),
         nominal: &nominal,
@@ -985,11 +950,7 @@ pub fn sensitivities(case: &Case, request: &SensitivityRequest) -> Result<Sensit
         responses,
         exact: exact_route,
     };
-    let threads = match request.threads {
-        0 => std::thread::available_parallelism().map_or(1, usize::from),
-        n => n,
-    };
-    let columns = in_parallel(np, threads, |j| column(&shared, j))?;
+    let columns = in_parallel(np, request.threads, |j| column(&shared, j))?;
     for (j, col) in columns.into_iter().enumerate() {
         let Some(col) = col else { continue };
         steps[j] = col.step;

@@ -58,16 +58,32 @@ pub trait Constant: Real + Lift<Self> + Send + Sync + std::fmt::Debug + 'static 
     /// Whether the constant is zero and stays zero as the parameter moves (a term it
     /// multiplies can be skipped).
     fn is_exactly_zero(self) -> bool;
+    /// Whether the constant moves with the parameter (a nonzero or NaN derivative): a term
+    /// none of whose constants move has no derivative at fixed coordinates, so the exact
+    /// sensitivities skip it there.
+    fn moves(self) -> bool;
 }
 impl Constant for f64 {
     fn is_exactly_zero(self) -> bool {
         self == 0.0
+    }
+    fn moves(self) -> bool {
+        false
     }
 }
 impl Constant for Dual64 {
     fn is_exactly_zero(self) -> bool {
         self.re == 0.0 && self.eps == 0.0
     }
+    fn moves(self) -> bool {
+        // NaN != 0: a broken derivative counts as moving, so it is never skipped
+        self.eps != 0.0
+    }
+}
+
+/// Whether any of `constants` moves with the parameter ([`Constant::moves`]).
+pub fn any_moves<'a, C: Constant>(constants: impl IntoIterator<Item = &'a C>) -> bool {
+    constants.into_iter().any(|c| c.moves())
 }
 
 /// First derivatives over the coordinates of a function whose constants carry a parameter

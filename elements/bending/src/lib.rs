@@ -34,7 +34,7 @@ use pendkit_energy::{
     Wire, add_jacobian, hyper_dual_over_frames,
 };
 use pendkit_geometry::{Frame, FrameMap};
-use pendkit_rotations::{Constant, Lift, Real, c, dot};
+use pendkit_rotations::{Constant, Lift, Real, any_moves, c, dot};
 
 /// Index of the bending strain energy U_b among a beam's energy parts.
 pub const BENDING_PART: usize = 0;
@@ -77,21 +77,42 @@ pub struct BeamEnergy<D> {
     pub bending: D,
 }
 
-/// A wire's beam as the bending and extra-stretch kinds share it: the body and its frames.
-pub type SharedBeam = Option<(Arc<WireBeam>, Arc<LocalFrames>)>;
+/// A wire's beam as the bending and extra-stretch kinds share it: the body and its frames
+/// (constants `f64`, or `Dual64` for the parameter derivatives).
+pub type SharedBeam<C = f64> = Option<(Arc<WireBeam<C>>, Arc<LocalFrames>)>;
 
 /// The beam of wire number `index` of `reference.system`, from `shared` if another kind
 /// already built it around this reference, else built now and put there.
-pub fn shared_beam(
-    reference: &Reference,
+pub fn shared_beam<C: Constant>(
+    reference: &Reference<C>,
     shared: &SharedBodies,
     index: usize,
-) -> Result<Arc<SharedBeam>, EnergyError> {
+) -> Result<Arc<SharedBeam<C>>, EnergyError> {
     shared.get_or_try_insert(index, || {
         let wire = &reference.system.wires[index];
         let frames = shared.frames(reference.system, &[wire.ends[0].body, wire.ends[1].body]);
         Ok(WireBeam::new(reference, wire, &frames)?.map(|beam| (Arc::new(beam), frames)))
     })
+}
+
+/// `term(label, tag, off, frames, beam)` for every wire with a beam: part `part` of the
+/// shared beam, as kind `kind` (the one builder of the `f64` and the dual terms).
+fn each_beam<C: Constant, T>(
+    reference: &Reference<C>,
+    shared: &SharedBodies,
+    kind: &'static str,
+    part: usize,
+    term: impl Fn(String, String, PartOff, Arc<LocalFrames>, Arc<WireBeam<C>>) -> Result<T, EnergyError>,
+) -> Result<Vec<T>, EnergyError> {
+    let mut terms = Vec::new();
+    for (index, wire) in reference.system.wires.iter().enumerate() {
+        if let Some((beam, frames)) = shared_beam(reference, shared, index)?.as_ref() {
+            let (tag, off) = part_tag(wire, part);
+            let label = format!("{kind} {}", wire.name);
+            terms.push(term(label, tag, off, frames.clone(), beam.clone())?);
+        }
+    }
+    Ok(terms)
 }
 
 /// One term per wire with a beam: part `part` of the shared beam, as kind `kind`.
@@ -101,16 +122,13 @@ pub fn beam_terms(
     kind: &'static str,
     part: usize,
 ) -> Result<Vec<Term>, EnergyError> {
-    let mut terms = Vec::new();
-    for (index, wire) in reference.system.wires.iter().enumerate() {
-        if let Some((beam, frames)) = shared_beam(reference, shared, index)?.as_ref() {
-            let (tag, off) = part_tag(wire, part);
-            let label = format!("{kind} {}", wire.name);
-            let (frames, beam) = (frames.clone(), beam.clone());
-            terms.push(Term::part(label, kind, tag, frames, beam, part, off));
-        }
-    }
-    Ok(terms)
+    each_beam(
+        reference,
+        shared,
+        kind,
+        part,
+        |label, tag, off, frames, beam| Ok(Term::part(label, kind, tag, frames, beam, part, off)),
+    )
 }
 
 /// The damping tag and tension-off form of a beam's part: the bending strain energy is
@@ -125,30 +143,21 @@ fn part_tag<S: Constant>(wire: &Wire<S>, part: usize) -> (String, PartOff) {
 }
 
 /// [`beam_terms`] for a model built with one parameter seeded: each wire's beam with its
-/// constants' derivatives, built around `reference` (whose coordinates move with the
+/// constants' derivatives, built around `reference` (whose coordinates may move with the
 /// parameter), part `part` as kind `kind`.
 pub fn beam_tangent_terms(
     reference: &Reference<Dual64>,
+    shared: &SharedBodies,
     kind: &'static str,
     part: usize,
 ) -> Result<Vec<TangentTerm>, EnergyError> {
-    let mut terms = Vec::new();
-    for wire in &reference.system.wires {
-        let frames = LocalFrames::new(reference.system, &[wire.ends[0].body, wire.ends[1].body]);
-        if let Some(beam) = WireBeam::new(reference, wire, &frames)? {
-            let (tag, _) = part_tag(wire, part);
-            let label = format!("{kind} {}", wire.name);
-            terms.push(TangentTerm::part(
-                label,
-                kind,
-                tag,
-                &frames,
-                Arc::new(beam),
-                part,
-            ));
-        }
-    }
-    Ok(terms)
+    each_beam(
+        reference,
+        shared,
+        kind,
+        part,
+        |label, tag, _, frames, beam| TangentTerm::part(label, kind, tag, frames, beam, part),
+    )
 }
 
 impl<C: Constant> WireBeam<C> {
@@ -402,6 +411,17 @@ impl TangentSharedPotential for WireBeam<Dual64> {
         out[BENDING_PART] = e.bending;
         out[EXTRA_STRETCH_PART] = e.total - e.bending;
     }
+
+    fn moves(&self) -> bool {
+        let section = match &self.section {
+            Section::Round { ei } => ei.moves(),
+            Section::Oblong { axis, ei } => any_moves(axis) || any_moves(ei),
+        };
+        section
+            || self.tension.moves()
+            || self.points.iter().any(any_moves)
+            || self.directions.iter().flatten().any(any_moves)
+    }
 }
 
 /// The beam yields U_b ([`BENDING_PART`]) and U − U_b ([`EXTRA_STRETCH_PART`]).
@@ -461,8 +481,9 @@ impl Element for WireBending {
     fn tangent_terms(
         &self,
         reference: &Reference<Dual64>,
+        shared: &SharedBodies,
     ) -> Result<Option<Vec<TangentTerm>>, EnergyError> {
-        beam_tangent_terms(reference, self.kind(), BENDING_PART).map(Some)
+        beam_tangent_terms(reference, shared, self.kind(), BENDING_PART).map(Some)
     }
 }
 

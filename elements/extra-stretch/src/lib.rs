@@ -35,8 +35,9 @@ impl Element for WireExtraStretch {
     fn tangent_terms(
         &self,
         reference: &Reference<Dual64>,
+        shared: &SharedBodies,
     ) -> Result<Option<Vec<TangentTerm>>, EnergyError> {
-        beam_tangent_terms(reference, self.kind(), EXTRA_STRETCH_PART).map(Some)
+        beam_tangent_terms(reference, shared, self.kind(), EXTRA_STRETCH_PART).map(Some)
     }
 }
 

@@ -17,7 +17,7 @@ use pendkit_energy::{
 };
 use pendkit_geometry::{Frame, FrameMap};
 use pendkit_rotations::{
-    Constant, Lift, Real, dot, mul_tr_const, small_rotation, tr_mul, tr_mul_vec, vee,
+    Constant, Lift, Real, any_moves, dot, mul_tr_const, small_rotation, tr_mul, tr_mul_vec, vee,
 };
 
 /// Twist energy of one wire (constants `f64`, or `Dual64` for the parameter derivatives).
@@ -59,6 +59,12 @@ impl<C: Constant> TorsionEnergy<C> {
 impl TangentPotential for TorsionEnergy<Dual64> {
     fn energy_on_frames<D: Lift<Dual64>>(&self, frames: &[&Frame<D>]) -> D {
         self.energy_on(frames[0], frames[1])
+    }
+    fn moves(&self) -> bool {
+        self.stiffness.moves()
+            || self.stiffness_unloaded.moves()
+            || any_moves(&self.reference_relative)
+            || self.points.iter().any(any_moves)
     }
 }
 
@@ -180,11 +186,12 @@ impl Element for WireTorsion {
     fn tangent_terms(
         &self,
         reference: &Reference<Dual64>,
+        shared: &SharedBodies,
     ) -> Result<Option<Vec<TangentTerm>>, EnergyError> {
         let system = reference.system;
         let mut terms = Vec::new();
         for wire in &system.wires {
-            let local = LocalFrames::new(system, &[wire.ends[0].body, wire.ends[1].body]);
+            let local = shared.frames(system, &[wire.ends[0].body, wire.ends[1].body]);
             if let Some(energy) = torsion_energy(reference, wire, &local) {
                 let label = format!("wire-torsion {}", wire.name);
                 let tag = wire.tags.torsion.clone();
@@ -192,7 +199,7 @@ impl Element for WireTorsion {
                     label,
                     "wire-torsion",
                     tag,
-                    &local,
+                    local,
                     energy,
                 ));
             }
