@@ -84,9 +84,18 @@ fn fd_modes(case: &Case, stage: Stage, name: &str, p0: f64, h: f64, v0: &DMatrix
 /// |df/dp| plus 10⁻⁸ relative-sensitivity units (the floor is what rounding allows for
 /// parameters that barely move a mode). Every comparison must have been converged.
 fn check_against_re_solved(spec: &str, stage: Stage, parameters: Option<&[&str]>) {
-    let case = case(spec);
-    let s = modes_of(&case, stage, parameters);
-    let (hz, v0, _) = modes_at(&case, stage);
+    check_case_against_re_solved(spec, &case(spec), stage, parameters);
+}
+
+/// [`check_against_re_solved`] for a case (`spec` names it in the messages).
+fn check_case_against_re_solved(
+    spec: &str,
+    case: &Case,
+    stage: Stage,
+    parameters: Option<&[&str]>,
+) {
+    let s = modes_of(case, stage, parameters);
+    let (hz, v0, _) = modes_at(case, stage);
     assert_eq!(hz, s.modes_hz, "{spec}: the nominal modes");
     let groups = groups(&hz);
     let mut compared = 0;
@@ -98,8 +107,8 @@ fn check_against_re_solved(spec: &str, stage: Stage, parameters: Option<&[&str]>
             continue;
         }
         let scale = if p0 == 0.0 { 1e-3 } else { p0.abs() };
-        let coarse = fd_modes(&case, stage, name, p0, 2e-4 * scale, &v0);
-        let fine = fd_modes(&case, stage, name, p0, 1e-4 * scale, &v0);
+        let coarse = fd_modes(case, stage, name, p0, 2e-4 * scale, &v0);
+        let fine = fd_modes(case, stage, name, p0, 1e-4 * scale, &v0);
         for g in &groups {
             let sum = |d: &dyn Fn(usize) -> f64| g.iter().map(|&k| d(k)).sum::<f64>();
             let f: f64 = g.iter().map(|&k| hz[k]).sum();
@@ -474,6 +483,26 @@ fn the_build_moves_along_its_exact_tangent_where_it_can() {
     request.parameters = Some(vec!["m3".into(), "l3".into(), "nn0".into()]);
     let s = sensitivities(&quad, &request).expect("sensitivities");
     assert_eq!(s.exact_build, vec![true, true, true]);
+}
+
+#[test]
+fn a_real_multiplier_that_moves_with_a_parameter_sends_it_the_difference_route() {
+    // ε'(0) of the fibres' stretch is 1 at the nominal mass (40 kg), so the exact route is
+    // open, but it moves with m1: the real stiffness then moves with m1 beyond dK/dp (its
+    // tension-off part times dε'/dm1), which the exact route does not carry. m1 must take
+    // the difference route, which rebuilds the damping at each step, and agree with the
+    // re-solved frequencies (the vertical mode moves by f/200 per kg through ε', against
+    // −f/80 per kg through the mass); the fibre length, which no ε' reads, stays exact.
+    let set = "damping.fibre_stretch.real=1 + 0.01*(m1 - 40)".to_string();
+    let pendulum = case("pendulum").with_sets(&[set]).expect("set");
+    let s = modes_of(&pendulum, Stage::S2, Some(&["m1", "l_fibre"]));
+    assert_eq!(s.exact, vec![false, true]);
+    check_case_against_re_solved(
+        "pendulum (ε' moving with m1)",
+        &pendulum,
+        Stage::S2,
+        Some(&["m1", "l_fibre"]),
+    );
 }
 
 #[test]

@@ -1125,6 +1125,34 @@ pub fn build_with(
     Ok((system, resolved))
 }
 
+/// The symbols (parameters, and `f`) that the real multipliers ε'(f) of the damping read,
+/// with the case's `overrides` merged in as [`attach_to_build`] merges them: where no tag
+/// gives a real part that reads a parameter, ε' is 1 whatever the parameters. A real part
+/// that does not parse reads nothing here (the build reports it).
+pub fn damping_real_symbols(
+    defaults: &Defaults,
+    overrides: &Overrides,
+) -> std::collections::BTreeSet<String> {
+    let tags = defaults.damping.keys().chain(
+        overrides
+            .damping
+            .keys()
+            .filter(|t| !defaults.damping.contains_key(*t)),
+    );
+    let mut symbols = std::collections::BTreeSet::new();
+    for tag in tags {
+        let over = overrides.damping.get(tag).and_then(|o| o.real.as_ref());
+        let default = defaults
+            .damping
+            .get(tag)
+            .and_then(|d| d.spec().real.as_ref());
+        if let Some(Ok(expr)) = over.or(default).map(|text| pendkit_expr::parse(text)) {
+            symbols.extend(expr.symbols());
+        }
+    }
+    symbols
+}
+
 /// What [`build_with`] adds to the model's mechanical build `system`: the damping
 /// multipliers of its tags (the model's defaults with `overrides`), the temperature and
 /// the "wire terms early" switch, at the parameter values `resolved`.

@@ -434,17 +434,22 @@ impl Case {
         &self,
         resolved: &Resolved,
     ) -> Result<std::collections::BTreeSet<String>, Error> {
+        self.parameters_behind(resolved.read_names().into_iter().map(String::from))
+    }
+
+    /// `names` and what their definitions (with this case's overrides) refer to,
+    /// transitively: every parameter a quantity that reads `names` depends on.
+    pub fn parameters_behind(
+        &self,
+        names: impl IntoIterator<Item = String>,
+    ) -> Result<std::collections::BTreeSet<String>, Error> {
         let mut params = pendkit_model::Defaults::of(self.model)?.params.clone();
         for (name, text) in &self.overrides.parameters {
             params
                 .apply_text(name, text)
                 .map_err(pendkit_model::BuildError::from)?;
         }
-        let mut read: std::collections::BTreeSet<String> = resolved
-            .read_names()
-            .into_iter()
-            .map(String::from)
-            .collect();
+        let mut read: std::collections::BTreeSet<String> = names.into_iter().collect();
         let mut pending: Vec<String> = read.iter().cloned().collect();
         while let Some(name) = pending.pop() {
             if let Some(definition) = params.get(&name) {

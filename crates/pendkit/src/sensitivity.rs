@@ -355,8 +355,7 @@ struct Shared<'a> {
     names: &'a [String],
     values: &'a [f64],
     reach: &'a [Reach],
-    /// Whether what the build adds to the mechanics (damping, temperature) reads each
-    /// parameter.
+    /// Whether the damping's real multipliers ε'(f) depend on each parameter.
     damping_reads: &'a [bool],
     base_point: &'a Point,
     base_ports: Option<&'a Ports>,
@@ -561,7 +560,7 @@ type Projections = (DMatrix<f64>, DMatrix<f64>);
 /// vᵀ dK_eff v' = wᵀ dK w', so only the modes' directions (and the pairs within a cluster
 /// of equal ω²) are differentiated. `None` where the route is closed: a kind without
 /// tangent terms, user-written terms, or a damping tag whose real multiplier at DC is not
-/// 1 at the nominal value and, where the damping reads p, at p₀ ± h.
+/// 1 at the nominal value and, where a real multiplier depends on p, at p₀ ± h.
 fn exact_projections(
     shared: &Shared,
     j: usize,
@@ -575,7 +574,7 @@ fn exact_projections(
     let name = &shared.names[j];
     let base = &shared.base_point.result;
     // the real stiffness is the tension-on Hessian only while every ε'(0) is 1: true at the
-    // nominal value (the route is open), so checked near it where the damping reads p
+    // nominal value (the route is open), so checked near it where an ε' depends on p
     let near = if shared.damping_reads[j] {
         &[-1.0, 1.0][..]
     } else {
@@ -845,12 +844,15 @@ pub fn sensitivities(case: &Case, request: &SensitivityRequest) -> Result<Sensit
     // which anything reads at all
     let read_all = case.parameters_read(&resolved)?;
     let (_, fresh) = parameters_with(&defaults, &case.overrides)?;
-    let mechanics = case.model.build(&fresh)?;
+    case.model.build(&fresh)?;
     let read_mechanics = case.parameters_read(&fresh)?;
-    let (_, fresh) = parameters_with(&defaults, &case.overrides)?;
-    pendkit_model::attach_to_build(mechanics, &defaults, &case.overrides, &fresh)?;
-    let read_by_damping = case.parameters_read(&fresh)?;
-    let damping_reads: Vec<bool> = names.iter().map(|n| read_by_damping.contains(n)).collect();
+    // the parameters the damping's real multipliers ε' depend on: only those can move ε'(0)
+    // away from 1 (the exact route's condition)
+    let real_reads = case.parameters_behind(pendkit_model::damping_real_symbols(
+        &defaults,
+        &case.overrides,
+    ))?;
+    let damping_reads: Vec<bool> = names.iter().map(|n| real_reads.contains(n)).collect();
     let reach: Vec<Reach> = names
         .iter()
         .map(|n| {
