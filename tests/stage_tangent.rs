@@ -377,3 +377,72 @@ fn terms_that_do_not_move_have_no_derivative_at_fixed_coordinates() {
     // not vacuous: most terms are skipped for each of these parameters, and some kept
     assert!(skipped > kept && kept > 0, "skipped {skipped}, kept {kept}");
 }
+
+#[test]
+fn a_sum_evaluates_a_shared_body_once_and_equals_the_terms_one_by_one() {
+    // TangentSum evaluates a wire's beam once for its bending and extra-stretch terms; the
+    // sum must equal the two terms evaluated separately (to rounding: the same arithmetic,
+    // summed in another order), and a term listed twice must count twice (a part the body
+    // does not have is an error: pendkit-energy's own unit test)
+    use pendkit_energy::{
+        Reference, SharedBodies, TangentSum, registry, tangent_frames, tangent_frames_along,
+    };
+    let case = Case::open("quad").expect("case");
+    let (system, _) = case.build().expect("build");
+    let a = assemble_with(&system, Stage::S2, &AssemblyOptions::default(), None).expect("assemble");
+    let at_rest: Vec<num_dual::Dual64> = a
+        .equilibrium
+        .coords
+        .iter()
+        .map(|&v| num_dual::Dual64::from_re(v))
+        .collect();
+    let dual = pendkit_model::build_tangent(case.model, &case.overrides, "m3").expect("dual");
+    let reference = Reference {
+        system: &dual,
+        coords: &at_rest,
+    };
+    let shared = SharedBodies::new();
+    let mut terms = Vec::new();
+    for kind in registry() {
+        if dual.element_stage(kind).is_some_and(|s| s <= Stage::S2) {
+            terms.extend(
+                kind.tangent_terms(&reference, &shared)
+                    .expect("terms")
+                    .expect("some"),
+            );
+        }
+    }
+    let n = dual.coords.len();
+    let u: Vec<f64> = (0..n).map(|i| ((i * 7) % 5) as f64 - 2.0).collect();
+    let v: Vec<f64> = (0..n).map(|i| ((i * 3) % 4) as f64 - 1.5).collect();
+    let along = tangent_frames_along(&dual, &at_rest, &u).expect("frames");
+    let across = tangent_frames(&dual, &at_rest, &u, &v).expect("frames");
+    let one_by_one_along: f64 = terms
+        .iter()
+        .map(|t| t.second_along_frames_once(&along).expect("term").eps)
+        .sum();
+    let one_by_one_across: f64 = terms
+        .iter()
+        .map(|t| t.second_along_frames(&across).expect("term").eps)
+        .sum();
+    let sum = TangentSum::new(&terms);
+    // the 14 beams' two parts each fold into one evaluation
+    assert_eq!(sum.len(), terms.len() - 14);
+    let close = |a: f64, b: f64| (a - b).abs() <= 1e-12 * b.abs().max(1e-300);
+    let summed = sum.second_along_frames_once(&along).expect("sum").eps;
+    assert!(
+        close(summed, one_by_one_along),
+        "{summed} vs {one_by_one_along}"
+    );
+    let summed = sum.second_along_frames(&across).expect("sum").eps;
+    assert!(
+        close(summed, one_by_one_across),
+        "{summed} vs {one_by_one_across}"
+    );
+    let twice = TangentSum::new(terms.iter().chain(&terms));
+    let summed = twice.second_along_frames_once(&along).expect("sum").eps;
+    assert!(
+        close(summed, 2.0 * one_by_one_along),
+        "{summed} vs 2 × {one_by_one_along}"
+    );
+}

@@ -525,3 +525,36 @@ fn frames_at<S: Real, T: Real, const K: usize>(
     let at: Vec<T> = (0..n).map(seed).collect();
     Ok(system.bodies.iter().map(|b| b.frame.eval(&at)).collect())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A body of two constant parts, 1 J and 2 J.
+    struct TwoParts;
+
+    impl TangentSharedPotential for TwoParts {
+        fn parts(&self) -> usize {
+            2
+        }
+        fn energies_on_frames<D: Lift<Dual64>>(&self, _frames: &[&Frame<D>], out: &mut [D]) {
+            out[0] = D::from(1.0);
+            out[1] = D::from(2.0);
+        }
+    }
+
+    #[test]
+    fn a_part_the_body_does_not_have_is_an_error_and_parts_sum_in_one_evaluation() {
+        let frames = Arc::new(LocalFrames::default());
+        let body = Arc::new(TwoParts);
+        let first = TangentTerm::part("one", "k", "t", frames.clone(), body.clone(), 0).unwrap();
+        let second = TangentTerm::part("two", "k", "t", frames.clone(), body.clone(), 1).unwrap();
+        let e = TangentTerm::part("three", "k", "t", frames, body, 2).unwrap_err();
+        assert!(e.to_string().contains("energy part"), "{e}");
+        // the two parts of one body fold into one evaluation; their sum is 3 J
+        let sum = TangentSum::new([&first, &second]);
+        assert_eq!(sum.len(), 1);
+        let value = sum.groups[0].0.body.value_d2(&[], &sum.groups[0].1);
+        assert_eq!(value.re.re, 3.0);
+    }
+}
