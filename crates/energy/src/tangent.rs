@@ -99,7 +99,7 @@ struct PartOf<S> {
 }
 
 impl<S: TangentSharedPotential> PartOf<S> {
-    /// The sum of the parts in the mask `parts`, all parts evaluated at once.
+    /// The sum of the parts listed in `parts`, all parts evaluated at once.
     fn value<D: Lift<Dual64>>(&self, frames: &[&Frame<D>], parts: &[usize]) -> D {
         let count = self.shared.parts();
         // a part the body does not have adds nothing (TangentTerm::part checks it)
@@ -309,16 +309,14 @@ impl TangentTerm {
         &self,
         frames: &[Frame<HyperTangent>],
     ) -> Result<Dual64, EnergyError> {
-        self.with_frames(frames, |mine| {
-            self.body.value_hd(mine, self.own_part()).eps1eps2
-        })
+        self.second_of_parts(frames, self.own_part())
     }
 
     /// The first derivative of the energy along a direction z, given every body's frame at
     /// x + εz ([`tangent_frames_first`]): its value part, with its derivative with respect
     /// to the parameter along the coordinates' own derivative in the dual part.
     pub fn first_along_frames(&self, frames: &[Frame<DualTangent>]) -> Result<Dual64, EnergyError> {
-        self.with_frames(frames, |mine| self.body.value_d(mine, self.own_part()).eps)
+        self.first_of_parts(frames, self.own_part())
     }
 
     /// [`TangentTerm::second_along_frames`] with u = v, given every body's frame at x + εu
@@ -327,7 +325,34 @@ impl TangentTerm {
         &self,
         frames: &[Frame<SecondTangent>],
     ) -> Result<Dual64, EnergyError> {
-        self.with_frames(frames, |mine| self.body.value_d2(mine, self.own_part()).v2)
+        self.second_once_of_parts(frames, self.own_part())
+    }
+
+    /// [`TangentTerm::first_along_frames`] of the sum of the body's parts `parts`.
+    fn first_of_parts(
+        &self,
+        frames: &[Frame<DualTangent>],
+        parts: &[usize],
+    ) -> Result<Dual64, EnergyError> {
+        self.with_frames(frames, |mine| self.body.value_d(mine, parts).eps)
+    }
+
+    /// [`TangentTerm::second_along_frames`] of the sum of the body's parts `parts`.
+    fn second_of_parts(
+        &self,
+        frames: &[Frame<HyperTangent>],
+        parts: &[usize],
+    ) -> Result<Dual64, EnergyError> {
+        self.with_frames(frames, |mine| self.body.value_hd(mine, parts).eps1eps2)
+    }
+
+    /// [`TangentTerm::second_along_frames_once`] of the sum of the body's parts `parts`.
+    fn second_once_of_parts(
+        &self,
+        frames: &[Frame<SecondTangent>],
+        parts: &[usize],
+    ) -> Result<Dual64, EnergyError> {
+        self.with_frames(frames, |mine| self.body.value_d2(mine, parts).v2)
     }
 
     /// `f` of the frames of the term's bodies picked out of every body's `frames`, without
@@ -432,7 +457,7 @@ impl<'t> TangentSum<'t> {
 
     /// Σ [`TangentTerm::first_along_frames`].
     pub fn first_along_frames(&self, frames: &[Frame<DualTangent>]) -> Result<Dual64, EnergyError> {
-        self.sum(|(t, parts)| t.with_frames(frames, |mine| t.body.value_d(mine, parts).eps))
+        self.sum(|(t, parts)| t.first_of_parts(frames, parts))
     }
 
     /// Σ [`TangentTerm::second_along_frames`].
@@ -440,7 +465,7 @@ impl<'t> TangentSum<'t> {
         &self,
         frames: &[Frame<HyperTangent>],
     ) -> Result<Dual64, EnergyError> {
-        self.sum(|(t, parts)| t.with_frames(frames, |mine| t.body.value_hd(mine, parts).eps1eps2))
+        self.sum(|(t, parts)| t.second_of_parts(frames, parts))
     }
 
     /// Σ [`TangentTerm::second_along_frames_once`].
@@ -448,7 +473,7 @@ impl<'t> TangentSum<'t> {
         &self,
         frames: &[Frame<SecondTangent>],
     ) -> Result<Dual64, EnergyError> {
-        self.sum(|(t, parts)| t.with_frames(frames, |mine| t.body.value_d2(mine, parts).v2))
+        self.sum(|(t, parts)| t.second_once_of_parts(frames, parts))
     }
 
     fn sum(
