@@ -307,6 +307,45 @@ fn wrong_sizes_are_errors_naming_what_and_where() {
     assert!(e.contains("vectors") && e.contains("not finite"), "{e}");
 }
 
+/// The equilibrium of `case` at stage 2 as dual numbers with no derivative, and every term
+/// of every kind up to stage 2 of the model built with `name` seeded, built around it.
+fn dual_terms_at_rest(
+    case: &Case,
+    name: &str,
+) -> (
+    pendkit_energy::System<num_dual::Dual64>,
+    Vec<num_dual::Dual64>,
+    Vec<pendkit_energy::TangentTerm>,
+) {
+    use pendkit_energy::{Reference, SharedBodies, registry};
+    let (system, _) = case.build().expect("build");
+    let a = assemble_with(&system, Stage::S2, &AssemblyOptions::default(), None).expect("assemble");
+    let at_rest: Vec<num_dual::Dual64> = a
+        .equilibrium
+        .coords
+        .iter()
+        .map(|&v| num_dual::Dual64::from_re(v))
+        .collect();
+    let dual = pendkit_model::build_tangent(case.model, &case.overrides, name)
+        .unwrap_or_else(|e| panic!("{name}: {e}"));
+    let reference = Reference {
+        system: &dual,
+        coords: &at_rest,
+    };
+    let shared = SharedBodies::new();
+    let mut terms = Vec::new();
+    for kind in registry() {
+        if dual.element_stage(kind).is_some_and(|s| s <= Stage::S2) {
+            terms.extend(
+                kind.tangent_terms(&reference, &shared)
+                    .expect("terms")
+                    .expect("every bundled kind has tangent terms"),
+            );
+        }
+    }
+    (dual, at_rest, terms)
+}
+
 #[test]
 fn terms_that_do_not_move_have_no_derivative_at_fixed_coordinates() {
     // the projected route evaluates, at the fixed equilibrium, only the terms that say
@@ -316,7 +355,6 @@ fn terms_that_do_not_move_have_no_derivative_at_fixed_coordinates() {
     // exact zeros, and so is all arithmetic on them). Every term of every kind at stage 2,
     // built around the equilibrium, for parameters that each move a few terms (a mass, a
     // wire's length, radius and modulus, a blade tip's position, a blade's frequency).
-    use pendkit_energy::{Reference, SharedBodies, registry};
     use pendkit_rotations::Constant;
     let cases: [(&str, &[&str]); 3] = [
         ("pendulum", &["m1", "l_fibre", "r_fibre", "E_fibre"]),
@@ -329,48 +367,24 @@ fn terms_that_do_not_move_have_no_derivative_at_fixed_coordinates() {
     let (mut skipped, mut kept) = (0, 0);
     for (model, parameters) in cases {
         let case = Case::open(model).expect("case");
-        let (system, _) = case.build().expect("build");
-        let a =
-            assemble_with(&system, Stage::S2, &AssemblyOptions::default(), None).expect("assemble");
-        let at_rest: Vec<num_dual::Dual64> = a
-            .equilibrium
-            .coords
-            .iter()
-            .map(|&v| num_dual::Dual64::from_re(v))
-            .collect();
         for &name in parameters {
-            let dual = pendkit_model::build_tangent(case.model, &case.overrides, name)
-                .unwrap_or_else(|e| panic!("{model} {name}: {e}"));
-            let reference = Reference {
-                system: &dual,
-                coords: &at_rest,
-            };
-            let shared = SharedBodies::new();
-            for kind in registry() {
-                if dual.element_stage(kind).is_none_or(|s| s > Stage::S2) {
+            let (_, at_rest, terms) = dual_terms_at_rest(&case, name);
+            for term in &terms {
+                if term.moves() {
+                    kept += 1;
                     continue;
                 }
-                let terms = kind
-                    .tangent_terms(&reference, &shared)
-                    .expect("terms")
-                    .expect("every bundled kind has tangent terms");
-                for term in terms.iter() {
-                    if term.moves() {
-                        kept += 1;
-                        continue;
-                    }
-                    skipped += 1;
-                    let d = term.derivatives(&at_rest).expect("derivatives");
-                    let moving = std::iter::once(&d.value)
-                        .chain(&d.gradient)
-                        .chain(&d.hessian)
-                        .any(|v| v.moves());
-                    assert!(
-                        !moving,
-                        "{model} {name}: '{}' says its constants do not move, yet has a derivative",
-                        term.label
-                    );
-                }
+                skipped += 1;
+                let d = term.derivatives(&at_rest).expect("derivatives");
+                let moving = std::iter::once(&d.value)
+                    .chain(&d.gradient)
+                    .chain(&d.hessian)
+                    .any(|v| v.moves());
+                assert!(
+                    !moving,
+                    "{model} {name}: '{}' says its constants do not move, yet has a derivative",
+                    term.label
+                );
             }
         }
     }
@@ -384,34 +398,8 @@ fn a_sum_evaluates_a_shared_body_once_and_equals_the_terms_one_by_one() {
     // sum must equal the two terms evaluated separately (to rounding: the same arithmetic,
     // summed in another order), and a term listed twice must count twice (a part the body
     // does not have is an error: pendkit-energy's own unit test)
-    use pendkit_energy::{
-        Reference, SharedBodies, TangentSum, registry, tangent_frames, tangent_frames_along,
-    };
-    let case = Case::open("quad").expect("case");
-    let (system, _) = case.build().expect("build");
-    let a = assemble_with(&system, Stage::S2, &AssemblyOptions::default(), None).expect("assemble");
-    let at_rest: Vec<num_dual::Dual64> = a
-        .equilibrium
-        .coords
-        .iter()
-        .map(|&v| num_dual::Dual64::from_re(v))
-        .collect();
-    let dual = pendkit_model::build_tangent(case.model, &case.overrides, "m3").expect("dual");
-    let reference = Reference {
-        system: &dual,
-        coords: &at_rest,
-    };
-    let shared = SharedBodies::new();
-    let mut terms = Vec::new();
-    for kind in registry() {
-        if dual.element_stage(kind).is_some_and(|s| s <= Stage::S2) {
-            terms.extend(
-                kind.tangent_terms(&reference, &shared)
-                    .expect("terms")
-                    .expect("some"),
-            );
-        }
-    }
+    use pendkit_energy::{TangentSum, tangent_frames, tangent_frames_along};
+    let (dual, at_rest, terms) = dual_terms_at_rest(&Case::open("quad").expect("case"), "m3");
     let n = dual.coords.len();
     let u: Vec<f64> = (0..n).map(|i| ((i * 7) % 5) as f64 - 2.0).collect();
     let v: Vec<f64> = (0..n).map(|i| ((i * 3) % 4) as f64 - 1.5).collect();
