@@ -11,13 +11,14 @@
 //! built from that model with `Dual64` constants ([`pendkit_energy::TangentTerm`]); the
 //! equilibrium's motion is δq = dq*/dp = −K⁻¹ ∂g/∂p by the implicit function theorem (∂g/∂p
 //! the dual part of the balanced terms' gradient at the fixed equilibrium, K factorised
-//! once per request); every term of the stage is rebuilt around q* + ε δq and
-//! differentiated there by nested hyper-dual numbers, whose ε part is the total dK/dp
-//! (third derivatives of the energies along δq included), and likewise dM/dp
+//! once per request); dK/dp is the total derivative along the moving equilibrium (third
+//! derivatives of the energies along δq included), and likewise dM/dp
 //! ([`pendkit_assembly::stage_tangent`]). Only what the modes need is differentiated: the
 //! second derivatives along w = (v, −Q⁻¹C_QX v), the mode v lifted to the floats (then
-//! wᵀ dK w = vᵀ dK_eff v), for each mode and each pair within a cluster. No step, no
-//! difference. The route is closed (and the parameter goes the difference route below) for
+//! wᵀ dK w = vᵀ dK_eff v), for each mode and each pair within a cluster, split by the chain
+//! rule into the terms whose constants move with p at the fixed equilibrium and the
+//! equilibrium's motion through coefficients computed once per request
+//! ([`pendkit_assembly::Projection`]). No step, no difference. The route is closed (and the parameter goes the difference route below) for
 //! a parameter the dual build cannot follow (written into a pose's text, a count, a
 //! switch), one read only by the damping, a model with user-written terms or a kind
 //! without tangent terms, plug-in terms that join the equilibrium (built around the start
@@ -356,7 +357,7 @@ struct Shared<'a> {
     values: &'a [f64],
     reach: &'a [Reach],
     /// Whether the damping's real multipliers ε'(f) depend on each parameter.
-    damping_reads: &'a [bool],
+    real_multiplier_reads: &'a [bool],
     base_point: &'a Point,
     base_ports: Option<&'a Ports>,
     nominal: &'a [Nominal],
@@ -575,7 +576,7 @@ fn exact_projections(
     let base = &shared.base_point.result;
     // the real stiffness is the tension-on Hessian only while every ε'(0) is 1: true at the
     // nominal value (the route is open), so checked near it where an ε' depends on p
-    let near = if shared.damping_reads[j] {
+    let near = if shared.real_multiplier_reads[j] {
         &[-1.0, 1.0][..]
     } else {
         &[]
@@ -852,7 +853,7 @@ pub fn sensitivities(case: &Case, request: &SensitivityRequest) -> Result<Sensit
         &defaults,
         &case.overrides,
     ))?;
-    let damping_reads: Vec<bool> = names.iter().map(|n| real_reads.contains(n)).collect();
+    let real_multiplier_reads: Vec<bool> = names.iter().map(|n| real_reads.contains(n)).collect();
     let reach: Vec<Reach> = names
         .iter()
         .map(|n| {
@@ -942,7 +943,7 @@ pub fn sensitivities(case: &Case, request: &SensitivityRequest) -> Result<Sensit
         names: &names,
         values: &values,
         reach: &reach,
-        damping_reads: &damping_reads,
+        real_multiplier_reads: &real_multiplier_reads,
         base_point: &base_point,
         base_ports: base_ports.as_ref(),
         nominal: &nominal,
