@@ -68,12 +68,35 @@ pub struct Equilibrium {
 /// Energy, gradient and Hessian of the sum of the terms over the free coordinates, plus
 /// the largest single-term force (a scale for the convergence test) and, per free
 /// coordinate, the rounding floor of its residual force.
-struct Evaluation {
+pub(crate) struct Evaluation {
     energy: f64,
     gradient: DVector<f64>,
-    hessian: DMatrix<f64>,
+    pub(crate) hessian: DMatrix<f64>,
     force_scale: f64,
     rounding: DVector<f64>,
+}
+
+impl Evaluation {
+    /// Nothing summed yet, over `n` free coordinates.
+    pub(crate) fn zeros(n: usize) -> Self {
+        Evaluation {
+            energy: 0.0,
+            gradient: DVector::zeros(n),
+            hessian: DMatrix::zeros(n, n),
+            force_scale: 0.0,
+            rounding: DVector::zeros(n),
+        }
+    }
+}
+
+/// The position of each of `n` global coordinates among `free` (None for the coordinates
+/// Newton does not move).
+pub(crate) fn free_slots(n: usize, free: &[usize]) -> Vec<Option<usize>> {
+    let mut slot = vec![None; n];
+    for (k, &i) in free.iter().enumerate() {
+        slot[i] = Some(k);
+    }
+    slot
 }
 
 /// Sums the evaluator's per-term values and gradients at its current point over the free
@@ -96,7 +119,7 @@ fn gradient_sums(ev: &Evaluator, slot: &[Option<usize>], out: &mut Evaluation) {
 }
 
 /// Sums the per-term tension-on Hessians over the free coordinates.
-fn hessian_sum(ev: &Evaluator, slot: &[Option<usize>], out: &mut Evaluation) {
+pub(crate) fn hessian_sum(ev: &Evaluator, slot: &[Option<usize>], out: &mut Evaluation) {
     out.hessian.fill(0.0);
     for (t, term) in ev.terms().iter().enumerate() {
         let (h, m) = (ev.on(t), term.coords.len());
@@ -182,20 +205,11 @@ pub(crate) fn newton(
     options: &EquilibriumOptions,
 ) -> Result<Equilibrium, AssemblyError> {
     let free = free_coordinates(system);
-    let mut slot = vec![None; system.coords.len()];
-    for (k, &i) in free.iter().enumerate() {
-        slot[i] = Some(k);
-    }
+    let slot = free_slots(system.coords.len(), &free);
     let n = free.len();
     let mut x = start.to_vec();
     let name = |k: usize| system.coords[free[k]].name.clone();
-    let mut ev = Evaluation {
-        energy: 0.0,
-        gradient: DVector::zeros(n),
-        hessian: DMatrix::zeros(n, n),
-        force_scale: 0.0,
-        rounding: DVector::zeros(n),
-    };
+    let mut ev = Evaluation::zeros(n);
     let mut trial = x.clone();
 
     let mut iteration = 0;

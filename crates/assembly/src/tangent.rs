@@ -29,7 +29,7 @@ use pendkit_energy::{
 use pendkit_geometry::Frame;
 use pendkit_rotations::{Constant, Real, tr_mul, vee};
 
-use crate::equilibrium::free_coordinates;
+use crate::equilibrium::{Evaluation, free_coordinates, free_slots, hessian_sum};
 use crate::evaluate::Evaluator;
 use crate::{AssemblyError, Layout};
 use crate::{DerivativePath, in_parallel};
@@ -156,26 +156,24 @@ impl Balance {
         let mut evaluator = Evaluator::new(system, DerivativePath::Fast);
         evaluator.extend(terms);
         evaluator.evaluate(equilibrium, true);
-        let n = system.coords.len();
-        let mut k = DMatrix::zeros(n, n);
-        let mut magnitude = vec![0.0; n];
+        let free = free_coordinates(system);
+        let slot = free_slots(system.coords.len(), &free);
+        let mut stiffness = Evaluation::zeros(free.len());
+        hessian_sum(&evaluator, &slot, &mut stiffness);
+        // the scale of the forces' rounding: per free coordinate, Σ over the terms of |force|
+        let mut magnitude = vec![0.0; free.len()];
         for (t, term) in evaluator.terms().iter().enumerate() {
-            let (gradient, hessian) = (evaluator.gradient(t), evaluator.on(t));
-            let m = term.coords.len();
-            for (a, &ga) in term.coords.iter().enumerate() {
-                magnitude[ga] += gradient[a].abs();
-                for (b, &gb) in term.coords.iter().enumerate() {
-                    k[(ga, gb)] += hessian[a * m + b];
+            for (&g, force) in term.coords.iter().zip(evaluator.gradient(t)) {
+                if let Some(k) = slot[g] {
+                    magnitude[k] += force.abs();
                 }
             }
         }
-        let free = free_coordinates(system);
-        let k_free = DMatrix::from_fn(free.len(), free.len(), |a, b| k[(free[a], free[b])]);
-        let forces = free.iter().map(|&g| magnitude[g]).fold(0.0, f64::max);
+        let forces = magnitude.iter().copied().fold(0.0, f64::max);
         Ok(Some(Balance {
             coords: coordinate_names(system),
             free,
-            lu: k_free.lu(),
+            lu: stiffness.hessian.lu(),
             forces,
         }))
     }
@@ -291,14 +289,17 @@ impl PairScalar for HyperTangent {
 /// Wᵀ(∂K/∂qᵢ)W for one pair and every free coordinate i of `coordinates` (each with the
 /// bodies it moves and the terms whose energy it changes: the terms on it, and the terms
 /// built around x + ε eᵢ whose constants moved with it): the pair's frames with those
-/// bodies re-evaluated at x + ε eᵢ, and the terms summed there. `frames` is restored.
+/// bodies re-evaluated at x + ε eᵢ, and the terms summed there (`frames`: every body's frame
+/// at x along the pair).
 fn geometric_row<T: PairScalar>(
     system: &System,
     x: &[f64],
     (u, v): (&[f64], &[f64]),
-    frames: &mut [Frame<T>],
+    frames: &[Frame<T>],
     coordinates: &[(usize, Vec<usize>, TangentSum)],
 ) -> Result<Vec<(usize, f64)>, EnergyError> {
+    // a copy whose moved bodies are put back after each coordinate
+    let mut frames = frames.to_vec();
     let mut seeds: Vec<T> = (0..x.len())
         .map(|j| T::seed(Dual64::from_re(x[j]), u[j], v[j]))
         .collect();
@@ -313,7 +314,7 @@ fn geometric_row<T: PairScalar>(
                 (b, std::mem::replace(&mut frames[b], moved))
             })
             .collect();
-        let sum = T::second(terms, frames);
+        let sum = T::second(terms, &frames);
         for (b, frame) in saved {
             frames[b] = frame;
         }
@@ -432,15 +433,14 @@ impl Projection {
                 (i, bodies, terms)
             })
             .collect();
-        // each pair on its own copy of its frames (the rows move a few bodies' frames)
         let rows = in_parallel(pairs.len(), threads, |k| {
             let (a, b) = pairs[k];
             match &frames[k] {
                 PairFrames::Along(f) => {
-                    geometric_row(system, equilibrium, at(a, b), &mut f.clone(), &coordinates)
+                    geometric_row(system, equilibrium, at(a, b), f, &coordinates)
                 }
                 PairFrames::Across(f) => {
-                    geometric_row(system, equilibrium, at(a, b), &mut f.clone(), &coordinates)
+                    geometric_row(system, equilibrium, at(a, b), f, &coordinates)
                 }
             }
         })?;
@@ -514,15 +514,11 @@ fn imbalance(
     for z in weightings(moving.len(), free) {
         let frames = tangent_frames_first(system, moving, &z)?;
         let sum = balanced.first_along_frames(&frames)?.eps;
-        // NaN is kept (max would drop it): the caller refuses it
-        worst = if sum.is_nan() {
-            sum
-        } else {
-            worst.max(sum.abs())
-        };
-        if worst.is_nan() {
-            break;
+        if sum.is_nan() {
+            // kept (max would drop it): the caller refuses it
+            return Ok(sum);
         }
+        worst = worst.max(sum.abs());
     }
     Ok(worst)
 }
