@@ -422,3 +422,58 @@ fn a_driven_body_placed_by_a_parameter_has_no_exact_derivative() {
     let s = pendkit::sensitivities(&case, &request).expect("sensitivities");
     assert_eq!(s.exact, vec![false, true]);
 }
+
+#[test]
+fn a_chunk_build_carries_each_parameter_as_its_own_build_does() {
+    // The sensitivities build the model once per chunk of parameters
+    // (`build_tangent_chunk`, one dual direction per parameter). For every bundled model,
+    // with its parameters in chunks in definition order (so that chunks mix parameters the
+    // build refuses with ones it carries, and parameters defined in terms of each other):
+    // each direction is the one-parameter build's model (`build_tangent`, checked against
+    // differences above) bit for bit — the same operations on the same numbers, direction
+    // by direction (a zero derivative's sign aside: a direction the chunk carries as zero
+    // may come out −0) — and a parameter is refused, with the same reason, exactly when its own
+    // build refuses it.
+    let mut carried = 0;
+    let mut refused = 0;
+    for model in pendkit::models() {
+        let defaults = pendkit_model::Defaults::of(model).unwrap();
+        let (_, resolved) = pendkit_model::parameters_with(&defaults, &Default::default()).unwrap();
+        let names: Vec<String> = resolved.iter().map(|(n, _)| n.to_string()).collect();
+        for chunk in names.chunks(pendkit_params::TANGENT_CHUNK) {
+            let chunk: Vec<&str> = chunk.iter().map(String::as_str).collect();
+            let built = pendkit_model::build_tangent_chunk(model, &Default::default(), &chunk)
+                .unwrap_or_else(|e| panic!("{}: {e}", model.name()));
+            assert_eq!(built.len(), chunk.len());
+            for (name, from_chunk) in chunk.iter().zip(built) {
+                let alone = pendkit_model::build_tangent(model, &Default::default(), name);
+                match (from_chunk, alone) {
+                    (Ok(a), Ok(b)) => {
+                        let (a, b) = (a.scalars(), b.scalars());
+                        assert_eq!(a.len(), b.len());
+                        for (i, (x, y)) in a.iter().zip(&b).enumerate() {
+                            assert!(
+                                x.re.to_bits() == y.re.to_bits() && x.eps == y.eps,
+                                "{} {name}: number {i}: {x:?} in the chunk, {y:?} alone",
+                                model.name()
+                            );
+                        }
+                        carried += 1;
+                    }
+                    (Err(a), Err(b)) => {
+                        assert_eq!(a, b, "{} {name}", model.name());
+                        refused += 1;
+                    }
+                    (a, b) => panic!(
+                        "{} {name}: the chunk says {:?}, the build alone {:?}",
+                        model.name(),
+                        a.err(),
+                        b.err()
+                    ),
+                }
+            }
+        }
+    }
+    eprintln!("{carried} carried, {refused} refused");
+    assert!(carried > 900 && refused > 10, "{carried} {refused}");
+}

@@ -509,6 +509,33 @@ fn a_real_multiplier_that_moves_with_a_parameter_sends_it_the_difference_route()
 }
 
 #[test]
+fn a_damping_parameter_a_real_multiplier_reads_moves_the_modes() {
+    // A parameter only the damping reads moves no mode, and its column is exactly 0 without
+    // computing anything, unless a real multiplier ε' reads it: here ε'(0) of the fibres'
+    // stretch is 1 + 0.001 (T − T₀), 1 at the nominal temperature T₀ but moving with it,
+    // so the vertical mode moves with the temperature (f/4000 per K). The library must
+    // difference it and agree with re-solved frequencies; without that ε' the temperature
+    // is an exact zero again.
+    let (_, nominal) = case("pendulum").build().expect("build");
+    let t0 = nominal.get("temperature").expect("temperature");
+    let set = format!("damping.fibre_stretch.real=1 + 0.001*(temperature - {t0:e})");
+    let pendulum = case("pendulum").with_sets(&[set]).expect("set");
+    let s = modes_of(&pendulum, Stage::S2, Some(&["temperature", "l_fibre"]));
+    assert_eq!(s.exact, vec![false, true]);
+    assert!(s.dfdp.iter().any(|row| row[0] != 0.0), "{:?}", s.dfdp);
+    check_case_against_re_solved(
+        "pendulum (ε' moving with the temperature)",
+        &pendulum,
+        Stage::S2,
+        Some(&["temperature", "l_fibre"]),
+    );
+    // without that ε', the temperature moves no mode: an exact zero
+    let s = modes_of(&case("pendulum"), Stage::S2, Some(&["temperature"]));
+    assert_eq!(s.exact, vec![true]);
+    assert!(s.dfdp.iter().all(|row| row[0] == 0.0), "{:?}", s.dfdp);
+}
+
+#[test]
 fn mode_sensitivities_are_exact_wherever_the_build_has_a_tangent() {
     // the exact route (dual numbers through the build, the terms and the equilibrium) is
     // taken by every parameter whose build has an exact tangent, at every stage the quad's
@@ -517,9 +544,30 @@ fn mode_sensitivities_are_exact_wherever_the_build_has_a_tangent() {
     let quad = case("quad");
     for stage in [Stage::S0A, Stage::S1A, Stage::S2] {
         let s = modes_of(&quad, stage, None);
-        assert_eq!(s.exact, s.exact_build, "stage {stage}");
-        // 82 differentiable parameters, 11 of them read only by the damping
-        assert_eq!(s.exact.iter().filter(|&&e| e).count(), 71, "stage {stage}");
+        // 82 differentiable parameters: 71 read by the mechanics, all with an exact build
+        // and all exact; 11 read only by what the build adds, of which the maraging loss
+        // angle and the temperature move no mode (read by no real multiplier ε' and no
+        // switch: exact zeros, nothing computed) and 9 material constants that the
+        // damping's real multipliers read (the materials' damping forms) are differenced
+        assert_eq!(
+            s.exact_build.iter().filter(|&&e| e).count(),
+            71,
+            "stage {stage}"
+        );
+        let blind: Vec<&str> = (0..s.parameters.len())
+            .filter(|&j| s.exact[j] && !s.exact_build[j])
+            .map(|j| s.parameters[j].as_str())
+            .collect();
+        assert_eq!(blind, ["maraging_phi", "temperature"], "stage {stage}");
+        for j in 0..s.parameters.len() {
+            if s.exact[j] && !s.exact_build[j] {
+                assert!(
+                    s.dfdp.iter().all(|row| row[j] == 0.0),
+                    "{}",
+                    s.parameters[j]
+                );
+            }
+        }
     }
     let mut request = SensitivityRequest::modes(Stage::S2);
     request.parameters = Some(vec!["m3".into(), "l3".into()]);

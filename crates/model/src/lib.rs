@@ -25,7 +25,7 @@ use pendkit_energy::{
 };
 use pendkit_expr::{ExprError, Slot};
 use pendkit_geometry::{FrameMap, PoseMap};
-use pendkit_params::{ParamError, ParamSet, Resolved, Tangent};
+use pendkit_params::{ChunkDual, ParamError, ParamSet, Resolved, Tangent};
 
 pub use damping::{DampingSpec, ParsedDamping};
 pub use fibre::{FibreProfile, fibre_inverse_radius};
@@ -924,15 +924,18 @@ pub trait Model: Sync {
     }
     /// Builds the numeric model from resolved parameters.
     fn build(&self, params: &Resolved) -> Result<System, BuildError>;
-    /// Builds the model with dual numbers seeded in the direction of one parameter
-    /// (`tangent`, resolved from the same set as `params`): every model number with its exact
-    /// derivative with respect to that parameter (docs/exact-sensitivities.md). The default
-    /// says the model offers none; suspension files do.
-    fn build_tangent(
+    /// Builds the model with dual numbers seeded in the directions of up to
+    /// [`pendkit_params::TANGENT_CHUNK`] parameters at once (`tangent`, resolved from the
+    /// same set as `params`): every model number with its exact derivatives with respect to
+    /// them (docs/exact-sensitivities.md). A derivative the build cannot carry (a number
+    /// that becomes a count, a switch or the text of an expression) is listed in
+    /// [`ChunkBuild::lost`] rather than failing the build, so the chunk's other parameters
+    /// keep theirs. The default says the model offers none; suspension files do.
+    fn build_tangents(
         &self,
         params: &Resolved,
-        tangent: &Tangent,
-    ) -> Result<System<Dual64>, BuildError> {
+        tangent: &Tangent<ChunkDual>,
+    ) -> Result<ChunkBuild, BuildError> {
         let _ = (params, tangent);
         Err(BuildError::Invalid {
             item: format!("model '{}'", self.name()),
@@ -1086,8 +1089,17 @@ pub fn parameters_with(
     Ok((params, resolved))
 }
 
+/// A model built over a chunk of seeds ([`Model::build_tangents`]).
+pub struct ChunkBuild {
+    /// Every model number with its derivatives, direction k with respect to the k-th seed.
+    pub system: System<ChunkDual>,
+    /// The derivatives the build could not carry: the directions (bit k: the k-th seed)
+    /// lost at one place, and why.
+    pub lost: Vec<(u64, BuildError)>,
+}
+
 /// `model` with `overrides` built with dual numbers seeded in the direction of `parameter`
-/// (see [`Model::build_tangent`]): the dual part of every model number is its exact
+/// (see [`Model::build_tangents`]): the dual part of every model number is its exact
 /// derivative with respect to `parameter`, moved as an override of it would move it. Only
 /// the mechanical model: no damping, temperature or early-terms switch (what
 /// [`build_with`] adds).
@@ -1096,18 +1108,51 @@ pub fn build_tangent(
     overrides: &Overrides,
     parameter: &str,
 ) -> Result<System<Dual64>, BuildError> {
+    let mut one = build_tangent_chunk(model, overrides, &[parameter])?;
+    one.pop().unwrap_or_else(|| {
+        Err(BuildError::Invalid {
+            item: format!("parameter '{parameter}'"),
+            message: "no exact derivative: the chunk build gave nothing".into(),
+        })
+    })
+}
+
+/// [`build_tangent`] for up to [`pendkit_params::TANGENT_CHUNK`] parameters with one build
+/// (the cost of about one `f64` build instead of one each): one result per parameter, in
+/// order, each the model's numbers with their derivatives with respect to it, or why it has
+/// no exact derivative. The outer error is a model that does not build at all.
+pub fn build_tangent_chunk(
+    model: &dyn Model,
+    overrides: &Overrides,
+    parameters: &[&str],
+) -> Result<Vec<Result<System<Dual64>, BuildError>>, BuildError> {
     let defaults = Defaults::of(model)?;
     let (set, resolved) = parameters_with(&defaults, overrides)?;
-    let tangent = set.resolve_tangent(parameter)?;
-    let system = model.build_tangent(&resolved, &tangent)?;
-    // a derivative that overflows or is undefined (a square root at zero) is not exact
-    if system.scalars().iter().any(|x| !x.eps.is_finite()) {
-        return Err(BuildError::Invalid {
-            item: format!("parameter '{parameter}'"),
-            message: "no exact derivative: a model number's derivative is not finite".into(),
-        });
-    }
-    Ok(system)
+    let tangent = set.resolve_tangents(parameters)?;
+    let ChunkBuild { system, lost } = model.build_tangents(&resolved, &tangent)?;
+    Ok((0..parameters.len())
+        .map(|k| {
+            if let Some((_, why)) = lost.iter().find(|(directions, _)| directions >> k & 1 == 1) {
+                return Err(why.clone());
+            }
+            let mut finite = true;
+            let one = system.map_scalars(|x| {
+                let x = pendkit_params::chunk_direction(&x, k);
+                finite &= x.eps.is_finite();
+                x
+            });
+            // a derivative that overflows or is undefined (a square root at zero) is not
+            // exact
+            if !finite {
+                return Err(BuildError::Invalid {
+                    item: format!("parameter '{}'", parameters[k]),
+                    message: "no exact derivative: a model number's derivative is not finite"
+                        .into(),
+                });
+            }
+            Ok(one)
+        })
+        .collect())
 }
 
 /// Resolves `model`'s defaults with `overrides` applied, builds the system and attaches
@@ -1124,6 +1169,10 @@ pub fn build_with(
     let system = attach_to_build(system, &defaults, overrides, &resolved)?;
     Ok((system, resolved))
 }
+
+/// The parameter that switches the "wire terms early" mode of [`attach_to_build`] (0 no,
+/// 1 yes, 2 equilibrium only): a switch, which moves the equilibrium and the modes.
+pub const WIRE_TERMS_EARLY: &str = "wire_terms_early";
 
 /// The symbols (parameters, and `f`) that the real multipliers ε'(f) of the damping read,
 /// with the case's `overrides` merged in as [`attach_to_build`] merges them: where no tag
@@ -1210,7 +1259,7 @@ pub fn attach_to_build(
             message: format!("must be positive (got {} K)", system.temperature),
         });
     }
-    system.early_wire_terms = match resolved.get("wire_terms_early")? {
+    system.early_wire_terms = match resolved.get(WIRE_TERMS_EARLY)? {
         0.0 => EarlyWireTerms::No,
         1.0 => EarlyWireTerms::Yes,
         2.0 => EarlyWireTerms::EquilibriumOnly,

@@ -22,7 +22,7 @@ use std::sync::Arc;
 use pendkit_expr::{BinOp, Expr, ExprError, parse};
 
 pub use resolve::Resolved;
-pub use tangent::{Tangent, Values};
+pub use tangent::{ChunkDual, TANGENT_CHUNK, Tangent, Values, chunk_direction};
 
 /// How a parameter is defined.
 #[derive(Debug, Clone, PartialEq)]
@@ -166,6 +166,13 @@ pub enum ParamError {
         name: String,
         /// The free symbols it depends on.
         free: Vec<String>,
+    },
+    /// Parameters seeded for derivatives that cannot be: more than [`TANGENT_CHUNK`] at
+    /// once, or one of them twice.
+    #[error("derivative seeds: {why}")]
+    Seeds {
+        /// What is wrong with them.
+        why: String,
     },
 }
 

@@ -1,32 +1,43 @@
-//! Every parameter's value and its exact derivative with respect to one of them, as dual
-//! numbers: what a model built with dual numbers reads (docs/exact-sensitivities.md, step 2).
+//! Every parameter's value and its exact derivatives with respect to one or a few of them,
+//! as dual numbers: what a model built with dual numbers reads
+//! (docs/exact-sensitivities.md, step 2).
 
 use std::collections::HashMap;
 use std::sync::Arc;
 
-use num_dual::Dual64;
+use num_dual::{Derivative, Dual64, DualNum, DualSVec64};
 
 use crate::{ParamError, ParamSet, unknown};
 
-/// The values of a parameter set seeded in the direction of one parameter, the *seed*:
-/// each value's dual part is its derivative with respect to the seed (in its unit per unit
-/// of the seed). The seed is moved as an override would move it: its own definition is
-/// replaced by its value plus ε, and the parameters defined in terms of it follow.
+/// How many parameters one vector-dual build carries ([`ChunkDual`]): a build over a chunk
+/// costs about one `f64` build (the interpreter's work is shared; its arithmetic is a small
+/// part of it), so the sensitivities build once per chunk instead of once per parameter.
+pub const TANGENT_CHUNK: usize = 16;
+
+/// A number with its derivatives with respect to up to [`TANGENT_CHUNK`] parameters at once
+/// (direction k: the k-th seed of a [`Tangent`] from [`ParamSet::resolve_tangents`]).
+pub type ChunkDual = DualSVec64<TANGENT_CHUNK>;
+
+/// The values of a parameter set seeded in the direction of one parameter, the *seed*
+/// (`S = Dual64`), or of several at once (`S = ChunkDual`, one direction each): each
+/// value's dual part is its derivative with respect to the seeds (in its unit per unit of
+/// the seed). A seed is moved as an override would move it: its own definition is replaced
+/// by its value plus ε, and the parameters defined in terms of it follow.
 #[derive(Debug, Clone)]
-pub struct Tangent {
-    seed: Arc<str>,
-    values: Vec<(Arc<str>, Dual64)>,
+pub struct Tangent<S = Dual64> {
+    seeds: Vec<Arc<str>>,
+    values: Vec<(Arc<str>, S)>,
     index: Arc<HashMap<Arc<str>, usize>>,
 }
 
-impl Tangent {
-    /// The parameter the derivatives are taken with respect to.
-    pub fn seed(&self) -> &str {
-        &self.seed
+impl<S: DualNum<Primitive = f64> + Copy> Tangent<S> {
+    /// The parameters the derivatives are taken with respect to, in direction order.
+    pub fn seeds(&self) -> &[Arc<str>] {
+        &self.seeds
     }
 
-    /// The value of `name` and its derivative with respect to the seed.
-    pub fn get(&self, name: &str) -> Result<Dual64, ParamError> {
+    /// The value of `name` and its derivatives with respect to the seeds.
+    pub fn get(&self, name: &str) -> Result<S, ParamError> {
         self.index
             .get(name)
             .map(|&i| self.values[i].1)
@@ -34,8 +45,15 @@ impl Tangent {
     }
 
     /// Every parameter, in definition order.
-    pub fn iter(&self) -> impl Iterator<Item = (&str, Dual64)> {
+    pub fn iter(&self) -> impl Iterator<Item = (&str, S)> {
         self.values.iter().map(|(n, v)| (&**n, *v))
+    }
+}
+
+impl Tangent<Dual64> {
+    /// The parameter the derivatives are taken with respect to.
+    pub fn seed(&self) -> &str {
+        &self.seeds[0]
     }
 }
 
@@ -44,54 +62,102 @@ impl ParamSet {
     /// is resolved to numbers first, with every check of [`ParamSet::resolve`]; the real
     /// parts are those values.
     pub fn resolve_tangent(&self, seed: &str) -> Result<Tangent, ParamError> {
-        let resolved = self.resolve()?;
-        let seed_index = self.position(seed)?;
-        let mut values: Vec<Option<Dual64>> = vec![None; self.entries.len()];
-        values[seed_index] = Some(Dual64::new(resolved.get(seed)?, 1.0));
+        self.resolve_seeded(&[seed], |_| Dual64::new(0.0, 1.0))
+    }
+
+    /// The values with their derivatives with respect to each of `seeds` at once (direction
+    /// k of every value: its derivative with respect to `seeds[k]`); at most
+    /// [`TANGENT_CHUNK`] seeds, each named once.
+    pub fn resolve_tangents(&self, seeds: &[&str]) -> Result<Tangent<ChunkDual>, ParamError> {
+        if seeds.len() > TANGENT_CHUNK {
+            return Err(ParamError::Seeds {
+                why: format!("{} seeded at once, at most {TANGENT_CHUNK}", seeds.len()),
+            });
+        }
+        self.resolve_seeded(seeds, |k| ChunkDual::from_re(0.0).derivative(k))
+    }
+
+    /// [`ParamSet::resolve_tangent`] and [`ParamSet::resolve_tangents`]: `unit(k)` is the
+    /// k-th seed's direction (real part 0, derivative 1 in direction k only).
+    ///
+    /// Each seed follows its definition in the other seeds' directions (moving another seed
+    /// moves it as it moves any parameter defined in terms of it) and only in its own is it
+    /// replaced by its value plus ε, as an override would replace it. Its definition has no
+    /// derivative in its own direction (that would be a cycle), so the value is the
+    /// definition's plus the unit.
+    fn resolve_seeded<S: DualNum<Primitive = f64> + Copy>(
+        &self,
+        seeds: &[&str],
+        unit: impl Fn(usize) -> S,
+    ) -> Result<Tangent<S>, ParamError> {
+        self.resolve()?;
+        let mut direction: Vec<Option<S>> = vec![None; self.entries.len()];
+        let mut names = Vec::with_capacity(seeds.len());
+        for (k, &seed) in seeds.iter().enumerate() {
+            let i = self.position(seed)?;
+            if direction[i].is_some() {
+                return Err(ParamError::Seeds {
+                    why: format!("'{seed}' is seeded twice"),
+                });
+            }
+            direction[i] = Some(unit(k));
+            names.push(self.entries[i].name.clone());
+        }
+        let mut values: Vec<Option<S>> = vec![None; self.entries.len()];
         for i in 0..self.entries.len() {
-            self.tangent_of(i, &mut values)?;
+            self.tangent_of(i, &direction, &mut values)?;
         }
         let values = self
             .entries
             .iter()
             .zip(values)
-            .map(|(e, v)| (e.name.clone(), v.unwrap_or(Dual64::from(0.0))))
+            .map(|(e, v)| (e.name.clone(), v.unwrap_or_else(|| S::from(0.0))))
             .collect();
         Ok(Tangent {
-            seed: self.entries[seed_index].name.clone(),
+            seeds: names,
             values,
             index: self.index.clone(),
         })
     }
 
     /// Evaluates entry `i` over dual numbers after the entries it reads (the resolution
-    /// has found no cycle and no unknown symbol, so the recursion ends).
-    fn tangent_of(&self, i: usize, values: &mut [Option<Dual64>]) -> Result<Dual64, ParamError> {
+    /// has found no cycle and no unknown symbol, so the recursion ends), plus its own seed
+    /// direction if it is a seed.
+    fn tangent_of<S: DualNum<Primitive = f64> + Copy>(
+        &self,
+        i: usize,
+        direction: &[Option<S>],
+        values: &mut [Option<S>],
+    ) -> Result<S, ParamError> {
         if let Some(v) = values[i] {
             return Ok(v);
         }
         let entry = &self.entries[i];
         for symbol in &entry.symbols {
             if let Some(&j) = self.index.get(symbol.as_str()) {
-                self.tangent_of(j, values)?;
+                self.tangent_of(j, direction, values)?;
             }
         }
         let lookup = |s: &str| self.index.get(s).and_then(|&j| values[j]);
-        let value = entry
-            .definition
-            .expr
-            .eval(&lookup)
-            .map_err(|source| ParamError::Syntax {
-                name: entry.name.to_string(),
-                source,
-            })?;
+        let mut value =
+            entry
+                .definition
+                .expr
+                .eval(&lookup)
+                .map_err(|source| ParamError::Syntax {
+                    name: entry.name.to_string(),
+                    source,
+                })?;
+        if let Some(unit) = direction[i] {
+            value += unit;
+        }
         values[i] = Some(value);
         Ok(value)
     }
 }
 
 /// Parameter values of one scalar type, as a model's build reads them: the resolved
-/// numbers (`f64`) or a [`Tangent`] (`Dual64`).
+/// numbers (`f64`) or a [`Tangent`] (`Dual64`, or [`ChunkDual`] for several seeds).
 pub trait Values<S> {
     /// The value of `name`, if it is a numeric parameter.
     fn value(&self, name: &str) -> Option<S>;
@@ -103,8 +169,15 @@ impl Values<f64> for crate::Resolved {
     }
 }
 
-impl Values<Dual64> for Tangent {
-    fn value(&self, name: &str) -> Option<Dual64> {
+impl<S: DualNum<Primitive = f64> + Copy> Values<S> for Tangent<S> {
+    fn value(&self, name: &str) -> Option<S> {
         self.get(name).ok()
     }
+}
+
+/// Direction `k` of a chunk's number as a one-direction dual number (its derivative with
+/// respect to the k-th seed).
+pub fn chunk_direction(x: &ChunkDual, k: usize) -> Dual64 {
+    let Derivative(eps) = &x.eps;
+    Dual64::new(x.re, eps.as_ref().map_or(0.0, |v| v[k]))
 }

@@ -5,9 +5,11 @@
 //! # Method, and what is exact
 //!
 //! **The exact route** (mode sensitivities; [`Sensitivities::exact`] says which parameters
-//! took it). The build runs with the parameter a dual number
-//! ([`pendkit_model::build_tangent`]), so every mass, inertia, point, section constant,
-//! stiffness and unstretched length carries its exact derivative; the element terms are
+//! took it). The build runs with the parameter a dual number, so every mass, inertia,
+//! point, section constant, stiffness and unstretched length carries its exact derivative:
+//! one build for each chunk of [`pendkit_params::TANGENT_CHUNK`] parameters, a vector dual
+//! number with one direction per parameter ([`pendkit_model::build_tangent_chunk`], about
+//! the cost of one `f64` build), split into one model per parameter; the element terms are
 //! built from that model with `Dual64` constants ([`pendkit_energy::TangentTerm`]); the
 //! equilibrium's motion is δq = dq*/dp = −K⁻¹ ∂g/∂p by the implicit function theorem (∂g/∂p
 //! the dual part of the balanced terms' gradient at the fixed equilibrium, K factorised
@@ -20,7 +22,8 @@
 //! equilibrium's motion through coefficients computed once per request
 //! ([`pendkit_assembly::Projection`]). No step, no difference. The route is closed (and the parameter goes the difference route below) for
 //! a parameter the dual build cannot follow (written into a pose's text, a count, a
-//! switch), one read only by the damping, a model with user-written terms or a kind
+//! switch), one read only by what the build adds (the damping, the temperature, the
+//! "wire terms early" switch), a model with user-written terms or a kind
 //! without tangent terms, plug-in terms that join the equilibrium (built around the start
 //! position, whose derivative the model does not carry), a damping tag whose real
 //! multiplier at DC is not 1, and for transfer-function and noise sensitivities, which
@@ -28,8 +31,8 @@
 //!
 //! **The difference route** (and what it shares with the exact one):
 //!
-//! 0. **The model's numbers, exactly where the build allows.** The build runs once with the
-//!    parameter a dual number ([`pendkit_model::build_tangent`]): the tangent of every
+//! 0. **The model's numbers, exactly where the build allows.** The build runs with the
+//!    parameter a dual number (the chunk build above): the tangent of every
 //!    mass, inertia, point, section constant, stiffness and unstretched length. The model
 //!    at each step below is the nominal one moved along that tangent
 //!    ([`System::stepped`]), which has the same derivative at p₀ as the rebuilt one. A
@@ -62,12 +65,16 @@
 //!
 //! Work skipped exactly: a parameter the model's build does not read (directly or through
 //! the definitions of parameters it reads) changes nothing but the damping, so its stage
-//! matrices are the nominal ones with its damping; a parameter read by nothing at all has
+//! matrices are the nominal ones with its damping; if moreover no real multiplier ε' and
+//! no switch reads it (a loss angle, the temperature), the modes' stiffness (the
+//! tension-on Hessian with each tag's ε'(0)) and mass do not move with it, so its mode
+//! sensitivities are exactly 0 and count as exact; a parameter read by nothing at all has
 //! zero sensitivities and costs nothing.
 
 use std::collections::BTreeSet;
 
 use nalgebra::{Complex, DMatrix, DVector};
+use num_dual::Dual64;
 use pendkit_assembly::{Along, AssemblyOptions, Balance, Projection, assemble_with, in_parallel};
 use pendkit_dynamics::{
     Input, Modes, Output, Stability, StageModel, eliminate_floats, validate::check_frequencies,
@@ -150,15 +157,15 @@ pub struct Sensitivities {
     /// units (0 for a parameter nothing reads).
     pub steps: Vec<f64>,
     /// Per parameter, whether the model's numbers were moved along their exact tangent (a
-    /// dual-number build, [`pendkit_model::build_tangent`]) rather than rebuilt at each
+    /// dual-number build, [`pendkit_model::build_tangent_chunk`]) rather than rebuilt at each
     /// step (a parameter that reaches the model through a pose's text, a count or a
     /// switch, or one only the damping reads).
     pub exact_build: Vec<bool>,
     /// Per parameter, whether its derivatives are exact: the stage's matrices differentiated
     /// by dual numbers through the build, the terms and the equilibrium (the implicit
-    /// function theorem), no difference anywhere (`steps` then says what a difference
-    /// would use). Otherwise the matrices are differenced (see the module's
-    /// documentation).
+    /// function theorem), or exactly 0 for a parameter only the loss angles and the
+    /// temperature read (the module's documentation), no difference anywhere (`steps`
+    /// then says what a difference would use). Otherwise the matrices are differenced.
     pub exact: Vec<bool>,
     /// Mode frequencies (Hz), ascending in ω² (the rows of `dfdp`).
     pub modes_hz: Vec<f64>,
@@ -358,6 +365,9 @@ struct Shared<'a> {
     reach: &'a [Reach],
     /// Whether the damping's real multipliers ε'(f) depend on each parameter.
     real_multiplier_reads: &'a [bool],
+    /// Whether each parameter is read only by what moves no mode (the damping's loss
+    /// angles, the temperature): its mode sensitivities are exactly 0.
+    modes_blind: &'a [bool],
     base_point: &'a Point,
     base_ports: Option<&'a Ports>,
     nominal: &'a [Nominal],
@@ -368,6 +378,9 @@ struct Shared<'a> {
     responses: bool,
     /// What the exact route shares between parameters; `None` when it is closed to all.
     exact: Option<ExactRoute>,
+    /// Each parameter's model numbers along their exact tangent, where the build offers
+    /// one (else each step of its difference rebuilds the model).
+    tangents: &'a [Option<System<Dual64>>],
 }
 
 /// One parameter's derivatives (Hz, |H|'s unit, and the noise response per unit of the
@@ -387,6 +400,38 @@ struct Column {
     d_tf: Vec<C>,
     /// (dT/dp, dR/dp) of the noise, one per frequency.
     d_noise: Vec<(f64, C)>,
+}
+
+/// The model's numbers with their exact derivatives with respect to each parameter the
+/// mechanics read, where the build offers them: one dual build per chunk of
+/// [`pendkit_params::TANGENT_CHUNK`] parameters (about the cost of one `f64` build each),
+/// the chunks on `threads` threads.
+fn tangent_builds(
+    case: &Case,
+    names: &[String],
+    reach: &[Reach],
+    threads: usize,
+) -> Result<Vec<Option<System<Dual64>>>, Error> {
+    let mechanical: Vec<usize> = (0..names.len())
+        .filter(|&j| reach[j] == Reach::Mechanics)
+        .collect();
+    let chunks: Vec<&[usize]> = mechanical.chunks(pendkit_params::TANGENT_CHUNK).collect();
+    let built = in_parallel(chunks.len(), threads, |c| {
+        let chunk: Vec<&str> = chunks[c].iter().map(|&j| names[j].as_str()).collect();
+        // a model that offers no dual build leaves every parameter to rebuilds
+        Ok::<_, Error>(
+            pendkit_model::build_tangent_chunk(case.model, &case.overrides, &chunk)
+                .map(|systems| systems.into_iter().map(Result::ok).collect())
+                .unwrap_or_else(|_| vec![None; chunk.len()]),
+        )
+    })?;
+    let mut tangents = vec![None; names.len()];
+    for (chunk, systems) in chunks.iter().zip(built) {
+        for (&j, system) in chunk.iter().zip(systems) {
+            tangents[j] = system;
+        }
+    }
+    Ok(tangents)
 }
 
 /// Parameter `j`'s column: the stage rebuilt at the stencil's points and differenced, then
@@ -421,10 +466,7 @@ fn column(shared: &Shared, j: usize) -> Result<Option<Column>, Error> {
     };
     // the model's numbers along their exact tangent, where the build offers one (else each
     // step rebuilds the model)
-    let tangent = match reach[j] {
-        Reach::Mechanics => pendkit_model::build_tangent(case.model, &case.overrides, name).ok(),
-        _ => None,
-    };
+    let tangent = shared.tangents[j].as_ref();
     let mut out = Column {
         step: h,
         exact_build: tangent.is_some(),
@@ -434,11 +476,18 @@ fn column(shared: &Shared, j: usize) -> Result<Option<Column>, Error> {
         d_tf: vec![C::new(0.0, 0.0); nf],
         d_noise: vec![(0.0, C::new(0.0, 0.0)); nf],
     };
+    // a parameter only the damping's loss angles and the temperature read: the modes'
+    // stiffness (the tension-on Hessian, each tag's times its ε'(0)) and the mass do not
+    // move with it, so every mode's derivative is exactly 0, with nothing computed
+    if request.modes && !responses && !request.differences && shared.modes_blind[j] {
+        out.exact = true;
+        return Ok(Some(out));
+    }
     // the exact route: the stage's matrices differentiated by the implicit function theorem
     if request.modes
         && !responses
         && !request.differences
-        && let Some(dual) = &tangent
+        && let Some(dual) = tangent
         && let Some((vk, vm)) = exact_projections(shared, j, p0, h, dual)?
     {
         out.dfdp = mode_derivatives(shared, &vk, &vm)?;
@@ -449,7 +498,7 @@ fn column(shared: &Shared, j: usize) -> Result<Option<Column>, Error> {
     for &(k, _) in &STENCIL {
         let value = p0 + k * h;
         let overrides = overridden(case, name, value);
-        let built = match &tangent {
+        let built = match tangent {
             Some(dual) => stepped(dual, k * h, defaults, &overrides),
             None => pendkit_model::build_with(case.model, &overrides).map(|(system, _)| system),
         }
@@ -854,6 +903,10 @@ pub fn sensitivities(case: &Case, request: &SensitivityRequest) -> Result<Sensit
         &case.overrides,
     ))?;
     let real_multiplier_reads: Vec<bool> = names.iter().map(|n| real_reads.contains(n)).collect();
+    // what the build adds that can move the modes: the real multipliers, and the switch
+    // that puts wire terms into the equilibrium; a parameter only the rest of the damping
+    // (loss angles, their temperatures) and the temperature read moves no mode
+    let switch_reads = case.parameters_behind([pendkit_model::WIRE_TERMS_EARLY.to_string()])?;
     let reach: Vec<Reach> = names
         .iter()
         .map(|n| {
@@ -864,6 +917,13 @@ pub fn sensitivities(case: &Case, request: &SensitivityRequest) -> Result<Sensit
             } else {
                 Reach::Nothing
             }
+        })
+        .collect();
+    let modes_blind: Vec<bool> = (0..names.len())
+        .map(|j| {
+            reach[j] == Reach::DampingOnly
+                && !real_multiplier_reads[j]
+                && !switch_reads.contains(&names[j])
         })
         .collect();
     let base = run_stage(system, request.stage)?;
@@ -936,6 +996,7 @@ pub fn sensitivities(case: &Case, request: &SensitivityRequest) -> Result<Sensit
         Vec::new()
     };
 
+    let tangents = tangent_builds(case, &names, &reach, request.threads)?;
     let shared = Shared {
         case,
         defaults: &defaults,
@@ -944,6 +1005,7 @@ pub fn sensitivities(case: &Case, request: &SensitivityRequest) -> Result<Sensit
         values: &values,
         reach: &reach,
         real_multiplier_reads: &real_multiplier_reads,
+        modes_blind: &modes_blind,
         base_point: &base_point,
         base_ports: base_ports.as_ref(),
         nominal: &nominal,
@@ -952,6 +1014,7 @@ pub fn sensitivities(case: &Case, request: &SensitivityRequest) -> Result<Sensit
         sizes,
         responses,
         exact: exact_route,
+        tangents: &tangents,
     };
     let columns = in_parallel(np, request.threads, |j| column(&shared, j))?;
     for (j, col) in columns.into_iter().enumerate() {

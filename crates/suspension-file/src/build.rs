@@ -12,7 +12,7 @@ use std::cell::RefCell;
 use std::collections::{BTreeSet, HashMap};
 
 use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
-use num_dual::Dual64;
+use num_dual::Derivative;
 use pendkit_energy::{
     BodyId, CoordKind, EndDirection, ExtraPhase, NamedSignal, Real, SignalTerm, SpringEnd, Stage,
     System, WireEnd, WireSection, WireTags,
@@ -20,7 +20,7 @@ use pendkit_energy::{
 use pendkit_expr::Expr;
 use pendkit_model::beads::{BeadedFibre, add_beaded_fibre, beads_mass};
 use pendkit_model::{BodySpec, BuildError, FibreProfile, Shape, SystemBuilder};
-use pendkit_params::{Resolved, Values};
+use pendkit_params::{ChunkDual, Resolved, Values};
 
 use crate::damping::{Hanging, blade_tag, find_material};
 use crate::read::Ex;
@@ -78,23 +78,38 @@ fn placed(at: &At) -> impl Fn(BuildError) -> BuildError + '_ {
     move |e| invalid(at, e.to_string())
 }
 
-/// The scalar a suspension file is built in: `f64` (the model), or `Dual64` (the model
-/// with the exact derivative of every number with respect to one parameter).
+/// The scalar a suspension file is built in: `f64` (the model) or [`ChunkDual`] (the model
+/// with the exact derivatives of every number with respect to up to
+/// [`pendkit_params::TANGENT_CHUNK`] parameters at once, one direction each).
 pub trait BuildScalar: Real {
-    /// Whether the number has a derivative: then it must not become the text of an
-    /// expression, a count or a switch, where the derivative would be lost.
-    fn moves(&self) -> bool;
-}
+    /// The directions (bit k: the k-th seed) in which the number has a non-zero derivative:
+    /// where it becomes the text of an expression, a count or a switch, those are lost.
+    fn moving(&self) -> u64;
 
-impl BuildScalar for f64 {
+    /// Whether the number has a derivative in any direction.
     fn moves(&self) -> bool {
-        false
+        self.moving() != 0
     }
 }
 
-impl BuildScalar for Dual64 {
-    fn moves(&self) -> bool {
-        self.eps != 0.0
+impl BuildScalar for f64 {
+    fn moving(&self) -> u64 {
+        0
+    }
+}
+
+// one bit per direction of a chunk
+const _: () = assert!(pendkit_params::TANGENT_CHUNK <= 64);
+
+impl BuildScalar for ChunkDual {
+    fn moving(&self) -> u64 {
+        let Derivative(eps) = &self.eps;
+        eps.as_ref().map_or(0, |v| {
+            v.iter()
+                .enumerate()
+                .filter(|(_, d)| **d != 0.0)
+                .fold(0, |bits, (k, _)| bits | 1 << k)
+        })
     }
 }
 
@@ -103,6 +118,10 @@ fn no_derivative(at: &At, what: &str) -> BuildError {
     invalid(at, format!("no exact derivative: {what}"))
 }
 
+/// Derivatives a chunk build could not carry: each entry, the directions (bit k: the k-th
+/// seed) lost at one place and why.
+pub type Lost = RefCell<Vec<(u64, BuildError)>>;
+
 /// Evaluation of the file's expressions against resolved parameters.
 pub struct Ctx<'a, S: BuildScalar = f64> {
     /// Parameter values (what is recorded as read, and the messages).
@@ -110,11 +129,41 @@ pub struct Ctx<'a, S: BuildScalar = f64> {
     /// Where reads are recorded, if they are.
     pub reads: Option<&'a RefCell<Reads>>,
     /// The values the expressions evaluate with, of the build's scalar: `params` itself
-    /// for `f64`, a [`pendkit_params::Tangent`] for `Dual64`.
+    /// for `f64`, a [`pendkit_params::Tangent`] for the dual numbers.
     pub values: &'a dyn Values<S>,
+    /// Where a build over several seeds records the derivatives it loses and goes on with
+    /// the numbers' values (what the `f64` build does), so the chunk's other seeds keep
+    /// theirs; `None`: a lost derivative is an error.
+    pub lost: Option<&'a Lost>,
 }
 
 impl<S: BuildScalar> Ctx<'_, S> {
+    /// The derivatives of `x` are lost at `at` (`what` says how): recorded when the build
+    /// records them, else an error if `x` has any.
+    fn lose(&self, x: S, at: &At, what: &str) -> Result<(), BuildError> {
+        self.lose_directions(x.moving(), at, what)
+    }
+
+    /// [`Ctx::lose`] for the directions themselves (bit k: the k-th seed).
+    fn lose_directions(&self, directions: u64, at: &At, what: &str) -> Result<(), BuildError> {
+        if directions == 0 {
+            return Ok(());
+        }
+        let error = no_derivative(at, what);
+        match self.lost {
+            Some(lost) => {
+                lost.borrow_mut().push((directions, error));
+                Ok(())
+            }
+            None => Err(error),
+        }
+    }
+
+    /// The directions in which parameter `name`'s value moves (none if it is not one).
+    fn moving(&self, name: &str) -> u64 {
+        self.values.value(name).map_or(0, |v| v.moving())
+    }
+
     /// Records that `field` reads the symbols of `expr` that are parameters.
     pub fn record(&self, expr: &Expr, field: &str) {
         if let Some(reads) = self.reads {
@@ -136,9 +185,7 @@ impl<S: BuildScalar> Ctx<'_, S> {
     /// constant the model keeps in `f64`): an error if it has a derivative.
     fn fixed(&self, ex: &Ex, what: &str) -> Result<f64, BuildError> {
         let v = self.eval(ex)?;
-        if v.moves() {
-            return Err(no_derivative(&ex.at, &format!("`{}` is {what}", ex.text)));
-        }
+        self.lose(v, &ex.at, &format!("`{}` is {what}", ex.text))?;
         Ok(v.re())
     }
 
@@ -266,13 +313,12 @@ fn num(x: f64) -> String {
 
 /// [`num`] of a model number, which must have no derivative (the text would lose it);
 /// `at` and `what` name it in the error.
-fn num_of<S: BuildScalar>(x: S, at: &At, what: &str) -> Result<String, BuildError> {
-    if x.moves() {
-        return Err(no_derivative(
-            at,
-            &format!("{what} is written into a pose's expression"),
-        ));
-    }
+fn num_of<S: BuildScalar>(ctx: &Ctx<S>, x: S, at: &At, what: &str) -> Result<String, BuildError> {
+    ctx.lose(
+        x,
+        at,
+        &format!("{what} is written into a pose's expression"),
+    )?;
     Ok(num(x.re()))
 }
 
@@ -437,11 +483,12 @@ impl<'s, 'c, S: BuildScalar> Interpreter<'s, 'c, S> {
         for p in &self.spec.parameters {
             // only a switch's value is looked up here: a look-up counts as a read, and an
             // override of a parameter nothing reads is refused
-            if p.allowed.is_some() && ctx.values.value(&p.name).is_some_and(|v| v.moves()) {
-                return Err(no_derivative(
+            if p.allowed.is_some() {
+                ctx.lose_directions(
+                    ctx.moving(&p.name),
                     &p.at,
                     &format!("{} is a switch (its values are listed)", p.name),
-                ));
+                )?;
             }
             if let Some(allowed) = &p.allowed
                 && let Ok(value) = ctx.params.get(&p.name)
@@ -578,12 +625,12 @@ impl<'s, 'c, S: BuildScalar> Interpreter<'s, 'c, S> {
             let at = &body.at;
             let what = "the link's offset or angles";
             spec = spec.on(upper).pose([
-                &num_of(offset.x, at, what)?,
-                &num_of(offset.y, at, what)?,
-                &num_of(offset.z, at, what)?,
-                &num_of(angles.x, at, what)?,
-                &num_of(angles.y, at, what)?,
-                &num_of(angles.z, at, what)?,
+                &num_of(ctx, offset.x, at, what)?,
+                &num_of(ctx, offset.y, at, what)?,
+                &num_of(ctx, offset.z, at, what)?,
+                &num_of(ctx, angles.x, at, what)?,
+                &num_of(ctx, angles.y, at, what)?,
+                &num_of(ctx, angles.z, at, what)?,
             ]);
         } else if let Some(suffix) = &body.coordinates {
             spec = spec.pose(
@@ -680,12 +727,13 @@ impl<'s, 'c, S: BuildScalar> Interpreter<'s, 'c, S> {
             let start = nominal_k.re();
             if dof.contains(&k) {
                 let name = format!("{}{suffix}", AXES[k]);
-                if body.driven && nominal_k.moves() {
+                if body.driven {
                     // a driven coordinate's value is where it starts: a number
-                    return Err(no_derivative(
+                    self.ctx.lose(
+                        nominal_k,
                         at,
                         "the position of a driven body (its coordinates' values) moves with it",
-                    ));
+                    )?;
                 }
                 if body.driven {
                     self.b.parameter(&name, start)
@@ -697,6 +745,7 @@ impl<'s, 'c, S: BuildScalar> Interpreter<'s, 'c, S> {
                 *entry = name;
             } else if start != 0.0 || nominal_k.moves() {
                 *entry = num_of(
+                    self.ctx,
                     nominal_k,
                     at,
                     "the nominal position of an axis that is not a degree of freedom",
@@ -728,11 +777,12 @@ impl<'s, 'c, S: BuildScalar> Interpreter<'s, 'c, S> {
             self.b.find_coordinate(base).is_some()
         };
         for s in ex.expr.symbols() {
-            if !is_coordinate(&s) && self.ctx.values.value(&s).is_some_and(|v| v.moves()) {
-                return Err(no_derivative(
+            if !is_coordinate(&s) {
+                self.ctx.lose_directions(
+                    self.ctx.moving(&s),
                     &ex.at,
                     &format!("'{s}' is written into the expression `{}`", ex.text),
-                ));
+                )?;
             }
             if !is_coordinate(&s) && self.ctx.params.get(&s).is_err() {
                 return Err(invalid(
@@ -1503,10 +1553,11 @@ impl<'s, 'c, S: BuildScalar> Interpreter<'s, 'c, S> {
             None => (false, text.value.trim()),
         };
         // signals are kept in f64: a parameter they read must not carry a derivative
-        let moved = std::cell::Cell::new(None::<String>);
+        let moved = RefCell::new(Vec::<(String, u64)>::new());
         let value = |s: &str| {
-            if self.ctx.values.value(s).is_some_and(|v| v.moves()) {
-                moved.set(Some(s.to_string()));
+            let directions = self.ctx.moving(s);
+            if directions != 0 {
+                moved.borrow_mut().push((s.to_string(), directions));
             }
             self.ctx.params.get(s).ok()
         };
@@ -1552,11 +1603,12 @@ impl<'s, 'c, S: BuildScalar> Interpreter<'s, 'c, S> {
                 })
                 .collect()
         };
-        if let Some(s) = moved.take() {
-            return Err(no_derivative(
+        for (s, directions) in moved.take() {
+            self.ctx.lose_directions(
+                directions,
                 at,
                 &format!("'{s}' is read by signal '{name}', which is kept in f64"),
-            ));
+            )?;
         }
         Ok(NamedSignal {
             name: name.to_string(),

@@ -62,10 +62,11 @@ use std::collections::BTreeMap;
 use std::path::Path;
 use std::sync::Arc;
 
-use num_dual::Dual64;
 use pendkit_energy::System;
-use pendkit_model::{BuildError, DampingSpec, DefaultsCache, Model, ParameterInfo, whole_number};
-use pendkit_params::{ParamError, ParamSet, Resolved, Tangent};
+use pendkit_model::{
+    BuildError, ChunkBuild, DampingSpec, DefaultsCache, Model, ParameterInfo, whole_number,
+};
+use pendkit_params::{ChunkDual, ParamError, ParamSet, Resolved, Tangent};
 
 pub use build::Reads;
 pub use pendkit_model::Shape;
@@ -298,6 +299,7 @@ impl Suspension {
             params,
             reads: None,
             values: params,
+            lost: None,
         };
         self.spec
             .bodies
@@ -308,11 +310,13 @@ impl Suspension {
     }
 
     /// The model at `params`, its expressions evaluated with `values` of the build's scalar
-    /// (`params` itself for the `f64` model, a tangent for the dual-number one).
+    /// (`params` itself for the `f64` model, a tangent for the dual-number one); `lost`
+    /// collects the derivatives a dual build cannot carry (see [`build::Ctx::lost`]).
     fn build_in<S: build::BuildScalar>(
         &self,
         params: &Resolved,
         values: &dyn pendkit_params::Values<S>,
+        lost: Option<&build::Lost>,
     ) -> Result<System<S>, BuildError> {
         let spec = self.spec_for(params)?;
         build::build(
@@ -321,6 +325,7 @@ impl Suspension {
                 params,
                 reads: None,
                 values,
+                lost,
             },
         )
     }
@@ -333,6 +338,7 @@ impl Suspension {
             params,
             reads: Some(&reads),
             values: params,
+            lost: None,
         };
         let system = build::build(&spec, &ctx)?;
         if let Some(g) = &self.generator {
@@ -541,27 +547,35 @@ impl Model for Suspension {
     }
 
     fn build(&self, params: &Resolved) -> Result<System, BuildError> {
-        self.build_in(params, params)
+        self.build_in(params, params, None)
     }
 
     fn defaults_cache(&self) -> Option<&DefaultsCache> {
         Some(&self.cache)
     }
 
-    fn build_tangent(
+    fn build_tangents(
         &self,
         params: &Resolved,
-        tangent: &Tangent,
-    ) -> Result<System<Dual64>, BuildError> {
+        tangent: &Tangent<ChunkDual>,
+    ) -> Result<ChunkBuild, BuildError> {
+        let lost = build::Lost::default();
         if let Some(g) = &self.generator
-            && g.parameter == tangent.seed()
+            && let Some(k) = tangent.seeds().iter().position(|s| **s == *g.parameter)
         {
-            return Err(BuildError::Invalid {
-                item: format!("parameter '{}'", g.parameter),
-                message: "no exact derivative: it is a count (the generator's)".into(),
-            });
+            lost.borrow_mut().push((
+                1 << k,
+                BuildError::Invalid {
+                    item: format!("parameter '{}'", g.parameter),
+                    message: "no exact derivative: it is a count (the generator's)".into(),
+                },
+            ));
         }
-        self.build_in(params, tangent)
+        let system = self.build_in(params, tangent, Some(&lost))?;
+        Ok(ChunkBuild {
+            system,
+            lost: lost.into_inner(),
+        })
     }
 
     fn parameter_info(&self, params: &Resolved) -> Result<Vec<ParameterInfo>, BuildError> {

@@ -121,14 +121,14 @@ impl Model for BundledModel {
         self.suspension().map_err(|e| self.broken(e))?.build(params)
     }
 
-    fn build_tangent(
+    fn build_tangents(
         &self,
         params: &Resolved,
-        tangent: &pendkit_params::Tangent,
-    ) -> Result<System<num_dual::Dual64>, BuildError> {
+        tangent: &pendkit_params::Tangent<pendkit_params::ChunkDual>,
+    ) -> Result<pendkit_model::ChunkBuild, BuildError> {
         self.suspension()
             .map_err(|e| self.broken(e))?
-            .build_tangent(params, tangent)
+            .build_tangents(params, tangent)
     }
 
     fn defaults_cache(&self) -> Option<&DefaultsCache> {
