@@ -17,7 +17,7 @@ fn set_start(system: &mut System, name: &str, value: f64) {
 /// Net generalised force on every variable and float, from all stage-0A terms at `x`.
 fn net_forces(system: &System, x: &[f64]) -> Vec<f64> {
     let mut g = vec![0.0; x.len()];
-    let reference = Reference { system, coords: x };
+    let reference = Reference::new(system, x);
     for kind in registry() {
         for term in kind.terms(&reference).unwrap() {
             let d = term.derivatives(x).unwrap();
@@ -50,10 +50,7 @@ fn rigid_body_converges_from_a_tilted_start_to_the_nominal_geometry() {
         }
     }
     // every wire is back at its nominal 0.6 m (the model derives l0 from the tension)
-    let reference = Reference {
-        system: &s,
-        coords: &eq.coords,
-    };
+    let reference = Reference::new(&s, &eq.coords);
     for w in &s.wires {
         assert!((reference.wire_length(w) - 0.6).abs() < 1e-12, "{}", w.name);
         assert!((reference.wire_tension(w) - 40.0 * 9.81 / 4.0).abs() < 1e-8);

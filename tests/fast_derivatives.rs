@@ -175,7 +175,7 @@ impl Random {
 
 /// Every kind's terms built around `x`, sharing bodies as the assembly does.
 fn all_terms(system: &System, x: &[f64]) -> Vec<Term> {
-    let reference = Reference { system, coords: x };
+    let reference = Reference::new(system, x);
     let shared = SharedBodies::new();
     registry()
         .iter()

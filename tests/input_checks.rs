@@ -211,10 +211,7 @@ fn terms_given_a_short_coordinate_vector_are_errors_not_panics() {
     let x = system.start();
     let terms = find_kind("wire-stretch")
         .unwrap()
-        .terms(&Reference {
-            system: &system,
-            coords: &x,
-        })
+        .terms(&Reference::new(&system, &x))
         .unwrap();
     let term = &terms[0];
     let short = &x[..3];

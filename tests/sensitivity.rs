@@ -485,51 +485,44 @@ fn the_build_moves_along_its_exact_tangent_where_it_can() {
     assert_eq!(s.exact_build, vec![true, true, true]);
 }
 
-#[test]
-fn a_real_multiplier_that_moves_with_a_parameter_sends_it_the_difference_route() {
-    // ε'(0) of the fibres' stretch is 1 at the nominal mass, so the exact route is
-    // open, but it moves with m1: the real stiffness then moves with m1 beyond dK/dp (its
-    // tension-off part times dε'/dm1), which the exact route does not carry. m1 must take
-    // the difference route, which rebuilds the damping at each step, and agree with the
-    // re-solved frequencies (the vertical mode moves by f/200 per kg through ε', against
-    // −f/80 per kg through the mass); the fibre length, which no ε' reads, stays exact.
-    // the nominal mass read from the model, so that ε'(0) is exactly 1 there
+/// The pendulum with ε'(0) of its fibres' stretch set to 1 + `slope`·(p − p₀), p₀ the
+/// nominal value of `parameter` (read from the model, so that ε'(0) is exactly 1 there):
+/// `parameter` must take the difference route (the real stiffness moves with it beyond
+/// dK/dp, through its tension-off part times dε'/dp, which the exact route does not carry),
+/// the fibre length, which no ε' reads, the exact one, and both must agree with re-solved
+/// frequencies. Returns the sensitivities to the two.
+fn check_real_multiplier_moving_with(parameter: &str, slope: f64) -> Sensitivities {
     let (_, nominal) = case("pendulum").build().expect("build");
-    let m1 = nominal.get("m1").expect("m1");
-    let set = format!("damping.fibre_stretch.real=1 + 0.01*(m1 - {m1:e})");
+    let p0 = nominal.get(parameter).expect("the parameter");
+    let set = format!("damping.fibre_stretch.real=1 + {slope:e}*({parameter} - {p0:e})");
     let pendulum = case("pendulum").with_sets(&[set]).expect("set");
-    let s = modes_of(&pendulum, Stage::S2, Some(&["m1", "l_fibre"]));
-    assert_eq!(s.exact, vec![false, true]);
+    let asked = [parameter, "l_fibre"];
+    let s = modes_of(&pendulum, Stage::S2, Some(&asked));
+    assert_eq!(s.exact, vec![false, true], "{parameter}");
     check_case_against_re_solved(
-        "pendulum (ε' moving with m1)",
+        &format!("pendulum (ε' moving with {parameter})"),
         &pendulum,
         Stage::S2,
-        Some(&["m1", "l_fibre"]),
+        Some(&asked),
     );
+    s
+}
+
+#[test]
+fn a_real_multiplier_that_moves_with_a_parameter_sends_it_the_difference_route() {
+    // ε' = 1 + 0.01 (m1 − m1₀): the vertical mode moves by f/200 per kg through ε', against
+    // −f/80 per kg through the mass
+    check_real_multiplier_moving_with("m1", 0.01);
 }
 
 #[test]
 fn a_damping_parameter_a_real_multiplier_reads_moves_the_modes() {
     // A parameter only the damping reads moves no mode, and its column is exactly 0 without
-    // computing anything, unless a real multiplier ε' reads it: here ε'(0) of the fibres'
-    // stretch is 1 + 0.001 (T − T₀), 1 at the nominal temperature T₀ but moving with it,
-    // so the vertical mode moves with the temperature (f/4000 per K). The library must
-    // difference it and agree with re-solved frequencies; without that ε' the temperature
-    // is an exact zero again.
-    let (_, nominal) = case("pendulum").build().expect("build");
-    let t0 = nominal.get("temperature").expect("temperature");
-    let set = format!("damping.fibre_stretch.real=1 + 0.001*(temperature - {t0:e})");
-    let pendulum = case("pendulum").with_sets(&[set]).expect("set");
-    let s = modes_of(&pendulum, Stage::S2, Some(&["temperature", "l_fibre"]));
-    assert_eq!(s.exact, vec![false, true]);
+    // computing anything, unless a real multiplier ε' reads it: with ε' = 1 + 0.001 (T − T₀)
+    // the vertical mode moves with the temperature (f/2000 per K), which must be
+    // differenced, not taken for an exact zero; without that ε' it is an exact zero again.
+    let s = check_real_multiplier_moving_with("temperature", 0.001);
     assert!(s.dfdp.iter().any(|row| row[0] != 0.0), "{:?}", s.dfdp);
-    check_case_against_re_solved(
-        "pendulum (ε' moving with the temperature)",
-        &pendulum,
-        Stage::S2,
-        Some(&["temperature", "l_fibre"]),
-    );
-    // without that ε', the temperature moves no mode: an exact zero
     let s = modes_of(&case("pendulum"), Stage::S2, Some(&["temperature"]));
     assert_eq!(s.exact, vec![true]);
     assert!(s.dfdp.iter().all(|row| row[0] == 0.0), "{:?}", s.dfdp);

@@ -331,10 +331,7 @@ fn finite_difference_stiffness(r: &StageResult) -> DMatrix<f64> {
     let system = &r.system;
     let x0 = r.assembled.equilibrium.coords.clone();
     let stage = r.assembled.stage;
-    let reference = Reference {
-        system,
-        coords: &x0,
-    };
+    let reference = Reference::new(system, &x0);
     let mut terms = Vec::new();
     for kind in registry() {
         if system.element_stage(kind).is_some_and(|s| s <= stage) {

@@ -328,10 +328,7 @@ fn dual_terms_at_rest(
         .collect();
     let dual = pendkit_model::build_tangent(case.model, &case.overrides, name)
         .unwrap_or_else(|e| panic!("{name}: {e}"));
-    let reference = Reference {
-        system: &dual,
-        coords: &at_rest,
-    };
+    let reference = Reference::new(&dual, &at_rest);
     let shared = SharedBodies::new();
     let mut terms = Vec::new();
     for kind in registry() {

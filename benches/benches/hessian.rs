@@ -35,10 +35,7 @@ fn term(model: &str, kind: &str, label: &str, at: At) -> (Term, Vec<f64>) {
     };
     let element = find_kind(kind).unwrap_or_else(|| panic!("no element kind '{kind}'"));
     let terms = element
-        .terms(&Reference {
-            system: &system,
-            coords: &x,
-        })
+        .terms(&Reference::new(&system, &x))
         .unwrap_or_else(|e| panic!("{model} {kind}: {e}"));
     let term = terms
         .into_iter()

@@ -309,7 +309,7 @@ fn kind_terms(
     shared: &SharedBodies,
     include: impl Fn(Stage) -> bool,
 ) -> Result<Vec<Term>, EnergyError> {
-    let reference = Reference { system, coords: x };
+    let reference = Reference::new(system, x);
     let mut terms = Vec::new();
     // a model may move a kind to another stage or switch it off (System::element_stages)
     for kind in registry()

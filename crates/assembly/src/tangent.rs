@@ -66,7 +66,7 @@ fn kind_tangent_terms(
     coords: &[Dual64],
     include: impl Fn(Stage) -> bool,
 ) -> Result<Option<Vec<TangentTerm>>, EnergyError> {
-    let reference = Reference { system, coords };
+    let reference = Reference::new(system, coords);
     // one beam per wire for its bending and extra-stretch terms, as in the f64 assembly
     let shared = SharedBodies::new();
     let mut terms = Vec::new();

@@ -798,10 +798,7 @@ mod tests {
                 base[i] + 1e-3 * ((i * 7 % 5) as f64 - 2.0)
             })
             .collect();
-        let reference = Reference {
-            system: &system,
-            coords: &x,
-        };
+        let reference = Reference::new(&system, &x);
         for kind in [&Gravity as &dyn Element, &WireStretch, &SpringKind] {
             for term in kind.terms(&reference).unwrap() {
                 check(&term, &x);

@@ -8,11 +8,11 @@
 
 use std::any::{Any, TypeId};
 use std::cell::RefCell;
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 
 use nalgebra::Vector3;
 use num_dual::Dual64;
-use pendkit_geometry::FrameMap;
+use pendkit_geometry::{Frame, FrameMap};
 use pendkit_rotations::{Constant, norm, tr_mul_vec};
 
 use crate::{BodyId, EndDirection, EnergyError, Stage, System, TangentTerm, Term, Wire};
@@ -21,23 +21,45 @@ use crate::{BodyId, EndDirection, EnergyError, Stage, System, TangentTerm, Term,
 /// position when plug-in terms join the equilibrium search early. With `S = Dual64` the
 /// model's numbers and the coordinates carry their derivatives with respect to one
 /// parameter (the exact sensitivities, docs/exact-sensitivities.md).
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct Reference<'a, S: Constant = f64> {
     /// The model.
     pub system: &'a System<S>,
     /// Full coordinate vector (m, rad).
     pub coords: &'a [S],
+    /// Every body's frame at `coords`, evaluated at the first request: the kinds built
+    /// around one reference ask for the same few bodies' frames many times (each wire's
+    /// ends, for its stretch, tension, clamp directions, torsion and beam).
+    frames: OnceLock<Vec<Frame<S>>>,
 }
 
-impl<S: Constant> Reference<'_, S> {
+impl<'a, S: Constant> Reference<'a, S> {
+    /// The configuration `coords` (full coordinate vector, m and rad) of `system`.
+    pub fn new(system: &'a System<S>, coords: &'a [S]) -> Self {
+        Reference {
+            system,
+            coords,
+            frames: OnceLock::new(),
+        }
+    }
+
+    /// The frame (origin, m; rotation) of body `body` here.
+    pub fn frame(&self, body: BodyId) -> &Frame<S> {
+        let frames = self.frames.get_or_init(|| {
+            self.system
+                .bodies
+                .iter()
+                .map(|b| b.frame.eval(self.coords))
+                .collect()
+        });
+        &frames[body]
+    }
+
     /// Lab positions (m) of the two attachment points of `wire`.
     pub fn wire_points(&self, wire: &Wire<S>) -> [Vector3<S>; 2] {
-        wire.ends.each_ref().map(|end| {
-            self.system.bodies[end.body]
-                .frame
-                .eval(self.coords)
-                .point(&end.point)
-        })
+        wire.ends
+            .each_ref()
+            .map(|end| self.frame(end.body).point(&end.point))
     }
 
     /// Chord length (m) of `wire`.
@@ -60,10 +82,7 @@ impl<S: Constant> Reference<'_, S> {
         let chord = chord / norm(&chord);
         std::array::from_fn(|k| {
             let end = &wire.ends[k];
-            let rotation = self.system.bodies[end.body]
-                .frame
-                .eval(self.coords)
-                .rotation;
+            let rotation = self.frame(end.body).rotation;
             let into_wire = if k == 0 { chord } else { -chord };
             match &end.direction {
                 EndDirection::Hinged => None,

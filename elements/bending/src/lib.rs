@@ -198,11 +198,7 @@ impl<C: Constant> WireBeam<C> {
         let section = if (ei[0] - ei[1]).is_exactly_zero() {
             Section::Round { ei: ei[0] }
         } else {
-            let rotation = reference.system.bodies[wire.ends[0].body]
-                .frame
-                .eval(reference.coords)
-                .rotation
-                .map(|v| v.re());
+            let rotation = reference.frame(wire.ends[0].body).rotation.map(|v| v.re());
             let [p0, p1] = reference.wire_points(wire).map(|p| p.map(|v| v.re()));
             let chord = (p1 - p0).normalize();
             let axis = rotation * sec.principal_axis.map(|v| v.re());

@@ -220,7 +220,6 @@ fn torsion_energy<S: Constant>(
     {
         return None;
     }
-    let system = reference.system;
     let l = reference.wire_length(wire);
     let tension = reference.wire_tension(wire);
     let unloaded = s.shear_modulus * s.torsion_constant / l;
@@ -229,12 +228,7 @@ fn torsion_energy<S: Constant>(
     } else {
         S::from(0.0)
     };
-    let rotation = |k: usize| {
-        system.bodies[wire.ends[k].body]
-            .frame
-            .eval(reference.coords)
-            .rotation
-    };
+    let rotation = |k: usize| reference.frame(wire.ends[k].body).rotation;
     Some(TorsionEnergy {
         frames: [local.frames[0].clone(), local.frames[1].clone()],
         points: [wire.ends[0].point, wire.ends[1].point],

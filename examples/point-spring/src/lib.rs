@@ -66,8 +66,7 @@ impl Element for PointSpring {
                 .values
                 .get("k")
                 .ok_or_else(|| fail("needs a value 'k' (N/m)"))?;
-            let at =
-                |b: usize, p: &Vector3<f64>| system.bodies[b].frame.eval(reference.coords).point(p);
+            let at = |b: usize, p: &Vector3<f64>| reference.frame(b).point(p);
             let local = LocalFrames::new(system, &[b0, b1]);
             terms.push(Term::new(
                 format!("point-spring {}", e.name),
