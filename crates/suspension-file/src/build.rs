@@ -734,8 +734,6 @@ impl<'s, 'c, S: BuildScalar> Interpreter<'s, 'c, S> {
                         at,
                         "the position of a driven body (its coordinates' values) moves with it",
                     )?;
-                }
-                if body.driven {
                     self.b.parameter(&name, start)
                 } else {
                     self.b.variable(&name, start)
