@@ -43,7 +43,7 @@ impl<'a, S: Constant> Reference<'a, S> {
         }
     }
 
-    /// The frame (origin, m; rotation) of body `body` here.
+    /// The frame (origin, m; rotation) of body `body` (one of the system's) here.
     pub fn frame(&self, body: BodyId) -> &Frame<S> {
         let frames = self.frames.get_or_init(|| {
             self.system

@@ -1118,7 +1118,7 @@ pub fn build_tangent(
 }
 
 /// [`build_tangent`] for up to [`pendkit_params::TANGENT_CHUNK`] parameters with one build
-/// (the cost of about one `f64` build instead of one each): one result per parameter, in
+/// (the cost of about two `f64` builds instead of one each): one result per parameter, in
 /// order, each the model's numbers with their derivatives with respect to it, or why it has
 /// no exact derivative. The outer error is a model that does not build at all.
 pub fn build_tangent_chunk(

@@ -9,7 +9,7 @@
 //! point, section constant, stiffness and unstretched length carries its exact derivative:
 //! one build for each chunk of [`pendkit_params::TANGENT_CHUNK`] parameters, a vector dual
 //! number with one direction per parameter ([`pendkit_model::build_tangent_chunk`], about
-//! the cost of one `f64` build), split into one model per parameter; the element terms are
+//! the cost of two `f64` builds), split into one model per parameter; the element terms are
 //! built from that model with `Dual64` constants ([`pendkit_energy::TangentTerm`]); the
 //! equilibrium's motion is δq = dq*/dp = −K⁻¹ ∂g/∂p by the implicit function theorem (∂g/∂p
 //! the dual part of the balanced terms' gradient at the fixed equilibrium, K factorised
@@ -161,11 +161,12 @@ pub struct Sensitivities {
     /// step (a parameter that reaches the model through a pose's text, a count or a
     /// switch, or one only the damping reads).
     pub exact_build: Vec<bool>,
-    /// Per parameter, whether its derivatives are exact: the stage's matrices differentiated
-    /// by dual numbers through the build, the terms and the equilibrium (the implicit
-    /// function theorem), or exactly 0 for a parameter only the loss angles and the
-    /// temperature read (the module's documentation), no difference anywhere (`steps`
-    /// then says what a difference would use). Otherwise the matrices are differenced.
+    /// Per parameter, whether its derivatives are exact, with no difference anywhere
+    /// (`steps` then says what a difference would use): the stage's matrices
+    /// differentiated by dual numbers through the build, the terms and the equilibrium
+    /// (the implicit function theorem), or, for a parameter only the damping's loss angles
+    /// and the temperature read, exactly 0 (see the module's documentation). Otherwise the
+    /// matrices are differenced.
     pub exact: Vec<bool>,
     /// Mode frequencies (Hz), ascending in ω² (the rows of `dfdp`).
     pub modes_hz: Vec<f64>,
@@ -404,7 +405,7 @@ struct Column {
 
 /// The model's numbers with their exact derivatives with respect to each parameter the
 /// mechanics read, where the build offers them: one dual build per chunk of
-/// [`pendkit_params::TANGENT_CHUNK`] parameters (about the cost of one `f64` build each),
+/// [`pendkit_params::TANGENT_CHUNK`] parameters (about the cost of two `f64` builds each),
 /// the chunks on `threads` threads.
 fn tangent_builds(
     case: &Case,
