@@ -444,8 +444,13 @@ fn a_chunk_build_carries_each_parameter_as_its_own_build_does() {
             let chunk: Vec<&str> = chunk.iter().map(String::as_str).collect();
             let built = pendkit_model::build_tangent_chunk(model, &Default::default(), &chunk)
                 .unwrap_or_else(|e| panic!("{}: {e}", model.name()));
-            assert_eq!(built.len(), chunk.len());
-            for (name, from_chunk) in chunk.iter().zip(built) {
+            assert_eq!(built.parameters(), chunk);
+            assert!(
+                built.direction(chunk.len()).is_err(),
+                "a direction past the chunk"
+            );
+            for (k, name) in chunk.iter().enumerate() {
+                let from_chunk = built.direction(k);
                 let alone = pendkit_model::build_tangent(model, &Default::default(), name);
                 match (from_chunk, alone) {
                     (Ok(a), Ok(b)) => {

@@ -1108,51 +1108,69 @@ pub fn build_tangent(
     overrides: &Overrides,
     parameter: &str,
 ) -> Result<System<Dual64>, BuildError> {
-    let mut one = build_tangent_chunk(model, overrides, &[parameter])?;
-    one.pop().unwrap_or_else(|| {
-        Err(BuildError::Invalid {
-            item: format!("parameter '{parameter}'"),
-            message: "no exact derivative: the chunk build gave nothing".into(),
-        })
-    })
+    build_tangent_chunk(model, overrides, &[parameter])?.direction(0)
 }
 
 /// [`build_tangent`] for up to [`pendkit_params::TANGENT_CHUNK`] parameters with one build
-/// (the cost of about two `f64` builds instead of one each): one result per parameter, in
-/// order, each the model's numbers with their derivatives with respect to it, or why it has
-/// no exact derivative. The outer error is a model that does not build at all.
+/// (the cost of about two `f64` builds instead of one each). The outer error is a model
+/// that does not build at all; [`TangentChunk::direction`] gives each parameter's model,
+/// or why it has no exact derivative.
 pub fn build_tangent_chunk(
     model: &dyn Model,
     overrides: &Overrides,
     parameters: &[&str],
-) -> Result<Vec<Result<System<Dual64>, BuildError>>, BuildError> {
+) -> Result<TangentChunk, BuildError> {
     let defaults = Defaults::of(model)?;
     let (set, resolved) = parameters_with(&defaults, overrides)?;
     let tangent = set.resolve_tangents(parameters)?;
-    let ChunkBuild { system, lost } = model.build_tangents(&resolved, &tangent)?;
-    Ok((0..parameters.len())
-        .map(|k| {
-            if let Some((_, why)) = lost.iter().find(|(directions, _)| directions >> k & 1 == 1) {
-                return Err(why.clone());
-            }
-            let mut finite = true;
-            let one = system.map_scalars(|x| {
-                let x = pendkit_params::chunk_direction(&x, k);
-                finite &= x.eps.is_finite();
-                x
+    Ok(TangentChunk {
+        parameters: parameters.iter().map(|p| p.to_string()).collect(),
+        build: model.build_tangents(&resolved, &tangent)?,
+    })
+}
+
+/// A model built once for a chunk of parameters ([`build_tangent_chunk`]), from which each
+/// parameter's model is taken when it is wanted (a copy of the model's numbers each).
+pub struct TangentChunk {
+    parameters: Vec<String>,
+    build: ChunkBuild,
+}
+
+impl TangentChunk {
+    /// The parameters, in direction order.
+    pub fn parameters(&self) -> &[String] {
+        &self.parameters
+    }
+
+    /// The model with the derivatives of its numbers with respect to the `k`-th parameter,
+    /// or why it has none: a derivative the build could not carry, one that is not finite,
+    /// or `k` past the chunk.
+    pub fn direction(&self, k: usize) -> Result<System<Dual64>, BuildError> {
+        let Some(parameter) = self.parameters.get(k) else {
+            return Err(BuildError::Invalid {
+                item: format!("direction {k}"),
+                message: format!("the chunk has {} parameters", self.parameters.len()),
             });
-            // a derivative that overflows or is undefined (a square root at zero) is not
-            // exact
-            if !finite {
-                return Err(BuildError::Invalid {
-                    item: format!("parameter '{}'", parameters[k]),
-                    message: "no exact derivative: a model number's derivative is not finite"
-                        .into(),
-                });
-            }
-            Ok(one)
-        })
-        .collect())
+        };
+        let mut lost = self.build.lost.iter();
+        if let Some((_, why)) = lost.find(|(directions, _)| directions >> k & 1 == 1) {
+            return Err(why.clone());
+        }
+        let mut finite = true;
+        let one = self.build.system.map_scalars(|x| {
+            let x = pendkit_params::chunk_direction(&x, k);
+            finite &= x.eps.is_finite();
+            x
+        });
+        // a derivative that overflows or is undefined (a square root at zero) is not exact
+        if !finite {
+            return Err(BuildError::Invalid {
+                item: format!("parameter '{parameter}'"),
+                message: "no exact derivative: a model number's derivative is not finite".into(),
+            });
+        }
+        Ok(one)
+    }
 }
 
 /// Resolves `model`'s defaults with `overrides` applied, builds the system and attaches

@@ -381,7 +381,7 @@ struct Shared<'a> {
     exact: Option<ExactRoute>,
     /// Each parameter's model numbers along their exact tangent, where the build offers
     /// one (else each step of its difference rebuilds the model).
-    tangents: &'a [Option<System<Dual64>>],
+    tangents: &'a Tangents,
 }
 
 /// One parameter's derivatives (Hz, |H|'s unit, and the noise response per unit of the
@@ -403,36 +403,48 @@ struct Column {
     d_noise: Vec<(f64, C)>,
 }
 
-/// The model's numbers with their exact derivatives with respect to each parameter the
-/// mechanics read, where the build offers them: one dual build per chunk of
-/// [`pendkit_params::TANGENT_CHUNK`] parameters (about the cost of two `f64` builds each),
-/// the chunks on `threads` threads.
-fn tangent_builds(
-    case: &Case,
-    names: &[String],
-    reach: &[Reach],
-    threads: usize,
-) -> Result<Vec<Option<System<Dual64>>>, Error> {
-    let mechanical: Vec<usize> = (0..names.len())
-        .filter(|&j| reach[j] == Reach::Mechanics)
-        .collect();
-    let chunks: Vec<&[usize]> = mechanical.chunks(pendkit_params::TANGENT_CHUNK).collect();
-    let built = in_parallel(chunks.len(), threads, |c| {
-        let chunk: Vec<&str> = chunks[c].iter().map(|&j| names[j].as_str()).collect();
-        // a model that offers no dual build leaves every parameter to rebuilds
-        Ok::<_, Error>(
-            pendkit_model::build_tangent_chunk(case.model, &case.overrides, &chunk)
-                .map(|systems| systems.into_iter().map(Result::ok).collect())
-                .unwrap_or_else(|_| vec![None; chunk.len()]),
-        )
-    })?;
-    let mut tangents = vec![None; names.len()];
-    for (chunk, systems) in chunks.iter().zip(built) {
-        for (&j, system) in chunk.iter().zip(systems) {
-            tangents[j] = system;
+/// The dual builds of the parameters the mechanics read, where the model offers them: one
+/// per chunk of [`pendkit_params::TANGENT_CHUNK`] parameters (about the cost of two `f64`
+/// builds each), the chunks on `threads` threads; each parameter's model is taken from its
+/// chunk by its own column ([`Tangents::of`]), on the column's thread.
+struct Tangents {
+    chunks: Vec<Option<pendkit_model::TangentChunk>>,
+    /// Per parameter: its chunk and direction there.
+    at: Vec<Option<(usize, usize)>>,
+}
+
+impl Tangents {
+    fn build(
+        case: &Case,
+        names: &[String],
+        reach: &[Reach],
+        threads: usize,
+    ) -> Result<Self, Error> {
+        let mechanical: Vec<usize> = (0..names.len())
+            .filter(|&j| reach[j] == Reach::Mechanics)
+            .collect();
+        let groups: Vec<&[usize]> = mechanical.chunks(pendkit_params::TANGENT_CHUNK).collect();
+        // a model that offers no dual build leaves its parameters to rebuilds
+        let chunks = in_parallel(groups.len(), threads, |c| {
+            let chunk: Vec<&str> = groups[c].iter().map(|&j| names[j].as_str()).collect();
+            Ok::<_, Error>(
+                pendkit_model::build_tangent_chunk(case.model, &case.overrides, &chunk).ok(),
+            )
+        })?;
+        let mut at = vec![None; names.len()];
+        for (c, group) in groups.iter().enumerate() {
+            for (k, &j) in group.iter().enumerate() {
+                at[j] = Some((c, k));
+            }
         }
+        Ok(Tangents { chunks, at })
     }
-    Ok(tangents)
+
+    /// Parameter `j`'s model with the exact derivatives of its numbers, if it has them.
+    fn of(&self, j: usize) -> Option<System<Dual64>> {
+        let (c, k) = self.at[j]?;
+        self.chunks[c].as_ref()?.direction(k).ok()
+    }
 }
 
 /// Parameter `j`'s column: the stage rebuilt at the stencil's points and differenced, then
@@ -467,7 +479,8 @@ fn column(shared: &Shared, j: usize) -> Result<Option<Column>, Error> {
     };
     // the model's numbers along their exact tangent, where the build offers one (else each
     // step rebuilds the model)
-    let tangent = shared.tangents[j].as_ref();
+    let tangent = shared.tangents.of(j);
+    let tangent = tangent.as_ref();
     let mut out = Column {
         step: h,
         exact_build: tangent.is_some(),
@@ -997,7 +1010,7 @@ pub fn sensitivities(case: &Case, request: &SensitivityRequest) -> Result<Sensit
         Vec::new()
     };
 
-    let tangents = tangent_builds(case, &names, &reach, request.threads)?;
+    let tangents = Tangents::build(case, &names, &reach, request.threads)?;
     let shared = Shared {
         case,
         defaults: &defaults,
