@@ -97,6 +97,15 @@ impl Sums {
             gradient: DVector::from_element(n, zero),
         }
     }
+
+    /// Sums that hold the gradient only (for [`accumulate`] without the Hessian: no n × n
+    /// matrix allocated once per parameter for nothing).
+    fn gradient_only(n: usize) -> Self {
+        Sums {
+            hessian: DMatrix::from_element(0, 0, Dual64::from_re(0.0)),
+            gradient: DVector::from_element(n, Dual64::from_re(0.0)),
+        }
+    }
 }
 
 /// Adds each term's Hessian (or, when `hessian` is false, its gradient only) at `x`.
@@ -555,7 +564,7 @@ pub fn stage_tangent(
     // ∂g/∂p at the fixed equilibrium (only the terms whose constants move have one), and
     // δq = −K⁻¹ ∂g/∂p
     let at_rest: Vec<Dual64> = equilibrium.iter().map(|&v| Dual64::from_re(v)).collect();
-    let mut rest = Sums::new(n);
+    let mut rest = Sums::gradient_only(n);
     accumulate(
         balanced.iter().filter(|t| t.moves()),
         &at_rest,
