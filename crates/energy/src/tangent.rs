@@ -271,31 +271,55 @@ impl TangentTerm {
 
     /// Value and gradient over the term's own coordinates at `x_global`, by one dual
     /// evaluation per coordinate: the gradient's dual parts are its derivatives with respect
-    /// to the parameter (at fixed coordinates when `x_global` carries no derivative).
+    /// to the parameter (at fixed coordinates when `x_global` carries no derivative). Each
+    /// frame is evaluated once, and again only for the coordinates it reads.
     pub fn gradient(&self, x_global: &[Dual64]) -> Result<TangentDerivatives, EnergyError> {
         self.check_length("TangentTerm::gradient", x_global)?;
+        let maps = &self.frames.frames;
+        if maps.len() > MAX_FRAMES {
+            return Err(EnergyError::Index {
+                item: format!("term '{}'", self.label),
+                what: "frame (at most MAX_FRAMES per term)",
+                index: MAX_FRAMES,
+                len: maps.len(),
+            });
+        }
         let mut x: Vec<DualTangent> = self
             .coords
             .iter()
             .map(|&i| DualTangent::from_re(x_global[i]))
             .collect();
         let zero = Dual64::from_re(0.0);
+        let at_x: Vec<Frame<DualTangent>> = maps.iter().map(|m| m.eval(&x)).collect();
+        let mut frames = at_x.clone();
+        let energy = |frames: &[Frame<DualTangent>]| {
+            let mut refs = [&at_x[0]; MAX_FRAMES];
+            for (slot, frame) in refs.iter_mut().zip(frames) {
+                *slot = frame;
+            }
+            self.body.value_d(&refs[..frames.len()], self.own_part())
+        };
         let mut out = TangentDerivatives {
-            value: zero,
+            value: if at_x.is_empty() {
+                self.body.value_d(&[], self.own_part()).re
+            } else {
+                energy(&at_x).re
+            },
             gradient: vec![zero; x.len()],
             hessian: Vec::new(),
         };
         for i in 0..x.len() {
             x[i].eps = Dual64::from_re(1.0);
-            let r = self.on_local_frames(&x, |f| self.body.value_d(f, self.own_part()));
+            for (k, map) in maps.iter().enumerate() {
+                if map.var_list().contains(&i) {
+                    frames[k] = map.eval(&x);
+                }
+            }
             x[i].eps = zero;
-            out.value = r.re;
-            out.gradient[i] = r.eps;
-        }
-        if x.is_empty() {
-            out.value = self
-                .on_local_frames(&x, |f| self.body.value_d(f, self.own_part()))
-                .re;
+            if !frames.is_empty() {
+                out.gradient[i] = energy(&frames).eps;
+            }
+            frames.clone_from_slice(&at_x);
         }
         Ok(out)
     }
