@@ -79,14 +79,36 @@ pub fn run(a: Args) -> Result<String, CliError> {
     let freqs = if responses {
         a.grid.frequencies()?
     } else {
+        // frequencies without a response to take them are a mistyped request, not nothing
+        let grid = &a.grid;
+        let default = GridArgs::default();
+        if grid.freqs.is_some()
+            || grid.freqs_file.is_some()
+            || (grid.from, grid.to, grid.points) != (default.from, default.to, default.points)
+        {
+            return Err(CliError::usage(
+                "frequencies (--freqs, --freqs-file, --from, --to, --points) are for --tf and \
+                 --noise; the mode sensitivities take none",
+            ));
+        }
         Vec::new()
     };
-    let parameters = a.parameters.as_ref().map(|list| {
-        list.split(',')
-            .map(|p| p.trim().to_string())
-            .filter(|p| !p.is_empty())
-            .collect::<Vec<_>>()
-    });
+    let parameters = match &a.parameters {
+        Some(list) => {
+            let names: Vec<String> = list.split(',').map(|p| p.trim().to_string()).collect();
+            if list.trim().is_empty() {
+                // the library's own message for an empty list
+                Some(Vec::new())
+            } else if names.iter().any(String::is_empty) {
+                return Err(CliError::usage(format!(
+                    "--parameters '{list}': an empty name between commas"
+                )));
+            } else {
+                Some(names)
+            }
+        }
+        None => None,
+    };
     let request = SensitivityRequest {
         stage: a.stage.unwrap_or(DEFAULT_STAGE),
         modes: a.modes || !responses,

@@ -121,6 +121,16 @@ fn bad_requests_fail_with_one_line() {
             &["sensitivity", "pendulum", "--stage", "0a", "--noise", "x1"][..],
             "stage 0b",
         ),
+        (
+            &["sensitivity", "pendulum", "--parameters", "m,,l"][..],
+            "empty name",
+        ),
+        (
+            &["sensitivity", "pendulum", "--parameters", ""][..],
+            "empty list",
+        ),
+        (&["sensitivity", "pendulum", "--freqs", "1,2"][..], "--tf"),
+        (&["sensitivity", "pendulum", "--points", "3"][..], "--tf"),
     ] {
         let (ok, out, err) = pendkit(args);
         assert!(!ok, "{args:?} should fail: {out}");
