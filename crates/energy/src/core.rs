@@ -8,7 +8,8 @@ use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
 use num_dual::Dual64;
 use pendkit_geometry::{Frame, FrameMap};
 use pendkit_rotations::{
-    ANGLE_ENTRIES, Constant, Lift, Real, angle_derivatives, angles, any_moves, c, rotation,
+    ANGLE_ENTRIES, Constant, Lift, Real, angle_derivatives, angles, any_moves, c, mul_const,
+    rotation,
 };
 
 use crate::{
@@ -332,6 +333,9 @@ fn wire_stretch_energy<S: Constant>(
 pub struct SpringEnergy<C: Constant = f64> {
     frames: [FrameMap; 2],
     ends: [SpringEnd<C>; 2],
+    /// Each end's attachment rotation R(yaw, pitch, roll) of its fixed angles, worked out
+    /// once here rather than per evaluation.
+    turns: [Matrix3<C>; 2],
     stiffness: Matrix6<C>,
     preload: Vector6<C>,
 }
@@ -346,11 +350,10 @@ impl<C: Constant> SpringEnergy<C> {
     fn deflection_between<D: Lift<C>>(&self, f0: &Frame<D>, f1: &Frame<D>) -> Vector6<D> {
         let attach = |k: usize| -> Frame<D> {
             let body = if k == 0 { f0 } else { f1 };
-            let at_point = Frame {
+            Frame {
                 origin: body.point(&self.ends[k].point),
-                rotation: body.rotation,
-            };
-            at_point.turned(&self.ends[k].angles)
+                rotation: mul_const(&body.rotation, &self.turns[k]),
+            }
         };
         let rel = attach(0).relative(&attach(1));
         let [yaw, pitch, roll] = angles(&rel.rotation);
@@ -404,10 +407,7 @@ impl SpringEnergy {
             return false;
         };
         let n = out.n;
-        let turn: [Matrix3<f64>; 2] = std::array::from_fn(|k| {
-            let [y, p, r] = self.ends[k].angles;
-            rotation(y, p, r)
-        });
+        let turn = &self.turns;
         let frames = [f0, f1];
         // frames whose local indices do not match their jets: the reference path answers
         if frames
@@ -628,6 +628,10 @@ fn spring_energies<S: Constant>(
         let energy = SpringEnergy {
             frames: [local.frames[0].clone(), local.frames[1].clone()],
             ends: s.ends.clone(),
+            turns: s.ends.each_ref().map(|e| {
+                let [yaw, pitch, roll] = e.angles;
+                rotation(yaw, pitch, roll)
+            }),
             stiffness: s.stiffness,
             preload: s.preload,
         };
