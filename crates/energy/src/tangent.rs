@@ -277,11 +277,14 @@ impl TangentTerm {
         self.check_length("TangentTerm::gradient", x_global)?;
         let maps = &self.frames.frames;
         if maps.len() > MAX_FRAMES {
-            return Err(EnergyError::Index {
-                item: format!("term '{}'", self.label),
-                what: "frame (at most MAX_FRAMES per term)",
-                index: MAX_FRAMES,
-                len: maps.len(),
+            return Err(EnergyError::Element {
+                kind: self.kind,
+                element: self.label.clone(),
+                message: format!(
+                    "reads {} bodies; a term's derivatives with respect to a parameter take \
+                     at most {MAX_FRAMES}",
+                    maps.len()
+                ),
             });
         }
         let mut x: Vec<DualTangent> = self
