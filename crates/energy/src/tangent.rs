@@ -295,19 +295,19 @@ impl TangentTerm {
         let zero = Dual64::from_re(0.0);
         let at_x: Vec<Frame<DualTangent>> = maps.iter().map(|m| m.eval(&x)).collect();
         let mut frames = at_x.clone();
-        let energy = |frames: &[Frame<DualTangent>]| {
-            let mut refs = [&at_x[0]; MAX_FRAMES];
-            for (slot, frame) in refs.iter_mut().zip(frames) {
-                *slot = frame;
+        // the energy at `frames` (at most MAX_FRAMES, checked above), by reference
+        let energy = |frames: &[Frame<DualTangent>]| match frames.first() {
+            None => self.body.value_d(&[], self.own_part()),
+            Some(first) => {
+                let mut refs = [first; MAX_FRAMES];
+                for (slot, frame) in refs.iter_mut().zip(frames) {
+                    *slot = frame;
+                }
+                self.body.value_d(&refs[..frames.len()], self.own_part())
             }
-            self.body.value_d(&refs[..frames.len()], self.own_part())
         };
         let mut out = TangentDerivatives {
-            value: if at_x.is_empty() {
-                self.body.value_d(&[], self.own_part()).re
-            } else {
-                energy(&at_x).re
-            },
+            value: energy(&at_x).re,
             gradient: vec![zero; x.len()],
             hessian: Vec::new(),
         };
@@ -319,9 +319,7 @@ impl TangentTerm {
                 }
             }
             x[i].eps = zero;
-            if !frames.is_empty() {
-                out.gradient[i] = energy(&frames).eps;
-            }
+            out.gradient[i] = energy(&frames).eps;
             frames.clone_from_slice(&at_x);
         }
         Ok(out)
