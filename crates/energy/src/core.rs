@@ -8,8 +8,7 @@ use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
 use num_dual::Dual64;
 use pendkit_geometry::{Frame, FrameMap};
 use pendkit_rotations::{
-    ANGLE_ENTRIES, Constant, Lift, Real, angle_derivatives, angles, any_moves, c, mul_const,
-    rotation,
+    ANGLE_ENTRIES, Constant, Lift, Real, angle_derivatives, angles, any_moves, c, rotation,
 };
 
 use crate::{
@@ -350,10 +349,11 @@ impl<C: Constant> SpringEnergy<C> {
     fn deflection_between<D: Lift<C>>(&self, f0: &Frame<D>, f1: &Frame<D>) -> Vector6<D> {
         let attach = |k: usize| -> Frame<D> {
             let body = if k == 0 { f0 } else { f1 };
-            Frame {
+            let at_point = Frame {
                 origin: body.point(&self.ends[k].point),
-                rotation: mul_const(&body.rotation, &self.turns[k]),
-            }
+                rotation: body.rotation,
+            };
+            at_point.turned(&self.turns[k])
         };
         let rel = attach(0).relative(&attach(1));
         let [yaw, pitch, roll] = angles(&rel.rotation);

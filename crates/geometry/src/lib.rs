@@ -96,15 +96,16 @@ impl<D: Real> Frame<D> {
         }
     }
 
-    /// The same frame turned by fixed attachment angles (yaw, pitch, roll in rad, model
-    /// constants) about its own axes.
-    pub fn turned<C: Real>(&self, angles: &[C; 3]) -> Frame<D>
+    /// The same frame turned about its own axes by a fixed attachment rotation (a model
+    /// constant, e.g. R(yaw, pitch, roll) of an attachment's angles, worked out once where
+    /// the term is built).
+    pub fn turned<C: Copy>(&self, turn: &Matrix3<C>) -> Frame<D>
     where
         D: Lift<C>,
     {
         Frame {
             origin: self.origin,
-            rotation: mul_const(&self.rotation, &rotation(angles[0], angles[1], angles[2])),
+            rotation: mul_const(&self.rotation, turn),
         }
     }
 }
