@@ -36,6 +36,10 @@ pub struct Args {
     /// field, damping.<tag>.<field>=EXPR (repeatable).
     #[arg(long = "set", value_name = "NAME=EXPR")]
     sets: Vec<String>,
+    /// How the modes' Jacobian is computed: exact (the exact sensitivities, default) or
+    /// differences (central differences of the re-solved model).
+    #[arg(long, value_name = "METHOD", default_value = "exact")]
+    jacobian: pendkit::JacobianMethod,
     /// Write the fitted case file (TOML) here.
     #[arg(long, value_name = "FILE")]
     out: Option<PathBuf>,
@@ -54,6 +58,7 @@ pub fn run(a: Args) -> Result<String, CliError> {
     };
     let options = FitOptions {
         stage: a.stage.unwrap_or(DEFAULT_STAGE),
+        jacobian: a.jacobian,
         ..FitOptions::default()
     };
     let result = fit(&case, &measured, tf.as_ref(), &a.free, &options)?;
@@ -119,7 +124,7 @@ fn table(case: &Case, stage: Stage, r: &FitResult, tf: Option<&MeasuredTf>) -> S
     let mut out = String::new();
     let _ = writeln!(
         out,
-        "{} ({}), stage {}: {} modes{} fitted with {} free parameters in {} iterations ({} model solutions)",
+        "{} ({}), stage {}: {} modes{} fitted with {} free parameters in {} iterations ({} model solutions, {})",
         case.name,
         case.model.name(),
         stage,
@@ -132,7 +137,11 @@ fn table(case: &Case, stage: Stage, r: &FitResult, tf: Option<&MeasuredTf>) -> S
         )),
         r.parameters.len(),
         r.iterations,
-        r.solves
+        r.solves,
+        match r.jacobian {
+            pendkit::JacobianMethod::Exact => "exact Jacobian",
+            pendkit::JacobianMethod::Differences => "central-difference Jacobian",
+        }
     );
     let _ = writeln!(
         out,

@@ -85,6 +85,7 @@ fn fit_writes_a_case_file_that_reproduces_the_fitted_modes() {
         parameters[2]
     );
     assert_eq!(result["fit"]["undetermined"].as_array().unwrap().len(), 1);
+    assert_eq!(result["fit"]["jacobian"], "exact");
 
     // the case file loads and gives the fitted model's frequencies, mode by mode
     let again = modes_json(&["modes", fitted.to_str().unwrap(), "--json"]);
@@ -108,6 +109,7 @@ fn fit_writes_a_case_file_that_reproduces_the_fitted_modes() {
     ]);
     assert!(ok, "{stderr}");
     for expected in [
+        "exact Jacobian",
         "chi^2/dof",
         "correlation",
         "undetermined combinations",
@@ -115,6 +117,36 @@ fn fit_writes_a_case_file_that_reproduces_the_fitted_modes() {
     ] {
         assert!(table.contains(expected), "no '{expected}' in\n{table}");
     }
+
+    // central differences for the Jacobian on request: the same fit, said so; a method
+    // that is neither is a one-line usage error naming it
+    let (ok, table, stderr) = pendkit(&[
+        "fit",
+        "quad",
+        "--modes",
+        measured.to_str().unwrap(),
+        "--free",
+        "m1,l1",
+        "--jacobian",
+        "differences",
+    ]);
+    assert!(ok, "{stderr}");
+    assert!(table.contains("central-difference Jacobian"), "{table}");
+    let (ok, _, stderr) = pendkit(&[
+        "fit",
+        "quad",
+        "--modes",
+        measured.to_str().unwrap(),
+        "--free",
+        "m1",
+        "--jacobian",
+        "adjoint",
+    ]);
+    assert!(!ok);
+    assert!(
+        stderr.contains("'adjoint' is not a Jacobian method (exact or differences)"),
+        "{stderr}"
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }
 

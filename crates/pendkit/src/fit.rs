@@ -40,8 +40,14 @@
 //! *not* scaled by χ²/dof: they are what the stated σ imply; the reduced χ² says whether
 //! the σ and the model agree with the scatter.
 //!
-//! The Jacobian is in one function, [`mode_jacobian`] (central differences of the
-//! re-solved model), so that exact sensitivities can replace it.
+//! # The Jacobian
+//!
+//! The modes' rows are the exact sensitivities by default ([`exact_mode_jacobian`]: the
+//! implicit function theorem through the equilibrium and Hellmann–Feynman through the
+//! eigenproblem, [`crate::sensitivities`]), one stage solution and no step per iteration;
+//! [`JacobianMethod::Differences`] takes central differences of the re-solved model
+//! instead ([`mode_jacobian`], two solutions per free parameter, the modes followed by
+//! shape at each step). The |TF| points' rows are central differences of |H| either way.
 
 use std::path::{Path, PathBuf};
 
@@ -345,13 +351,40 @@ pub struct FitOptions {
     /// A direction of the weighted, scaled Jacobian whose singular value is below this
     /// fraction of the largest is undetermined: not stepped in, and reported. 1e-6: the
     /// data then constrain it a million times less than the best-determined combination,
-    /// and the central-difference Jacobian is good to about 1e-8 relative, so that no
-    /// direction falls below by numerical noise alone.
+    /// and the Jacobian is good to about 1e-8 relative (central differences; the exact one
+    /// to rounding), so that no direction falls below by numerical noise alone.
     pub undetermined_below: f64,
     /// Step of the central differences, relative to each parameter's scale (|p|, or 1 for
     /// p = 0): 1e-4 balances truncation (~1e-8 relative) against the eigenvalues' own
     /// rounding divided by the step.
     pub relative_step: f64,
+    /// How the modes' rows of the Jacobian are computed.
+    pub jacobian: JacobianMethod,
+}
+
+/// How the fit differentiates the model's mode frequencies with respect to the free
+/// parameters.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum JacobianMethod {
+    /// The exact sensitivities ([`exact_mode_jacobian`]).
+    #[default]
+    Exact,
+    /// Central differences of the re-solved model ([`mode_jacobian`]).
+    Differences,
+}
+
+impl std::str::FromStr for JacobianMethod {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "exact" => Ok(JacobianMethod::Exact),
+            "differences" => Ok(JacobianMethod::Differences),
+            _ => Err(format!(
+                "'{s}' is not a Jacobian method (exact or differences)"
+            )),
+        }
+    }
 }
 
 impl Default for FitOptions {
@@ -361,6 +394,7 @@ impl Default for FitOptions {
             max_iterations: 50,
             undetermined_below: 1e-6,
             relative_step: 1e-4,
+            jacobian: JacobianMethod::Exact,
         }
     }
 }
@@ -648,10 +682,9 @@ fn scales(values: &[f64]) -> Vec<f64> {
 /// per free parameter): central differences of the re-solved model with steps
 /// `relative_step` × |value|, the modes followed by shape at each step.
 ///
-/// This is the only place the fit gets its Jacobian from; exact sensitivities
-/// (`pendkit::sensitivities`) can take its place, returning their rows
-/// `matched.indices`. `values` must hold one value per free parameter and
-/// `relative_step` be finite and positive.
+/// The fit's Jacobian with [`JacobianMethod::Differences`] ([`exact_mode_jacobian`] is
+/// the default). `values` must hold one value per free parameter and `relative_step` be
+/// finite and positive.
 pub fn mode_jacobian(
     case: &Case,
     stage: Stage,
@@ -681,6 +714,62 @@ pub fn mode_jacobian(
     let jacobian = central_differences(case, stage, free, values, relative_step, |result| {
         Ok(matched.follow(result)?.hz)
     })?;
+    Ok((matched.hz.clone(), jacobian))
+}
+
+/// [`mode_jacobian`] by the exact sensitivities ([`crate::sensitivities`]) instead of
+/// differences: the frequencies of the `matched` modes of `case` with the free parameters
+/// at `values` (the solution `matched` comes from), and d(frequency)/d(parameter) (Hz per
+/// unit of the parameter; one row per matched mode, one column per free parameter), with
+/// no step. A parameter the exact route is closed to has its stage matrices differenced
+/// there (see [`crate::sensitivities`]), still without following any mode. Modes within a
+/// cluster of equal frequencies get the eigenvalues of the cluster's derivative in
+/// ascending order, as their frequencies are ordered.
+pub fn exact_mode_jacobian(
+    case: &Case,
+    stage: Stage,
+    free: &[String],
+    values: &[f64],
+    matched: &MatchedModes,
+) -> Result<(Vec<f64>, DMatrix<f64>), Error> {
+    if values.len() != free.len() {
+        return Err(Error::Argument {
+            function: "exact_mode_jacobian",
+            argument: "values",
+            expected: format!("one value per free parameter ({})", free.len()),
+            given: values.len().to_string(),
+        });
+    }
+    let at = case.clone().with_sets(&sets(free, values))?;
+    let request = crate::SensitivityRequest {
+        parameters: Some(free.to_vec()),
+        ..crate::SensitivityRequest::modes(stage)
+    };
+    let sensitivities = crate::sensitivities(&at, &request).map_err(|e| match e {
+        // a count or a switch among the free parameters, a neutral mode: said as the fit's
+        Error::Sensitivity(why) => Error::Sensitivity(format!("the fit's exact Jacobian: {why}")),
+        e => e,
+    })?;
+    // the same build and stage as the solution `matched` comes from, so the same modes in
+    // the same order, to the last bit
+    let mut rows = Vec::with_capacity(matched.indices.len());
+    for (&index, &hz) in matched.indices.iter().zip(&matched.hz) {
+        match (
+            sensitivities.modes_hz.get(index),
+            sensitivities.dfdp.get(index),
+        ) {
+            (Some(&f), Some(row)) if f == hz && row.len() == free.len() => rows.push(row),
+            _ => {
+                return Err(Error::Argument {
+                    function: "exact_mode_jacobian",
+                    argument: "matched",
+                    expected: "modes of the solution at `values`".into(),
+                    given: format!("mode {} at {hz} Hz", index + 1),
+                });
+            }
+        }
+    }
+    let jacobian = DMatrix::from_fn(rows.len(), free.len(), |i, p| rows[i][p]);
     Ok((matched.hz.clone(), jacobian))
 }
 
@@ -813,8 +902,10 @@ pub struct FitResult {
     pub undetermined: Vec<Undetermined>,
     /// Levenberg–Marquardt iterations (Jacobians computed).
     pub iterations: usize,
-    /// Model solutions made.
+    /// Model solutions made (an exact Jacobian counts as one).
     pub solves: usize,
+    /// How the modes' rows of the Jacobian were computed.
+    pub jacobian: JacobianMethod,
 }
 
 impl FitResult {
@@ -1020,15 +1111,24 @@ pub fn fit(
     let mut iterations = 0;
     loop {
         // the weighted Jacobian in relative parameter units: rows / σ, columns × scale
-        let (_, jm) = mode_jacobian(
-            case,
-            stage,
-            free,
-            &state.values,
-            &state.matched,
-            options.relative_step,
-        )?;
-        let mut jacobian = jm;
+        let mut jacobian = match options.jacobian {
+            JacobianMethod::Exact => {
+                solves += 1;
+                exact_mode_jacobian(case, stage, free, &state.values, &state.matched)?.1
+            }
+            JacobianMethod::Differences => {
+                solves += 2 * free.len();
+                mode_jacobian(
+                    case,
+                    stage,
+                    free,
+                    &state.values,
+                    &state.matched,
+                    options.relative_step,
+                )?
+                .1
+            }
+        };
         if let Some(t) = tf {
             let jt = central_differences(
                 case,
@@ -1039,8 +1139,8 @@ pub fn fit(
                 |result| tf_values(result, t, &tf_freqs),
             )?;
             jacobian = stack(&jacobian, &jt);
+            solves += 2 * free.len();
         }
-        solves += 2 * free.len() * if tf.is_some() { 2 } else { 1 };
         iterations += 1;
         let weighted = DMatrix::from_fn(n_data, free.len(), |i, p| {
             jacobian[(i, p)] / sigma[i] * scale[p]
@@ -1082,13 +1182,9 @@ pub fn fit(
                 scale,
                 units,
             };
-            return Ok(finish(
-                &problem,
-                &state,
-                &svd,
-                &determined,
-                (iterations, solves),
-            ));
+            let mut result = finish(&problem, &state, &svd, &determined, (iterations, solves));
+            result.jacobian = options.jacobian;
+            return Ok(result);
         }
         let mut lambda = damping.unwrap_or(1e-3 * s_max * s_max);
         let mut accepted = false;
@@ -1272,5 +1368,6 @@ fn finish(
         undetermined,
         iterations,
         solves,
+        jacobian: JacobianMethod::Exact,
     }
 }

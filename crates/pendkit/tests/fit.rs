@@ -6,8 +6,11 @@
 
 use std::path::Path;
 
-use pendkit::fit::{MeasuredMode, MeasuredModes};
-use pendkit::{Case, Error, FitError, FitOptions, Stage, fit, run_stage};
+use pendkit::fit::{MatchedModes, MeasuredMode, MeasuredModes};
+use pendkit::{
+    Case, Error, FitError, FitOptions, JacobianMethod, Stage, exact_mode_jacobian, fit,
+    mode_jacobian, run_stage,
+};
 
 /// SplitMix64 and Box–Muller: a reproducible standard normal sequence.
 struct Normal(u64);
@@ -119,6 +122,74 @@ fn recovers_five_quad_parameters_and_leaves_a_loss_angle_undetermined() {
         assert_eq!(m.label, r.model_label);
         assert!(r.normalized.abs() < 4.0, "{r:?}");
     }
+    assert_eq!(result.jacobian, JacobianMethod::Exact);
+
+    // the same fit with central differences for the Jacobian: the same minimum (the
+    // Jacobians agree to ~1e-8, so the converged values to far below their uncertainties;
+    // 1e-3 σ leaves room for where each run's last step stopped, within the convergence
+    // test's χ² gain of 1e-9 χ²), the same uncertainties to 1e-4 of themselves
+    let options = FitOptions {
+        jacobian: JacobianMethod::Differences,
+        ..FitOptions::default()
+    };
+    let differenced = fit(&case, &measured, None, &free, &options).unwrap();
+    assert_eq!(differenced.jacobian, JacobianMethod::Differences);
+    for (a, b) in result.parameters.iter().zip(&differenced.parameters) {
+        let sigma = a.uncertainty.unwrap_or(f64::INFINITY);
+        assert!((a.value - b.value).abs() <= 1e-3 * sigma, "{a:?} {b:?}");
+        match (a.uncertainty, b.uncertainty) {
+            (Some(x), Some(y)) => assert!((x - y).abs() <= 1e-4 * x, "{a:?} {b:?}"),
+            (x, y) => assert_eq!(x, y),
+        }
+    }
+}
+
+#[test]
+fn the_exact_jacobian_agrees_with_central_differences() {
+    // The fit's two Jacobians at the quad's nominal values, for parameters of every sort
+    // the fit takes: masses, wire lengths, an inertia, a blade tip's position (n0, which
+    // the dual build moves by the tip's points), and a loss angle no mode depends on. The
+    // reference is the central difference of the re-solved frequencies (step 1e-4 of each
+    // value): its truncation error ~(1e-4)² of a column's scale and its rounding ~1e-15 f
+    // over 2e-4 both sit far below 1e-6 of the column's largest entry, the tolerance.
+    // Measured: ≤ 3e-8 for all but I1y, 1.5e-7 there (its pitch mode sits 1.2 mHz from
+    // the UIM's transverse mode, and the difference's truncation grows with the curvature
+    // of the near crossing).
+    let case = Case::model("quad").unwrap();
+    let measured = synthetic(&[], 1e-4, 3);
+    let free = names(&["m1", "m2", "l1", "l3", "I1y", "n0", "silica_phi"]);
+    let (_, resolved) = case.build().unwrap();
+    let values: Vec<f64> = free.iter().map(|n| resolved.get(n).unwrap()).collect();
+    let solution = run_stage(case.build().unwrap().0, Stage::S2).unwrap();
+    let matched = MatchedModes::by_label(&solution, &measured).unwrap();
+    let (hz, exact) = exact_mode_jacobian(&case, Stage::S2, &free, &values, &matched).unwrap();
+    let (hz_d, differenced) =
+        mode_jacobian(&case, Stage::S2, &free, &values, &matched, 1e-4).unwrap();
+    assert_eq!(hz, hz_d);
+    assert_eq!((exact.nrows(), exact.ncols()), (24, free.len()));
+    for (p, name) in free.iter().enumerate() {
+        let scale = differenced.column(p).amax();
+        for i in 0..exact.nrows() {
+            let (e, d) = (exact[(i, p)], differenced[(i, p)]);
+            assert!(
+                (e - d).abs() <= 1e-6 * scale,
+                "{name}, mode {} ({}): exact {e:e}, differences {d:e}",
+                i + 1,
+                matched.labels[i]
+            );
+        }
+    }
+    // the loss angle moves no mode: both exactly 0
+    assert_eq!(exact.column(6).amax(), 0.0);
+    assert_eq!(differenced.column(6).amax(), 0.0);
+    // a parameter list that does not fit the values is a one-line error naming it
+    let e = exact_mode_jacobian(&case, Stage::S2, &free, &values[1..], &matched).unwrap_err();
+    assert!(e.to_string().contains("values"), "{e}");
+    // and so are modes matched in another solution than the one at `values`
+    let mut shifted = values.clone();
+    shifted[0] *= 1.01;
+    let e = exact_mode_jacobian(&case, Stage::S2, &free, &shifted, &matched).unwrap_err();
+    assert!(e.to_string().contains("matched"), "{e}");
 }
 
 #[test]
@@ -198,7 +269,7 @@ fn bad_measurements_are_refused_with_file_and_line() {
 #[test]
 fn fits_that_cannot_be_made_say_why() {
     let modes = "x3,0.4328,0.001\ny3,0.4681,0.001\npitch3,0.4919,0.001\n";
-    let cases: [(&str, &[&str], &str); 6] = [
+    let cases: [(&str, &[&str], &str); 7] = [
         (
             modes,
             &["m9"],
@@ -226,6 +297,13 @@ fn fits_that_cannot_be_made_say_why() {
             "x3,0.4328,0.001\nx3,0.98,0.001\nx3,2,0.001\n",
             &["m1"],
             "measured.csv:3: no model mode left that moves x3",
+        ),
+        // a count has no derivative: the exact Jacobian says which and why
+        (
+            "x3,0.4328,0.001\ny3,0.4681,0.001\npitch3,0.4919,0.001\n",
+            &["m1", "n_beads"],
+            "sensitivity: the fit's exact Jacobian: 'n_beads' has no derivative: the model \
+             refuses n_beads = ",
         ),
     ];
     for (text, free, expected) in cases {

@@ -274,9 +274,11 @@ impl Model {
     /// measured |TF| file. Returns a dict: `parameters` (name, unit, start, value,
     /// uncertainty: None when undetermined), `correlation`, `modes` (residuals), `tf`,
     /// `chi_squared`, `dof`, `reduced_chi_squared`, `singular_values`, `undetermined`
-    /// (combinations), `iterations`, `solves`, and `case_file` (the text of the fitted
-    /// case file when the model is a bundled one, else None).
-    #[pyo3(signature = (modes, free, *, tf = None, stage = None))]
+    /// (combinations), `iterations`, `solves`, `jacobian` (how the modes' Jacobian was
+    /// computed: `"exact"`, the default, or `"differences"`, as `jacobian=` asks), and
+    /// `case_file` (the text of the fitted case file when the model is a bundled one, else
+    /// None).
+    #[pyo3(signature = (modes, free, *, tf = None, stage = None, jacobian = "exact"))]
     fn fit<'py>(
         &self,
         py: Python<'py>,
@@ -284,8 +286,12 @@ impl Model {
         free: Vec<String>,
         tf: Option<&Bound<'py, PyAny>>,
         stage: Option<&Bound<'py, PyAny>>,
+        jacobian: &str,
     ) -> PyResult<Bound<'py, PyAny>> {
         let stage = stage_or_complete(stage)?;
+        let jacobian: pendkit::JacobianMethod = jacobian
+            .parse()
+            .map_err(|e: String| PyValueError::new_err(e))?;
         let measured = measured_modes(modes)?;
         let tf = match tf {
             None => None,
@@ -296,6 +302,7 @@ impl Model {
         let case = self.case.clone();
         let options = pendkit::FitOptions {
             stage,
+            jacobian,
             ..pendkit::FitOptions::default()
         };
         let result = py

@@ -46,6 +46,17 @@ def test_fit_agrees_with_the_command_line_and_recovers_the_truth(cli, tmp_path):
     assert phi["uncertainty"] is None and phi["value"] == phi["start"]
     assert from_file["undetermined"][0]["combination"][0][0] == "silica_phi"
     assert from_file["case_file"].startswith("# written by pendkit fit")
+    assert from_file["jacobian"] == "exact"
+    # central differences for the Jacobian: the command line's numbers with the same option
+    differenced = pendkit.Model("quad").fit(path, free, jacobian="differences")
+    reference = json.loads(
+        cli("fit", "quad", "--modes", str(path), "--free", ",".join(free), "--jacobian", "differences", "--json")
+    )["fit"]
+    assert differenced["jacobian"] == reference["jacobian"] == "differences"
+    for p, q in zip(differenced["parameters"], reference["parameters"]):
+        assert p["value"] == q["value"] and p["uncertainty"] == q["uncertainty"]
+    with pytest.raises(ValueError, match="not a Jacobian method"):
+        pendkit.Model("quad").fit(path, free, jacobian="adjoint")
 
 
 def test_bad_measurements_raise_the_command_lines_message(cli, tmp_path):
