@@ -358,11 +358,13 @@ fn check_responses_against_re_solved(
         let fd = |h: f64| {
             let at = |k: f64| responses_at(&case, stage, ports, freqs, (name, p0 + k * h));
             let [m2, m1, p1, p2] = [at(-2.0), at(-1.0), at(1.0), at(2.0)];
-            let d = |x: fn(&(Vec<f64>, Vec<f64>)) -> &Vec<f64>, i: usize| {
-                (x(&m2)[i] - 8.0 * x(&m1)[i] + 8.0 * x(&p1)[i] - x(&p2)[i]) / (12.0 * h)
+            let d = |[a, b, c, e]: [&Vec<f64>; 4]| -> Vec<f64> {
+                (0..freqs.len())
+                    .map(|i| (a[i] - 8.0 * b[i] + 8.0 * c[i] - e[i]) / (12.0 * h))
+                    .collect()
             };
-            let tf: Vec<f64> = (0..freqs.len()).map(|i| d(|r| &r.0, i)).collect();
-            let noise: Vec<f64> = (0..freqs.len()).map(|i| d(|r| &r.1, i)).collect();
+            let tf = d([&m2.0, &m1.0, &p1.0, &p2.0]);
+            let noise = d([&m2.1, &m1.1, &p1.1, &p2.1]);
             (tf, noise)
         };
         let (coarse, fine) = (fd(2e-4 * scale), fd(1e-4 * scale));
@@ -408,6 +410,18 @@ fn quad_and_triple_tf_and_noise_against_re_solved() {
     let n =
         check_responses_against_re_solved("triple", Stage::S2, ("x00", "x3"), &[0.1, 10.0, 100.0]);
     assert_eq!(n, 78 * 6);
+}
+
+#[test]
+fn noise_with_tags_at_their_own_temperatures_against_re_solved() {
+    // quad-aligo gives every damping tag its own temperature (`temp_fibre`,
+    // `temp_blade_n`, ...; each "temperature" by default), so its noise is the
+    // fluctuation–dissipation sum over tags, 4 k_B/ω Σ T_tag ε''_tag z̄ᵀ P_tag z, whose
+    // derivative takes each tag's temperature, loss and stiffness apart. Every parameter
+    // (the tags' temperatures among them), the same reference and tolerance as above.
+    let freqs = [0.1, 20.0, 100.0];
+    let n = check_responses_against_re_solved("quad-aligo", Stage::S2, ("x00", "x3"), &freqs);
+    assert!(n >= 90 * 6, "{n} compared");
 }
 
 #[test]

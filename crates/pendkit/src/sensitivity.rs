@@ -56,7 +56,11 @@
 //!    functions: dH = −cᵀA⁻¹(dA)A⁻¹b + (dc)ᵀA⁻¹b + cᵀA⁻¹(db), A = P(f) − ω²M over the
 //!    unknowns, with the input's and output's vectors (which follow the equilibrium's
 //!    geometry) differenced like the matrices. Thermal noise: PSD = 4k_BT/ω |Im R| with
-//!    R = oᵀA⁻¹o, dR = 2(do)ᵀz − zᵀ(dA)z, z = A⁻¹o.
+//!    R = oᵀA⁻¹o, dR = 2(do)ᵀz − zᵀ(dA)z, z = A⁻¹o; where damping tags have their own
+//!    temperatures, PSD = 4k_B/ω Σ_tag T_tag ε''_tag z̄ᵀP_tag z (the fluctuation–dissipation
+//!    theorem per tag, as the noise is computed), differentiated term by term with
+//!    dz = A⁻¹(do − dA z) and each tag's T_tag ε''_tag and P_tag differenced like the
+//!    matrices.
 //!
 //! Differencing the matrices, not the answers, keeps the results smooth where the answers
 //! are not: a |TF| near a high-Q resonance moves by many line widths when p moves by
@@ -257,8 +261,14 @@ where
     inner * (8.0 / (12.0 * h)) + outer * (-1.0 / (12.0 * h))
 }
 
-/// [`difference`] of vectors given one per stencil point.
-fn difference_of(v: &[&DVector<f64>], h: f64) -> DVector<f64> {
+/// [`difference`] of vectors or matrices given one per stencil point.
+fn difference_of<M>(v: &[&M], h: f64) -> M
+where
+    for<'a> &'a M: std::ops::Sub<&'a M, Output = M>,
+    M: std::ops::Mul<f64, Output = M>
+        + std::ops::Sub<M, Output = M>
+        + std::ops::Div<f64, Output = M>,
+{
     ((v[2] - v[1]) * 8.0 - (v[3] - v[0])) / (12.0 * h)
 }
 
@@ -399,8 +409,8 @@ struct Column {
     dfdp: Vec<f64>,
     /// dH/dp, one per frequency.
     d_tf: Vec<C>,
-    /// (dT/dp, dR/dp) of the noise, one per frequency.
-    d_noise: Vec<(f64, C)>,
+    /// d(noise PSD)/dp, one per frequency.
+    d_noise: Vec<f64>,
 }
 
 /// The dual builds of the parameters the mechanics read, where the model offers them: one
@@ -488,7 +498,7 @@ fn column(shared: &Shared, j: usize) -> Result<Option<Column>, Error> {
         refused: None,
         dfdp: vec![0.0; if request.modes { modes.len() } else { 0 }],
         d_tf: vec![C::new(0.0, 0.0); nf],
-        d_noise: vec![(0.0, C::new(0.0, 0.0)); nf],
+        d_noise: vec![0.0; nf],
     };
     // a parameter only the damping's loss angles and the temperature read: the modes'
     // stiffness (the tension-on Hessian, each tag's times its ε'(0)) and the mass do not
@@ -588,15 +598,14 @@ fn column(shared: &Shared, j: usize) -> Result<Option<Column>, Error> {
             .then(|| difference_of(&tf_vectors.iter().map(|v| &v.1).collect::<Vec<_>>(), h));
         let d_o = (noise_vectors.len() == STENCIL.len())
             .then(|| difference_of(&noise_vectors.iter().collect::<Vec<_>>(), h));
-        let d_temperature = difference(&points, h, |p| p.result.system.temperature);
         for (i, &f) in request.freqs.iter().enumerate() {
             let da = difference(&points, h, |p| Scaled(dynamic_matrix(p, f))).0;
             let nominal = &nominal[i];
             if let (Some(db), Some(dc)) = (&db, &dc) {
                 out.d_tf[i] = nominal.d_transfer(&da, db, dc, sizes)?;
             }
-            if let Some(d_o) = &d_o {
-                out.d_noise[i] = (d_temperature, nominal.d_noise_response(&da, d_o, sizes));
+            if let (Some(d_o), Some(noise)) = (&d_o, &nominal.noise) {
+                out.d_noise[i] = noise.d_psd(&points, h, f, (&da, d_o), &nominal.lu, name)?;
             }
         }
     }
@@ -985,7 +994,7 @@ pub fn sensitivities(case: &Case, request: &SensitivityRequest) -> Result<Sensit
     let mut dfdp = vec![vec![0.0; np]; if request.modes { modes.len() } else { 0 }];
     // per frequency, per parameter: d of the TF and of the noise response R
     let mut d_tf: Vec<Vec<C>> = vec![vec![C::new(0.0, 0.0); np]; nf];
-    let mut d_noise: Vec<Vec<(f64, C)>> = vec![vec![(0.0, C::new(0.0, 0.0)); np]; nf];
+    let mut d_noise: Vec<Vec<f64>> = vec![vec![0.0; np]; nf];
     let mut steps = vec![0.0; np];
     let mut exact_build = vec![false; np];
     let mut exact = vec![false; np];
@@ -1078,27 +1087,11 @@ pub fn sensitivities(case: &Case, request: &SensitivityRequest) -> Result<Sensit
     };
     let noise_asd = match &request.noise {
         Some(_) => {
-            let damping = &base_point.result.system.damping;
-            if base_point
-                .result
-                .model
-                .by_tag
-                .iter()
-                .any(|(tag, _)| damping.temperature(tag).is_some())
-            {
-                return Err(bad(
-                    "noise sensitivities with damping tags at their own temperatures are not supported",
-                ));
-            }
-            let t = base_point.result.system.temperature;
             let mut asd = Vec::with_capacity(nf);
             let mut d = Vec::with_capacity(nf);
             for (i, n) in nominal.iter().enumerate() {
                 let f = request.freqs[i];
-                let scale = 4.0 * BOLTZMANN / (2.0 * std::f64::consts::PI * f);
-                let im = n.noise_response.im;
-                let psd = scale * t * im.abs();
-                let a = psd.sqrt();
+                let a = n.noise.as_ref().map_or(f64::NAN, NoiseNominal::psd).sqrt();
                 if !(a > 0.0 && a.is_finite()) {
                     return Err(Error::NotFinite {
                         what: "d(noise ASD)/dp (the ASD is zero or not finite)".into(),
@@ -1106,15 +1099,7 @@ pub fn sensitivities(case: &Case, request: &SensitivityRequest) -> Result<Sensit
                     });
                 }
                 asd.push(a);
-                d.push(
-                    d_noise[i]
-                        .iter()
-                        .map(|(dt, dr)| {
-                            let dpsd = scale * (dt * im.abs() + t * im.signum() * dr.im);
-                            dpsd / (2.0 * a)
-                        })
-                        .collect::<Vec<f64>>(),
-                );
+                d.push(d_noise[i].iter().map(|dpsd| dpsd / (2.0 * a)).collect());
             }
             Some((asd, d))
         }
@@ -1188,9 +1173,123 @@ struct Nominal {
     /// w = [z; s]: the response over every master row to the input.
     w: DVector<C>,
     tf: C,
-    /// z = A⁻¹o over the unknowns for the noise output, and R = oᵀz.
-    noise_z: DVector<C>,
-    noise_response: C,
+    /// The thermal noise of the noise output, when asked for.
+    noise: Option<NoiseNominal>,
+}
+
+/// What the noise's derivative needs at one frequency: the response z = A⁻¹o over the
+/// unknowns to a unit force along the output o, and the dissipation it meets.
+struct NoiseNominal {
+    z: DVector<C>,
+    /// R = oᵀz: with one temperature T, PSD = 4 k_B T/ω |Im R|.
+    response: C,
+    /// 4 k_B/ω (J/K per rad/s).
+    scale: f64,
+    /// The model's temperature T (K).
+    temperature: f64,
+    /// Per damping tag when some tag has its own temperature (else empty): the
+    /// fluctuation–dissipation theorem per tag, PSD = 4 k_B/ω Σ T_tag ε''_tag z̄ᵀ P_tag z.
+    tags: Vec<TagNoise>,
+}
+
+/// One damping tag's part of the noise: its name, T_tag ε''_tag (K), its tension-off
+/// stiffness P_tag over the unknowns, and z̄ᵀ P_tag z.
+struct TagNoise {
+    name: String,
+    weight: f64,
+    stiffness: DMatrix<f64>,
+    energy: f64,
+}
+
+/// A tag's T_tag ε''_tag(f) (K) at one point: its own temperature, else the model's.
+fn tag_weight(point: &Point, tag: &str, f_hz: f64) -> f64 {
+    let system = &point.result.system;
+    let t = system
+        .damping
+        .temperature(tag)
+        .unwrap_or(system.temperature);
+    t * system.damping.at(tag, f_hz).1
+}
+
+/// Each damping tag's tension-off stiffness P_tag over the `u` unknowns at one point, in
+/// the stage's tag order (name order).
+fn tag_stiffnesses(point: &Point, u: usize) -> Result<Vec<(String, DMatrix<f64>)>, Error> {
+    let model = &point.result.model;
+    model
+        .by_tag
+        .iter()
+        .map(|(name, values)| {
+            let dense = model.dense(values)?;
+            Ok((name.clone(), dense.view((0, 0), (u, u)).into_owned()))
+        })
+        .collect()
+}
+
+impl NoiseNominal {
+    fn psd(&self) -> f64 {
+        if self.tags.is_empty() {
+            self.scale * self.temperature * self.response.im.abs()
+        } else {
+            self.scale * self.tags.iter().map(|t| t.weight * t.energy).sum::<f64>()
+        }
+    }
+
+    /// d(PSD)/dp at `f_hz` from the stencil's `points` (step `h`), the derivatives `da` of A
+    /// and `d_o` of the output vector, and A's factors `lu`. One temperature: dPSD =
+    /// 4k_B/ω (dT |Im R| + T sign(Im R) Im dR), dR = 2(do)ᵀz − zᵀ(dA)z. Per tag: dPSD =
+    /// 4k_B/ω Σ [d(T_tag ε''_tag) E_tag + T_tag ε''_tag (z̄ᵀ dP_tag z + 2 Re z̄ᵀ P_tag dz)],
+    /// dz = A⁻¹(do − dA z), every d a difference over the points like the matrices.
+    fn d_psd(
+        &self,
+        points: &[Point],
+        h: f64,
+        f_hz: f64,
+        (da, d_o): (&DMatrix<C>, &DVector<f64>),
+        lu: &nalgebra::LU<C, nalgebra::Dyn, nalgebra::Dyn>,
+        name: &str,
+    ) -> Result<f64, Error> {
+        let u = self.z.len();
+        let z = &self.z;
+        let d_o = complex(&d_o.rows(0, u).into_owned());
+        let da = da.view((0, 0), (u, u));
+        if self.tags.is_empty() {
+            let d_t = difference(points, h, |p| p.result.system.temperature);
+            let dr = (d_o.transpose() * z)[(0, 0)] * 2.0 - (z.transpose() * (da * z))[(0, 0)];
+            let im = self.response.im;
+            return Ok(self.scale * (d_t * im.abs() + self.temperature * im.signum() * dr.im));
+        }
+        let dz = lu
+            .solve(&(&d_o - da * z))
+            .ok_or_else(|| bad("the dynamic stiffness is singular"))?;
+        let stiffnesses: Vec<Vec<(String, DMatrix<f64>)>> = points
+            .iter()
+            .map(|p| tag_stiffnesses(p, u))
+            .collect::<Result<_, _>>()?;
+        let mut sum = 0.0;
+        for (k, tag) in self.tags.iter().enumerate() {
+            if stiffnesses
+                .iter()
+                .any(|list| list.get(k).map(|(n, _)| n) != Some(&tag.name))
+            {
+                return Err(bad(format!(
+                    "changing '{name}' changes which damping tags dissipate: no derivative"
+                )));
+            }
+            let d_weight = difference(points, h, |p| tag_weight(p, &tag.name, f_hz));
+            let dp = difference_of(
+                &stiffnesses
+                    .iter()
+                    .map(|list| &list[k].1)
+                    .collect::<Vec<_>>(),
+                h,
+            );
+            let p_z = tag.stiffness.map(|x| C::new(x, 0.0)) * z;
+            let d_energy = (z.adjoint() * (dp.map(|x| C::new(x, 0.0)) * z))[(0, 0)].re
+                + 2.0 * (dz.adjoint() * &p_z)[(0, 0)].re;
+            sum += d_weight * tag.energy + tag.weight * d_energy;
+        }
+        Ok(self.scale * sum)
+    }
 }
 
 fn complex(v: &DVector<f64>) -> DVector<C> {
@@ -1235,21 +1334,49 @@ impl Nominal {
             };
             tf_vectors = Some((b, c, force_in, force_out));
         }
-        let mut noise_z = DVector::zeros(0);
-        let mut noise_response = C::new(0.0, 0.0);
-        if let Some(ports) = noise {
-            let o = complex(&port_vectors(ports, sizes).1.rows(0, u).into_owned());
-            noise_z = solve(&o)?;
-            noise_response = (o.transpose() * &noise_z)[(0, 0)];
-        }
+        let noise = match noise {
+            Some(ports) => {
+                let o = complex(&port_vectors(ports, sizes).1.rows(0, u).into_owned());
+                let z = solve(&o)?;
+                let response = (o.transpose() * &z)[(0, 0)];
+                let damping = &point.result.system.damping;
+                let by_tag = &point.result.model.by_tag;
+                // per tag only where some tag has its own temperature: otherwise the
+                // one-temperature form, as the noise itself is computed
+                let tags = if by_tag.iter().any(|(t, _)| damping.temperature(t).is_some()) {
+                    tag_stiffnesses(point, u)?
+                        .into_iter()
+                        .map(|(name, stiffness)| {
+                            let p = stiffness.map(|x| C::new(x, 0.0));
+                            let energy = (z.adjoint() * (p * &z))[(0, 0)].re;
+                            TagNoise {
+                                weight: tag_weight(point, &name, f_hz),
+                                name,
+                                stiffness,
+                                energy,
+                            }
+                        })
+                        .collect()
+                } else {
+                    Vec::new()
+                };
+                Some(NoiseNominal {
+                    z,
+                    response,
+                    scale: 4.0 * BOLTZMANN / (2.0 * std::f64::consts::PI * f_hz),
+                    temperature: point.result.system.temperature,
+                    tags,
+                })
+            }
+            None => None,
+        };
         Ok(Nominal {
             a,
             lu,
             tf_vectors,
             w,
             tf: tf_value,
-            noise_z,
-            noise_response,
+            noise,
         })
     }
 
@@ -1290,19 +1417,5 @@ impl Nominal {
         } else {
             (complex(dc).transpose() * &self.w)[(0, 0)] + (c.transpose() * &dw)[(0, 0)]
         })
-    }
-
-    /// dR for R = oᵀA⁻¹o over the unknowns: 2(do)ᵀz − zᵀ(dA)z (A is symmetric).
-    fn d_noise_response(
-        &self,
-        da: &DMatrix<C>,
-        d_o: &DVector<f64>,
-        sizes: (usize, usize, usize),
-    ) -> C {
-        let u = sizes.0 + sizes.1;
-        let z = &self.noise_z;
-        let d_o = complex(&d_o.rows(0, u).into_owned());
-        (d_o.transpose() * z)[(0, 0)] * 2.0
-            - (z.transpose() * (da.view((0, 0), (u, u)) * z))[(0, 0)]
     }
 }
