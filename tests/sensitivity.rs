@@ -524,6 +524,31 @@ fn bad_requests_are_errors() {
         ..base.clone()
     });
     assert!(e.contains("nothing to differentiate"), "{e}");
+    // answers with a corner at 0 have no derivative there: the lossless double pendulum's
+    // noise, and |H| from the quad's support x to its transverse y (decoupled by symmetry)
+    let zero = |spec: &str, tf: Option<(&str, &str)>, noise: Option<&str>| {
+        let request = SensitivityRequest {
+            modes: false,
+            tf: tf.map(|(i, o)| (i.to_string(), o.to_string())),
+            noise: noise.map(str::to_string),
+            freqs: vec![0.3],
+            parameters: Some(vec!["g".into()]),
+            ..base.clone()
+        };
+        sensitivities(&Case::open(spec).expect("case"), &request)
+            .unwrap_err()
+            .to_string()
+    };
+    let e = zero("double-pendulum", None, Some("x1"));
+    assert!(
+        e.contains("thermal-noise ASD is exactly 0 at 0.3 Hz") && e.contains("no derivative"),
+        "{e}"
+    );
+    let e = zero("quad", Some(("x00", "y3")), None);
+    assert!(
+        e.contains("|H| is exactly 0 at 0.3 Hz") && e.contains("no derivative"),
+        "{e}"
+    );
 }
 
 #[test]

@@ -113,8 +113,12 @@ pub fn run(a: Args) -> Result<String, CliError> {
     Ok(out)
 }
 
-/// "name NN%" of the largest share, as a percentage of `total`.
+/// "name NN%" of the largest share, as a percentage of `total`; "-" when nothing
+/// dissipates (a lossless model's PSD is exactly 0: no share dominates).
 fn dominant<'a>(shares: impl Iterator<Item = (&'a str, f64)>, total: f64) -> String {
+    if total == 0.0 {
+        return "-".to_string();
+    }
     shares
         .max_by(|a, b| a.1.total_cmp(&b.1))
         .map(|(name, share)| {

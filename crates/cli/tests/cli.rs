@@ -302,6 +302,12 @@ fn noise_names_the_dominant_tag_or_with_breakdown_the_dominant_term() {
     );
     let by_term = table(&["--breakdown"]);
     assert!(by_term.contains("wire-bending wn"), "{by_term}");
+    // a lossless model (the double pendulum has no damping): a zero PSD, no share dominates
+    let (ok, out, stderr) =
+        pendkit(&["noise", "double-pendulum", "--output", "x1", "--freqs", "1"]);
+    assert!(ok, "{stderr}");
+    let row = out.lines().nth(2).unwrap();
+    assert!(row.ends_with("0.000000e0  -"), "{row}");
 }
 
 #[test]

@@ -1067,9 +1067,18 @@ pub fn sensitivities(case: &Case, request: &SensitivityRequest) -> Result<Sensit
             for (i, n) in nominal.iter().enumerate() {
                 let h = n.tf;
                 let a = h.norm();
-                if !(a > 0.0 && a.is_finite()) {
+                if a == 0.0 {
+                    // |H| has a corner at 0: no derivative (the input does not reach the
+                    // output at this frequency)
+                    return Err(bad(format!(
+                        "|H| is exactly 0 at {} Hz (the input does not reach the output): \
+                         it has no derivative there",
+                        request.freqs[i]
+                    )));
+                }
+                if !a.is_finite() {
                     return Err(Error::NotFinite {
-                        what: "d|H|/dp (|H| is zero or not finite)".into(),
+                        what: "|H|".into(),
                         f_hz: request.freqs[i],
                     });
                 }
@@ -1092,9 +1101,16 @@ pub fn sensitivities(case: &Case, request: &SensitivityRequest) -> Result<Sensit
             for (i, n) in nominal.iter().enumerate() {
                 let f = request.freqs[i];
                 let a = n.noise.as_ref().map_or(f64::NAN, NoiseNominal::psd).sqrt();
-                if !(a > 0.0 && a.is_finite()) {
+                if a == 0.0 {
+                    // √PSD has no derivative at 0
+                    return Err(bad(format!(
+                        "the thermal-noise ASD is exactly 0 at {f} Hz (nothing on the output's \
+                         path dissipates): it has no derivative there"
+                    )));
+                }
+                if !a.is_finite() {
                     return Err(Error::NotFinite {
-                        what: "d(noise ASD)/dp (the ASD is zero or not finite)".into(),
+                        what: "the thermal-noise ASD".into(),
                         f_hz: f,
                     });
                 }
