@@ -410,6 +410,12 @@ fn quad_and_triple_tf_and_noise_against_re_solved() {
     let n =
         check_responses_against_re_solved("triple", Stage::S2, ("x00", "x3"), &[0.1, 10.0, 100.0]);
     assert_eq!(n, 78 * 6);
+    // ports that follow the equilibrium's geometry: a force at a point of the PUM off its
+    // centre, the lengthwise motion of a point on the test-mass face off its axis (pitch
+    // and yaw reach it through lever arms that move with the equilibrium)
+    let ports = ("force:pum@0,0.1,0/1,0,0", "testmass@0.1,0.1,0.05/1,0,0");
+    let n = check_responses_against_re_solved("quad", Stage::S2, ports, &quad_freqs);
+    assert_eq!(n, 73 * 6);
 }
 
 #[test]

@@ -66,15 +66,8 @@ pub struct Args {
 /// Runs the command and returns what it prints.
 pub fn run(a: Args) -> Result<String, CliError> {
     let case = Case::open(&a.model)?.with_sets(&a.sets)?;
-    let tf = match &a.tf {
-        Some(spec) => {
-            let (input, output) = spec.split_once(':').ok_or_else(|| {
-                CliError::usage(format!("--tf '{spec}': expected INPUT:OUTPUT, e.g. x00:x3"))
-            })?;
-            Some((input.trim().to_string(), output.trim().to_string()))
-        }
-        None => None,
-    };
+    // at the colon that is not a `force:` prefix, as `sweep --tf` splits it
+    let tf = a.tf.as_deref().map(crate::common::split_pair).transpose()?;
     let responses = tf.is_some() || a.noise.is_some();
     let freqs = if responses {
         a.grid.frequencies()?

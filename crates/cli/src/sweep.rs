@@ -9,7 +9,7 @@ use nalgebra::DMatrix;
 use pendkit::{ModeSelection, unit_slug};
 use pendkit_plot::{Axis, BodePlot, BodeSeries, Figure, LinePlot, Scale, Series};
 
-use crate::common::{GridArgs, ModelArgs, Run, check_plot_path};
+use crate::common::{GridArgs, ModelArgs, Run, check_plot_path, split_pair};
 use crate::error::CliError;
 use crate::format::{csv, fixed};
 use crate::progress::Progress;
@@ -111,27 +111,6 @@ pub fn parse_vary(text: &str) -> Result<Vary, CliError> {
         name: name.to_string(),
         values,
     })
-}
-
-/// Splits `IN:OUT` at the one colon that is not a `force:` prefix.
-pub fn split_pair(text: &str) -> Result<(String, String), CliError> {
-    let separators: Vec<usize> = text
-        .match_indices(':')
-        .map(|(i, _)| i)
-        .filter(|&i| {
-            let before = &text[..i];
-            let prefix = before.ends_with("force") && (i == 5 || before[..i - 5].ends_with(':'));
-            !prefix
-        })
-        .collect();
-    match separators.as_slice() {
-        [i] if *i > 0 && *i + 1 < text.len() => {
-            Ok((text[..*i].to_string(), text[i + 1..].to_string()))
-        }
-        _ => Err(CliError::usage(format!(
-            "--tf '{text}': expected INPUT:OUTPUT, e.g. x00:x3 or force:x3:x3"
-        ))),
-    }
 }
 
 /// The grid points (one value per swept parameter), the last parameter changing fastest.
@@ -497,21 +476,6 @@ mod tests {
         ] {
             let e = parse_vary(bad).unwrap_err().to_string();
             assert!(e.contains(bad) && !e.contains('\n'), "{e}");
-        }
-    }
-
-    #[test]
-    fn pairs_split_at_the_colon_that_is_not_a_force_prefix() {
-        let pair = |t: &str| split_pair(t).unwrap();
-        assert_eq!(pair("x00:x3"), ("x00".into(), "x3".into()));
-        assert_eq!(pair("force:x3:x3"), ("force:x3".into(), "x3".into()));
-        assert_eq!(pair("x00:force:x00"), ("x00".into(), "force:x00".into()));
-        assert_eq!(
-            pair("force:x1:force:x00"),
-            ("force:x1".into(), "force:x00".into())
-        );
-        for bad in ["x00", "x00:x3:x2", ":x3", "force:x3"] {
-            assert!(split_pair(bad).is_err(), "{bad}");
         }
     }
 

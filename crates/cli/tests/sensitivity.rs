@@ -96,6 +96,39 @@ fn tf_and_noise_json_keys() {
     assert_eq!(v["dnoise_asd_dp"][0].as_array().map(Vec::len), Some(2));
     // only the responses were asked for: no mode rows
     assert_eq!(v["dfdp"].as_array().map(Vec::len), Some(0));
+    // a force input (`force:` is a prefix, not the separator), as `pendkit sweep --tf`
+    // takes it: the same |H| as `pendkit tf` prints for it
+    let (ok, out, err) = pendkit(&[
+        "sensitivity",
+        "pendulum",
+        "--tf",
+        "force:x1:x1",
+        "--freqs",
+        "2",
+        "--parameters",
+        "l_fibre",
+        "--json",
+    ]);
+    assert!(ok, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).expect("JSON");
+    let (ok, tf, err) = pendkit(&[
+        "tf", "pendulum", "--input", "force:x1", "--output", "x1", "--freqs", "2", "--csv",
+    ]);
+    assert!(ok, "{err}");
+    // the CSV's re and im columns
+    let row: Vec<f64> = tf
+        .lines()
+        .nth(1)
+        .unwrap()
+        .split(',')
+        .map(|x| x.parse().unwrap())
+        .collect();
+    let magnitude = row[1].hypot(row[2]);
+    let abs = v["tf_abs"][0].as_f64().unwrap();
+    assert!(
+        (abs - magnitude).abs() <= 1e-9 * magnitude,
+        "{abs} vs {magnitude}"
+    );
 }
 
 #[test]
