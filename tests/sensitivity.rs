@@ -347,6 +347,25 @@ fn check_responses_against_re_solved(
     let s = sensitivities(&case, &request).expect("sensitivities");
     let (tf_abs, d_tf) = s.tf_abs.as_ref().expect("tf");
     let (asd, d_asd) = s.noise_asd.as_ref().expect("noise");
+    // the nominal |H| and ASD are those `pendkit tf` and `pendkit noise` give (the
+    // sensitivities solve their own dense systems, and sum the noise per tag themselves
+    // where tags have their own temperatures: they must agree)
+    let (system, _) = case.build().expect("build");
+    let r = run_stage(system, stage).expect("stage");
+    let h = r.transfer(ports.0, ports.1, freqs).expect("tf");
+    let n = r.noise(ports.1, freqs).expect("noise").asd();
+    for i in 0..freqs.len() {
+        assert!(
+            (tf_abs[i] - h[i].norm()).abs() <= 1e-9 * h[i].norm(),
+            "{spec} |H|"
+        );
+        assert!(
+            (asd[i] - n[i]).abs() <= 1e-9 * n[i],
+            "{spec} ASD {} vs {}",
+            asd[i],
+            n[i]
+        );
+    }
     let mut compared = 0;
     for (j, name) in s.parameters.iter().enumerate() {
         if s.steps[j] == 0.0 {

@@ -598,6 +598,12 @@ fn column(shared: &Shared, j: usize) -> Result<Option<Column>, Error> {
             .then(|| difference_of(&tf_vectors.iter().map(|v| &v.1).collect::<Vec<_>>(), h));
         let d_o = (noise_vectors.len() == STENCIL.len())
             .then(|| difference_of(&noise_vectors.iter().collect::<Vec<_>>(), h));
+        // each damping tag's dP_tag/dp, once for every frequency, where the noise is summed
+        // per tag
+        let d_tags = match nominal.first().and_then(|n| n.noise.as_ref()) {
+            Some(noise) if !noise.tags.is_empty() => noise.tag_derivatives(&points, h, name)?,
+            _ => Vec::new(),
+        };
         for (i, &f) in request.freqs.iter().enumerate() {
             let da = difference(&points, h, |p| Scaled(dynamic_matrix(p, f))).0;
             let nominal = &nominal[i];
@@ -605,7 +611,8 @@ fn column(shared: &Shared, j: usize) -> Result<Option<Column>, Error> {
                 out.d_tf[i] = nominal.d_transfer(&da, db, dc, sizes)?;
             }
             if let (Some(d_o), Some(noise)) = (&d_o, &nominal.noise) {
-                out.d_noise[i] = noise.d_psd(&points, h, f, (&da, d_o), &nominal.lu, name)?;
+                let d_a = (&da, d_o, d_tags.as_slice());
+                out.d_noise[i] = noise.d_psd(&points, h, f, d_a, &nominal.lu)?;
             }
         }
     }
@@ -1250,8 +1257,42 @@ impl NoiseNominal {
         }
     }
 
-    /// d(PSD)/dp at `f_hz` from the stencil's `points` (step `h`), the derivatives `da` of A
-    /// and `d_o` of the output vector, and A's factors `lu`. One temperature: dPSD =
+    /// Each tag's dP_tag/dp over the unknowns, differenced over the stencil's `points`
+    /// (step `h`), in the order of `self.tags`; an error naming `parameter` when the tags
+    /// that dissipate are not the same at every point.
+    fn tag_derivatives(
+        &self,
+        points: &[Point],
+        h: f64,
+        parameter: &str,
+    ) -> Result<Vec<DMatrix<f64>>, Error> {
+        let u = self.z.len();
+        let stiffnesses: Vec<Vec<(String, DMatrix<f64>)>> = points
+            .iter()
+            .map(|p| tag_stiffnesses(p, u))
+            .collect::<Result<_, _>>()?;
+        self.tags
+            .iter()
+            .enumerate()
+            .map(|(k, tag)| {
+                let at_points: Option<Vec<&DMatrix<f64>>> = stiffnesses
+                    .iter()
+                    .map(|list| list.get(k).filter(|(n, _)| *n == tag.name).map(|(_, m)| m))
+                    .collect();
+                let at_points = at_points.ok_or_else(|| {
+                    bad(format!(
+                        "changing '{parameter}' changes which damping tags dissipate: no \
+                         derivative"
+                    ))
+                })?;
+                Ok(difference_of(&at_points, h))
+            })
+            .collect()
+    }
+
+    /// d(PSD)/dp at `f_hz` from the stencil's `points` (step `h`), the derivatives of A, of
+    /// the output vector and of each tag's P_tag ([`NoiseNominal::tag_derivatives`]; empty
+    /// with one temperature), and A's factors `lu`. One temperature: dPSD =
     /// 4k_B/ω (dT |Im R| + T sign(Im R) Im dR), dR = 2(do)ᵀz − zᵀ(dA)z. Per tag: dPSD =
     /// 4k_B/ω Σ [d(T_tag ε''_tag) E_tag + T_tag ε''_tag (z̄ᵀ dP_tag z + 2 Re z̄ᵀ P_tag dz)],
     /// dz = A⁻¹(do − dA z), every d a difference over the points like the matrices.
@@ -1260,9 +1301,8 @@ impl NoiseNominal {
         points: &[Point],
         h: f64,
         f_hz: f64,
-        (da, d_o): (&DMatrix<C>, &DVector<f64>),
+        (da, d_o, d_tags): (&DMatrix<C>, &DVector<f64>, &[DMatrix<f64>]),
         lu: &nalgebra::LU<C, nalgebra::Dyn, nalgebra::Dyn>,
-        name: &str,
     ) -> Result<f64, Error> {
         let u = self.z.len();
         let z = &self.z;
@@ -1277,28 +1317,9 @@ impl NoiseNominal {
         let dz = lu
             .solve(&(&d_o - da * z))
             .ok_or_else(|| bad("the dynamic stiffness is singular"))?;
-        let stiffnesses: Vec<Vec<(String, DMatrix<f64>)>> = points
-            .iter()
-            .map(|p| tag_stiffnesses(p, u))
-            .collect::<Result<_, _>>()?;
         let mut sum = 0.0;
-        for (k, tag) in self.tags.iter().enumerate() {
-            if stiffnesses
-                .iter()
-                .any(|list| list.get(k).map(|(n, _)| n) != Some(&tag.name))
-            {
-                return Err(bad(format!(
-                    "changing '{name}' changes which damping tags dissipate: no derivative"
-                )));
-            }
+        for (tag, dp) in self.tags.iter().zip(d_tags) {
             let d_weight = difference(points, h, |p| tag_weight(p, &tag.name, f_hz));
-            let dp = difference_of(
-                &stiffnesses
-                    .iter()
-                    .map(|list| &list[k].1)
-                    .collect::<Vec<_>>(),
-                h,
-            );
             let p_z = tag.stiffness.map(|x| C::new(x, 0.0)) * z;
             let d_energy = (z.adjoint() * (dp.map(|x| C::new(x, 0.0)) * z))[(0, 0)].re
                 + 2.0 * (dz.adjoint() * &p_z)[(0, 0)].re;
