@@ -1215,13 +1215,19 @@ struct NoiseNominal {
     tags: Vec<TagNoise>,
 }
 
-/// One damping tag's part of the noise: its name, T_tag ε''_tag (K), its tension-off
-/// stiffness P_tag over the unknowns, and z̄ᵀ P_tag z.
+/// One damping tag's part of the noise: its name, T_tag ε''_tag (K), P_tag z (P_tag its
+/// tension-off stiffness over the unknowns), and z̄ᵀ P_tag z.
 struct TagNoise {
     name: String,
     weight: f64,
-    stiffness: DMatrix<f64>,
+    p_z: DVector<C>,
     energy: f64,
+}
+
+/// z̄ᵀ P z for a real symmetric P: zᵣᵀ P zᵣ + zᵢᵀ P zᵢ.
+fn real_energy(p: &DMatrix<f64>, z: &DVector<C>) -> f64 {
+    let (re, im) = (z.map(|x| x.re), z.map(|x| x.im));
+    re.dot(&(p * &re)) + im.dot(&(p * &im))
 }
 
 /// A tag's T_tag ε''_tag(f) (K) at one point: its own temperature, else the model's.
@@ -1320,9 +1326,7 @@ impl NoiseNominal {
         let mut sum = 0.0;
         for (tag, dp) in self.tags.iter().zip(d_tags) {
             let d_weight = difference(points, h, |p| tag_weight(p, &tag.name, f_hz));
-            let p_z = tag.stiffness.map(|x| C::new(x, 0.0)) * z;
-            let d_energy = (z.adjoint() * (dp.map(|x| C::new(x, 0.0)) * z))[(0, 0)].re
-                + 2.0 * (dz.adjoint() * &p_z)[(0, 0)].re;
+            let d_energy = real_energy(dp, z) + 2.0 * dz.dotc(&tag.p_z).re;
             sum += d_weight * tag.energy + tag.weight * d_energy;
         }
         Ok(self.scale * sum)
@@ -1383,15 +1387,11 @@ impl Nominal {
                 let tags = if by_tag.iter().any(|(t, _)| damping.temperature(t).is_some()) {
                     tag_stiffnesses(point, u)?
                         .into_iter()
-                        .map(|(name, stiffness)| {
-                            let p = stiffness.map(|x| C::new(x, 0.0));
-                            let energy = (z.adjoint() * (p * &z))[(0, 0)].re;
-                            TagNoise {
-                                weight: tag_weight(point, &name, f_hz),
-                                name,
-                                stiffness,
-                                energy,
-                            }
+                        .map(|(name, stiffness)| TagNoise {
+                            weight: tag_weight(point, &name, f_hz),
+                            p_z: stiffness.map(|x| C::new(x, 0.0)) * &z,
+                            energy: real_energy(&stiffness, &z),
+                            name,
                         })
                         .collect()
                 } else {
