@@ -222,83 +222,19 @@ fn suspension_file_against_re_solved() {
     check_against_re_solved(file, Stage::S2, None);
 }
 
-/// |H| (or the ASD) of `case` with `name = value`, re-solved from scratch.
-fn response_at(case: &Case, name: &str, value: f64, f: f64, tf: bool) -> f64 {
-    let perturbed = case
-        .clone()
-        .with_sets(&[format!("{name}={value:e}")])
-        .expect("set");
-    let (system, _) = perturbed.build().expect("build");
-    let r = run_stage(system, Stage::S2).expect("stage");
-    if tf {
-        r.transfer("x00", "x1", &[f]).expect("tf")[0].norm()
-    } else {
-        r.noise("x1", &[f]).expect("noise").asd()[0]
-    }
-}
-
 #[test]
 fn pendulum_tf_and_noise_against_re_solved() {
     // |H| from the support x00 to the mass x1 and the thermal-noise ASD of x1, at
     // frequencies away from the modes (0.644 Hz swing, ~6 Hz bounce, violin modes above
-    // 100 Hz), against fourth-order central differences of the re-solved answers with steps
-    // 2·10⁻⁴ and 10⁻⁴ of |p| (converged to 1e-7 relative, checked), to 1e-6 relative
-    // plus a floor of 1e-9 of the response per unit relative change of p.
-    let case = case("pendulum");
-    let freqs = vec![0.1, 0.3, 2.0, 20.0];
-    let request = SensitivityRequest {
-        stage: Stage::S2,
-        modes: false,
-        tf: Some(("x00".into(), "x1".into())),
-        noise: Some("x1".into()),
-        freqs: freqs.clone(),
-        parameters: None,
-        allow_unstable: false,
-        threads: 0,
-        differences: false,
-    };
-    let s = sensitivities(&case, &request).expect("sensitivities");
-    let (tf_abs, d_tf) = s.tf_abs.as_ref().expect("tf");
-    let (asd, d_asd) = s.noise_asd.as_ref().expect("noise");
-    // the nominal values are the library's own transfer function and noise (the
-    // sensitivity code solves its own dense system: they must agree)
-    let (system, _) = case.build().expect("build");
-    let r = run_stage(system, Stage::S2).expect("stage");
-    let h = r.transfer("x00", "x1", &freqs).expect("tf");
-    let n = r.noise("x1", &freqs).expect("noise").asd();
-    for i in 0..freqs.len() {
-        assert!((tf_abs[i] - h[i].norm()).abs() <= 1e-9 * h[i].norm());
-        assert!((asd[i] - n[i]).abs() <= 1e-9 * n[i]);
-    }
-    let mut compared = 0;
-    for (j, name) in s.parameters.iter().enumerate() {
-        if s.steps[j] == 0.0 {
-            continue;
-        }
-        let p0 = s.values[j];
-        let scale = if p0 == 0.0 { 1e-3 } else { p0.abs() };
-        for (i, &f) in freqs.iter().enumerate() {
-            for (tf, value, lib) in [(true, tf_abs[i], d_tf[i][j]), (false, asd[i], d_asd[i][j])] {
-                let fd = |h: f64| {
-                    let at = |k: f64| response_at(&case, name, p0 + k * h, f, tf);
-                    (at(-2.0) - 8.0 * at(-1.0) + 8.0 * at(1.0) - at(2.0)) / (12.0 * h)
-                };
-                let (a, b) = (fd(2e-4 * scale), fd(1e-4 * scale));
-                let per_relative = value / scale;
-                assert!(
-                    (a - b).abs() <= 1e-7 * b.abs() + 1e-9 * per_relative,
-                    "{name} at {f} Hz (tf {tf}): reference not converged ({a} vs {b})"
-                );
-                let tol = 1e-6 * b.abs() + 1e-9 * per_relative;
-                assert!(
-                    (lib - b).abs() <= tol,
-                    "{name} at {f} Hz (tf {tf}): library {lib:e}, re-solved {b:e}"
-                );
-                compared += 1;
-            }
-        }
-    }
-    assert!(compared > 0);
+    // 100 Hz): see `check_responses_against_re_solved` for the reference and tolerance
+    let n = check_responses_against_re_solved(
+        "pendulum",
+        Stage::S2,
+        ("x00", "x1"),
+        &[0.1, 0.3, 2.0, 20.0],
+    );
+    // every parameter with a step (11), four frequencies, |H| and the ASD
+    assert_eq!(n, 11 * 8);
 }
 
 /// |H| from `input` to `output` and the thermal-noise ASD of `output` at `freqs`, of `case`

@@ -98,15 +98,20 @@ fn fit_writes_a_case_file_that_reproduces_the_fitted_modes() {
         assert!((hz - fitted_hz).abs() <= 1e-12 * hz, "{hz} vs {fitted_hz}");
     }
 
+    // `pendkit fit quad --modes measured.csv --free <free>` and more arguments
+    let fit_quad = |free: &str, more: &[&str]| {
+        let base = [
+            "fit",
+            "quad",
+            "--modes",
+            measured.to_str().unwrap(),
+            "--free",
+            free,
+        ];
+        pendkit(&[&base[..], more].concat())
+    };
     // the table says the same in words
-    let (ok, table, stderr) = pendkit(&[
-        "fit",
-        "quad",
-        "--modes",
-        measured.to_str().unwrap(),
-        "--free",
-        "m1,l1,silica_phi",
-    ]);
+    let (ok, table, stderr) = fit_quad("m1,l1,silica_phi", &[]);
     assert!(ok, "{stderr}");
     for expected in [
         "exact Jacobian",
@@ -120,28 +125,10 @@ fn fit_writes_a_case_file_that_reproduces_the_fitted_modes() {
 
     // central differences for the Jacobian on request: the same fit, said so; a method
     // that is neither is a one-line usage error naming it
-    let (ok, table, stderr) = pendkit(&[
-        "fit",
-        "quad",
-        "--modes",
-        measured.to_str().unwrap(),
-        "--free",
-        "m1,l1",
-        "--jacobian",
-        "differences",
-    ]);
+    let (ok, table, stderr) = fit_quad("m1,l1", &["--jacobian", "differences"]);
     assert!(ok, "{stderr}");
     assert!(table.contains("central-difference Jacobian"), "{table}");
-    let (ok, _, stderr) = pendkit(&[
-        "fit",
-        "quad",
-        "--modes",
-        measured.to_str().unwrap(),
-        "--free",
-        "m1",
-        "--jacobian",
-        "adjoint",
-    ]);
+    let (ok, _, stderr) = fit_quad("m1", &["--jacobian", "adjoint"]);
     assert!(!ok);
     assert!(
         stderr.contains("'adjoint' is not a Jacobian method (exact or differences)"),
