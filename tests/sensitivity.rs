@@ -374,6 +374,38 @@ fn quad_and_triple_tf_and_noise_against_re_solved() {
 }
 
 #[test]
+fn modes_asked_with_responses_keep_the_exact_route() {
+    // the modes asked for together with |H| and the noise: the same exact mode
+    // sensitivities (bit for bit, the same `exact` flags) as the modes alone, and the same
+    // response sensitivities as the responses alone
+    let case = case("quad");
+    let both = SensitivityRequest {
+        tf: Some(("x00".into(), "x3".into())),
+        noise: Some("x3".into()),
+        freqs: vec![0.1, 20.0],
+        ..SensitivityRequest::modes(Stage::S2)
+    };
+    let modes = SensitivityRequest::modes(Stage::S2);
+    let responses = SensitivityRequest {
+        modes: false,
+        ..both.clone()
+    };
+    let [b, m, r] =
+        [both, modes, responses].map(|q| sensitivities(&case, &q).expect("sensitivities"));
+    assert_eq!(b.dfdp, m.dfdp);
+    assert_eq!(b.exact, m.exact);
+    assert!(
+        b.exact.iter().filter(|&&e| e).count() >= 70,
+        "{:?}",
+        b.exact
+    );
+    assert_eq!(b.tf_abs, r.tf_abs);
+    assert_eq!(b.noise_asd, r.noise_asd);
+    // without the modes nothing is called exact: the responses are differenced
+    assert!(r.exact.iter().all(|&e| !e));
+}
+
+#[test]
 fn noise_with_tags_at_their_own_temperatures_against_re_solved() {
     // quad-aligo gives every damping tag its own temperature (`temp_fibre`,
     // `temp_blade_n`, ...; each "temperature" by default), so its noise is the
@@ -676,11 +708,15 @@ fn mode_sensitivities_are_exact_wherever_the_build_has_a_tangent() {
     request.differences = true;
     let s = sensitivities(&quad, &request).expect("sensitivities");
     assert_eq!(s.exact, vec![false, false]);
-    // a response asked for sends every parameter the difference route
+    // a response asked for too leaves the modes on the exact route (the response itself
+    // is differenced); the responses alone are called exact nowhere
     let mut request = SensitivityRequest::modes(Stage::S2);
     request.parameters = Some(vec!["m3".into()]);
     request.tf = Some(("x00".into(), "x3".into()));
     request.freqs = vec![1.0];
+    let s = sensitivities(&quad, &request).expect("sensitivities");
+    assert_eq!(s.exact, vec![true]);
+    request.modes = false;
     let s = sensitivities(&quad, &request).expect("sensitivities");
     assert_eq!(s.exact, vec![false]);
 }

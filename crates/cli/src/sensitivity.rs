@@ -57,7 +57,8 @@ pub struct Args {
     differences: bool,
     /// Print JSON: {"parameters", "modes_hz", "dfdp", "exact_build", "exact"} (one row per
     /// mode, one column per parameter, Hz per unit; per parameter whether the model's
-    /// numbers moved along their exact tangent, and whether the derivative is exact), with --tf also "freqs_hz", "tf_abs", "dtf_abs_dp", with
+    /// numbers moved along their exact tangent, and whether its mode sensitivities are
+    /// exact), with --tf also "freqs_hz", "tf_abs", "dtf_abs_dp", with
     /// --noise "freqs_hz", "noise_asd", "dnoise_asd_dp" (one row per frequency).
     #[arg(long)]
     json: bool,

@@ -27,7 +27,8 @@
 //! without tangent terms, plug-in terms that join the equilibrium (built around the start
 //! position, whose derivative the model does not carry), a damping tag whose real
 //! multiplier at DC is not 1, and for transfer-function and noise sensitivities, which
-//! need the tension-off Hessians too.
+//! need the tension-off Hessians too (asked for with the modes, they are differenced
+//! while the modes still take the exact route).
 //!
 //! **The difference route** (and what it shares with the exact one):
 //!
@@ -165,12 +166,13 @@ pub struct Sensitivities {
     /// step (a parameter that reaches the model through a pose's text, a count or a
     /// switch, or one only the damping reads).
     pub exact_build: Vec<bool>,
-    /// Per parameter, whether its derivatives are exact, with no difference anywhere
+    /// Per parameter, whether its mode sensitivities are exact, with no difference anywhere
     /// (`steps` then says what a difference would use): the stage's matrices
     /// differentiated by dual numbers through the build, the terms and the equilibrium
     /// (the implicit function theorem), or, for a parameter only the damping's loss angles
     /// and the temperature read, exactly 0 (see the module's documentation). Otherwise the
-    /// matrices are differenced.
+    /// matrices are differenced. The |H| and noise sensitivities are always differenced
+    /// (this is false for every parameter of a request without the modes).
     pub exact: Vec<bool>,
     /// Mode frequencies (Hz), ascending in ω² (the rows of `dfdp`).
     pub modes_hz: Vec<f64>,
@@ -500,23 +502,25 @@ fn column(shared: &Shared, j: usize) -> Result<Option<Column>, Error> {
         d_tf: vec![C::new(0.0, 0.0); nf],
         d_noise: vec![0.0; nf],
     };
-    // a parameter only the damping's loss angles and the temperature read: the modes'
-    // stiffness (the tension-on Hessian, each tag's times its ε'(0)) and the mass do not
-    // move with it, so every mode's derivative is exactly 0, with nothing computed
-    if request.modes && !responses && !request.differences && shared.modes_blind[j] {
-        out.exact = true;
-        return Ok(Some(out));
-    }
-    // the exact route: the stage's matrices differentiated by the implicit function theorem
-    if request.modes
-        && !responses
-        && !request.differences
-        && let Some(dual) = tangent
-        && let Some((vk, vm)) = exact_projections(shared, j, p0, h, dual)?
-    {
-        out.dfdp = mode_derivatives(shared, &vk, &vm)?;
-        out.exact = true;
-        return Ok(Some(out));
+    // the modes by the exact route where it is open (the responses, if asked for, are
+    // differenced below whatever the modes took)
+    if request.modes && !request.differences {
+        if shared.modes_blind[j] {
+            // a parameter only the damping's loss angles and the temperature read: the
+            // modes' stiffness (the tension-on Hessian, each tag's times its ε'(0)) and the
+            // mass do not move with it, so every mode's derivative is exactly 0, with
+            // nothing computed
+            out.exact = true;
+        } else if let Some(dual) = tangent
+            && let Some((vk, vm)) = exact_projections(shared, j, p0, h, dual)?
+        {
+            // the stage's matrices differentiated by the implicit function theorem
+            out.dfdp = mode_derivatives(shared, &vk, &vm)?;
+            out.exact = true;
+        }
+        if out.exact && !responses {
+            return Ok(Some(out));
+        }
     }
     let mut points = Vec::with_capacity(STENCIL.len());
     for &(k, _) in &STENCIL {
@@ -556,7 +560,7 @@ fn column(shared: &Shared, j: usize) -> Result<Option<Column>, Error> {
             )));
         }
     }
-    if request.modes {
+    if request.modes && !out.exact {
         let dk = difference(&points, h, |p| p.k_eff.clone());
         let dm = difference(&points, h, |p| p.result.assembled.mass.clone());
         let vectors = shared.vectors;
@@ -983,7 +987,7 @@ pub fn sensitivities(case: &Case, request: &SensitivityRequest) -> Result<Sensit
         modes[k].vector.get(i).copied().unwrap_or(0.0)
     });
     let clusters = mode_clusters(modes);
-    let exact_route = if request.modes && !responses && !request.differences {
+    let exact_route = if request.modes && !request.differences {
         ExactRoute::new(
             &base_point.result,
             request.stage,

@@ -425,8 +425,9 @@ impl Model {
 /// modes were not asked for), `freqs` (Hz), `tf_abs` and `dtf_abs_dp` (frequencies ×
 /// parameters), `noise_asd` and `dnoise_asd_dp` (None unless asked for),
 /// `not_differentiable` ((name, why) of switches and counts left out), `exact` (per
-/// parameter: differentiated exactly by dual numbers and the implicit function theorem,
-/// else by differences of the stage's matrices) and `warning`.
+/// parameter: its mode sensitivities differentiated exactly by dual numbers and the
+/// implicit function theorem, else by differences of the stage's matrices; the |H| and
+/// noise sensitivities are always differenced) and `warning`.
 #[pyclass(module = "pendkit._pendkit", frozen, get_all)]
 struct Sensitivities {
     parameters: Vec<String>,
