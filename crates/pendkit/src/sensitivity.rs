@@ -49,7 +49,12 @@
 //!    h⁴ X⁽⁵⁾/30: with h = 10⁻³|p₀| ([`RELATIVE_STEP`]) that is ~10⁻¹³ of X for a smooth
 //!    dependence on the scale of p₀, below the rounding of the matrices' entries
 //!    (~10⁻¹⁶ |X| / h ≈ 10⁻¹³ relative). A parameter whose value is 0 is stepped by
-//!    [`ZERO_STEP`] (in its own unit).
+//!    [`ZERO_STEP`] (in its own unit). dP(f)/dp is put together per frequency from the
+//!    differences of P's frequency-independent parts, P(f) = L + Σ_tag ε_tag(f) P_tag (L
+//!    the lossless part): ε dP_tag where a tag's multiplier does not move with p, the
+//!    difference of ε P_tag point by point where it does (a loss angle); so one parameter's
+//!    matrices are differenced once, not at every frequency, and a loss angle's derivative
+//!    does not carry the rounding of the other tags' imaginary parts.
 //! 2. **Everything after the matrices, exactly** (both routes). Mode frequencies: dω²/dp =
 //!    vᵀ(dK_eff/dp − ω² dM/dp)v with the mass-normalised mode v (Hellmann–Feynman); for a
 //!    cluster of (nearly) equal ω² the derivatives are the eigenvalues of that projected
@@ -272,23 +277,6 @@ where
         + std::ops::Div<f64, Output = M>,
 {
     ((v[2] - v[1]) * 8.0 - (v[3] - v[0])) / (12.0 * h)
-}
-
-/// A complex matrix that [`difference`] can weigh by real numbers.
-struct Scaled(DMatrix<C>);
-
-impl std::ops::Mul<f64> for Scaled {
-    type Output = Scaled;
-    fn mul(self, w: f64) -> Scaled {
-        Scaled(self.0 * C::new(w, 0.0))
-    }
-}
-
-impl std::ops::Add for Scaled {
-    type Output = Scaled;
-    fn add(self, other: Scaled) -> Scaled {
-        Scaled(self.0 + other.0)
-    }
 }
 
 /// How each parameter enters the model.
@@ -602,21 +590,16 @@ fn column(shared: &Shared, j: usize) -> Result<Option<Column>, Error> {
             .then(|| difference_of(&tf_vectors.iter().map(|v| &v.1).collect::<Vec<_>>(), h));
         let d_o = (noise_vectors.len() == STENCIL.len())
             .then(|| difference_of(&noise_vectors.iter().collect::<Vec<_>>(), h));
-        // each damping tag's dP_tag/dp, once for every frequency, where the noise is summed
-        // per tag
-        let d_tags = match nominal.first().and_then(|n| n.noise.as_ref()) {
-            Some(noise) if !noise.tags.is_empty() => noise.tag_derivatives(&points, h, name)?,
-            _ => Vec::new(),
-        };
+        // the frequency-independent parts' derivatives once, dA(f) from them per frequency
+        let master = MasterDerivative::new(&points, h, name)?;
         for (i, &f) in request.freqs.iter().enumerate() {
-            let da = difference(&points, h, |p| Scaled(dynamic_matrix(p, f))).0;
+            let da = master.at(&points, f)?;
             let nominal = &nominal[i];
             if let (Some(db), Some(dc)) = (&db, &dc) {
                 out.d_tf[i] = nominal.d_transfer(&da, db, dc, sizes)?;
             }
             if let (Some(d_o), Some(noise)) = (&d_o, &nominal.noise) {
-                let d_a = (&da, d_o, d_tags.as_slice());
-                out.d_noise[i] = noise.d_psd(&points, h, f, d_a, &nominal.lu)?;
+                out.d_noise[i] = noise.d_psd(&points, (h, f), (&da, d_o), &master, &nominal.lu)?;
             }
         }
     }
@@ -854,6 +837,170 @@ fn dynamic_matrix(point: &Point, f_hz: f64) -> DMatrix<C> {
         };
         C::new(re[(i, j)] - w2 * m, im[(i, j)])
     })
+}
+
+/// One frequency-independent part of A (the lossless part, or a damping tag's P_tag) at
+/// the stencil's points: its values on each point's pattern, its derivative, and (made
+/// when first needed, for a multiplier that moves with the parameter) its dense value at
+/// each point.
+struct Part<'a> {
+    at: Vec<(&'a StageModel, &'a [f64])>,
+    /// dense dPart/dp; `None` where the part is the same at every point (an exact 0)
+    derivative: Option<DMatrix<f64>>,
+    dense: std::cell::OnceCell<Vec<DMatrix<f64>>>,
+}
+
+impl<'a> Part<'a> {
+    /// The part whose values on each point's pattern `values` gives, differenced on the
+    /// pattern where every point has the same one (the usual case: then a part the
+    /// parameter does not move costs one comparison).
+    fn new(
+        points: &'a [Point],
+        h: f64,
+        values: impl Fn(&'a StageModel) -> &'a [f64],
+    ) -> Result<Part<'a>, Error> {
+        let at: Vec<(&StageModel, &[f64])> = points
+            .iter()
+            .map(|p| (&p.result.model, values(&p.result.model)))
+            .collect();
+        let (first, first_values) = at[0];
+        let same_pattern = at.iter().all(|(m, _)| m.pattern == first.pattern);
+        let derivative = if same_pattern && at.iter().all(|(_, v)| *v == first_values) {
+            None
+        } else if same_pattern {
+            let on_pattern: Vec<DVector<f64>> = at
+                .iter()
+                .map(|(_, v)| DVector::from_column_slice(v))
+                .collect();
+            let d = difference_of(&on_pattern.iter().collect::<Vec<_>>(), h);
+            Some(first.dense(d.as_slice())?)
+        } else {
+            let dense: Vec<DMatrix<f64>> = at
+                .iter()
+                .map(|(m, v)| m.dense(v))
+                .collect::<Result<_, _>>()?;
+            Some(difference_of(&dense.iter().collect::<Vec<_>>(), h))
+        };
+        Ok(Part {
+            at,
+            derivative,
+            dense: std::cell::OnceCell::new(),
+        })
+    }
+
+    /// The part's dense value at each point.
+    fn dense(&self) -> Result<&[DMatrix<f64>], Error> {
+        if let Some(d) = self.dense.get() {
+            return Ok(d);
+        }
+        let d: Vec<DMatrix<f64>> = self
+            .at
+            .iter()
+            .map(|(m, v)| m.dense(v))
+            .collect::<Result<_, _>>()?;
+        Ok(self.dense.get_or_init(|| d))
+    }
+
+    /// Adds this part's d(ε P)/dp for one real or imaginary part of its multiplier, given
+    /// that part of ε at each point, to `target`: ε dP where ε is the same at every point
+    /// (nothing where the part does not move either: an exact 0), else
+    /// Σ_k (weight_k / h) ε_k P_k over the stencil's points.
+    fn add_to(&self, target: &mut DMatrix<f64>, eps: &[f64], h: f64) -> Result<(), Error> {
+        if eps.iter().all(|&e| e == eps[0]) {
+            if let Some(d) = &self.derivative
+                && eps[0] != 0.0
+            {
+                let e = eps[0];
+                target.zip_apply(d, |t, x| *t += e * x);
+            }
+            return Ok(());
+        }
+        for (m, (&e, &(_, weight))) in self.dense()?.iter().zip(eps.iter().zip(&STENCIL)) {
+            let c = weight / h * e;
+            target.zip_apply(m, |t, x| *t += c * x);
+        }
+        Ok(())
+    }
+}
+
+/// dA(f)/dp of one parameter from the stencil's points, put together per frequency from
+/// the differences of A's frequency-independent parts, A(f) = L + Σ_tag ε_tag(f) P_tag −
+/// ω² M (L the lossless part, P_tag each damping tag's tension-off part, M the mass in the
+/// variables' block): the parts are differenced once per parameter, not four master
+/// matrices rebuilt per frequency.
+struct MasterDerivative<'a> {
+    /// The lossless part.
+    lossless: Part<'a>,
+    /// dM/dp over the variables.
+    mass: DMatrix<f64>,
+    /// Per damping tag (the stage's order): its name and its part.
+    tags: Vec<(&'a str, Part<'a>)>,
+    /// The step of the difference.
+    h: f64,
+}
+
+impl<'a> MasterDerivative<'a> {
+    fn new(points: &'a [Point], h: f64, parameter: &str) -> Result<Self, Error> {
+        fn by_tag(p: &Point) -> Vec<&str> {
+            p.result
+                .model
+                .by_tag
+                .iter()
+                .map(|(t, _)| t.as_str())
+                .collect()
+        }
+        let names = by_tag(&points[0]);
+        if points.iter().any(|p| by_tag(p) != names) {
+            return Err(bad(format!(
+                "changing '{parameter}' changes which damping tags dissipate: no derivative"
+            )));
+        }
+        let tags = names
+            .iter()
+            .enumerate()
+            .map(|(t, &name)| Ok((name, Part::new(points, h, move |m| &m.by_tag[t].1)?)))
+            .collect::<Result<_, Error>>()?;
+        let masses: Vec<&DMatrix<f64>> = points.iter().map(|p| &p.result.model.mass).collect();
+        Ok(MasterDerivative {
+            lossless: Part::new(points, h, |m| &m.lossless)?,
+            mass: difference_of(&masses, h),
+            tags,
+            h,
+        })
+    }
+
+    /// dA(f_hz)/dp over every master row.
+    fn at(&self, points: &[Point], f_hz: f64) -> Result<DMatrix<C>, Error> {
+        let n = points[0].result.model.pattern.dim();
+        let mut re = DMatrix::zeros(n, n);
+        let mut im = DMatrix::zeros(n, n);
+        // the lossless part's multiplier is 1 at every point
+        self.lossless.add_to(&mut re, &[1.0; 4], self.h)?;
+        for (tag, part) in &self.tags {
+            let eps: Vec<(f64, f64)> = points
+                .iter()
+                .map(|p| p.result.system.damping.at(tag, f_hz))
+                .collect();
+            let real: Vec<f64> = eps.iter().map(|e| e.0).collect();
+            let imag: Vec<f64> = eps.iter().map(|e| e.1).collect();
+            part.add_to(&mut re, &real, self.h)?;
+            part.add_to(&mut im, &imag, self.h)?;
+        }
+        let w2 = (2.0 * std::f64::consts::PI * f_hz).powi(2);
+        let nx = self.mass.nrows();
+        re.view_mut((0, 0), (nx, nx))
+            .zip_apply(&self.mass, |r, m| *r -= w2 * m);
+        Ok(re.zip_map(&im, C::new))
+    }
+
+    /// dP_tag/dp over the first `u` master rows (the unknowns) of the tag named `tag`:
+    /// `Some(None)` when it is exactly 0, `None` when the points have no such tag.
+    fn tag(&self, tag: &str, u: usize) -> Option<Option<nalgebra::DMatrixView<'_, f64>>> {
+        self.tags
+            .iter()
+            .find(|(name, _)| *name == tag)
+            .map(|(_, part)| part.derivative.as_ref().map(|d| d.view((0, 0), (u, u))))
+    }
 }
 
 /// Sensitivities of `case` at the request's stage. See the module's documentation for the
@@ -1229,7 +1376,10 @@ struct TagNoise {
 }
 
 /// z̄ᵀ P z for a real symmetric P: zᵣᵀ P zᵣ + zᵢᵀ P zᵢ.
-fn real_energy(p: &DMatrix<f64>, z: &DVector<C>) -> f64 {
+fn real_energy<S>(p: &nalgebra::Matrix<f64, nalgebra::Dyn, nalgebra::Dyn, S>, z: &DVector<C>) -> f64
+where
+    S: nalgebra::Storage<f64, nalgebra::Dyn, nalgebra::Dyn>,
+{
     let (re, im) = (z.map(|x| x.re), z.map(|x| x.im));
     re.dot(&(p * &re)) + im.dot(&(p * &im))
 }
@@ -1267,51 +1417,18 @@ impl NoiseNominal {
         }
     }
 
-    /// Each tag's dP_tag/dp over the unknowns, differenced over the stencil's `points`
-    /// (step `h`), in the order of `self.tags`; an error naming `parameter` when the tags
-    /// that dissipate are not the same at every point.
-    fn tag_derivatives(
-        &self,
-        points: &[Point],
-        h: f64,
-        parameter: &str,
-    ) -> Result<Vec<DMatrix<f64>>, Error> {
-        let u = self.z.len();
-        let stiffnesses: Vec<Vec<(String, DMatrix<f64>)>> = points
-            .iter()
-            .map(|p| tag_stiffnesses(p, u))
-            .collect::<Result<_, _>>()?;
-        self.tags
-            .iter()
-            .enumerate()
-            .map(|(k, tag)| {
-                let at_points: Option<Vec<&DMatrix<f64>>> = stiffnesses
-                    .iter()
-                    .map(|list| list.get(k).filter(|(n, _)| *n == tag.name).map(|(_, m)| m))
-                    .collect();
-                let at_points = at_points.ok_or_else(|| {
-                    bad(format!(
-                        "changing '{parameter}' changes which damping tags dissipate: no \
-                         derivative"
-                    ))
-                })?;
-                Ok(difference_of(&at_points, h))
-            })
-            .collect()
-    }
-
-    /// d(PSD)/dp at `f_hz` from the stencil's `points` (step `h`), the derivatives of A, of
-    /// the output vector and of each tag's P_tag ([`NoiseNominal::tag_derivatives`]; empty
-    /// with one temperature), and A's factors `lu`. One temperature: dPSD =
-    /// 4k_B/ω (dT |Im R| + T sign(Im R) Im dR), dR = 2(do)ᵀz − zᵀ(dA)z. Per tag: dPSD =
-    /// 4k_B/ω Σ [d(T_tag ε''_tag) E_tag + T_tag ε''_tag (z̄ᵀ dP_tag z + 2 Re z̄ᵀ P_tag dz)],
+    /// d(PSD)/dp at `f_hz` from the stencil's `points` (step `h`), the derivatives of A
+    /// and of the output vector, the parameter's `master` derivative (for each tag's
+    /// dP_tag), and A's factors `lu`. One temperature: dPSD = 4k_B/ω (dT |Im R| +
+    /// T sign(Im R) Im dR), dR = 2(do)ᵀz − zᵀ(dA)z. Per tag: dPSD = 4k_B/ω Σ
+    /// [d(T_tag ε''_tag) E_tag + T_tag ε''_tag (z̄ᵀ dP_tag z + 2 Re z̄ᵀ P_tag dz)],
     /// dz = A⁻¹(do − dA z), every d a difference over the points like the matrices.
     fn d_psd(
         &self,
         points: &[Point],
-        h: f64,
-        f_hz: f64,
-        (da, d_o, d_tags): (&DMatrix<C>, &DVector<f64>, &[DMatrix<f64>]),
+        (h, f_hz): (f64, f64),
+        (da, d_o): (&DMatrix<C>, &DVector<f64>),
+        master: &MasterDerivative<'_>,
         lu: &nalgebra::LU<C, nalgebra::Dyn, nalgebra::Dyn>,
     ) -> Result<f64, Error> {
         let u = self.z.len();
@@ -1328,9 +1445,17 @@ impl NoiseNominal {
             .solve(&(&d_o - da * z))
             .ok_or_else(|| bad("the dynamic stiffness is singular"))?;
         let mut sum = 0.0;
-        for (tag, dp) in self.tags.iter().zip(d_tags) {
+        for tag in &self.tags {
+            // the nominal's tags are the points' (MasterDerivative::new checked them)
+            let dp = master.tag(&tag.name, u).ok_or_else(|| {
+                bad(format!(
+                    "damping tag '{}' dissipates at the nominal value only: no derivative",
+                    tag.name
+                ))
+            })?;
             let d_weight = difference(points, h, |p| tag_weight(p, &tag.name, f_hz));
-            let d_energy = real_energy(dp, z) + 2.0 * dz.dotc(&tag.p_z).re;
+            let d_stiffness = dp.map_or(0.0, |dp| real_energy(&dp, z));
+            let d_energy = d_stiffness + 2.0 * dz.dotc(&tag.p_z).re;
             sum += d_weight * tag.energy + tag.weight * d_energy;
         }
         Ok(self.scale * sum)
