@@ -2,7 +2,10 @@
 //! modes × all its parameters, `pendkit::sensitivities`) against one stage run of the same
 //! model (build to modes: `Case::build` and `run_stage`), so that the ratio is read off
 //! numbers measured side by side. The sensitivities are timed on one thread and on the
-//! machine's threads, by the exact route and by the difference route.
+//! machine's threads, by the exact route and by the difference route. Beside them, the
+//! response sensitivities (the difference route of the stage's matrices): |H| from the
+//! support to the test mass and its thermal noise at 100 frequencies, on the quad and on
+//! quad-aligo (whose damping tags have their own temperatures).
 
 use std::time::Duration;
 
@@ -38,6 +41,24 @@ fn sensitivity(c: &mut Criterion) {
                 b.iter(|| sensitivities(&case, &request).unwrap())
             });
         }
+    }
+    // |H| and noise ASD sensitivities, every parameter, 100 log-spaced frequencies
+    let freqs: Vec<f64> = (0..100)
+        .map(|k| 0.1 * 1000f64.powf(k as f64 / 99.0))
+        .collect();
+    for name in ["quad", "quad-aligo"] {
+        let case = Case::model(name).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let request = SensitivityRequest {
+            modes: false,
+            tf: Some(("x00".into(), "x3".into())),
+            noise: Some("x3".into()),
+            freqs: freqs.clone(),
+            ..SensitivityRequest::modes(Stage::S2)
+        };
+        sensitivities(&case, &request).unwrap_or_else(|e| panic!("{name}: {e}"));
+        group.bench_function(format!("{name}/responses-100-freqs/all-threads"), |b| {
+            b.iter(|| sensitivities(&case, &request).unwrap())
+        });
     }
     group.finish();
 }
