@@ -111,7 +111,7 @@ pub use pendkit_params::Resolved;
 
 pub use describe::{DOF_FAMILIES, OTHER_FAMILY, unit_ratio, unit_slug};
 pub use fit::{
-    FitError, FitOptions, FitResult, JacobianMethod, MeasuredModes, MeasuredTf,
+    FitError, FitOptions, FitResult, JacobianMethod, MeasuredModes, MeasuredTf, exact_jacobian,
     exact_mode_jacobian, fit, mode_jacobian, pair_modes_by_overlap,
 };
 pub use parameters::{ParameterRow, parameter_table};

@@ -8,8 +8,8 @@ use std::path::Path;
 
 use pendkit::fit::{MatchedModes, MeasuredMode, MeasuredModes};
 use pendkit::{
-    Case, Error, FitError, FitOptions, JacobianMethod, Stage, exact_mode_jacobian, fit,
-    mode_jacobian, run_stage,
+    Case, Error, FitError, FitOptions, JacobianMethod, Stage, exact_jacobian, exact_mode_jacobian,
+    fit, mode_jacobian, run_stage,
 };
 
 /// SplitMix64 and Box–Muller: a reproducible standard normal sequence.
@@ -374,6 +374,79 @@ fn a_measured_transfer_function_joins_the_modes() {
     }
     // 8 measurements, 2 parameters
     assert_eq!(result.dof, 6);
+}
+
+#[test]
+fn the_exact_jacobian_follows_a_resonance_that_differences_of_h_miss() {
+    // |x3/x00| of the quad at its x3 mode's frequency (as the model solves it: |H| ≈ 1.3e5,
+    // the peak a few 1e-6 of its frequency wide) and at two frequencies off resonance. The
+    // reference: the fourth-order central difference of |H| re-solved at l3 and m3 ± h,
+    // with h = 1e-7 and 5e-8 of the value on the peak (small enough not to move it across
+    // its width) and 1e-4 and 5e-5 off it (where smaller steps meet the solves' rounding),
+    // the two agreeing to 3e-6 first (a third of the tolerance; measured ≤ 5e-7, the
+    // solves' rounding on the peak). The exact Jacobian's |TF| rows must match it to 1e-5
+    // (measured ≤ 2.3e-6); the fit's central difference with its own step (1e-4) misses
+    // the peak's row by tens of per cent.
+    let case = Case::model("quad").unwrap();
+    let solution = run_stage(case.build().unwrap().0, Stage::S2).unwrap();
+    let x3 = solution
+        .modes
+        .modes
+        .iter()
+        .find(|m| m.label == "x3")
+        .unwrap()
+        .hz;
+    let freqs = [0.2, x3, 20.0];
+    let mut text = String::from("# input = x00\n# output = x3\n");
+    for f in freqs {
+        text += &format!("{f:e},1,0.1\n");
+    }
+    let tf = pendkit::MeasuredTf::parse(Path::new("tf.csv"), &text).unwrap();
+    let free = names(&["l3", "m3"]);
+    let values = [0.6, 39.6];
+    let matched = MatchedModes::by_label(&solution, &synthetic(&[], 1e-4, 3)).unwrap();
+    let (_, rows) = exact_jacobian(&case, Stage::S2, &free, &values, &matched, Some(&tf)).unwrap();
+    let rows = rows.expect("|TF| rows");
+    let abs_h = |name: &str, value: f64, f: f64| {
+        let c = case
+            .clone()
+            .with_sets(&[format!("{name}={value:e}")])
+            .unwrap();
+        let r = run_stage(c.build().unwrap().0, Stage::S2).unwrap();
+        r.transfer("x00", "x3", &[f]).unwrap()[0].norm()
+    };
+    // fourth order: on the peak the second-order difference's truncation, (h/width)²,
+    // would be 1e-5
+    let central = |name: &str, p0: f64, f: f64, relative: f64| {
+        let h = relative * p0;
+        let at = |k: f64| abs_h(name, p0 + k * h, f);
+        (at(-2.0) - 8.0 * at(-1.0) + 8.0 * at(1.0) - at(2.0)) / (12.0 * h)
+    };
+    let steps = [1e-4, 1e-7, 1e-4];
+    for (i, (&f, step)) in freqs.iter().zip(steps).enumerate() {
+        for (p, (name, p0)) in free.iter().zip(values).enumerate() {
+            let (a, b) = (central(name, p0, f, step), central(name, p0, f, step / 2.0));
+            assert!(
+                (a - b).abs() <= 3e-6 * b.abs(),
+                "{name} at {f} Hz: {a} vs {b}"
+            );
+            let exact = rows[(i, p)];
+            assert!(
+                (exact - b).abs() <= 1e-5 * b.abs(),
+                "{name} at {f} Hz: exact {exact}, reference {b}"
+            );
+        }
+    }
+    // on the peak the fit's central difference (second order, its step 1e-4) misses: m3's
+    // row off by more than 10 %
+    let coarse = {
+        let h = 1e-4 * 39.6;
+        (abs_h("m3", 39.6 + h, freqs[1]) - abs_h("m3", 39.6 - h, freqs[1])) / (2.0 * h)
+    };
+    assert!(
+        (coarse - rows[(1, 1)]).abs() > 0.1 * rows[(1, 1)].abs(),
+        "{coarse}"
+    );
 }
 
 #[test]
