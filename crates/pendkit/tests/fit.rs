@@ -447,6 +447,13 @@ fn the_exact_jacobian_follows_a_resonance_that_differences_of_h_miss() {
         (coarse - rows[(1, 1)]).abs() > 0.1 * rows[(1, 1)].abs(),
         "{coarse}"
     );
+    // values that do not fit the free parameters: a one-line error naming the function
+    let e = exact_jacobian(&case, Stage::S2, &free, &values[..1], &matched, Some(&tf)).unwrap_err();
+    let message = e.to_string();
+    assert!(
+        message.contains("exact_jacobian") && message.contains("values"),
+        "{message}"
+    );
 }
 
 #[test]
