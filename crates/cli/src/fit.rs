@@ -36,8 +36,9 @@ pub struct Args {
     /// field, damping.<tag>.<field>=EXPR (repeatable).
     #[arg(long = "set", value_name = "NAME=EXPR")]
     sets: Vec<String>,
-    /// How the modes' Jacobian is computed: exact (the exact sensitivities, default) or
-    /// differences (central differences of the re-solved model).
+    /// How the Jacobian is computed: exact (the exact mode sensitivities, and the |TF| rows
+    /// from the same request; default) or differences (central differences of the
+    /// re-solved model).
     #[arg(long, value_name = "METHOD", default_value = "exact")]
     jacobian: pendkit::JacobianMethod,
     /// Write the fitted case file (TOML) here.

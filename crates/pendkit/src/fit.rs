@@ -363,19 +363,20 @@ pub struct FitOptions {
     /// p = 0): 1e-4 balances truncation (~1e-8 relative) against the eigenvalues' own
     /// rounding divided by the step.
     pub relative_step: f64,
-    /// How the modes' rows of the Jacobian are computed.
+    /// How the Jacobian is computed (see [`JacobianMethod`]).
     pub jacobian: JacobianMethod,
 }
 
-/// How the fit differentiates the model's mode frequencies with respect to the free
-/// parameters.
+/// How the fit differentiates the model's mode frequencies (and |TF| points) with respect
+/// to the free parameters.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum JacobianMethod {
-    /// The exact sensitivities ([`exact_mode_jacobian`]).
+    /// The exact mode sensitivities, and the |TF| rows from the same request
+    /// ([`exact_jacobian`]).
     #[default]
     Exact,
-    /// Central differences of the re-solved model ([`mode_jacobian`]).
+    /// Central differences of the re-solved model ([`mode_jacobian`], and of |H|).
     Differences,
 }
 
@@ -951,7 +952,7 @@ pub struct FitResult {
     /// Model solutions made (an exact Jacobian counts as one, plus four per free parameter
     /// for its |TF| rows).
     pub solves: usize,
-    /// How the modes' rows of the Jacobian were computed.
+    /// How the Jacobian was computed.
     pub jacobian: JacobianMethod,
 }
 

@@ -274,8 +274,10 @@ impl Model {
     /// measured |TF| file. Returns a dict: `parameters` (name, unit, start, value,
     /// uncertainty: None when undetermined), `correlation`, `modes` (residuals), `tf`,
     /// `chi_squared`, `dof`, `reduced_chi_squared`, `singular_values`, `undetermined`
-    /// (combinations), `iterations`, `solves`, `jacobian` (how the modes' Jacobian was
-    /// computed: `"exact"`, the default, or `"differences"`, as `jacobian=` asks), and
+    /// (combinations), `iterations`, `solves`, `jacobian` (how the Jacobian was computed:
+    /// `"exact"`, the default — the modes' rows exact, the |TF| rows from the same
+    /// sensitivities — or `"differences"`, central differences of the re-solved model, as
+    /// `jacobian=` asks), and
     /// `case_file` (the text of the fitted case file when the model is a bundled one, else
     /// None).
     #[pyo3(signature = (modes, free, *, tf = None, stage = None, jacobian = "exact"))]
