@@ -312,15 +312,17 @@ impl TangentTerm {
             hessian: Vec::new(),
         };
         for i in 0..x.len() {
+            // the frames that read coordinate i, moved along it and put back after
+            let reads = |map: &&pendkit_geometry::FrameMap| map.var_list().contains(&i);
             x[i].eps = Dual64::from_re(1.0);
-            for (k, map) in maps.iter().enumerate() {
-                if map.var_list().contains(&i) {
-                    frames[k] = map.eval(&x);
-                }
+            for (k, _) in maps.iter().enumerate().filter(|(_, m)| reads(m)) {
+                frames[k] = maps[k].eval(&x);
             }
             x[i].eps = zero;
             out.gradient[i] = energy(&frames).eps;
-            frames.clone_from_slice(&at_x);
+            for (k, _) in maps.iter().enumerate().filter(|(_, m)| reads(m)) {
+                frames[k] = at_x[k].clone();
+            }
         }
         Ok(out)
     }
