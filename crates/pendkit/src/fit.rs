@@ -1040,7 +1040,7 @@ fn residuals(
 }
 
 /// What is fitted to what: the measurements, the free parameters, their start values,
-/// scales and units.
+/// scales and units, and how the Jacobian was computed.
 struct Problem<'a> {
     measured: &'a MeasuredModes,
     tf: Option<&'a MeasuredTf>,
@@ -1048,6 +1048,7 @@ struct Problem<'a> {
     start: Vec<f64>,
     scale: Vec<f64>,
     units: Vec<Option<String>>,
+    jacobian: JacobianMethod,
 }
 
 /// One point of the fit: the solution, its matched modes and residuals.
@@ -1238,10 +1239,15 @@ pub fn fit(
                 start,
                 scale,
                 units,
+                jacobian: options.jacobian,
             };
-            let mut result = finish(&problem, &state, &svd, &determined, (iterations, solves));
-            result.jacobian = options.jacobian;
-            return Ok(result);
+            return Ok(finish(
+                &problem,
+                &state,
+                &svd,
+                &determined,
+                (iterations, solves),
+            ));
         }
         let mut lambda = damping.unwrap_or(1e-3 * s_max * s_max);
         let mut accepted = false;
@@ -1317,6 +1323,7 @@ fn finish(
         start,
         scale,
         units,
+        jacobian,
     } = problem;
     let (iterations, solves) = counts;
     let n = free.len();
@@ -1425,6 +1432,6 @@ fn finish(
         undetermined,
         iterations,
         solves,
-        jacobian: JacobianMethod::Exact,
+        jacobian: *jacobian,
     }
 }
