@@ -201,7 +201,7 @@ fn table(case: &Case, stage: Stage, r: &FitResult, tf: Option<&MeasuredTf>) -> S
             fixed(m.measured_hz, 6, 12),
             sci(m.sigma_hz, 2, 10),
             fixed(m.model_hz, 6, 12),
-            fixed(m.normalized, 2, 9)
+            normalized(m.normalized)
         );
     }
     if !r.tf.is_empty() {
@@ -218,7 +218,7 @@ fn table(case: &Case, stage: Stage, r: &FitResult, tf: Option<&MeasuredTf>) -> S
                 sci(t.measured, 4, 12),
                 sci(t.sigma, 2, 10),
                 sci(t.model, 4, 12),
-                fixed(t.normalized, 2, 9)
+                normalized(t.normalized)
             );
         }
     }
@@ -254,4 +254,14 @@ fn table(case: &Case, stage: Stage, r: &FitResult, tf: Option<&MeasuredTf>) -> S
 /// At most `n` characters of `s`.
 fn truncate(s: &str, n: usize) -> String {
     s.chars().take(n).collect()
+}
+
+/// A normalized residual (m − f)/σ: two decimals, or scientific from 10⁵ on, where the
+/// decimals would only widen the column.
+fn normalized(x: f64) -> String {
+    if x.abs() >= 1e5 {
+        sci(x, 2, 9)
+    } else {
+        fixed(x, 2, 9)
+    }
 }

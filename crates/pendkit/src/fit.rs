@@ -11,7 +11,7 @@
 //!   coordinate, e.g. `pitch2`) or its family (`L`, `T`, `V`, `Y`, `P`, `R`, ...), in the
 //!   model's names or a naming scheme's (`L2_P`).
 //! - `hz`: the measured frequency (Hz, positive); `sigma_hz`: its standard uncertainty
-//!   (Hz, positive).
+//!   (Hz, positive, and not below the rounding of `hz`: 2.2·10⁻¹⁶ of it).
 //! - `shape` (optional): more coordinates the mode mostly moves, joined by `+`
 //!   (`yaw1+yaw3`); needed with a family label.
 //!
@@ -25,8 +25,9 @@
 //! # Measured transfer-function file
 //!
 //! CSV `freq_hz,abs,sigma_abs` (|TF| in the unit of the transfer function, e.g. m/m, and
-//! its standard uncertainty), with the input and output named in two comment lines before
-//! the data: `# input = x00` and `# output = x3` (any name `pendkit tf` takes).
+//! its standard uncertainty, not below the rounding of `abs`), with the input and output
+//! named in two comment lines before the data, each once: `# input = x00` and
+//! `# output = x3` (any name `pendkit tf` takes).
 //!
 //! # The fit
 //!
@@ -165,6 +166,9 @@ pub struct TfPoint {
     pub abs: f64,
     /// Its standard uncertainty (same unit).
     pub sigma_abs: f64,
+    /// Its line in the file (from 1; names the errors).
+    #[serde(skip)]
+    pub line: usize,
 }
 
 /// A measured transfer-function magnitude.
@@ -215,6 +219,22 @@ fn positive(field: &str, what: &str) -> Result<f64, String> {
     }
 }
 
+/// A standard uncertainty: positive, finite, and not below the rounding of the value it
+/// belongs to (a smaller one asks the fit to resolve differences an `f64` cannot hold, and
+/// its weight 1/σ² can overflow).
+fn uncertainty(field: &str, what: &str, value: f64, value_name: &str) -> Result<f64, String> {
+    let sigma = positive(field, what)?;
+    if sigma < value * f64::EPSILON {
+        return Err(format!(
+            "{what} = {field} is below the rounding of {value_name} = {value} (relative {:.1e}, \
+             an f64 resolves {:.1e})",
+            sigma / value,
+            f64::EPSILON
+        ));
+    }
+    Ok(sigma)
+}
+
 /// An error at a line of the file at `path`.
 fn line_error(path: &Path) -> impl Fn(usize, String) -> FitError + '_ {
     move |line, message| FitError::Line {
@@ -256,7 +276,7 @@ impl MeasuredModes {
                 return Err(at(line, "empty label".into()));
             }
             let hz = positive(fields[1], "hz").map_err(|m| at(line, m))?;
-            let sigma_hz = positive(fields[2], "sigma_hz").map_err(|m| at(line, m))?;
+            let sigma_hz = uncertainty(fields[2], "sigma_hz", hz, "hz").map_err(|m| at(line, m))?;
             let shape: Vec<String> = match fields.get(3) {
                 Some(s) if !s.is_empty() => s.split('+').map(|c| c.trim().to_string()).collect(),
                 _ => Vec::new(),
@@ -297,16 +317,43 @@ impl MeasuredTf {
     /// Parses the text of a measured transfer-function file read from `path`.
     pub fn parse(path: &Path, text: &str) -> Result<MeasuredTf, FitError> {
         let at = line_error(path);
-        let (mut input, mut output) = (None, None);
-        for raw in text.lines() {
+        let first_data = data_lines(text, "freq_hz").first().map(|(line, _)| *line);
+        // (value, line) of the `# input = ...` and `# output = ...` lines: each once, before
+        // the data (a second one, or one among the points, is not silently obeyed)
+        let (mut input, mut output): (Option<(String, usize)>, Option<(String, usize)>) =
+            (None, None);
+        for (k, raw) in text.lines().enumerate() {
+            let line = k + 1;
             let directive = raw.trim().strip_prefix('#').map(str::trim);
-            if let Some((key, value)) = directive.and_then(|d| d.split_once('=')) {
-                match key.trim() {
-                    "input" => input = Some(value.trim().to_string()),
-                    "output" => output = Some(value.trim().to_string()),
-                    _ => {}
-                }
+            let Some((key, value)) = directive.and_then(|d| d.split_once('=')) else {
+                continue;
+            };
+            let key = key.trim();
+            let slot = match key {
+                "input" => &mut input,
+                "output" => &mut output,
+                _ => continue,
+            };
+            if let Some((_, first)) = slot {
+                return Err(at(
+                    line,
+                    format!("a second '# {key} = NAME' line (the first is line {first})"),
+                ));
             }
+            if first_data.is_some_and(|data| line > data) {
+                return Err(at(
+                    line,
+                    format!(
+                        "'# {key} = NAME' after the data (line {}): it goes before the points",
+                        first_data.unwrap_or(0)
+                    ),
+                ));
+            }
+            let value = value.trim();
+            if value.is_empty() {
+                return Err(at(line, format!("'# {key} =' names no {key}")));
+            }
+            *slot = Some((value.to_string(), line));
         }
         let mut points = Vec::new();
         for (line, fields) in data_lines(text, "freq_hz") {
@@ -319,18 +366,21 @@ impl MeasuredTf {
                     ),
                 ));
             }
+            let abs = positive(fields[1], "abs").map_err(|m| at(line, m))?;
             points.push(TfPoint {
                 freq_hz: positive(fields[0], "freq_hz").map_err(|m| at(line, m))?,
-                abs: positive(fields[1], "abs").map_err(|m| at(line, m))?,
-                sigma_abs: positive(fields[2], "sigma_abs").map_err(|m| at(line, m))?,
+                abs,
+                sigma_abs: uncertainty(fields[2], "sigma_abs", abs, "abs")
+                    .map_err(|m| at(line, m))?,
+                line,
             });
         }
         let missing = |what: &str| FitError::File {
             path: path.to_path_buf(),
             message: format!("no '# {what} = NAME' line before the data"),
         };
-        let input = input.ok_or_else(|| missing("input"))?;
-        let output = output.ok_or_else(|| missing("output"))?;
+        let (input, _) = input.ok_or_else(|| missing("input"))?;
+        let (output, _) = output.ok_or_else(|| missing("output"))?;
         if points.is_empty() {
             return Err(FitError::File {
                 path: path.to_path_buf(),
@@ -1039,6 +1089,36 @@ fn residuals(
     DVector::from_iterator(measured.modes.len() + tf_model.len(), modes.chain(points))
 }
 
+/// The error for the `i`-th weighted residual `r` (modes first, then |TF| points), which is
+/// not finite or too large to square.
+fn residual_error(measured: &MeasuredModes, tf: Option<&MeasuredTf>, i: usize, r: f64) -> FitError {
+    let point = tf.and_then(|t| {
+        let p = t.points.get(i.checked_sub(measured.modes.len())?)?;
+        Some((&t.path, p.line, "sigma_abs"))
+    });
+    let mode = measured
+        .modes
+        .get(i)
+        .map(|m| (&measured.path, m.line, "sigma_hz"));
+    // residuals() makes one per mode, then one per point: one of the two is there
+    let Some((path, line, what)) = mode.or(point) else {
+        return FitError::NotFinite(format!("residual {i}"));
+    };
+    let message = if r.is_finite() {
+        format!(
+            "the weighted residual (model - measured)/{what} = {r:.3e} is too large to square: \
+             {what} is far below the model's distance from the measurement"
+        )
+    } else {
+        format!("the model's value for this measurement is not finite ({r})")
+    };
+    FitError::Line {
+        path: path.clone(),
+        line,
+        message,
+    }
+}
+
 /// What is fitted to what: the measurements, the free parameters, their start values,
 /// scales and units, and how the Jacobian was computed.
 struct Problem<'a> {
@@ -1125,8 +1205,9 @@ pub fn fit(
                 None => Vec::new(),
             };
             let r = residuals(&matched.hz, measured, tf, &tf_model);
-            if r.iter().any(|x| !x.is_finite()) {
-                return Err(FitError::NotFinite("a residual".into()).into());
+            // a residual that is not finite, or whose square overflows χ², names its line
+            if let Some(i) = r.iter().position(|x| !(x * x).is_finite()) {
+                return Err(residual_error(measured, tf, i, r[i]).into());
             }
             Ok(State {
                 values: values.to_vec(),

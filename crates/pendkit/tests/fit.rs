@@ -259,6 +259,12 @@ fn bad_measurements_are_refused_with_file_and_line() {
         ),
         ("x3,0.43,0.001,yaw1+\n", "measured.csv:1: shape"),
         ("# nothing\n", "measured.csv: no measured modes"),
+        // an uncertainty below an f64's rounding of the value (2.2e-16 relative): its
+        // weight would overflow χ² (1e-300 did, and the fit reported chi^2 = inf)
+        (
+            "x3,0.43,0.001\ny3,0.46,1e-300\n",
+            "measured.csv:2: sigma_hz = 1e-300 is below the rounding of hz = 0.46",
+        ),
     ];
     for (text, expected) in cases {
         let message = fit_error(text, &["m1"]);
@@ -472,5 +478,66 @@ fn a_transfer_function_file_names_its_input_and_output() {
     assert_eq!(
         err,
         "tf.csv:3: expected freq_hz,abs,sigma_abs, got 2 fields"
+    );
+    // the input and output each once, before the points: a second one or one among the
+    // points was obeyed silently (the last one won)
+    let cases = [
+        (
+            "# input = x00\n# output = x3\n# input = y00\n1,2,0.1\n",
+            "tf.csv:3: a second '# input = NAME' line (the first is line 1)",
+        ),
+        (
+            "# input = x00\n1,2,0.1\n# output = x3\n",
+            "tf.csv:3: '# output = NAME' after the data (line 2): it goes before the points",
+        ),
+        (
+            "# input =\n# output = x3\n1,2,0.1\n",
+            "tf.csv:1: '# input =' names no input",
+        ),
+        (
+            "# input = x00\n# output = x3\n1,2,1e-20\n",
+            "tf.csv:3: sigma_abs = 1e-20 is below the rounding of abs = 2",
+        ),
+    ];
+    for (text, expected) in cases {
+        let err = pendkit::MeasuredTf::parse(Path::new("tf.csv"), text)
+            .unwrap_err()
+            .to_string();
+        assert!(err.starts_with(expected), "{err}");
+    }
+    // a header line before the directives is still a header
+    let tf = pendkit::MeasuredTf::parse(
+        Path::new("tf.csv"),
+        "freq_hz,abs,sigma_abs\n# input = x00\n# output = x3\n1,2,0.1\n",
+    )
+    .unwrap();
+    assert_eq!((tf.input.as_str(), tf.output.as_str()), ("x00", "x3"));
+    assert_eq!(tf.points[0].line, 4);
+}
+
+/// A residual whose square overflows χ² (an uncertainty legal for its own value, a model
+/// value 10³⁰¹ of it away) names its line instead of a fit with chi^2 = inf.
+#[test]
+fn a_weighted_residual_too_large_to_square_names_its_line() {
+    let measured =
+        MeasuredModes::parse(Path::new("m.csv"), "x3,0.4328,0.001\ny3,0.4681,0.001\n").unwrap();
+    let tf = pendkit::MeasuredTf::parse(
+        Path::new("tf.csv"),
+        "# input = x00\n# output = x3\n0.5,1e-300,1e-301\n",
+    )
+    .unwrap();
+    let case = Case::model("quad").unwrap();
+    let err = fit(
+        &case,
+        &measured,
+        Some(&tf),
+        &names(&["m1"]),
+        &FitOptions::default(),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        err.starts_with("tf.csv:3: the weighted residual (model - measured)/sigma_abs = "),
+        "{err}"
     );
 }
