@@ -320,8 +320,8 @@ impl MeasuredTf {
         let first_data = data_lines(text, "freq_hz").first().map(|(line, _)| *line);
         // (value, line) of the `# input = ...` and `# output = ...` lines: each once, before
         // the data (a second one, or one among the points, is not silently obeyed)
-        let (mut input, mut output): (Option<(String, usize)>, Option<(String, usize)>) =
-            (None, None);
+        let mut input: Option<(String, usize)> = None;
+        let mut output: Option<(String, usize)> = None;
         for (k, raw) in text.lines().enumerate() {
             let line = k + 1;
             let directive = raw.trim().strip_prefix('#').map(str::trim);
