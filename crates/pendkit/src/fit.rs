@@ -259,42 +259,32 @@ impl MeasuredModes {
 
     /// Parses the text of a measured modes file read from `path`.
     pub fn parse(path: &Path, text: &str) -> Result<MeasuredModes, FitError> {
-        let at = line_error(path);
-        let mut modes = Vec::new();
-        for (line, fields) in data_lines(text, "label") {
-            if !(3..=4).contains(&fields.len()) {
-                return Err(at(
-                    line,
-                    format!(
-                        "expected label,hz,sigma_hz[,shape], got {} fields",
-                        fields.len()
-                    ),
-                ));
-            }
-            let label = fields[0];
-            if label.is_empty() {
-                return Err(at(line, "empty label".into()));
-            }
-            let hz = positive(fields[1], "hz").map_err(|m| at(line, m))?;
-            let sigma_hz = uncertainty(fields[2], "sigma_hz", hz, "hz").map_err(|m| at(line, m))?;
-            let shape: Vec<String> = match fields.get(3) {
-                Some(s) if !s.is_empty() => s.split('+').map(|c| c.trim().to_string()).collect(),
-                _ => Vec::new(),
-            };
-            if shape.iter().any(String::is_empty) {
-                return Err(at(
-                    line,
-                    "shape: coordinates joined by '+' (e.g. yaw1+yaw3)".into(),
-                ));
-            }
-            modes.push(MeasuredMode {
-                label: label.to_string(),
-                hz,
-                sigma_hz,
-                shape,
-                line,
-            });
-        }
+        let modes = data_lines(text, "label")
+            .into_iter()
+            .map(|(line, fields)| MeasuredMode::from_fields(path, line, &fields))
+            .collect::<Result<Vec<_>, _>>()?;
+        MeasuredModes::new(path, modes)
+    }
+
+    /// Measured modes given as rows of fields `label, hz, sigma_hz[, shape]` (as a
+    /// program holds them, not as text: no comments or header; row k is named line k + 1
+    /// of `path` in the errors), checked as a file's lines are.
+    pub fn from_rows<S: AsRef<str>>(
+        path: &Path,
+        rows: &[Vec<S>],
+    ) -> Result<MeasuredModes, FitError> {
+        let modes = rows
+            .iter()
+            .enumerate()
+            .map(|(k, row)| {
+                let fields: Vec<&str> = row.iter().map(|f| f.as_ref().trim()).collect();
+                MeasuredMode::from_fields(path, k + 1, &fields)
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        MeasuredModes::new(path, modes)
+    }
+
+    fn new(path: &Path, modes: Vec<MeasuredMode>) -> Result<MeasuredModes, FitError> {
         if modes.is_empty() {
             return Err(FitError::File {
                 path: path.to_path_buf(),
@@ -304,6 +294,45 @@ impl MeasuredModes {
         Ok(MeasuredModes {
             path: path.to_path_buf(),
             modes,
+        })
+    }
+}
+
+impl MeasuredMode {
+    /// One measured mode from its fields `label, hz, sigma_hz[, shape]` at `line` of `path`.
+    fn from_fields(path: &Path, line: usize, fields: &[&str]) -> Result<MeasuredMode, FitError> {
+        let at = |message| FitError::Line {
+            path: path.to_path_buf(),
+            line,
+            message,
+        };
+        if !(3..=4).contains(&fields.len()) {
+            return Err(at(format!(
+                "expected label,hz,sigma_hz[,shape], got {} fields",
+                fields.len()
+            )));
+        }
+        let label = fields[0];
+        if label.is_empty() {
+            return Err(at("empty label".into()));
+        }
+        let hz = positive(fields[1], "hz").map_err(at)?;
+        let sigma_hz = uncertainty(fields[2], "sigma_hz", hz, "hz").map_err(at)?;
+        let shape: Vec<String> = match fields.get(3) {
+            Some(s) if !s.is_empty() => s.split('+').map(|c| c.trim().to_string()).collect(),
+            _ => Vec::new(),
+        };
+        if shape.iter().any(String::is_empty) {
+            return Err(at(
+                "shape: coordinates joined by '+' (e.g. yaw1+yaw3)".into()
+            ));
+        }
+        Ok(MeasuredMode {
+            label: label.to_string(),
+            hz,
+            sigma_hz,
+            shape,
+            line,
         })
     }
 }

@@ -127,23 +127,36 @@ fn fspath(path: &Bound<'_, PyAny>) -> PyResult<String> {
 }
 
 /// Measured modes from a CSV file's path, or from a list of `(label, hz, sigma_hz[,
-/// shape])` tuples (checked as the file's lines are, item k being line k).
+/// shape])` tuples (checked as a file's lines are; the errors name item k, from 0, `modes:k+1`).
 fn measured_modes(modes: &Bound<'_, PyAny>) -> PyResult<pendkit::MeasuredModes> {
     if modes.is_instance_of::<PyString>() || modes.hasattr("__fspath__")? {
         return pendkit::MeasuredModes::read(Path::new(&fspath(modes)?)).map_err(error);
     }
-    let mut text = String::new();
+    let mut rows: Vec<Vec<String>> = Vec::new();
     for item in modes.try_iter().map_err(|_| {
         error("modes: expected a file path or a list of (label, hz, sigma_hz[, shape]) tuples")
     })? {
-        let fields: Vec<String> = item?
-            .try_iter()?
+        let item = item?;
+        let k = rows.len();
+        // a str is iterable too: its characters would pass for fields
+        if item.is_instance_of::<PyString>() {
+            return Err(error(format!(
+                "modes[{k}]: expected a tuple (label, hz, sigma_hz[, shape]), got a str"
+            )));
+        }
+        let fields: Vec<String> = item
+            .try_iter()
+            .map_err(|_| {
+                error(format!(
+                    "modes[{k}]: expected a tuple (label, hz, sigma_hz[, shape])"
+                ))
+            })?
             .map(|f| f.and_then(|f| f.str()?.extract::<String>()))
             .collect::<PyResult<_>>()?;
-        text += &fields.join(",");
-        text.push('\n');
+        rows.push(fields);
     }
-    pendkit::MeasuredModes::parse(Path::new("modes"), &text).map_err(error)
+    // the items are rows, not a file's lines: a '#' or ',' in a label is the label's
+    pendkit::MeasuredModes::from_rows(Path::new("modes"), &rows).map_err(error)
 }
 
 impl Model {

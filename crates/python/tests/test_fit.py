@@ -65,3 +65,21 @@ def test_bad_measurements_raise_the_command_lines_message(cli, tmp_path):
     with pytest.raises(PendkitError) as e:
         pendkit.Model("quad").fit(path, ["m1"])
     assert str(e.value) == cli.error("fit", "quad", "--modes", str(path), "--free", "m1")
+
+
+def test_measured_modes_as_tuples_are_rows_not_text():
+    # Once joined into CSV text: a label starting with '#' was a comment (the measurement
+    # silently dropped), a ',' in a label shifted the fields, and a str item passed its
+    # characters for fields.
+    model = pendkit.Model("quad")
+    good = [("x3", 0.4328, 0.001), ("y3", 0.4681, 0.001)]
+    with pytest.raises(PendkitError, match=r"^modes:3: '#x3' is neither a variable"):
+        model.fit(good + [("#x3", 0.98, 0.001)], ["m1"])
+    with pytest.raises(PendkitError, match=r"^modes:1: 'x3,y3' is neither a variable"):
+        model.fit([("x3,y3", 0.43, 0.001)] + good, ["m1"])
+    with pytest.raises(PendkitError, match=r"^modes\[1\]: expected a tuple .* got a str$"):
+        model.fit([good[0], "y3,0.4681,0.001"], ["m1"])
+    with pytest.raises(PendkitError, match=r"^modes:2: sigma_hz = 1e-300 is below the rounding"):
+        model.fit([good[0], ("y3", 0.4681, 1e-300)], ["m1"])
+    with pytest.raises(PendkitError, match=r"^modes: no measured modes"):
+        model.fit([], ["m1"])
