@@ -466,6 +466,8 @@ fn column(shared: &Shared, j: usize) -> Result<Option<Column>, Error> {
         ..
     } = *shared;
     if reach[j] == Reach::Nothing {
+        // nothing reads it: every derivative is exactly 0, with nothing computed (exact for
+        // the modes, as a loss angle's zero is, where the exact route was asked for)
         return Ok(None);
     }
     let name = &names[j];
@@ -1199,7 +1201,10 @@ pub fn sensitivities(case: &Case, request: &SensitivityRequest) -> Result<Sensit
     };
     let columns = in_parallel(np, request.threads, |j| column(&shared, j))?;
     for (j, col) in columns.into_iter().enumerate() {
-        let Some(col) = col else { continue };
+        let Some(col) = col else {
+            exact[j] = request.modes && !request.differences;
+            continue;
+        };
         steps[j] = col.step;
         exact_build[j] = col.exact_build;
         exact[j] = col.exact;
