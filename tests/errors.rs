@@ -251,3 +251,72 @@ fn other_impossible_parameters_are_named() {
         .to_string();
     assert!(e.contains("float 'q'"), "{e}");
 }
+
+/// Numbers far from 1 in messages are written in scientific notation (Rust's `{}` writes
+/// 1e-300 as 301 decimals), and a wire its load would stretch past its own length says so
+/// rather than calling itself zero-length.
+#[test]
+fn extreme_values_in_messages_are_short_and_say_what_is_wrong() {
+    for (model, set, expected) in [
+        (
+            "quad",
+            "l1=1e-300",
+            "length 1e-300 m does not reach across 0.14 m",
+        ),
+        (
+            "quad",
+            "silica_rho=-1e300",
+            "linear density is negative (-1.2566370614359173e293)",
+        ),
+        (
+            "quad",
+            "temperature=-1e300",
+            "must be positive (got -1e300 K)",
+        ),
+        (
+            "quad",
+            "wire_terms_early=1e-300",
+            "equilibrium only), got 1e-300",
+        ),
+        (
+            "quad-v5",
+            "n_beads=1e300",
+            "`n_beads` = 1e300 must be a whole number",
+        ),
+        (
+            "pendulum",
+            "hinged_bottom=1e-300",
+            "`hinged` = 1e-300: must be 0",
+        ),
+        (
+            "triple",
+            "fibre_silica=1e-300",
+            "fibre_silica = 1e-300 must be one of 0, 1",
+        ),
+        (
+            "triple",
+            "kc1=-1e-300",
+            "`kc1` = -1e-300 N/m must be positive",
+        ),
+        (
+            "pendulum",
+            "m1=1e20",
+            "unstretched length -1.6263645747203054e16 m is negative: its tension would stretch it by more than its length",
+        ),
+    ] {
+        let e = build_error(model, &[set]);
+        assert!(e.contains(expected), "{model} {set}: {e}");
+        assert!(e.len() < 400, "{model} {set}: {e}");
+    }
+}
+
+/// A damping field the tag refuses names the `--set` argument once, with the reason.
+#[test]
+fn a_bad_damping_field_names_the_argument_and_the_field() {
+    let e = build_error("quad", &["damping.fibre_stretch.phi=1"]);
+    assert!(
+        e.starts_with("--set 'damping.fibre_stretch.phi=1': unknown damping field 'phi'"),
+        "{e}"
+    );
+    assert!(!e.contains("expected NAME=EXPR"), "{e}");
+}

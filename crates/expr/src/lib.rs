@@ -23,7 +23,7 @@ use std::str::FromStr;
 use num_dual::DualNum;
 
 pub use compile::{Compiled, Slot};
-pub use number::{NumberError, number_literal};
+pub use number::{NumberError, number_literal, number_text};
 pub use parse::parse;
 
 /// A binary operator.

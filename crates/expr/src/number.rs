@@ -62,6 +62,25 @@ pub fn number_literal(text: &str) -> Result<f64, NumberError> {
     Ok(value)
 }
 
+/// `x` for a message: every digit needed to read it back, in plain decimals from 10⁻⁴ up
+/// to 10⁷ and in scientific notation outside (Rust's `{}` would print 1e-300 as 301
+/// decimals).
+///
+/// ```
+/// use pendkit_expr::number_text;
+/// assert_eq!(number_text(0.3085), "0.3085");
+/// assert_eq!(number_text(1e-300), "1e-300");
+/// assert_eq!(number_text(-2.5e12), "-2.5e12");
+/// assert_eq!(number_text(0.0), "0");
+/// ```
+pub fn number_text(x: f64) -> String {
+    if x == 0.0 || !x.is_finite() || (1e-4..1e7).contains(&x.abs()) {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

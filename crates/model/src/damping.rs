@@ -4,7 +4,7 @@
 use std::sync::OnceLock;
 
 use pendkit_energy::TagDamping;
-use pendkit_expr::{Expr, Slot, parse};
+use pendkit_expr::{Expr, Slot, number_text, parse};
 use pendkit_params::Resolved;
 
 use crate::BuildError;
@@ -121,7 +121,7 @@ impl DampingSpec {
         } else {
             Err(BuildError::Invalid {
                 item: which,
-                message: format!("must be positive (got {value} K)"),
+                message: format!("must be positive (got {} K)", number_text(value)),
             })
         }
     }

@@ -26,6 +26,7 @@
 use std::f64::consts::PI;
 
 use pendkit_energy::{Real, WireEnd, WireSection, WireTags};
+use pendkit_expr::number_text;
 
 use crate::BuildError;
 
@@ -102,7 +103,10 @@ impl<S: Real> FibreProfile<S> {
         ] {
             let v = v.re();
             if !(v.is_finite() && v > 0.0) {
-                return Err(bad(format!("{what} must be positive (got {v})")));
+                return Err(bad(format!(
+                    "{what} must be positive (got {})",
+                    number_text(v)
+                )));
             }
         }
         Ok(())

@@ -23,7 +23,7 @@ use pendkit_energy::{
     Body, BodyId, CoordId, CoordKind, Coordinate, EarlyWireTerms, EndDirection, ExtraPhase,
     ExtraTerm, NamedSignal, PluginElement, SignalTerm, Spring, SpringEnd, Stage, System, Wire,
 };
-use pendkit_expr::{ExprError, Slot};
+use pendkit_expr::{ExprError, Slot, number_text};
 use pendkit_geometry::{FrameMap, PoseMap};
 use pendkit_params::{ChunkDual, ParamError, ParamSet, Resolved, Tangent};
 
@@ -177,14 +177,6 @@ pub struct SystemBuilder<S: Real = f64> {
 
 /// A number for an error message: as written when of ordinary size, in exponent form when
 /// huge or tiny (a value of 1e300 is not printed as 300 digits).
-fn readable(v: f64) -> String {
-    if v == 0.0 || (1e-4..1e6).contains(&v.abs()) {
-        v.to_string()
-    } else {
-        format!("{v:e}")
-    }
-}
-
 /// `item` is formatted only for the error.
 fn check_finite(
     item: impl std::fmt::Display,
@@ -197,7 +189,11 @@ fn check_finite(
     } else {
         Err(BuildError::Invalid {
             item: item.to_string(),
-            message: format!("{what} is not a finite number ({value} {unit})"),
+            message: format!(
+                "{what} is not a finite number ({}{}{unit})",
+                number_text(value),
+                if unit.is_empty() { "" } else { " " }
+            ),
         })
     }
 }
@@ -336,7 +332,7 @@ impl<S: Real> SystemBuilder<S> {
         if mass < 0.0 {
             return Err(BuildError::Invalid {
                 item,
-                message: format!("negative mass ({} kg)", readable(mass)),
+                message: format!("negative mass ({} kg)", number_text(mass)),
             });
         }
         let inertia = spec.inertia.map(|v| v.re());
@@ -444,10 +440,16 @@ impl<S: Real> SystemBuilder<S> {
         if unstretched_length <= 0.0 {
             return Err(BuildError::Invalid {
                 item,
-                message: format!(
-                    "zero-length wire: unstretched length {} m must be positive",
-                    readable(unstretched_length)
-                ),
+                message: if unstretched_length < 0.0 {
+                    // l0 = l − T/k below 0: the load stretches the wire by more than its
+                    // length, which no wire does (a wrong load, stiffness or length)
+                    format!(
+                        "unstretched length {} m is negative: its tension would stretch it by more than its length (check the load it carries, its stiffness and its length)",
+                        number_text(unstretched_length)
+                    )
+                } else {
+                    "zero-length wire: unstretched length 0 m must be positive".into()
+                },
             });
         }
         check_finite(&item, "stiffness", stiffness, "N/m")?;
@@ -456,7 +458,7 @@ impl<S: Real> SystemBuilder<S> {
                 item,
                 message: format!(
                     "stiffness {} N/m must be positive (check the wire's radius, Young's modulus and length)",
-                    readable(stiffness)
+                    number_text(stiffness)
                 ),
             });
         }
@@ -479,8 +481,9 @@ impl<S: Real> SystemBuilder<S> {
                 return Err(BuildError::Invalid {
                     item,
                     message: format!(
-                        "{what} is {} ({v}): wire sizes (radius, thickness) and material constants must be positive",
-                        if v < 0.0 { "negative" } else { "zero" }
+                        "{what} is {} ({}): wire sizes (radius, thickness) and material constants must be positive",
+                        if v < 0.0 { "negative" } else { "zero" },
+                        number_text(v)
                     ),
                 });
             }
@@ -819,7 +822,7 @@ pub fn shear_modulus<S: Real>(
             item: item.to_string(),
             message: format!(
                 "Poisson's ratio {} must lie in (-1, 0.5) for an isotropic material",
-                readable(nu)
+                number_text(nu)
             ),
         })
     }
@@ -852,7 +855,10 @@ pub fn whole_number(
     } else {
         Err(BuildError::Invalid {
             item: format!("parameter '{name}'"),
-            message: format!("must be a whole number from {low} to {high}, got {value}"),
+            message: format!(
+                "must be a whole number from {low} to {high}, got {}",
+                number_text(value)
+            ),
         })
     }
 }
@@ -1274,7 +1280,10 @@ pub fn attach_to_build(
     if system.temperature <= 0.0 {
         return Err(BuildError::Invalid {
             item: "parameter 'temperature'".into(),
-            message: format!("must be positive (got {} K)", system.temperature),
+            message: format!(
+                "must be positive (got {} K)",
+                number_text(system.temperature)
+            ),
         });
     }
     system.early_wire_terms = match resolved.get(WIRE_TERMS_EARLY)? {
@@ -1284,7 +1293,10 @@ pub fn attach_to_build(
         other => {
             return Err(BuildError::Invalid {
                 item: "parameter 'wire_terms_early'".into(),
-                message: format!("must be 0 (no), 1 (yes) or 2 (equilibrium only), got {other}"),
+                message: format!(
+                    "must be 0 (no), 1 (yes) or 2 (equilibrium only), got {}",
+                    number_text(other)
+                ),
             });
         }
     };

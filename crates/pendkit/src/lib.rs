@@ -149,6 +149,14 @@ pub enum Error {
     /// A `--set NAME=EXPR` argument without '='.
     #[error("--set '{0}': expected NAME=EXPR or damping.<tag>.<field>=EXPR")]
     SetSyntax(String),
+    /// A `--set damping.<tag>.<field>=EXPR` the damping field refuses.
+    #[error("--set '{set}': {message}")]
+    SetDamping {
+        /// The argument as given.
+        set: String,
+        /// What is wrong with it.
+        message: String,
+    },
     /// Two overrides of the same parameter or damping field in one list: the later would
     /// silently replace the earlier.
     #[error("--set '{0}' is given twice: give each parameter or damping field once")]
@@ -396,7 +404,10 @@ impl Case {
                 Some((tag, field)) => {
                     let spec = self.overrides.damping.entry(tag.to_string()).or_default();
                     spec.set_field(field, expr)
-                        .map_err(|m| Error::SetSyntax(format!("{s}: {m}")))?;
+                        .map_err(|message| Error::SetDamping {
+                            set: s.clone(),
+                            message,
+                        })?;
                 }
                 None => self
                     .overrides

@@ -17,7 +17,7 @@ use pendkit_energy::{
     BodyId, CoordKind, EndDirection, ExtraPhase, NamedSignal, Real, SignalTerm, SpringEnd, Stage,
     System, WireEnd, WireSection, WireTags,
 };
-use pendkit_expr::Expr;
+use pendkit_expr::{Expr, number_text};
 use pendkit_model::beads::{BeadedFibre, add_beaded_fibre, beads_mass};
 use pendkit_model::{BodySpec, BuildError, FibreProfile, Shape, SystemBuilder};
 use pendkit_params::{ChunkDual, Resolved, Values};
@@ -218,7 +218,11 @@ impl<S: BuildScalar> Ctx<'_, S> {
         } else {
             Err(invalid(
                 &ex.at,
-                format!("`{}` = {} is not a finite number", ex.text, value.re()),
+                format!(
+                    "`{}` = {} is not a finite number",
+                    ex.text,
+                    number_text(value.re())
+                ),
             ))
         }
     }
@@ -231,7 +235,11 @@ impl<S: BuildScalar> Ctx<'_, S> {
         } else {
             Err(invalid(
                 &ex.at,
-                format!("`{}` = {} {unit} must be positive", ex.text, v.re()),
+                format!(
+                    "`{}` = {} {unit} must be positive",
+                    ex.text,
+                    number_text(v.re())
+                ),
             ))
         }
     }
@@ -255,8 +263,9 @@ impl<S: BuildScalar> Ctx<'_, S> {
             Err(invalid(
                 &ex.at,
                 format!(
-                    "`{}` = {v} must be a whole number from {low} to {high}",
-                    ex.text
+                    "`{}` = {} must be a whole number from {low} to {high}",
+                    ex.text,
+                    number_text(v)
                 ),
             ))
         }
@@ -294,7 +303,10 @@ impl<S: BuildScalar> Ctx<'_, S> {
                 other => {
                     return Err(invalid(
                         &h.at,
-                        format!("`hinged` = {other}: must be 0 (clamped) or 1 (hinged)"),
+                        format!(
+                            "`hinged` = {}: must be 0 (clamped) or 1 (hinged)",
+                            number_text(other)
+                        ),
                     ));
                 }
             }
@@ -494,10 +506,15 @@ impl<'s, 'c, S: BuildScalar> Interpreter<'s, 'c, S> {
                 && let Ok(value) = ctx.params.get(&p.name)
                 && !allowed.value.contains(&value)
             {
-                let list: Vec<String> = allowed.value.iter().map(f64::to_string).collect();
+                let list: Vec<String> = allowed.value.iter().map(|&v| number_text(v)).collect();
                 return Err(invalid(
                     &p.at,
-                    format!("{} = {value} must be one of {}", p.name, list.join(", ")),
+                    format!(
+                        "{} = {} must be one of {}",
+                        p.name,
+                        number_text(value),
+                        list.join(", ")
+                    ),
                 ));
             }
         }
@@ -879,7 +896,7 @@ impl<'s, 'c, S: BuildScalar> Interpreter<'s, 'c, S> {
                     format!(
                         "{first}`{}` = {} m must be positive{zero}",
                         set.length.text,
-                        length.re()
+                        number_text(length.re())
                     ),
                 ));
             }
@@ -902,8 +919,8 @@ impl<'s, 'c, S: BuildScalar> Interpreter<'s, 'c, S> {
                         &set.length.at,
                         format!(
                             "wire '{name}': length {} m does not reach across {} m",
-                            length.re(),
-                            across2.re().sqrt()
+                            number_text(length.re()),
+                            number_text(across2.re().sqrt())
                         ),
                     ));
                 }
@@ -972,8 +989,8 @@ impl<'s, 'c, S: BuildScalar> Interpreter<'s, 'c, S> {
                                 "wire '{}' puts '{}' at z = {} m but wire '{first}' at {} m: the wires of a stage must agree on its height",
                                 w.name,
                                 plan.stage.body,
-                                z.re(),
-                                z0.re()
+                                number_text(z.re()),
+                                number_text(z0.re())
                             ),
                         ));
                     }
@@ -1140,7 +1157,7 @@ impl<'s, 'c, S: BuildScalar> Interpreter<'s, 'c, S> {
                     format!(
                         "{wire}`{}` = {} m: a radius must be positive",
                         r.text,
-                        radius.re()
+                        number_text(radius.re())
                     ),
                 ));
             }
