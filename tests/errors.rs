@@ -308,6 +308,15 @@ fn extreme_values_in_messages_are_short_and_say_what_is_wrong() {
         assert!(e.contains(expected), "{model} {set}: {e}");
         assert!(e.len() < 400, "{model} {set}: {e}");
     }
+    let e = pendkit::log_grid(1e-10, 100.0, 200)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.starts_with("frequency grid from 1e-10 Hz to 100 Hz"),
+        "{e}"
+    );
+    let e = pendkit_dynamics::DynamicsError::DampingFrequency(-1e-300).to_string();
+    assert_eq!(e, "damping frequency must be positive (got -1e-300 Hz)");
 }
 
 /// A damping field the tag refuses names the `--set` argument once, with the reason.

@@ -220,8 +220,10 @@ pub fn number(text: &str) -> Result<f64, String> {
 fn frequency(text: &str, place: &str) -> Result<f64, CliError> {
     match number(text) {
         Ok(f) if f > 0.0 => Ok(f),
-        Ok(f) => Err(CliError::usage(format!(
-            "{place}: frequency {f} Hz must be positive"
+        // as typed: `{}` of an f64 writes -1e-300 as 300 decimals
+        Ok(_) => Err(CliError::usage(format!(
+            "{place}: frequency {} Hz must be positive",
+            text.trim()
         ))),
         Err(e) => Err(CliError::usage(format!("{place}: {e} (Hz)"))),
     }

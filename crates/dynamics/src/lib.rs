@@ -50,7 +50,7 @@ pub enum DynamicsError {
         variable: String,
     },
     /// Damping represented at a frequency that is not positive.
-    #[error("damping frequency must be positive (got {0} Hz)")]
+    #[error("damping frequency must be positive (got {} Hz)", pendkit_expr::number_text(*.0))]
     DampingFrequency(f64),
     /// The eigen solver failed.
     #[error("eigen solver failed: {0}")]
@@ -139,7 +139,10 @@ pub enum DynamicsError {
         f_hz: f64,
     },
     /// A frequency bound for the modes that is not positive and finite.
-    #[error("modes below {0} Hz: the frequency must be positive and finite")]
+    #[error(
+        "modes below {} Hz: the frequency must be positive and finite",
+        pendkit_expr::number_text(*.0)
+    )]
     BelowFrequency(f64),
     /// The sparse solver could not analyse or factorise a matrix.
     #[error("sparse solver: {0}")]

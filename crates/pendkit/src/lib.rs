@@ -192,7 +192,9 @@ pub enum Error {
     },
     /// A frequency grid that cannot be made.
     #[error(
-        "frequency grid from {from} Hz to {to} Hz with {n} points: need 1e-9 <= from <= to <= 1e9 (Hz, finite) and 1 to 1000000 points"
+        "frequency grid from {} Hz to {} Hz with {n} points: need 1e-9 <= from <= to <= 1e9 (Hz, finite) and 1 to 1000000 points",
+        pendkit_expr::number_text(*from),
+        pendkit_expr::number_text(*to)
     )]
     Grid {
         /// Start (Hz).
