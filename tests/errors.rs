@@ -329,3 +329,21 @@ fn a_bad_damping_field_names_the_argument_and_the_field() {
     );
     assert!(!e.contains("expected NAME=EXPR"), "{e}");
 }
+
+/// An empty file, or a case file's lines without its `model = ...`, reads as a suspension
+/// file with nothing in it: the error says so at once instead of "no variables" from the
+/// model builder.
+#[test]
+fn a_file_without_bodies_or_a_model_says_which_it_lacks() {
+    for text in ["", "[parameters]\nm1 = 3\n", "# only a comment\n"] {
+        let e = Case::from_text(std::path::Path::new("c.toml"), text)
+            .err()
+            .expect("no bodies")
+            .to_string();
+        assert!(
+            e.starts_with("c.toml: no bodies: a suspension file describes its bodies")
+                && e.contains("model = \"quad\""),
+            "{text:?}: {e}"
+        );
+    }
+}

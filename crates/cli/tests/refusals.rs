@@ -366,7 +366,7 @@ fn scratch_file(name: &str, text: &str) -> String {
 fn empty_suspension_file_is_refused_not_a_model_with_no_modes() {
     // an empty .toml read as a suspension file with nothing in it gave "0 modes", exit 0
     let path = scratch_file("empty-suspension.toml", "");
-    refused(&["modes", &path], &["no variables"]);
+    refused(&["modes", &path], &["no bodies", "model = \"quad\""]);
 }
 
 #[test]

@@ -234,6 +234,15 @@ impl Suspension {
         library: &dyn Library,
     ) -> Result<Suspension, FileError> {
         let spec = read_spec(&source, root, library)?;
+        // an empty file, or a case file's text without its `model` line, reads as a
+        // suspension with nothing in it: say that, not "no variables" later
+        if spec.bodies.is_empty() {
+            return Err(FileError::file(
+                &source.name,
+                "no bodies: a suspension file describes its bodies in [bodies.NAME] tables, \
+                 and a case file names its model first (model = \"quad\")",
+            ));
+        }
         let stem = Path::new(&source.name)
             .file_stem()
             .map(|s| s.to_string_lossy().into_owned())
