@@ -328,6 +328,15 @@ fn a_bad_damping_field_names_the_argument_and_the_field() {
         "{e}"
     );
     assert!(!e.contains("expected NAME=EXPR"), "{e}");
+    // a missing name or expression is the argument's syntax, not an unknown parameter ''
+    // or the expression "()"
+    for set in ["=3", "m1=", "damping.fibre_stretch.structural=", " = "] {
+        let e = build_error("quad", &[set]);
+        assert_eq!(
+            e,
+            format!("--set '{set}': expected NAME=EXPR or damping.<tag>.<field>=EXPR")
+        );
+    }
 }
 
 /// An empty file, or a case file's lines without its `model = ...`, reads as a suspension

@@ -396,6 +396,11 @@ impl Case {
                 .split_once('=')
                 .ok_or_else(|| Error::SetSyntax(s.clone()))?;
             let (name, expr) = (name.trim(), expr.trim());
+            // `=3`, `m1=` or `damping.tag.field=`: a half that is missing is named as such,
+            // not looked up as the parameter '' or parsed as the expression "()"
+            if name.is_empty() || expr.is_empty() {
+                return Err(Error::SetSyntax(s.clone()));
+            }
             if !seen.insert(name) {
                 return Err(Error::SetTwice(name.to_string()));
             }
