@@ -122,6 +122,14 @@ fn negative_loss_and_non_finite_damping_are_refused_naming_the_tag() {
         ],
         &["fibre_stretch"],
     );
+    // the sensitivities of the same responses refuse them too (they were differentiated,
+    // a noise ASD from a negative loss given as an answer)
+    for response in [&["--noise", "x3"][..], &["--tf", "x00:x3"][..]] {
+        let mut args = vec!["sensitivity", "quad", "--freqs", "1", "--parameters", "m3"];
+        args.extend_from_slice(response);
+        args.extend_from_slice(&["--set", "damping.fibre_stretch.structural=-1e-7"]);
+        refused(&args, &["fibre_stretch", "at 1 Hz", "negative loss"]);
+    }
 }
 
 /// A temperature so high that the fibres' thermoelastic loss overflows makes the damping

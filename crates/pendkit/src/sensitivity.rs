@@ -1481,6 +1481,12 @@ impl Nominal {
     ) -> Result<Nominal, Error> {
         let (nx, nq, ns) = sizes;
         let u = nx + nq;
+        // the multipliers `pendkit tf` and `noise` refuse (a negative loss, a non-finite
+        // value) are refused here too, not differentiated
+        point
+            .result
+            .model
+            .check_damping_at(&point.result.system.damping, f_hz)?;
         let a = dynamic_matrix(point, f_hz);
         let lu = a.view((0, 0), (u, u)).into_owned().lu();
         let singular = || Error::Dynamics(pendkit_dynamics::DynamicsError::Singular { f_hz });
