@@ -94,7 +94,13 @@ pub enum DynamicsError {
     #[error("{0} frequencies: at most 1000000 points per grid")]
     TooManyPoints(usize),
     /// A damping multiplier that is not finite or has the wrong sign somewhere.
-    #[error("damping tag '{tag}' at {f_hz} Hz: multiplier {real} + {imag}i {problem}")]
+    #[error(
+        "damping tag '{tag}' at {} Hz: multiplier {} {} {}i {problem}",
+        pendkit_expr::number_text(*f_hz),
+        pendkit_expr::number_text(*real),
+        if imag.is_sign_negative() { "-" } else { "+" },
+        imaginary_text(*imag)
+    )]
     Damping {
         /// The tag.
         tag: String,
@@ -248,5 +254,16 @@ impl StageModel {
         )?;
         sweep.at(f_hz)?;
         Ok(sweep.response().to_vec())
+    }
+}
+
+/// |x| for the imaginary part of a message's complex number: bracketed when it is not a
+/// finite number, so that it does not run into the `i` ("1 + (inf)i").
+fn imaginary_text(x: f64) -> String {
+    let text = pendkit_expr::number_text(x.abs());
+    if x.is_finite() {
+        text
+    } else {
+        format!("({text})")
     }
 }
