@@ -175,8 +175,6 @@ pub struct SystemBuilder<S: Real = f64> {
     spring_names: HashSet<String>,
 }
 
-/// A number for an error message: as written when of ordinary size, in exponent form when
-/// huge or tiny (a value of 1e300 is not printed as 300 digits).
 /// `item` is formatted only for the error.
 fn check_finite(
     item: impl std::fmt::Display,

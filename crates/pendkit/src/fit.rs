@@ -226,8 +226,9 @@ fn uncertainty(field: &str, what: &str, value: f64, value_name: &str) -> Result<
     let sigma = positive(field, what)?;
     if sigma < value * f64::EPSILON {
         return Err(format!(
-            "{what} = {field} is below the rounding of {value_name} = {value} (relative {:.1e}, \
+            "{what} = {field} is below the rounding of {value_name} = {} (relative {:.1e}, \
              an f64 resolves {:.1e})",
+            pendkit_expr::number_text(value),
             sigma / value,
             f64::EPSILON
         ));
@@ -369,12 +370,11 @@ impl MeasuredTf {
                     format!("a second '# {key} = NAME' line (the first is line {first})"),
                 ));
             }
-            if first_data.is_some_and(|data| line > data) {
+            if let Some(data) = first_data.filter(|&data| line > data) {
                 return Err(at(
                     line,
                     format!(
-                        "'# {key} = NAME' after the data (line {}): it goes before the points",
-                        first_data.unwrap_or(0)
+                        "'# {key} = NAME' after the data (line {data}): it goes before the points"
                     ),
                 ));
             }

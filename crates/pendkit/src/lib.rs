@@ -146,7 +146,7 @@ pub enum Error {
     /// line and field.
     #[error(transparent)]
     SuspensionFile(#[from] pendkit_suspension::FileError),
-    /// A `--set NAME=EXPR` argument without '='.
+    /// A `--set NAME=EXPR` argument without '=', or with nothing on one side of it.
     #[error("--set '{0}': expected NAME=EXPR or damping.<tag>.<field>=EXPR")]
     SetSyntax(String),
     /// A `--set damping.<tag>.<field>=EXPR` the damping field refuses.
