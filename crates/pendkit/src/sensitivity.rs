@@ -20,7 +20,10 @@
 //! wᵀ dK w = vᵀ dK_eff v), for each mode and each pair within a cluster, split by the chain
 //! rule into the terms whose constants move with p at the fixed equilibrium and the
 //! equilibrium's motion through coefficients computed once per request
-//! ([`pendkit_assembly::Projection`]). No step, no difference. The route is closed (and the parameter goes the difference route below) for
+//! ([`pendkit_assembly::Projection`]). No step, no difference. A parameter nothing reads,
+//! or only the damping's loss angles and the temperature read (no real multiplier, no
+//! switch), moves no mode: its derivatives are exactly 0, computed from nothing, and
+//! called exact. The route is closed (and the parameter goes the difference route below) for
 //! a parameter the dual build cannot follow (written into a pose's text, a count, a
 //! switch), one read only by what the build adds (the damping, the temperature, the
 //! "wire terms early" switch), a model with user-written terms or a kind
@@ -174,8 +177,9 @@ pub struct Sensitivities {
     /// Per parameter, whether its mode sensitivities are exact, with no difference anywhere
     /// (`steps` then says what a difference would use): the stage's matrices
     /// differentiated by dual numbers through the build, the terms and the equilibrium
-    /// (the implicit function theorem), or, for a parameter only the damping's loss angles
-    /// and the temperature read, exactly 0 (see the module's documentation). Otherwise the
+    /// (the implicit function theorem), or, for a parameter nothing reads or only the
+    /// damping's loss angles and the temperature read, exactly 0 (see the module's
+    /// documentation). Otherwise the
     /// matrices are differenced. The |H| and noise sensitivities are always differenced
     /// (this is false for every parameter of a request without the modes).
     pub exact: Vec<bool>,

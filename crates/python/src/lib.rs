@@ -441,7 +441,8 @@ impl Model {
 /// parameters), `noise_asd` and `dnoise_asd_dp` (None unless asked for),
 /// `not_differentiable` ((name, why) of switches and counts left out), `exact` (per
 /// parameter: its mode sensitivities differentiated exactly by dual numbers and the
-/// implicit function theorem, else by differences of the stage's matrices; the |H| and
+/// implicit function theorem, or exactly 0 for a parameter nothing or only the loss angles
+/// read, else by differences of the stage's matrices; the |H| and
 /// noise sensitivities are always differenced) and `warning`.
 #[pyclass(module = "pendkit._pendkit", frozen, get_all)]
 struct Sensitivities {
