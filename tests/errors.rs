@@ -263,10 +263,11 @@ fn extreme_values_in_messages_are_short_and_say_what_is_wrong() {
             "l1=1e-300",
             "length 1e-300 m does not reach across 0.14 m",
         ),
+        // ρ π r² with the fibre's r = 0.2 mm: −1e300 · 1.2566e-7 kg/m
         (
             "quad",
             "silica_rho=-1e300",
-            "linear density is negative (-1.2566370614359173e293)",
+            "linear density is negative (-1.2566",
         ),
         (
             "quad",
@@ -298,14 +299,16 @@ fn extreme_values_in_messages_are_short_and_say_what_is_wrong() {
             "kc1=-1e-300",
             "`kc1` = -1e-300 N/m must be positive",
         ),
+        // l0 = l − T/k, T = 1e20 kg · g / 4 fibres ≈ 2.5e20 N, k = EA/l ≈ 1.5e4 N/m: −1.6e16 m
         (
             "pendulum",
             "m1=1e20",
-            "unstretched length -1.6263645747203054e16 m is negative: its tension would stretch it by more than its length",
+            "e16 m is negative: its tension would stretch it by more than its length",
         ),
     ] {
         let e = build_error(model, &[set]);
         assert!(e.contains(expected), "{model} {set}: {e}");
+        assert!(!e.contains("0000000000"), "{model} {set}: {e}");
         assert!(e.len() < 400, "{model} {set}: {e}");
     }
     let e = pendkit::log_grid(1e-10, 100.0, 200)
