@@ -347,7 +347,8 @@ impl MeasuredTf {
     /// Parses the text of a measured transfer-function file read from `path`.
     pub fn parse(path: &Path, text: &str) -> Result<MeasuredTf, FitError> {
         let at = line_error(path);
-        let first_data = data_lines(text, "freq_hz").first().map(|(line, _)| *line);
+        let data = data_lines(text, "freq_hz");
+        let first_data = data.first().map(|(line, _)| *line);
         // (value, line) of the `# input = ...` and `# output = ...` lines: each once, before
         // the data (a second one, or one among the points, is not silently obeyed)
         let mut input: Option<(String, usize)> = None;
@@ -385,7 +386,7 @@ impl MeasuredTf {
             *slot = Some((value.to_string(), line));
         }
         let mut points = Vec::new();
-        for (line, fields) in data_lines(text, "freq_hz") {
+        for (line, fields) in data {
             if fields.len() != 3 {
                 return Err(at(
                     line,
