@@ -431,3 +431,101 @@ fn a_sum_evaluates_a_shared_body_once_and_equals_the_terms_one_by_one() {
         "{summed} vs 2 × {one_by_one_along}"
     );
 }
+
+#[test]
+fn a_moving_only_reference_leaves_out_no_term_that_moves() {
+    // The projected route builds each parameter's terms around a `Reference::moving_only`,
+    // which lets a kind leave out the terms of an element nothing of which moves, and keeps
+    // the terms that say their constants move (`TangentTerm::moves`). Sound only if no
+    // moving term is left out: for every bundled model and every parameter its dual build
+    // carries, every kind's terms up to stage 2, built around the equilibrium both ways,
+    // must give the same moving terms (by label, in order) — an exact comparison, nothing
+    // numerical. Likewise the projection's builds, around the equilibrium moved along one
+    // coordinate with the model's numbers fixed: the same terms that move or are on the
+    // coordinate. Not vacuous: the moving-only builds leave out most terms.
+    use pendkit_energy::{Reference, SharedBodies, TangentTerm, registry};
+    let (mut built_all, mut built_moving_only, mut compared) = (0, 0, 0);
+    let terms_of = |reference: &Reference<num_dual::Dual64>| {
+        let shared = SharedBodies::new();
+        let mut terms: Vec<TangentTerm> = Vec::new();
+        for kind in registry() {
+            if reference
+                .system
+                .element_stage(kind)
+                .is_some_and(|s| s <= Stage::S2)
+            {
+                terms.extend(
+                    kind.tangent_terms(reference, &shared)
+                        .expect("terms")
+                        .expect("every bundled kind has tangent terms"),
+                );
+            }
+        }
+        terms
+    };
+    let labels = |terms: &[TangentTerm], keep: &dyn Fn(&TangentTerm) -> bool| -> Vec<String> {
+        terms
+            .iter()
+            .filter(|t| keep(t))
+            .map(|t| t.label.clone())
+            .collect()
+    };
+    for model in pendkit::models() {
+        let (system, resolved) =
+            pendkit_model::build_with(model, &Default::default()).expect("build");
+        let a = assemble_with(&system, Stage::S2, &AssemblyOptions::default(), None)
+            .unwrap_or_else(|e| panic!("{}: {e}", model.name()));
+        let at_rest: Vec<num_dual::Dual64> = a
+            .equilibrium
+            .coords
+            .iter()
+            .map(|&v| num_dual::Dual64::from_re(v))
+            .collect();
+        let lifted = system.map_scalars(num_dual::Dual64::from_re);
+        for i in 0..at_rest.len() {
+            let mut moved = at_rest.clone();
+            moved[i].eps = 1.0;
+            let on_it = |t: &TangentTerm| t.moves() || t.coords.contains(&i);
+            let all = terms_of(&Reference::new(&lifted, &moved));
+            let kept = terms_of(&Reference::moving_only(&lifted, &moved));
+            assert_eq!(
+                labels(&kept, &on_it),
+                labels(&all, &on_it),
+                "{} along {}",
+                model.name(),
+                system.coords[i].name
+            );
+            built_all += all.len();
+            built_moving_only += kept.len();
+        }
+        let names: Vec<String> = resolved.iter().map(|(n, _)| n.to_string()).collect();
+        for chunk in names.chunks(pendkit_params::TANGENT_CHUNK) {
+            let chunk: Vec<&str> = chunk.iter().map(String::as_str).collect();
+            let Ok(built) = pendkit_model::build_tangent_chunk(model, &Default::default(), &chunk)
+            else {
+                continue;
+            };
+            for (k, name) in chunk.iter().enumerate() {
+                let Ok(dual) = built.direction(k) else {
+                    continue;
+                };
+                let all = terms_of(&Reference::new(&dual, &at_rest));
+                let kept = terms_of(&Reference::moving_only(&dual, &at_rest));
+                let moves = |t: &TangentTerm| t.moves();
+                assert_eq!(
+                    labels(&kept, &moves),
+                    labels(&all, &moves),
+                    "{} {name}",
+                    model.name()
+                );
+                built_all += all.len();
+                built_moving_only += kept.len();
+                compared += 1;
+            }
+        }
+    }
+    assert!(
+        compared > 500 && 2 * built_moving_only < built_all,
+        "{compared} parameters: {built_moving_only} terms built moving-only, {built_all} in all"
+    );
+}

@@ -24,7 +24,7 @@ use nalgebra::{DMatrix, DVector, Vector3};
 use num_dual::{Dual, Dual64};
 use pendkit_energy::{
     CoordKind, EarlyWireTerms, EnergyError, HyperTangent, Reference, SecondTangent, SharedBodies,
-    Stage, System, TangentSum, TangentTerm, registry, tangent_frames_first,
+    Stage, System, TangentSum, TangentTerm, registry,
 };
 use pendkit_geometry::Frame;
 use pendkit_rotations::{Constant, Real, tr_mul, vee};
@@ -50,9 +50,10 @@ pub struct StageTangent {
     /// of the free coordinates with |zᵢ| in [½, 1] and mixed signs (N or N m per unit of
     /// the parameter; at most the sum of |dg/dp| over the free coordinates): the implicit
     /// function theorem's own check, zero but for rounding, which is measured against
-    /// `forces`. Two weighted sums instead of every entry: one evaluation per term instead
-    /// of one per term and coordinate; an imbalance hides from both only if it is
-    /// orthogonal to both weightings.
+    /// `forces`. By linearity zᵀ dg/dp = zᵀ ∂g/∂p + (H z)ᵀ δq, with H the balanced terms'
+    /// stiffness from their dual forms (not the fast `f64` Hessians the equilibrium's motion
+    /// was solved with), H z worked out once per stage ([`Balance`]): two dot products per
+    /// parameter. An imbalance hides only if it is orthogonal to both weightings.
     pub residual: f64,
     /// The largest sum over the balanced terms of their |force| on one free coordinate at
     /// the equilibrium (N or N m): the scale of the forces' rounding.
@@ -60,13 +61,20 @@ pub struct StageTangent {
 }
 
 /// The kinds' tangent terms whose stage passes `include`, built around `coords`; `None`
-/// when some kind has none (the caller falls back to differences).
+/// when some kind has none (the caller falls back to differences). With `moving_only` the
+/// caller keeps only the terms whose constants move, and the kinds may leave out the
+/// others ([`Reference::moving_only`]).
 fn kind_tangent_terms(
     system: &System<Dual64>,
     coords: &[Dual64],
     include: impl Fn(Stage) -> bool,
+    moving_only: bool,
 ) -> Result<Option<Vec<TangentTerm>>, EnergyError> {
-    let reference = Reference::new(system, coords);
+    let reference = if moving_only {
+        Reference::moving_only(system, coords)
+    } else {
+        Reference::new(system, coords)
+    };
     // one beam per wire for its bending and extra-stretch terms, as in the f64 assembly
     let shared = SharedBodies::new();
     let mut terms = Vec::new();
@@ -145,6 +153,10 @@ pub struct Balance {
     /// The largest sum over the balanced terms of their |force| on one free coordinate
     /// (N or N m).
     forces: f64,
+    /// The implicit function theorem's check ([`StageTangent::residual`]): each weighting z
+    /// of the free coordinates ([`weightings`]) and H z, the balanced terms' stiffness
+    /// along it from their dual forms, both over the free coordinates.
+    checks: [(Vec<f64>, Vec<f64>); 2],
 }
 
 impl Balance {
@@ -153,9 +165,9 @@ impl Balance {
     pub fn new(system: &System, equilibrium: &[f64]) -> Result<Option<Balance>, AssemblyError> {
         let lifted = system.map_scalars(Dual64::from_re);
         check_equilibrium("Balance::new", &lifted, equilibrium)?;
-        if balanced_terms(&lifted)?.is_none() {
+        let Some(balanced) = balanced_terms(&lifted, false)? else {
             return Ok(None);
-        }
+        };
         // the same terms in f64 (the stage-0A kinds built around the start), whose fast
         // Hessians are the stiffness: the dual forms would give it too, at ten times the
         // cost, to rounding
@@ -179,12 +191,45 @@ impl Balance {
             }
         }
         let forces = magnitude.iter().copied().fold(0.0, f64::max);
+        // H z from the dual terms: their gradient at the equilibrium moved along z (the
+        // lifted model's constants carry no derivative, so the dual parts are H z)
+        let checks = weightings(equilibrium.len(), &free).map(|z| {
+            let along: Vec<Dual64> = equilibrium
+                .iter()
+                .zip(&z)
+                .map(|(&v, &d)| Dual64::new(v, d))
+                .collect();
+            let mut sums = Sums::gradient_only(equilibrium.len());
+            accumulate(&balanced, &along, &mut sums, false)?;
+            let weights = free.iter().map(|&i| z[i]).collect();
+            let stiffness = free.iter().map(|&i| sums.gradient[i].eps).collect();
+            Ok::<_, EnergyError>((weights, stiffness))
+        });
+        let [first, second] = checks;
         Ok(Some(Balance {
             coords: coordinate_names(system),
             free,
             lu: stiffness.hessian.lu(),
             forces,
+            checks: [first?, second?],
         }))
+    }
+
+    /// The implicit function theorem's check ([`StageTangent::residual`]) of the motion
+    /// `delta` (dq*/dp) against the forces' parameter derivative `dg` at fixed
+    /// coordinates, both over the free coordinates: the larger |zᵀ dg + (H z)ᵀ delta| of
+    /// the two weightings z (NaN if either is).
+    fn imbalance(&self, dg: &[f64], delta: &[f64]) -> f64 {
+        let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
+        self.checks.iter().fold(0.0, |worst: f64, (z, hz)| {
+            let sum = dot(z, dg) + dot(hz, delta);
+            // NaN kept (max would drop it): the caller refuses it
+            if sum.is_nan() || worst.is_nan() {
+                f64::NAN
+            } else {
+                worst.max(sum.abs())
+            }
+        })
     }
 
     /// Whether `system` has the coordinates this balance was built for.
@@ -203,13 +248,17 @@ fn coordinate_names<S: Real>(system: &System<S>) -> Vec<String> {
 /// is unknown), or when plug-in terms join the equilibrium: those are built around the
 /// start position, which moves with the parameters (the nominal geometry) but whose
 /// derivative the model does not carry (`Coordinate::start` is a number, not a model
-/// constant).
-fn balanced_terms(system: &System<Dual64>) -> Result<Option<Vec<TangentTerm>>, EnergyError> {
+/// constant). With `moving_only` the kinds may leave out terms whose constants do not move
+/// ([`kind_tangent_terms`]).
+fn balanced_terms(
+    system: &System<Dual64>,
+    moving_only: bool,
+) -> Result<Option<Vec<TangentTerm>>, EnergyError> {
     if !system.extra_terms.is_empty() || system.early_wire_terms != EarlyWireTerms::No {
         return Ok(None);
     }
     let start: Vec<Dual64> = system.start().into_iter().map(Dual64::from_re).collect();
-    kind_tangent_terms(system, &start, |s| s == Stage::S0A)
+    kind_tangent_terms(system, &start, |s| s == Stage::S0A, moving_only)
 }
 
 /// `equilibrium` is a finite full coordinate vector of `system`, whose indices are valid.
@@ -390,7 +439,7 @@ impl Projection {
                 given: a.max(b) + 1,
             });
         }
-        let Some(balanced) = balanced_terms(&lifted)? else {
+        let Some(balanced) = balanced_terms(&lifted, false)? else {
             return Ok(None);
         };
         let columns: Vec<Vec<f64>> = (0..m)
@@ -419,7 +468,9 @@ impl Projection {
         let plugins = in_parallel(balance.free.len(), threads, |a| {
             let mut moved: Vec<Dual64> = equilibrium.iter().map(|&v| Dual64::from_re(v)).collect();
             moved[balance.free[a]].eps = 1.0;
-            kind_tangent_terms(&lifted, &moved, |s| s != Stage::S0A && s <= stage)
+            // kept below: the terms whose constants moved with the coordinate, and the terms
+            // on it, whose bodies' frames move with it; no other term is needed
+            kind_tangent_terms(&lifted, &moved, |s| s != Stage::S0A && s <= stage, true)
         })?;
         let Some(plugins) = plugins.into_iter().collect::<Option<Vec<_>>>() else {
             return Ok(None);
@@ -510,34 +561,15 @@ fn weightings(n: usize, free: &[usize]) -> [Vec<f64>; 2] {
     })
 }
 
-/// The implicit function theorem's check (see [`StageTangent::residual`]): the balanced
-/// terms' gradient at the moving equilibrium `moving`, its parameter derivative weighted
-/// by two fixed weightings of the free coordinates.
-fn imbalance(
-    system: &System<Dual64>,
-    balanced: &TangentSum,
-    moving: &[Dual64],
-    free: &[usize],
-) -> Result<f64, EnergyError> {
-    let mut worst: f64 = 0.0;
-    for z in weightings(moving.len(), free) {
-        let frames = tangent_frames_first(system, moving, &z)?;
-        let sum = balanced.first_along_frames(&frames)?.eps;
-        if sum.is_nan() {
-            // kept (max would drop it): the caller refuses it
-            return Ok(sum);
-        }
-        worst = worst.max(sum.abs());
-    }
-    Ok(worst)
-}
-
 /// The exact derivatives of stage `stage`'s stiffness and mass with respect to the
 /// parameter `system` was built with seeded, at the equilibrium `equilibrium` (the `f64`
 /// model's, full coordinate vector) with the stage's `layout` and the equilibrium's
 /// `balance` (from the `f64` model). `None` when the model has terms without such
 /// derivatives (a kind without tangent terms, user-written terms, wire terms that join the
-/// equilibrium), for which the caller keeps to differences.
+/// equilibrium), for which the caller keeps to differences. The balance and a projection
+/// must be those of the model whose value part `system` is (what [`Balance::new`] and
+/// [`Projection::new`] were given): only their coordinates, stage and equilibrium are
+/// checked against it.
 pub fn stage_tangent(
     system: &System<Dual64>,
     stage: Stage,
@@ -558,7 +590,10 @@ pub fn stage_tangent(
     {
         return Err(AssemblyError::ForeignProjection);
     }
-    let Some(balanced) = balanced_terms(system)? else {
+    // the projected route evaluates only the terms whose constants move at the fixed
+    // equilibrium (the equilibrium's motion is the projection's), so only those are built
+    let moving_only = matches!(along, Along::Projected(_));
+    let Some(balanced) = balanced_terms(system, moving_only)? else {
         return Ok(None);
     };
     // ∂g/∂p at the fixed equilibrium (only the terms whose constants move have one), and
@@ -590,13 +625,13 @@ pub fn stage_tangent(
         .zip(&delta)
         .map(|(&v, &d)| Dual64::new(v, d))
         .collect();
-    let residual = imbalance(system, &TangentSum::new(&balanced), &moving, free)?;
+    let residual = balance.imbalance(dg_free.as_slice(), delta_free.as_slice());
     let plugin_stage = |s: Stage| s != Stage::S0A && s <= stage;
     let stiffness = match along {
         Along::Full => {
             // the stage's plug-in terms built around the moving equilibrium, and every
             // term's Hessian there
-            let Some(plugins) = kind_tangent_terms(system, &moving, plugin_stage)? else {
+            let Some(plugins) = kind_tangent_terms(system, &moving, plugin_stage, false)? else {
                 return Ok(None);
             };
             let mut sums = Sums::new(n);
@@ -608,7 +643,7 @@ pub fn stage_tangent(
         Along::Projected(projection) => {
             // the plug-in terms built around the fixed equilibrium: the parameter's own
             // part; the equilibrium's motion is the projection's
-            let Some(plugins) = kind_tangent_terms(system, &at_rest, plugin_stage)? else {
+            let Some(plugins) = kind_tangent_terms(system, &at_rest, plugin_stage, true)? else {
                 return Ok(None);
             };
             let moving_terms =
@@ -641,9 +676,18 @@ fn mass_tangent(system: &System<Dual64>, layout: &Layout, x: &[Dual64]) -> DMatr
         if body.mass.is_exactly_zero() && body.inertia.iter().all(|v| v.is_exactly_zero()) {
             continue;
         }
-        let vars: Vec<usize> = body
-            .frame
-            .var_list()
+        let reads = body.frame.var_list();
+        // a body whose numbers do not move, on coordinates that do not move, adds exactly 0
+        let numbers_move = body.mass.moves()
+            || body
+                .inertia
+                .iter()
+                .chain(&body.centre_of_mass)
+                .any(|v| v.moves());
+        if !numbers_move && reads.iter().all(|&g| !x[g].moves()) {
+            continue;
+        }
+        let vars: Vec<usize> = reads
             .iter()
             .copied()
             .filter(|&g| system.coords[g].kind == CoordKind::Variable)

@@ -13,8 +13,8 @@ use pendkit_rotations::{
 
 use crate::{
     Attached, Derivatives, Element, EnergyError, JetPoint, LocalFrames, OffForm, Potential,
-    Reference, SharedBodies, SpringEnd, Stage, System, TangentPotential, TangentTerm, TensionOff,
-    Term, Wire, add_curvature, add_jacobian,
+    Reference, SharedBodies, SpringEnd, Stage, TangentPotential, TangentTerm, TensionOff, Term,
+    Wire, add_curvature, add_jacobian,
 };
 
 /// Tag of gravity terms (lossless whatever multipliers the tag is given).
@@ -106,7 +106,7 @@ impl Element for Gravity {
         "m g z of every massive body (lossless)"
     }
     fn terms(&self, reference: &Reference) -> Result<Vec<Term>, EnergyError> {
-        Ok(gravity_energies(reference.system)
+        Ok(gravity_energies(reference)
             .map(|(label, local, energy)| {
                 Term::on_frames(label, "gravity", GRAVITY_TAG, local, energy)
             })
@@ -118,7 +118,7 @@ impl Element for Gravity {
         _shared: &SharedBodies,
     ) -> Result<Option<Vec<TangentTerm>>, EnergyError> {
         Ok(Some(
-            gravity_energies(reference.system)
+            gravity_energies(reference)
                 .map(|(label, local, energy)| {
                     TangentTerm::on_frames(label, "gravity", GRAVITY_TAG, local, energy)
                 })
@@ -127,12 +127,14 @@ impl Element for Gravity {
     }
 }
 
-/// The gravity term of every body with mass (or whose mass moves with the parameter).
-fn gravity_energies<S: Constant>(
-    system: &System<S>,
-) -> impl Iterator<Item = (String, LocalFrames, GravityEnergy<S>)> + '_ {
+/// The gravity term of every body with mass (or whose mass moves with the parameter) that
+/// `reference` keeps ([`Reference::keeps_body`]).
+fn gravity_energies<'r, S: Constant>(
+    reference: &'r Reference<'_, S>,
+) -> impl Iterator<Item = (String, LocalFrames, GravityEnergy<S>)> + 'r {
+    let system = reference.system;
     (0..system.bodies.len())
-        .filter(|&b| !system.bodies[b].mass.is_exactly_zero())
+        .filter(|&b| !system.bodies[b].mass.is_exactly_zero() && reference.keeps_body(b))
         .map(|b| {
             let body = &system.bodies[b];
             let local = LocalFrames::new(system, &[b]);
@@ -289,7 +291,8 @@ impl Element for WireStretch {
         reference: &Reference<Dual64>,
         _shared: &SharedBodies,
     ) -> Result<Option<Vec<TangentTerm>>, EnergyError> {
-        let terms = reference.system.wires.iter().map(|wire| {
+        let wires = reference.system.wires.iter();
+        let terms = wires.filter(|w| reference.keeps_wire(w)).map(|wire| {
             let (local, energy) = wire_stretch_energy(reference, wire)?;
             let label = format!("wire-stretch {}", wire.name);
             let tag = wire.tags.stretch.clone();
@@ -600,7 +603,7 @@ impl Element for SpringKind {
         "six-axis spring ½ Δᵀ K Δ + fᵀ Δ between two attachment frames"
     }
     fn terms(&self, reference: &Reference) -> Result<Vec<Term>, EnergyError> {
-        Ok(spring_energies(reference.system)
+        Ok(spring_energies(reference)
             .map(|(label, tag, local, energy)| Term::on_frames(label, "spring", tag, local, energy))
             .collect())
     }
@@ -610,7 +613,7 @@ impl Element for SpringKind {
         _shared: &SharedBodies,
     ) -> Result<Option<Vec<TangentTerm>>, EnergyError> {
         Ok(Some(
-            spring_energies(reference.system)
+            spring_energies(reference)
                 .map(|(label, tag, local, energy)| {
                     TangentTerm::on_frames(label, "spring", tag, local, energy)
                 })
@@ -619,24 +622,30 @@ impl Element for SpringKind {
     }
 }
 
-/// Every spring's energy, with its label and tag.
-fn spring_energies<S: Constant>(
-    system: &System<S>,
-) -> impl Iterator<Item = (String, String, LocalFrames, SpringEnergy<S>)> + '_ {
-    system.springs.iter().map(|s| {
-        let local = LocalFrames::new(system, &[s.ends[0].body, s.ends[1].body]);
-        let energy = SpringEnergy {
-            frames: [local.frames[0].clone(), local.frames[1].clone()],
-            ends: s.ends.clone(),
-            turns: s.ends.each_ref().map(|e| {
-                let [yaw, pitch, roll] = e.angles;
-                rotation(yaw, pitch, roll)
-            }),
-            stiffness: s.stiffness,
-            preload: s.preload,
-        };
-        (format!("spring {}", s.name), s.tag.clone(), local, energy)
-    })
+/// The energy of every spring `reference` keeps ([`Reference::keeps_spring`]), with its
+/// label and tag.
+fn spring_energies<'r, S: Constant>(
+    reference: &'r Reference<'_, S>,
+) -> impl Iterator<Item = (String, String, LocalFrames, SpringEnergy<S>)> + 'r {
+    let system = reference.system;
+    system
+        .springs
+        .iter()
+        .filter(|s| reference.keeps_spring(s))
+        .map(|s| {
+            let local = LocalFrames::new(system, &[s.ends[0].body, s.ends[1].body]);
+            let energy = SpringEnergy {
+                frames: [local.frames[0].clone(), local.frames[1].clone()],
+                ends: s.ends.clone(),
+                turns: s.ends.each_ref().map(|e| {
+                    let [yaw, pitch, roll] = e.angles;
+                    rotation(yaw, pitch, roll)
+                }),
+                stiffness: s.stiffness,
+                preload: s.preload,
+            };
+            (format!("spring {}", s.name), s.tag.clone(), local, energy)
+        })
 }
 
 crate::register_element!(Gravity);

@@ -15,7 +15,7 @@ use num_dual::Dual64;
 use pendkit_geometry::{Frame, FrameMap};
 use pendkit_rotations::{Constant, norm, tr_mul_vec};
 
-use crate::{BodyId, EndDirection, EnergyError, Stage, System, TangentTerm, Term, Wire};
+use crate::{BodyId, EndDirection, EnergyError, Spring, Stage, System, TangentTerm, Term, Wire};
 
 /// The configuration an element builds its terms around: the equilibrium, or the start
 /// position when plug-in terms join the equilibrium search early. With `S = Dual64` the
@@ -31,6 +31,9 @@ pub struct Reference<'a, S: Constant = f64> {
     /// around one reference ask for the same few bodies' frames many times (each wire's
     /// ends, for its stretch, tension, clamp directions, torsion and beam).
     frames: OnceLock<Vec<Frame<S>>>,
+    /// Whether the caller keeps only the terms whose constants move with the parameter
+    /// ([`Reference::moving_only`]).
+    moving_only: bool,
 }
 
 impl<'a, S: Constant> Reference<'a, S> {
@@ -40,7 +43,68 @@ impl<'a, S: Constant> Reference<'a, S> {
             system,
             coords,
             frames: OnceLock::new(),
+            moving_only: false,
         }
+    }
+
+    /// [`Reference::new`] for a caller that keeps only the terms whose constants move with
+    /// the parameter and discards the rest ([`TangentTerm::moves`]: the exact sensitivities'
+    /// passes at a fixed configuration). A kind may then leave out the terms of an element
+    /// nothing of which moves ([`Reference::keeps_wire`], [`Reference::keeps_body`],
+    /// [`Reference::keeps_spring`]), which saves building them; a kind that builds them all
+    /// anyway is only slower.
+    pub fn moving_only(system: &'a System<S>, coords: &'a [S]) -> Self {
+        Reference {
+            moving_only: true,
+            ..Reference::new(system, coords)
+        }
+    }
+
+    /// Whether body `body`'s frame here moves with the parameter: some coordinate it reads
+    /// carries a derivative (the frames' expressions hold no model numbers).
+    fn frame_moves(&self, body: BodyId) -> bool {
+        self.system.bodies[body]
+            .frame
+            .var_list()
+            .iter()
+            .any(|&i| self.coords.get(i).is_none_or(|c| c.moves()))
+    }
+
+    /// Whether a kind must build its terms of `wire`: always, unless the caller keeps only
+    /// moving terms ([`Reference::moving_only`]) and nothing a wire's terms are built from
+    /// moves: the wire's numbers ([`Wire::moves`]) and its end bodies' frames here.
+    pub fn keeps_wire(&self, wire: &Wire<S>) -> bool {
+        !self.moving_only || wire.moves() || wire.ends.iter().any(|e| self.frame_moves(e.body))
+    }
+
+    /// Whether a kind must build its terms of body `body` alone (gravity): always, unless
+    /// the caller keeps only moving terms and none of the body's numbers (mass, inertia,
+    /// centre of mass), the gravitational acceleration or its frame here moves.
+    pub fn keeps_body(&self, body: BodyId) -> bool {
+        let b = &self.system.bodies[body];
+        !self.moving_only
+            || self.system.gravity.moves()
+            || b.mass.moves()
+            || b.inertia.iter().any(|v| v.moves())
+            || b.centre_of_mass.iter().any(|v| v.moves())
+            || self.frame_moves(body)
+    }
+
+    /// Whether a kind must build its terms of `spring`: always, unless the caller keeps
+    /// only moving terms and none of the spring's numbers (end points and angles,
+    /// stiffness, preload) or its end bodies' frames here moves.
+    pub fn keeps_spring(&self, spring: &Spring<S>) -> bool {
+        !self.moving_only
+            || spring
+                .ends
+                .iter()
+                .any(|e| e.point.iter().chain(&e.angles).any(|v| v.moves()))
+            || spring
+                .stiffness
+                .iter()
+                .chain(&spring.preload)
+                .any(|v| v.moves())
+            || spring.ends.iter().any(|e| self.frame_moves(e.body))
     }
 
     /// The frame (origin, m; rotation) of body `body` (one of the system's) here.

@@ -199,6 +199,32 @@ pub struct Wire<S: Real = f64> {
     pub tags: WireTags,
 }
 
+impl<S: pendkit_rotations::Constant> Wire<S> {
+    /// Whether any of the wire's numbers (its ends' points and explicit directions,
+    /// stiffness, unstretched length, section) moves with the parameter
+    /// ([`pendkit_rotations::Constant::moves`]).
+    pub fn moves(&self) -> bool {
+        let ends = self.ends.iter().any(|e| {
+            e.point.iter().any(|v| v.moves())
+                || matches!(&e.direction, EndDirection::Explicit(d) if d.iter().any(|v| v.moves()))
+        });
+        let s = &self.section;
+        let section = [
+            s.youngs_modulus,
+            s.shear_modulus,
+            s.area,
+            s.moment_1,
+            s.moment_2,
+            s.torsion_constant,
+            s.polar_moment,
+            s.linear_density,
+        ];
+        ends || self.stiffness.moves()
+            || self.unstretched_length.moves()
+            || section.iter().chain(&s.principal_axis).any(|v| v.moves())
+    }
+}
+
 impl<S: Real> Wire<S> {
     /// A wire of equilibrium length `length` (m) carrying static tension `tension` (N):
     /// k = E A / length (the parameter sets' convention) and l0 = length − T / k.

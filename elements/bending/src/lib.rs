@@ -105,7 +105,8 @@ fn each_beam<C: Constant, T>(
     term: impl Fn(String, String, PartOff, Arc<LocalFrames>, Arc<WireBeam<C>>) -> Result<T, EnergyError>,
 ) -> Result<Vec<T>, EnergyError> {
     let mut terms = Vec::new();
-    for (index, wire) in reference.system.wires.iter().enumerate() {
+    let wires = reference.system.wires.iter().enumerate();
+    for (index, wire) in wires.filter(|(_, w)| reference.keeps_wire(w)) {
         if let Some((beam, frames)) = shared_beam(reference, shared, index)?.as_ref() {
             let (tag, off) = part_tag(wire, part);
             let label = format!("{kind} {}", wire.name);

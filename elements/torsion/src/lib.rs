@@ -173,7 +173,7 @@ impl Element for WireTorsion {
     ) -> Result<Vec<Term>, EnergyError> {
         let system = reference.system;
         let mut terms = Vec::new();
-        for wire in &system.wires {
+        for wire in system.wires.iter().filter(|w| reference.keeps_wire(w)) {
             let local = shared.frames(system, &[wire.ends[0].body, wire.ends[1].body]);
             if let Some(energy) = torsion_energy(reference, wire, &local) {
                 let label = format!("wire-torsion {}", wire.name);
@@ -190,7 +190,7 @@ impl Element for WireTorsion {
     ) -> Result<Option<Vec<TangentTerm>>, EnergyError> {
         let system = reference.system;
         let mut terms = Vec::new();
-        for wire in &system.wires {
+        for wire in system.wires.iter().filter(|w| reference.keeps_wire(w)) {
             let local = shared.frames(system, &[wire.ends[0].body, wire.ends[1].body]);
             if let Some(energy) = torsion_energy(reference, wire, &local) {
                 let label = format!("wire-torsion {}", wire.name);
