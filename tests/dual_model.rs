@@ -210,6 +210,30 @@ fn map_scalars_visits_every_generic_field() {
     assert_eq!(pendulum(M, L, R).scalars().len(), expected);
 }
 
+#[test]
+fn a_wire_moves_exactly_when_one_of_its_own_numbers_does() {
+    // `Wire::moves` lets the kinds leave out a wire's terms for a parameter that moves none
+    // of its numbers (`Reference::moving_only`): it must see every generic number of the
+    // wire and nothing else. Each number of the model seeded alone, in the visitor's order
+    // (gravity, the two bodies' 13 each, then the wire's 22, the count the test above
+    // checks), moves the wire exactly when it is one of the wire's.
+    let base = pendulum(M, L, R);
+    let wire_numbers = (1 + 2 * 13)..(1 + 2 * 13 + 22);
+    for k in 0..base.scalars().len() {
+        let mut index = 0;
+        let seeded = base.map_scalars(|x| {
+            let seed = if index == k { 1.0 } else { 0.0 };
+            index += 1;
+            Dual64::new(x, seed)
+        });
+        assert_eq!(
+            seeded.wires[0].moves(),
+            wire_numbers.contains(&k),
+            "number {k}"
+        );
+    }
+}
+
 /// `model` built in `f64` with `parameter` overridden by `value`.
 fn f64_model(model: &dyn pendkit_model::Model, parameter: &str, value: f64) -> Option<System> {
     let mut overrides = pendkit_model::Overrides::default();

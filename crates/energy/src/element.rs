@@ -174,7 +174,9 @@ pub trait Element: Sync {
     /// parameter derivatives (docs/exact-sensitivities.md). Energy bodies shared with other
     /// kinds built around the same reference are taken from (or put into) `shared`, as in
     /// [`Element::terms_shared`]. `None` (the default): the kind has no such terms, and the
-    /// sensitivities fall back to differences.
+    /// sensitivities fall back to differences. Around a [`Reference::moving_only`] the kind
+    /// may leave out the terms of elements nothing of which moves
+    /// ([`Reference::keeps_wire`] and its siblings); it need not.
     fn tangent_terms(
         &self,
         _reference: &Reference<Dual64>,
