@@ -61,13 +61,16 @@ impl<'a, S: Constant> Reference<'a, S> {
     }
 
     /// Whether body `body`'s frame here moves with the parameter: some coordinate it reads
-    /// carries a derivative (the frames' expressions hold no model numbers).
+    /// carries a derivative (the frames' expressions hold no model numbers). A body or
+    /// coordinate the model does not have counts as moving: its terms are then built, and
+    /// the build reports what is wrong with them.
     fn frame_moves(&self, body: BodyId) -> bool {
-        self.system.bodies[body]
-            .frame
-            .var_list()
-            .iter()
-            .any(|&i| self.coords.get(i).is_none_or(|c| c.moves()))
+        self.system.bodies.get(body).is_none_or(|b| {
+            b.frame
+                .var_list()
+                .iter()
+                .any(|&i| self.coords.get(i).is_none_or(|c| c.moves()))
+        })
     }
 
     /// Whether a kind must build its terms of `wire`: always, unless the caller keeps only
@@ -81,12 +84,14 @@ impl<'a, S: Constant> Reference<'a, S> {
     /// the caller keeps only moving terms and none of the body's numbers (mass, inertia,
     /// centre of mass), the gravitational acceleration or its frame here moves.
     pub fn keeps_body(&self, body: BodyId) -> bool {
-        let b = &self.system.bodies[body];
+        let numbers_move = |b: &crate::Body<S>| {
+            b.mass.moves()
+                || b.inertia.iter().any(|v| v.moves())
+                || b.centre_of_mass.iter().any(|v| v.moves())
+        };
         !self.moving_only
             || self.system.gravity.moves()
-            || b.mass.moves()
-            || b.inertia.iter().any(|v| v.moves())
-            || b.centre_of_mass.iter().any(|v| v.moves())
+            || self.system.bodies.get(body).is_none_or(numbers_move)
             || self.frame_moves(body)
     }
 
