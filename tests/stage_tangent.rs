@@ -307,6 +307,39 @@ fn wrong_sizes_are_errors_naming_what_and_where() {
     assert!(e.contains("vectors") && e.contains("not finite"), "{e}");
 }
 
+/// The equilibrium of `system` at stage 2, as dual numbers with no derivative.
+fn stage_2_at_rest(system: &pendkit_energy::System) -> Vec<num_dual::Dual64> {
+    let a = assemble_with(system, Stage::S2, &AssemblyOptions::default(), None)
+        .unwrap_or_else(|e| panic!("assemble: {e}"));
+    a.equilibrium
+        .coords
+        .iter()
+        .map(|&v| num_dual::Dual64::from_re(v))
+        .collect()
+}
+
+/// Every term of every kind up to stage 2, built around `reference`.
+fn tangent_terms_to_stage_2(
+    reference: &pendkit_energy::Reference<num_dual::Dual64>,
+) -> Vec<pendkit_energy::TangentTerm> {
+    let shared = pendkit_energy::SharedBodies::new();
+    let mut terms = Vec::new();
+    for kind in pendkit_energy::registry() {
+        if reference
+            .system
+            .element_stage(kind)
+            .is_some_and(|s| s <= Stage::S2)
+        {
+            terms.extend(
+                kind.tangent_terms(reference, &shared)
+                    .expect("terms")
+                    .expect("every bundled kind has tangent terms"),
+            );
+        }
+    }
+    terms
+}
+
 /// The equilibrium of `case` at stage 2 as dual numbers with no derivative, and every term
 /// of every kind up to stage 2 of the model built with `name` seeded, built around it.
 fn dual_terms_at_rest(
@@ -317,29 +350,11 @@ fn dual_terms_at_rest(
     Vec<num_dual::Dual64>,
     Vec<pendkit_energy::TangentTerm>,
 ) {
-    use pendkit_energy::{Reference, SharedBodies, registry};
     let (system, _) = case.build().expect("build");
-    let a = assemble_with(&system, Stage::S2, &AssemblyOptions::default(), None).expect("assemble");
-    let at_rest: Vec<num_dual::Dual64> = a
-        .equilibrium
-        .coords
-        .iter()
-        .map(|&v| num_dual::Dual64::from_re(v))
-        .collect();
+    let at_rest = stage_2_at_rest(&system);
     let dual = pendkit_model::build_tangent(case.model, &case.overrides, name)
         .unwrap_or_else(|e| panic!("{name}: {e}"));
-    let reference = Reference::new(&dual, &at_rest);
-    let shared = SharedBodies::new();
-    let mut terms = Vec::new();
-    for kind in registry() {
-        if dual.element_stage(kind).is_some_and(|s| s <= Stage::S2) {
-            terms.extend(
-                kind.tangent_terms(&reference, &shared)
-                    .expect("terms")
-                    .expect("every bundled kind has tangent terms"),
-            );
-        }
-    }
+    let terms = tangent_terms_to_stage_2(&pendkit_energy::Reference::new(&dual, &at_rest));
     (dual, at_rest, terms)
 }
 
@@ -443,26 +458,9 @@ fn a_moving_only_reference_leaves_out_no_term_that_moves() {
     // numerical. Likewise the projection's builds, around the equilibrium moved along one
     // coordinate with the model's numbers fixed: the same terms that move or are on the
     // coordinate. Not vacuous: the moving-only builds leave out most terms.
-    use pendkit_energy::{Reference, SharedBodies, TangentTerm, registry};
+    use pendkit_energy::{Reference, TangentTerm};
     let (mut built_all, mut built_moving_only, mut compared) = (0, 0, 0);
-    let terms_of = |reference: &Reference<num_dual::Dual64>| {
-        let shared = SharedBodies::new();
-        let mut terms: Vec<TangentTerm> = Vec::new();
-        for kind in registry() {
-            if reference
-                .system
-                .element_stage(kind)
-                .is_some_and(|s| s <= Stage::S2)
-            {
-                terms.extend(
-                    kind.tangent_terms(reference, &shared)
-                        .expect("terms")
-                        .expect("every bundled kind has tangent terms"),
-                );
-            }
-        }
-        terms
-    };
+    let terms_of = tangent_terms_to_stage_2;
     let labels = |terms: &[TangentTerm], keep: &dyn Fn(&TangentTerm) -> bool| -> Vec<String> {
         terms
             .iter()
@@ -473,14 +471,7 @@ fn a_moving_only_reference_leaves_out_no_term_that_moves() {
     for model in pendkit::models() {
         let (system, resolved) =
             pendkit_model::build_with(model, &Default::default()).expect("build");
-        let a = assemble_with(&system, Stage::S2, &AssemblyOptions::default(), None)
-            .unwrap_or_else(|e| panic!("{}: {e}", model.name()));
-        let at_rest: Vec<num_dual::Dual64> = a
-            .equilibrium
-            .coords
-            .iter()
-            .map(|&v| num_dual::Dual64::from_re(v))
-            .collect();
+        let at_rest = stage_2_at_rest(&system);
         let lifted = system.map_scalars(num_dual::Dual64::from_re);
         for i in 0..at_rest.len() {
             let mut moved = at_rest.clone();
