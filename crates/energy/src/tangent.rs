@@ -339,13 +339,6 @@ impl TangentTerm {
         self.second_of_parts(frames, self.own_part())
     }
 
-    /// The first derivative of the energy along a direction z, given every body's frame at
-    /// x + εz ([`tangent_frames_first`]): its value part, with its derivative with respect
-    /// to the parameter along the coordinates' own derivative in the dual part.
-    pub fn first_along_frames(&self, frames: &[Frame<DualTangent>]) -> Result<Dual64, EnergyError> {
-        self.first_of_parts(frames, self.own_part())
-    }
-
     /// [`TangentTerm::second_along_frames`] with u = v, given every body's frame at x + εu
     /// ([`tangent_frames_along`]): uᵀ H u by the cheaper second-order dual number.
     pub fn second_along_frames_once(
@@ -353,15 +346,6 @@ impl TangentTerm {
         frames: &[Frame<SecondTangent>],
     ) -> Result<Dual64, EnergyError> {
         self.second_once_of_parts(frames, self.own_part())
-    }
-
-    /// [`TangentTerm::first_along_frames`] of the sum of the body's parts `parts`.
-    fn first_of_parts(
-        &self,
-        frames: &[Frame<DualTangent>],
-        parts: &[usize],
-    ) -> Result<Dual64, EnergyError> {
-        self.with_frames(frames, |mine| self.body.value_d(mine, parts).eps)
     }
 
     /// [`TangentTerm::second_along_frames`] of the sum of the body's parts `parts`.
@@ -482,11 +466,6 @@ impl<'t> TangentSum<'t> {
         self.groups.is_empty()
     }
 
-    /// Σ [`TangentTerm::first_along_frames`].
-    pub fn first_along_frames(&self, frames: &[Frame<DualTangent>]) -> Result<Dual64, EnergyError> {
-        self.sum(|(t, parts)| t.first_of_parts(frames, parts))
-    }
-
     /// Σ [`TangentTerm::second_along_frames`].
     pub fn second_along_frames(
         &self,
@@ -543,18 +522,6 @@ pub fn tangent_frames_along<S: Real>(
     let zero = Dual64::from_re(0.0);
     frames_at(system, [("x", x.len()), ("u", u.len())], |i| {
         SecondTangent::new(x[i], Dual64::from_re(u[i]), zero)
-    })
-}
-
-/// Every body's frame of `system` at x + εz: the frames
-/// [`TangentTerm::first_along_frames`] reads.
-pub fn tangent_frames_first<S: Real>(
-    system: &crate::System<S>,
-    x: &[Dual64],
-    z: &[f64],
-) -> Result<Vec<Frame<DualTangent>>, EnergyError> {
-    frames_at(system, [("x", x.len()), ("z", z.len())], |i| {
-        DualTangent::new(x[i], Dual64::from_re(z[i]))
     })
 }
 
