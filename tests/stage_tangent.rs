@@ -448,6 +448,89 @@ fn a_sum_evaluates_a_shared_body_once_and_equals_the_terms_one_by_one() {
 }
 
 #[test]
+fn a_pass_along_several_modes_at_once_is_the_passes_along_each() {
+    // The projection and each parameter's column evaluate the terms along LANES modes at
+    // once (`SecondLanes`: the value shared, one lane per direction). Each lane must be the
+    // one-direction pass along its own direction (`Dual2<Dual64>`, an independent scalar
+    // of num-dual's), term by term and summed, to rounding (the same products summed in
+    // another order: 1e-12 of the term's size is a thousand times the rounding seen); the
+    // lanes past the directions given are 0, and more directions than lanes is an error.
+    // Every kind of the quad and of quad-full (6 × 6 blade springs), with a parameter
+    // whose derivative moves terms of each kind (the PUM mass: gravity, wire stretch,
+    // bending through the tension, torsion), and the coordinates' own motion.
+    use num_dual::Dual64;
+    use pendkit_energy::{TangentSum, tangent_frames_along, tangent_frames_along_lanes};
+    use pendkit_rotations::LANES;
+    for (model, parameter) in [("quad", "m2"), ("quad-full", "m2"), ("quad", "l3")] {
+        let (dual, at_rest, terms) =
+            dual_terms_at_rest(&Case::open(model).expect("case"), parameter);
+        let n = dual.coords.len();
+        // directions with every coordinate moving, different in each lane
+        let directions: Vec<Vec<f64>> = (0..LANES + 1)
+            .map(|k| {
+                (0..n)
+                    .map(|i| (((i + 3) * (k + 5)) % 7) as f64 * 0.3 - 0.8)
+                    .collect()
+            })
+            .collect();
+        let refs: Vec<&[f64]> = directions.iter().map(|d| d.as_slice()).collect();
+        let e = tangent_frames_along_lanes(&dual, &at_rest, &refs).expect_err("too many");
+        assert!(e.to_string().contains("directions"), "{e}");
+        for count in [LANES, 3] {
+            let lanes = tangent_frames_along_lanes(&dual, &at_rest, &refs[..count]).expect("lanes");
+            let close = |a: Dual64, b: Dual64, what: &str| {
+                for (x, y) in [(a.re, b.re), (a.eps, b.eps)] {
+                    assert!(
+                        (x - y).abs() <= 1e-12 * y.abs().max(1e-300),
+                        "{model} {parameter} {what}: lanes {x} against one direction {y}"
+                    );
+                }
+            };
+            let sum = TangentSum::new(&terms);
+            let summed = sum.second_along_frames_lanes(&lanes).expect("sum");
+            for (k, direction) in refs.iter().enumerate().take(LANES) {
+                if k >= count {
+                    assert_eq!(
+                        summed[k],
+                        Dual64::from_re(0.0),
+                        "lane {k} past the directions"
+                    );
+                    continue;
+                }
+                let along = tangent_frames_along(&dual, &at_rest, direction).expect("frames");
+                for term in &terms {
+                    let one = term.second_along_frames_once(&along).expect("term");
+                    let lane = term.second_along_frames_lanes(&lanes).expect("term")[k];
+                    close(lane, one, &format!("{} lane {k}", term.label));
+                }
+                let one = sum.second_along_frames_once(&along).expect("sum");
+                close(summed[k], one, &format!("sum lane {k}"));
+            }
+        }
+        // the coordinates' own motion (the projection's coefficients): a coordinate with a
+        // derivative moves every lane's second derivative as it moves the one direction's
+        let mut moving = at_rest.clone();
+        moving[n / 2].eps = 1.0;
+        let lanes = tangent_frames_along_lanes(&dual, &moving, &refs[..LANES]).expect("lanes");
+        let summed = TangentSum::new(&terms)
+            .second_along_frames_lanes(&lanes)
+            .expect("sum");
+        for (k, direction) in refs.iter().enumerate().take(LANES) {
+            let along = tangent_frames_along(&dual, &moving, direction).expect("frames");
+            let one = TangentSum::new(&terms)
+                .second_along_frames_once(&along)
+                .expect("sum");
+            assert!(
+                (summed[k].eps - one.eps).abs() <= 1e-12 * one.eps.abs().max(1e-300),
+                "{model}: coordinate motion, lane {k}: {} against {}",
+                summed[k].eps,
+                one.eps
+            );
+        }
+    }
+}
+
+#[test]
 fn a_moving_only_reference_leaves_out_no_term_that_moves() {
     // The projected route builds each parameter's terms around a `Reference::moving_only`,
     // which lets a kind leave out the terms of an element nothing of which moves, and keeps

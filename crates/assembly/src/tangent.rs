@@ -23,11 +23,13 @@
 use nalgebra::{DMatrix, DVector, Vector3};
 use num_dual::{Dual, Dual64};
 use pendkit_energy::{
-    CoordKind, EarlyWireTerms, EnergyError, HyperTangent, Reference, SecondTangent, SharedBodies,
-    Stage, System, TangentSum, TangentTerm, registry,
+    CoordKind, EarlyWireTerms, EnergyError, HyperTangent, Reference, SharedBodies, Stage, System,
+    TangentSum, TangentTerm, registry,
 };
 use pendkit_geometry::Frame;
-use pendkit_rotations::{Constant, Real, tr_mul, vee};
+use pendkit_rotations::{
+    Constant, Dual2Lanes, LANES, Real, SecondLanes, second_lanes_seed, tr_mul, vee,
+};
 
 use crate::equilibrium::{Evaluation, free_coordinates, free_slots, hessian_sum};
 use crate::evaluate::Evaluator;
@@ -308,79 +310,151 @@ pub enum Along<'a> {
     Projected(&'a Projection),
 }
 
-/// Every body's frame at the equilibrium along a pair of directions (a, b): what one
-/// entry of Wᵀ(dK/dp)W evaluates the terms on. Along one direction (a = b) the cheaper
-/// second-order dual number.
+/// Pairs of directions evaluated together, with their seeds (every coordinate at the
+/// equilibrium along the pairs) and every body's frame there: what the entries of
+/// Wᵀ(dK/dp)W for those pairs evaluate the terms on. Up to [`LANES`] pairs along one
+/// direction each (a = b) share one evaluation, one lane each ([`SecondLanes`]); a pair
+/// across two directions (a ≠ b, within a cluster of equal ω²) takes the hyper-dual
+/// number alone.
 #[derive(Debug)]
-enum PairFrames {
-    Along(Vec<Frame<SecondTangent>>),
-    Across(Vec<Frame<HyperTangent>>),
+struct PairGroup<T> {
+    /// The pairs, as indices into the projection's list, in lane order.
+    pairs: Vec<usize>,
+    seeds: Vec<T>,
+    frames: Vec<Frame<T>>,
 }
 
-/// The scalars of [`PairFrames`]: a coordinate seeded with its value (carrying its
-/// derivative with respect to the parameter) and the two directions' entries, and the
-/// second derivative of a term along the directions.
+/// A [`PairGroup`] of either kind.
+#[derive(Debug)]
+enum Group {
+    Along(PairGroup<SecondLanes>),
+    Across(PairGroup<HyperTangent>),
+}
+
+/// The scalars of a [`PairGroup`]: a seed moved along its own coordinate, and the second
+/// derivatives of terms along the group's pairs.
 trait PairScalar: Real {
-    fn seed(x: Dual64, u: f64, v: f64) -> Self;
-    fn second(terms: &TangentSum, frames: &[Frame<Self>]) -> Result<Dual64, EnergyError>;
+    /// The seed of coordinate i at x + ε eᵢ: its value's derivative set to 1 (the
+    /// directions' entries do not move with it).
+    fn moving(self) -> Self;
+    /// Σ of the terms' second derivatives along each of the group's `count` pairs, each
+    /// with its derivative.
+    fn seconds(
+        terms: &TangentSum,
+        frames: &[Frame<Self>],
+        count: usize,
+    ) -> Result<Vec<Dual64>, EnergyError>;
 }
 
-impl PairScalar for SecondTangent {
-    fn seed(x: Dual64, u: f64, _v: f64) -> Self {
-        SecondTangent::new(x, Dual64::from_re(u), Dual64::from_re(0.0))
+impl PairScalar for SecondLanes {
+    fn moving(self) -> Self {
+        Dual::new(self.re, Dual2Lanes::from_re(1.0))
     }
-    fn second(terms: &TangentSum, frames: &[Frame<Self>]) -> Result<Dual64, EnergyError> {
-        terms.second_along_frames_once(frames)
+    fn seconds(
+        terms: &TangentSum,
+        frames: &[Frame<Self>],
+        count: usize,
+    ) -> Result<Vec<Dual64>, EnergyError> {
+        let lanes = terms.second_along_frames_lanes(frames)?;
+        Ok(lanes[..count].to_vec())
     }
 }
 
 impl PairScalar for HyperTangent {
-    fn seed(x: Dual64, u: f64, v: f64) -> Self {
-        let zero = Dual64::from_re(0.0);
-        HyperTangent::new(x, Dual64::from_re(u), Dual64::from_re(v), zero)
+    fn moving(self) -> Self {
+        HyperTangent::new(
+            Dual64::new(self.re.re, 1.0),
+            self.eps1,
+            self.eps2,
+            self.eps1eps2,
+        )
     }
-    fn second(terms: &TangentSum, frames: &[Frame<Self>]) -> Result<Dual64, EnergyError> {
-        terms.second_along_frames(frames)
+    fn seconds(
+        terms: &TangentSum,
+        frames: &[Frame<Self>],
+        _count: usize,
+    ) -> Result<Vec<Dual64>, EnergyError> {
+        Ok(vec![terms.second_along_frames(frames)?])
     }
 }
 
-/// Wᵀ(∂K/∂qᵢ)W for one pair and every free coordinate i of `coordinates` (each with the
-/// bodies it moves and the terms whose energy it changes: the terms on it, and the terms
-/// built around x + ε eᵢ whose constants moved with it): the pair's frames with those
-/// bodies re-evaluated at x + ε eᵢ, and the terms summed there (`frames`: every body's frame
-/// at x along the pair).
-fn geometric_row<T: PairScalar>(
-    system: &System,
-    x: &[f64],
-    (u, v): (&[f64], &[f64]),
-    frames: &[Frame<T>],
-    coordinates: &[(usize, Vec<usize>, TangentSum)],
-) -> Result<Vec<(usize, f64)>, EnergyError> {
-    // a copy whose moved bodies are put back after each coordinate
-    let mut frames = frames.to_vec();
-    let mut seeds: Vec<T> = (0..x.len())
-        .map(|j| T::seed(Dual64::from_re(x[j]), u[j], v[j]))
-        .collect();
-    let mut row = Vec::with_capacity(coordinates.len());
-    for (i, bodies, terms) in coordinates {
-        let i = *i;
-        seeds[i] = T::seed(Dual64::new(x[i], 1.0), u[i], v[i]);
-        let saved: Vec<(usize, Frame<T>)> = bodies
-            .iter()
-            .map(|&b| {
-                let moved = system.bodies[b].frame.eval(&seeds);
-                (b, std::mem::replace(&mut frames[b], moved))
-            })
-            .collect();
-        let sum = T::second(terms, &frames);
-        for (b, frame) in saved {
-            frames[b] = frame;
+impl<T: PairScalar> PairGroup<T> {
+    /// The group of `pairs` (indices into the projection's list) with the seeds `seed(j)`.
+    fn new(system: &System, n: usize, pairs: Vec<usize>, seed: impl Fn(usize) -> T) -> Self {
+        let seeds: Vec<T> = (0..n).map(seed).collect();
+        let frames = system.bodies.iter().map(|b| b.frame.eval(&seeds)).collect();
+        PairGroup {
+            pairs,
+            seeds,
+            frames,
         }
-        seeds[i] = T::seed(Dual64::from_re(x[i]), u[i], v[i]);
-        row.push((i, sum?.eps));
     }
-    Ok(row)
+
+    /// Σ `terms` along the group's pairs at the equilibrium: one value per pair.
+    fn seconds(&self, terms: &TangentSum) -> Result<Vec<Dual64>, EnergyError> {
+        T::seconds(terms, &self.frames, self.pairs.len())
+    }
+
+    /// Wᵀ(∂K/∂qᵢ)W for the group's pairs and each free coordinate i of `coordinates` (each
+    /// with the bodies it moves and the terms whose energy it changes: the terms on it,
+    /// and the terms built around x + ε eᵢ whose constants moved with it): the group's
+    /// frames with those bodies re-evaluated at x + ε eᵢ, and the terms summed there. One
+    /// (coordinate, value per pair) per coordinate.
+    fn geometric_rows(
+        &self,
+        system: &System,
+        coordinates: &[(usize, Vec<usize>, TangentSum)],
+    ) -> Result<Vec<(usize, Vec<f64>)>, EnergyError> {
+        // copies whose moved coordinate and bodies are put back after each coordinate
+        let mut frames = self.frames.clone();
+        let mut seeds = self.seeds.clone();
+        let mut rows = Vec::with_capacity(coordinates.len());
+        for (i, bodies, terms) in coordinates {
+            let i = *i;
+            seeds[i] = self.seeds[i].moving();
+            for &b in bodies {
+                frames[b] = system.bodies[b].frame.eval(&seeds);
+            }
+            let sums = T::seconds(terms, &frames, self.pairs.len());
+            for &b in bodies {
+                frames[b] = self.frames[b].clone();
+            }
+            seeds[i] = self.seeds[i];
+            rows.push((i, sums?.iter().map(|v| v.eps).collect()));
+        }
+        Ok(rows)
+    }
 }
+
+impl Group {
+    fn pairs(&self) -> &[usize] {
+        match self {
+            Group::Along(g) => &g.pairs,
+            Group::Across(g) => &g.pairs,
+        }
+    }
+    fn seconds(&self, terms: &TangentSum) -> Result<Vec<Dual64>, EnergyError> {
+        match self {
+            Group::Along(g) => g.seconds(terms),
+            Group::Across(g) => g.seconds(terms),
+        }
+    }
+    fn geometric_rows(
+        &self,
+        system: &System,
+        coordinates: &[(usize, Vec<usize>, TangentSum)],
+    ) -> Result<Vec<(usize, Vec<f64>)>, EnergyError> {
+        match self {
+            Group::Along(g) => g.geometric_rows(system, coordinates),
+            Group::Across(g) => g.geometric_rows(system, coordinates),
+        }
+    }
+}
+
+/// How many free coordinates one unit of the projection's parallel work takes: enough
+/// units for the threads when there are only a few groups (the quad's 24 modes make three),
+/// few enough that each unit's copy of the frames is small beside its passes.
+const COORDINATES_PER_UNIT: usize = 8;
 
 /// What the directional derivatives Wᵀ(dK/dp)W of one stage share between parameters:
 /// the directions W (full coordinate vectors, e.g. the modes lifted to the floats), the
@@ -395,7 +469,7 @@ pub struct Projection {
     equilibrium: Vec<f64>,
     pairs: Vec<(usize, usize)>,
     directions: usize,
-    frames: Vec<PairFrames>,
+    groups: Vec<Group>,
     /// One row per pair, one column per coordinate (0 on the coordinates that are not free).
     geometric: DMatrix<f64>,
 }
@@ -445,23 +519,36 @@ impl Projection {
         let columns: Vec<Vec<f64>> = (0..m)
             .map(|a| vectors.column(a).iter().copied().collect())
             .collect();
-        let at = |a: usize, b: usize| (columns[a].as_slice(), columns[b].as_slice());
-        let frames_of = |a: usize, b: usize| {
-            let (u, v) = at(a, b);
-            let at_rest = |j: usize| Dual64::from_re(equilibrium[j]);
-            if a == b {
-                let seeds: Vec<SecondTangent> = (0..n)
-                    .map(|j| SecondTangent::seed(at_rest(j), u[j], v[j]))
-                    .collect();
-                PairFrames::Along(system.bodies.iter().map(|b| b.frame.eval(&seeds)).collect())
-            } else {
-                let seeds: Vec<HyperTangent> = (0..n)
-                    .map(|j| HyperTangent::seed(at_rest(j), u[j], v[j]))
-                    .collect();
-                PairFrames::Across(system.bodies.iter().map(|b| b.frame.eval(&seeds)).collect())
-            }
-        };
-        let frames: Vec<PairFrames> = pairs.iter().map(|&(a, b)| frames_of(a, b)).collect();
+        let at_rest = |j: usize| Dual64::from_re(equilibrium[j]);
+        // the pairs along one direction in groups of LANES, each pair across two alone
+        let (along, across): (Vec<usize>, Vec<usize>) =
+            (0..pairs.len()).partition(|&k| pairs[k].0 == pairs[k].1);
+        let mut groups: Vec<Group> = along
+            .chunks(LANES)
+            .map(|chunk| {
+                let group = PairGroup::new(system, n, chunk.to_vec(), |j| {
+                    second_lanes_seed(
+                        at_rest(j),
+                        std::array::from_fn(|l| {
+                            chunk.get(l).map_or(0.0, |&k| columns[pairs[k].0][j])
+                        }),
+                    )
+                });
+                Group::Along(group)
+            })
+            .collect();
+        groups.extend(across.into_iter().map(|k| {
+            let (u, v) = (&columns[pairs[k].0], &columns[pairs[k].1]);
+            let zero = Dual64::from_re(0.0);
+            Group::Across(PairGroup::new(system, n, vec![k], |j| {
+                HyperTangent::new(
+                    at_rest(j),
+                    Dual64::from_re(u[j]),
+                    Dual64::from_re(v[j]),
+                    zero,
+                )
+            }))
+        }));
         // per free coordinate: the bodies it moves, and the terms whose energy it changes
         // (the terms on it, and the plug-in terms built around x + ε eᵢ whose constants
         // moved with it)
@@ -493,21 +580,19 @@ impl Projection {
                 (i, bodies, terms)
             })
             .collect();
-        let rows = in_parallel(pairs.len(), threads, |k| {
-            let (a, b) = pairs[k];
-            match &frames[k] {
-                PairFrames::Along(f) => {
-                    geometric_row(system, equilibrium, at(a, b), f, &coordinates)
-                }
-                PairFrames::Across(f) => {
-                    geometric_row(system, equilibrium, at(a, b), f, &coordinates)
-                }
-            }
+        // one unit of work per group and block of free coordinates
+        let blocks: Vec<&[(usize, Vec<usize>, TangentSum)]> =
+            coordinates.chunks(COORDINATES_PER_UNIT).collect();
+        let units = in_parallel(groups.len() * blocks.len(), threads, |u| {
+            groups[u / blocks.len()].geometric_rows(system, blocks[u % blocks.len()])
         })?;
         let mut geometric = DMatrix::zeros(pairs.len(), n);
-        for (k, row) in rows.into_iter().enumerate() {
-            for (i, value) in row {
-                geometric[(k, i)] = value;
+        for (u, rows) in units.into_iter().enumerate() {
+            let group = &groups[u / blocks.len()];
+            for (i, values) in rows {
+                for (&k, value) in group.pairs().iter().zip(values) {
+                    geometric[(k, i)] = value;
+                }
             }
         }
         Ok(Some(Projection {
@@ -516,7 +601,7 @@ impl Projection {
             equilibrium: equilibrium.to_vec(),
             pairs: pairs.to_vec(),
             directions: m,
-            frames,
+            groups,
             geometric,
         }))
     }
@@ -527,14 +612,13 @@ impl Projection {
     fn derivative(&self, moving: &TangentSum, delta: &[f64]) -> Result<DMatrix<f64>, EnergyError> {
         let mut out = DMatrix::zeros(self.directions, self.directions);
         let motion = &self.geometric * DVector::from_column_slice(delta);
-        for (k, (&(a, b), frames)) in self.pairs.iter().zip(&self.frames).enumerate() {
-            let partial = match frames {
-                PairFrames::Along(f) => SecondTangent::second(moving, f)?.eps,
-                PairFrames::Across(f) => HyperTangent::second(moving, f)?.eps,
-            };
-            let value = partial + motion[k];
-            out[(a, b)] = value;
-            out[(b, a)] = value;
+        for group in &self.groups {
+            for (&k, partial) in group.pairs().iter().zip(group.seconds(moving)?) {
+                let (a, b) = self.pairs[k];
+                let value = partial.eps + motion[k];
+                out[(a, b)] = value;
+                out[(b, a)] = value;
+            }
         }
         Ok(out)
     }

@@ -35,6 +35,7 @@ pub use system::*;
 pub use tangent::{
     DualTangent, HyperTangent, SecondTangent, TangentDerivatives, TangentPotential,
     TangentSharedPotential, TangentSum, TangentTerm, tangent_frames, tangent_frames_along,
+    tangent_frames_along_lanes,
 };
 pub use term::{
     LocalDerivatives, OffHessian, PartOff, Potential, SharedPotential, TensionOff, Term,

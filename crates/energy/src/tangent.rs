@@ -15,7 +15,7 @@ use std::sync::Arc;
 
 use num_dual::{Dual, Dual2, Dual64, HyperDual};
 use pendkit_geometry::Frame;
-use pendkit_rotations::{Lift, Real};
+use pendkit_rotations::{LANES, Lift, Real, SecondLanes, second_lanes_parts, second_lanes_seed};
 
 use crate::{BodyId, EnergyError, LocalFrames, MAX_FRAMES, MAX_PARTS};
 
@@ -71,6 +71,7 @@ trait DynTangent: Send + Sync {
     fn value_d(&self, frames: &[&Frame<DualTangent>], parts: &[usize]) -> DualTangent;
     fn value_d2(&self, frames: &[&Frame<SecondTangent>], parts: &[usize]) -> SecondTangent;
     fn value_hd(&self, frames: &[&Frame<HyperTangent>], parts: &[usize]) -> HyperTangent;
+    fn value_lanes(&self, frames: &[&Frame<SecondLanes>], parts: &[usize]) -> SecondLanes;
 }
 
 impl<P: TangentPotential> DynTangent for P {
@@ -87,6 +88,9 @@ impl<P: TangentPotential> DynTangent for P {
         self.energy_on_frames(frames)
     }
     fn value_hd(&self, frames: &[&Frame<HyperTangent>], _parts: &[usize]) -> HyperTangent {
+        self.energy_on_frames(frames)
+    }
+    fn value_lanes(&self, frames: &[&Frame<SecondLanes>], _parts: &[usize]) -> SecondLanes {
         self.energy_on_frames(frames)
     }
 }
@@ -135,6 +139,9 @@ impl<S: TangentSharedPotential> DynTangent for PartOf<S> {
         self.value(frames, parts)
     }
     fn value_hd(&self, frames: &[&Frame<HyperTangent>], parts: &[usize]) -> HyperTangent {
+        self.value(frames, parts)
+    }
+    fn value_lanes(&self, frames: &[&Frame<SecondLanes>], parts: &[usize]) -> SecondLanes {
         self.value(frames, parts)
     }
 }
@@ -348,6 +355,18 @@ impl TangentTerm {
         self.second_once_of_parts(frames, self.own_part())
     }
 
+    /// [`TangentTerm::second_along_frames_once`] along [`LANES`] directions at once, given
+    /// every body's frame at x + Σₖ εₖuₖ ([`tangent_frames_along_lanes`]): each lane's uₖᵀ H uₖ
+    /// with its derivative, equal to the one-direction pass's to rounding.
+    pub fn second_along_frames_lanes(
+        &self,
+        frames: &[Frame<SecondLanes>],
+    ) -> Result<[Dual64; LANES], EnergyError> {
+        Ok(second_lanes_parts(
+            &self.second_lanes_of_parts(frames, self.own_part())?,
+        ))
+    }
+
     /// [`TangentTerm::second_along_frames`] of the sum of the body's parts `parts`.
     fn second_of_parts(
         &self,
@@ -364,6 +383,16 @@ impl TangentTerm {
         parts: &[usize],
     ) -> Result<Dual64, EnergyError> {
         self.with_frames(frames, |mine| self.body.value_d2(mine, parts).v2)
+    }
+
+    /// [`TangentTerm::second_along_frames_lanes`] of the sum of the body's parts `parts`,
+    /// every part of the number kept.
+    fn second_lanes_of_parts(
+        &self,
+        frames: &[Frame<SecondLanes>],
+        parts: &[usize],
+    ) -> Result<SecondLanes, EnergyError> {
+        self.with_frames(frames, |mine| self.body.value_lanes(mine, parts))
     }
 
     /// `f` of the frames of the term's bodies picked out of every body's `frames`, without
@@ -482,6 +511,18 @@ impl<'t> TangentSum<'t> {
         self.sum(|(t, parts)| t.second_once_of_parts(frames, parts))
     }
 
+    /// Σ [`TangentTerm::second_along_frames_lanes`].
+    pub fn second_along_frames_lanes(
+        &self,
+        frames: &[Frame<SecondLanes>],
+    ) -> Result<[Dual64; LANES], EnergyError> {
+        let mut total = SecondLanes::from(0.0);
+        for (term, parts) in &self.groups {
+            total += term.second_lanes_of_parts(frames, parts)?;
+        }
+        Ok(second_lanes_parts(&total))
+    }
+
     fn sum(
         &self,
         each: impl Fn((&TangentTerm, &[usize])) -> Result<Dual64, EnergyError>,
@@ -522,6 +563,32 @@ pub fn tangent_frames_along<S: Real>(
     let zero = Dual64::from_re(0.0);
     frames_at(system, [("x", x.len()), ("u", u.len())], |i| {
         SecondTangent::new(x[i], Dual64::from_re(u[i]), zero)
+    })
+}
+
+/// Every body's frame of `system` at x + Σₖ εₖuₖ for up to [`LANES`] directions `u` (the
+/// lanes past them along no direction): the frames
+/// [`TangentTerm::second_along_frames_lanes`] reads. More directions than lanes is an
+/// error.
+pub fn tangent_frames_along_lanes<S: Real>(
+    system: &crate::System<S>,
+    x: &[Dual64],
+    u: &[&[f64]],
+) -> Result<Vec<Frame<SecondLanes>>, EnergyError> {
+    if u.len() > LANES {
+        return Err(EnergyError::Length {
+            function: "tangent_frames_along_lanes",
+            argument: "u (directions, at most LANES)",
+            expected: LANES,
+            given: u.len(),
+        });
+    }
+    let shortest = u.iter().map(|d| d.len()).min().unwrap_or(usize::MAX);
+    frames_at(system, [("x", x.len()), ("u", shortest)], |i| {
+        second_lanes_seed(
+            x[i],
+            std::array::from_fn(|k| u.get(k).map_or(0.0, |d| d[i])),
+        )
     })
 }
 

@@ -1,0 +1,325 @@
+//! Second-order dual numbers along several directions at once, one lane per direction.
+//!
+//! The exact mode sensitivities evaluate every energy term along each mode w: the second
+//! derivative wᵀHw, with its derivative with respect to a parameter or a coordinate
+//! (docs/exact-sensitivities.md). `Dual2<Dual64>` does that one mode at a time. A
+//! [`Dual2Lanes`] carries [`LANES`] modes in one evaluation: the value is shared, and each
+//! lane holds the first and second derivative along its own direction (no cross
+//! derivatives between lanes, which nothing needs). Wrapped in a first-order dual
+//! (`Dual<Dual2Lanes<f64>>`, [`SecondLanes`]) each lane's parts carry their derivative with
+//! respect to the parameter. Sharing the value part and every elementary function's
+//! derivatives (sin, cos, sqrt, exp once for all lanes), with the lanes stored as plain
+//! arrays that the compiler vectorises, makes one evaluation cost about 0.6 of the eight
+//! one-direction evaluations it replaces (measured on a wire-like energy; eight lanes were
+//! the fastest of 4, 8, 12 and 24). The numbers are those of eight `Dual2<Dual64>`
+//! evaluations up to rounding: the same products, summed in another order.
+//!
+//! The arithmetic and every function come from num-dual's own macros (`impl_dual!`,
+//! `impl_second_derivatives!`): a lane follows the chain and product rules of num-dual's
+//! `Dual2`, written here once for an array of lanes.
+
+use std::fmt;
+use std::iter::{Product, Sum};
+use std::ops::{
+    Add, AddAssign, Div, DivAssign, Mul, MulAssign, Neg, Rem, RemAssign, Sub, SubAssign,
+};
+
+use num_dual::{
+    Dual, Dual64, DualNum, DualNumFloat, DualStruct, chain_rule, first, forward_binop,
+    impl_add_sub_rem, impl_assign_ops, impl_comparisons, impl_derivatives, impl_dual,
+    impl_dual_struct, impl_float_const, impl_from_f, impl_from_primitive, impl_inv, impl_iterator,
+    impl_neg, impl_num, impl_scalar_op, impl_second_derivatives, impl_signed, impl_zero_one,
+    second, third, zeroth,
+};
+use num_traits::{FloatConst, FromPrimitive, Inv, Num, One, Signed, Zero};
+
+use crate::Lift;
+
+/// How many directions a [`Dual2Lanes`] carries.
+pub const LANES: usize = 8;
+
+/// One number per lane, added, subtracted and scaled lane by lane.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Lanes<T>(pub [T; LANES]);
+
+impl<T: Clone> Lanes<T> {
+    /// `f` of each lane's number.
+    #[inline]
+    fn map(&self, f: impl Fn(T) -> T) -> Self {
+        Lanes(std::array::from_fn(|k| f(self.0[k].clone())))
+    }
+
+    /// `f` of each lane's numbers in `self` and `other`.
+    #[inline]
+    fn zip(&self, other: &Self, f: impl Fn(T, T) -> T) -> Self {
+        Lanes(std::array::from_fn(|k| {
+            f(self.0[k].clone(), other.0[k].clone())
+        }))
+    }
+}
+
+impl<T: Zero> Lanes<T> {
+    /// Every lane 0.
+    #[inline]
+    pub fn zero() -> Self {
+        Lanes(std::array::from_fn(|_| T::zero()))
+    }
+}
+
+impl<T: DualNum> Add<&Lanes<T>> for Lanes<T> {
+    type Output = Lanes<T>;
+    #[inline]
+    fn add(self, other: &Lanes<T>) -> Lanes<T> {
+        self.zip(other, |a, b| a + b)
+    }
+}
+
+impl<T: DualNum> Sub<&Lanes<T>> for Lanes<T> {
+    type Output = Lanes<T>;
+    #[inline]
+    fn sub(self, other: &Lanes<T>) -> Lanes<T> {
+        self.zip(other, |a, b| a - b)
+    }
+}
+
+impl<T: DualNum> Neg for Lanes<T> {
+    type Output = Lanes<T>;
+    #[inline]
+    fn neg(self) -> Lanes<T> {
+        self.map(|a| -a)
+    }
+}
+
+impl<T: DualNum> AddAssign for Lanes<T> {
+    #[inline]
+    fn add_assign(&mut self, other: Lanes<T>) {
+        *self = self.zip(&other, |a, b| a + b);
+    }
+}
+
+impl<T: DualNum> SubAssign for Lanes<T> {
+    #[inline]
+    fn sub_assign(&mut self, other: Lanes<T>) {
+        *self = self.zip(&other, |a, b| a - b);
+    }
+}
+
+impl<T: DualNum> Mul<&T> for Lanes<T> {
+    type Output = Lanes<T>;
+    #[inline]
+    fn mul(self, factor: &T) -> Lanes<T> {
+        self.map(|a| a * factor.clone())
+    }
+}
+
+impl<T: DualNum> MulAssign<T> for Lanes<T> {
+    #[inline]
+    fn mul_assign(&mut self, factor: T) {
+        *self = self.map(|a| a * factor.clone());
+    }
+}
+
+impl<T: DualNum> DivAssign<T> for Lanes<T> {
+    #[inline]
+    fn div_assign(&mut self, divisor: T) {
+        *self = self.map(|a| a / divisor.clone());
+    }
+}
+
+/// A second-order dual number along [`LANES`] directions at once: the value `re`, and per
+/// lane k the first (`v1[k]`) and second (`v2[k]`) derivative along direction k.
+#[derive(Clone, Copy, Debug)]
+pub struct Dual2Lanes<T> {
+    /// The value.
+    pub re: T,
+    /// First derivative along each lane's direction.
+    pub v1: Lanes<T>,
+    /// Second derivative along each lane's direction.
+    pub v2: Lanes<T>,
+}
+
+impl<T> Dual2Lanes<T> {
+    /// The number with these parts.
+    #[inline]
+    pub fn new(re: T, v1: Lanes<T>, v2: Lanes<T>) -> Self {
+        Dual2Lanes { re, v1, v2 }
+    }
+}
+
+impl<T: Zero> Dual2Lanes<T> {
+    /// A number without derivatives.
+    #[inline]
+    pub fn from_re(re: T) -> Self {
+        Dual2Lanes::new(re, Lanes::zero(), Lanes::zero())
+    }
+}
+
+// chain rule, lane by lane as num-dual's Dual2: f(x)' = f'·x', f(x)'' = f'·x'' + f''·x'²
+impl<T: DualNum> Dual2Lanes<T> {
+    #[inline]
+    fn chain_rule(&self, f0: T, f1: T, f2: T) -> Self {
+        Dual2Lanes::new(
+            f0,
+            self.v1.map(|v1| v1 * f1.clone()),
+            self.v2.zip(&self.v1, |v2, v1| {
+                v2 * f1.clone() + v1.clone() * v1 * f2.clone()
+            }),
+        )
+    }
+}
+
+// product rule, lane by lane as num-dual's Dual2 (a product's derivatives are sums)
+#[allow(clippy::suspicious_arithmetic_impl)]
+impl<T: DualNum> Mul<&Dual2Lanes<T>> for &Dual2Lanes<T> {
+    type Output = Dual2Lanes<T>;
+    #[inline]
+    fn mul(self, other: &Dual2Lanes<T>) -> Dual2Lanes<T> {
+        let (a, b) = (self, other);
+        Dual2Lanes::new(
+            a.re.clone() * b.re.clone(),
+            Lanes(std::array::from_fn(|k| {
+                b.v1.0[k].clone() * a.re.clone() + a.v1.0[k].clone() * b.re.clone()
+            })),
+            Lanes(std::array::from_fn(|k| {
+                b.v2.0[k].clone() * a.re.clone()
+                    + a.v1.0[k].clone() * b.v1.0[k].clone()
+                    + b.v1.0[k].clone() * a.v1.0[k].clone()
+                    + a.v2.0[k].clone() * b.re.clone()
+            })),
+        )
+    }
+}
+
+// quotient rule, lane by lane as num-dual's Dual2
+impl<T: DualNum> Div<&Dual2Lanes<T>> for &Dual2Lanes<T> {
+    type Output = Dual2Lanes<T>;
+    #[inline]
+    fn div(self, other: &Dual2Lanes<T>) -> Dual2Lanes<T> {
+        let (a, b) = (self, other);
+        let inv = b.re.recip();
+        let inv2 = inv.clone() * inv.clone();
+        let two = T::one() + T::one();
+        Dual2Lanes::new(
+            a.re.clone() * inv.clone(),
+            Lanes(std::array::from_fn(|k| {
+                (a.v1.0[k].clone() * b.re.clone() - b.v1.0[k].clone() * a.re.clone()) * inv2.clone()
+            })),
+            Lanes(std::array::from_fn(|k| {
+                a.v2.0[k].clone() * inv.clone()
+                    - (b.v2.0[k].clone() * a.re.clone()
+                        + a.v1.0[k].clone() * b.v1.0[k].clone()
+                        + b.v1.0[k].clone() * a.v1.0[k].clone())
+                        * inv2.clone()
+                    + b.v1.0[k].clone()
+                        * b.v1.0[k].clone()
+                        * (two.clone() * a.re.clone() * inv2.clone() * inv.clone())
+            })),
+        )
+    }
+}
+
+impl<T: DualNum> fmt::Display for Dual2Lanes<T> {
+    fn fmt(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        write!(f, "{} + {LANES} lanes of (ε, ε²)", self.re)
+    }
+}
+
+impl_second_derivatives!(Dual2Lanes, [v1, v2]);
+impl_dual!(Dual2Lanes, [v1, v2]);
+
+/// The scalar of the passes along [`LANES`] modes at once: each lane's second derivative,
+/// every part carrying its derivative with respect to one parameter (or coordinate) in the
+/// outer dual part.
+pub type SecondLanes = Dual<Dual2Lanes<f64>>;
+
+/// A coordinate of a pass along [`LANES`] directions: its value `x` (with its derivative),
+/// each lane's direction entry `along[k]` and no second-order part.
+pub fn second_lanes_seed(x: Dual64, along: [f64; LANES]) -> SecondLanes {
+    Dual::new(
+        Dual2Lanes::new(x.re, Lanes(along), Lanes::zero()),
+        Dual2Lanes::from_re(x.eps),
+    )
+}
+
+/// Each lane's second derivative with its derivative: (v2, d v2) per lane.
+pub fn second_lanes_parts(value: &SecondLanes) -> [Dual64; LANES] {
+    std::array::from_fn(|k| Dual64::new(value.re.v2.0[k], value.eps.v2.0[k]))
+}
+
+/// The passes along several modes take constants that carry a parameter derivative.
+impl Lift<Dual64> for SecondLanes {
+    #[inline]
+    fn lift(constant: Dual64) -> Self {
+        Dual::new(
+            Dual2Lanes::from_re(constant.re),
+            Dual2Lanes::from_re(constant.eps),
+        )
+    }
+    #[inline]
+    fn times(self, constant: Dual64) -> Self {
+        // (a + b ε)(c + d ε) = a c + (a d + b c) ε, the lanes scaled by plain numbers
+        Dual::new(
+            self.re * constant.re,
+            self.re * constant.eps + self.eps * constant.re,
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use num_dual::Dual2;
+
+    use super::*;
+
+    /// A function that uses every kind of operation the energies use.
+    fn f<D: DualNum<Primitive = f64> + Copy>(x: D, y: D) -> D {
+        let (s, c) = x.sin_cos();
+        let r = (x * x + y * y + D::from(0.3)).sqrt();
+        (s * y - c / r) * (r * 0.7).exp() + x.powi(3) - y / (x + D::from(2.0)) + r.ln()
+            - (-x).tanh()
+            + y.atan2(x + D::from(1.5))
+    }
+
+    /// Each lane of one lanes evaluation is the `Dual2<Dual64>` evaluation along its own
+    /// direction, to rounding (the same products summed in another order).
+    #[test]
+    fn each_lane_is_the_one_direction_second_derivative_with_its_derivative() {
+        let (x, y) = (Dual64::new(0.4, 1.0), Dual64::new(-0.7, 0.25));
+        let dirs: [(f64, f64); LANES] = std::array::from_fn(|k| {
+            let k = k as f64;
+            (0.3 * k - 1.0, 0.5 - 0.2 * k)
+        });
+        let lanes = f(
+            second_lanes_seed(x, dirs.map(|d| d.0)),
+            second_lanes_seed(y, dirs.map(|d| d.1)),
+        );
+        let parts = second_lanes_parts(&lanes);
+        for (k, &(u, v)) in dirs.iter().enumerate() {
+            let zero = Dual64::from_re(0.0);
+            let one = f(
+                Dual2::new(x, Dual64::from_re(u), zero),
+                Dual2::new(y, Dual64::from_re(v), zero),
+            );
+            for (got, want) in [(parts[k].re, one.v2.re), (parts[k].eps, one.v2.eps)] {
+                assert!(
+                    (got - want).abs() <= 1e-14 * want.abs().max(1.0),
+                    "lane {k}: {got} against {want}"
+                );
+            }
+            assert!((lanes.re.re - one.re.re).abs() <= 1e-15 * one.re.re.abs());
+            assert!((lanes.re.v1.0[k] - one.v1.re).abs() <= 1e-14 * one.v1.re.abs().max(1.0));
+        }
+        // a constant with a derivative, lifted and multiplied in, moves the derivative part
+        let k = Dual64::new(2.0, 3.0);
+        let scaled = parts_of(lanes.times(k));
+        let lifted = parts_of(lanes * SecondLanes::lift(k));
+        for (a, b) in scaled.iter().zip(&lifted) {
+            assert!((a.re - b.re).abs() <= 1e-14 * b.re.abs().max(1.0));
+            assert!((a.eps - b.eps).abs() <= 1e-14 * b.eps.abs().max(1.0));
+        }
+    }
+
+    fn parts_of(value: SecondLanes) -> [Dual64; LANES] {
+        second_lanes_parts(&value)
+    }
+}
