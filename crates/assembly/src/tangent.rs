@@ -452,7 +452,7 @@ impl Group {
 }
 
 /// How many free coordinates one unit of the projection's parallel work takes: enough
-/// units for the threads when there are only a few groups (the quad's 24 modes make three),
+/// units for the threads when there are only a few groups (the quad's 24 modes make four),
 /// few enough that each unit's copy of the frames is small beside its passes.
 const COORDINATES_PER_UNIT: usize = 8;
 

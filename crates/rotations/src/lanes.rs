@@ -9,9 +9,11 @@
 //! (`Dual<Dual2Lanes<f64>>`, [`SecondLanes`]) each lane's parts carry their derivative with
 //! respect to the parameter. Sharing the value part and every elementary function's
 //! derivatives (sin, cos, sqrt, exp once for all lanes), with the lanes stored as plain
-//! arrays that the compiler vectorises, makes one evaluation cost about 0.6 of the eight
-//! one-direction evaluations it replaces (measured on a wire-like energy; eight lanes were
-//! the fastest of 4, 8, 12 and 24). The numbers are those of eight `Dual2<Dual64>`
+//! arrays that the compiler vectorises, makes one evaluation of eight lanes cost about 0.6
+//! of the eight one-direction evaluations it replaces (measured on a wire-like energy).
+//! Six lanes: in the library's sensitivities as fast as eight on the quad (24 modes, four
+//! groups) and faster on the triple (18 modes: three full groups, where eight lanes leave
+//! six of a third group idle). The numbers are those of one-direction `Dual2<Dual64>`
 //! evaluations up to rounding: the same products, summed in another order.
 //!
 //! The arithmetic and every function come from num-dual's own macros (`impl_dual!`,
@@ -36,7 +38,7 @@ use num_traits::{FloatConst, FromPrimitive, Inv, Num, One, Signed, Zero};
 use crate::Lift;
 
 /// How many directions a [`Dual2Lanes`] carries.
-pub const LANES: usize = 8;
+pub const LANES: usize = 6;
 
 /// One number per lane, added, subtracted and scaled lane by lane.
 #[derive(Clone, Copy, Debug, PartialEq)]
