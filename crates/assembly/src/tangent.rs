@@ -305,7 +305,8 @@ pub enum Along<'a> {
     /// triangle.
     Full,
     /// The entries (a, b) of Wᵀ (dK/dp) W that `projection` lists (the rest 0): one
-    /// evaluation per pair and term whose constants move with the parameter, the rest from
+    /// evaluation per term whose constants move with the parameter for every group of up
+    /// to [`LANES`] pairs along one direction and for every pair across two, the rest from
     /// the projection's coefficients.
     Projected(&'a Projection),
 }
@@ -458,7 +459,8 @@ const COORDINATES_PER_UNIT: usize = 8;
 
 /// What the directional derivatives Wᵀ(dK/dp)W of one stage share between parameters:
 /// the directions W (full coordinate vectors, e.g. the modes lifted to the floats), the
-/// pairs (a, b) wanted, every body's frame at the equilibrium along each pair, and the
+/// pairs (a, b) wanted, every body's frame at the equilibrium along each group of pairs
+/// (up to [`LANES`] pairs along one direction each, or one pair across two), and the
 /// coefficients Wₐᵀ(∂K/∂qᵢ)W_b of the equilibrium's motion, one per pair and free
 /// coordinate (the terms rebuilt around q* + ε eᵢ: their dependence on the configuration
 /// they are built around included).
@@ -480,7 +482,8 @@ impl Projection {
     /// each, n rows) for the entries `pairs` (a ≤ b), computed on `threads` threads (0: as
     /// many as the machine has; the numbers do not depend on it). `None` when the model has
     /// terms without parameter derivatives (see [`stage_tangent`]). Costs one build of the
-    /// plug-in terms and one pass over the terms on it per free coordinate, for every pair.
+    /// plug-in terms and one pass over the terms on it per free coordinate, for every group
+    /// of up to [`LANES`] pairs along one direction and every pair across two.
     pub fn new(
         system: &System,
         stage: Stage,

@@ -1,5 +1,7 @@
 //! Rotation matrices and angular-velocity maps for (yaw, pitch, roll) angles, generic over
-//! the dual-number scalar so that the same code gives values, gradients and Hessians.
+//! the dual-number scalar so that the same code gives values, gradients and Hessians; and
+//! those scalars' traits, with the dual number that carries several modes at once
+//! ([`SecondLanes`]).
 //!
 //! Convention (docs/conventions.md): R = Rz(yaw) · Ry(pitch) · Rx(roll); a point p given in body
 //! coordinates sits at X + R p in space. Angles are in radians.
