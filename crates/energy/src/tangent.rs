@@ -9,7 +9,8 @@
 //! the energy along δq included. The energy bodies are the kinds' own, written once over
 //! the scalar and over their constants' type ([`Lift`]), as functions of their bodies'
 //! frames, so that a pass along given directions evaluates each body's frame once for all
-//! the terms on it ([`tangent_frames`]).
+//! the terms on it ([`tangent_frames`]). A pass along several modes evaluates each term
+//! once for up to [`LANES`] of them ([`SecondLanes`], [`tangent_frames_along_lanes`]).
 
 use std::sync::Arc;
 
