@@ -28,7 +28,7 @@ use pendkit_energy::{
 };
 use pendkit_geometry::Frame;
 use pendkit_rotations::{
-    Constant, Dual2Lanes, LANES, Real, SecondLanes, second_lanes_seed, tr_mul, vee,
+    Constant, LANES, Real, SecondLanes, second_lanes_moving, second_lanes_seed, tr_mul, vee,
 };
 
 use crate::equilibrium::{Evaluation, free_coordinates, free_slots, hessian_sum};
@@ -349,7 +349,7 @@ trait PairScalar: Real {
 
 impl PairScalar for SecondLanes {
     fn moving(self) -> Self {
-        Dual::new(self.re, Dual2Lanes::from_re(1.0))
+        second_lanes_moving(self)
     }
     fn seconds(
         terms: &TangentSum,

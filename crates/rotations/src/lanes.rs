@@ -3,22 +3,22 @@
 //! The exact mode sensitivities evaluate every energy term along each mode w: the second
 //! derivative wᵀHw, with its derivative with respect to a parameter or a coordinate
 //! (docs/exact-sensitivities.md). `Dual2<Dual64>` does that one mode at a time. A
-//! [`Dual2Lanes`] carries [`LANES`] modes in one evaluation: the value is shared, and each
-//! lane holds the first and second derivative along its own direction (no cross
-//! derivatives between lanes, which nothing needs). Wrapped in a first-order dual
-//! (`Dual<Dual2Lanes<f64>>`, [`SecondLanes`]) each lane's parts carry their derivative with
-//! respect to the parameter. Sharing the value part and every elementary function's
-//! derivatives (sin, cos, sqrt, exp once for all lanes), with the lanes stored as plain
-//! arrays that the compiler vectorises, makes one evaluation of eight lanes cost about 0.6
-//! of the eight one-direction evaluations it replaces (measured on a wire-like energy).
-//! Six lanes: in the library's sensitivities as fast as eight on the quad (24 modes, four
-//! groups) and faster on the triple (18 modes: three full groups, where eight lanes leave
-//! six of a third group idle). The numbers are those of one-direction `Dual2<Dual64>`
-//! evaluations up to rounding: the same products, summed in another order.
+//! [`TangentLanes`] ([`SecondLanes`]) carries [`LANES`] modes in one evaluation: the value
+//! and its derivative are shared, and each lane holds the first and second derivative along
+//! its own direction with their derivatives (no cross derivatives between lanes, which
+//! nothing needs): lane k alone is `Dual2<Dual64>`. Sharing the value and every elementary
+//! function's derivatives (sin, cos, sqrt, exp once for all lanes), with every part of the
+//! lanes a plain array that the compiler vectorises, makes one evaluation of eight lanes
+//! cost about 0.6 of the eight one-direction evaluations it replaces (measured on a
+//! wire-like energy). Six lanes: in the library's sensitivities as fast as eight on the quad
+//! (24 modes, four groups) and faster on the triple (18 modes: three full groups, where
+//! eight lanes leave six of a third group idle). The numbers are those of one-direction
+//! `Dual2<Dual64>` evaluations up to rounding (the same products, some summed in another
+//! order).
 //!
 //! The arithmetic and every function come from num-dual's own macros (`impl_dual!`,
-//! `impl_second_derivatives!`): a lane follows the chain and product rules of num-dual's
-//! `Dual2`, written here once for an array of lanes.
+//! `impl_third_derivatives!`) over a chain rule and a product rule written here once, lane
+//! by lane as num-dual's `Dual2<Dual64>` has them.
 
 use std::fmt;
 use std::iter::{Product, Sum};
@@ -27,17 +27,17 @@ use std::ops::{
 };
 
 use num_dual::{
-    Dual, Dual64, DualNum, DualNumFloat, DualStruct, chain_rule, first, forward_binop,
-    impl_add_sub_rem, impl_assign_ops, impl_comparisons, impl_derivatives, impl_dual,
-    impl_dual_struct, impl_float_const, impl_from_f, impl_from_primitive, impl_inv, impl_iterator,
-    impl_neg, impl_num, impl_scalar_op, impl_second_derivatives, impl_signed, impl_zero_one,
-    second, third, zeroth,
+    Dual64, DualNum, DualNumFloat, DualStruct, chain_rule, first, forward_binop, impl_add_sub_rem,
+    impl_assign_ops, impl_comparisons, impl_derivatives, impl_dual, impl_dual_struct,
+    impl_float_const, impl_from_f, impl_from_primitive, impl_inv, impl_iterator, impl_neg,
+    impl_num, impl_scalar_op, impl_signed, impl_third_derivatives, impl_zero_one, second, third,
+    zeroth,
 };
 use num_traits::{FloatConst, FromPrimitive, Inv, Num, One, Signed, Zero};
 
 use crate::Lift;
 
-/// How many directions a [`Dual2Lanes`] carries.
+/// How many directions a [`TangentLanes`] carries.
 pub const LANES: usize = 6;
 
 /// One number per lane, added, subtracted and scaled lane by lane.
@@ -128,141 +128,187 @@ impl<T: DualNum> DivAssign<T> for Lanes<T> {
     }
 }
 
-/// A second-order dual number along [`LANES`] directions at once: the value `re`, and per
-/// lane k the first (`v1[k]`) and second (`v2[k]`) derivative along direction k.
+/// A second-order dual number along [`LANES`] directions at once, every part carrying its
+/// derivative with respect to one parameter (or coordinate) ε: the value `re` (and `eps`,
+/// its derivative), and per lane k the first (`v1[k]`, `v1e[k]`) and second (`v2[k]`,
+/// `v2e[k]`) derivative along direction k. Lane k alone is num-dual's `Dual2<Dual64>` with
+/// parts (re, eps), (v1, v1e), (v2, v2e); every part a plain number, so that the lanes
+/// vectorise and one product is one function.
 #[derive(Clone, Copy, Debug)]
-pub struct Dual2Lanes<T> {
+pub struct TangentLanes<T> {
     /// The value.
     pub re: T,
+    /// The value's derivative with respect to ε.
+    pub eps: T,
     /// First derivative along each lane's direction.
     pub v1: Lanes<T>,
+    /// Its derivative with respect to ε.
+    pub v1e: Lanes<T>,
     /// Second derivative along each lane's direction.
     pub v2: Lanes<T>,
+    /// Its derivative with respect to ε.
+    pub v2e: Lanes<T>,
 }
 
-impl<T> Dual2Lanes<T> {
+impl<T> TangentLanes<T> {
     /// The number with these parts.
     #[inline]
-    pub fn new(re: T, v1: Lanes<T>, v2: Lanes<T>) -> Self {
-        Dual2Lanes { re, v1, v2 }
+    pub fn new(re: T, eps: T, v1: Lanes<T>, v1e: Lanes<T>, v2: Lanes<T>, v2e: Lanes<T>) -> Self {
+        TangentLanes {
+            re,
+            eps,
+            v1,
+            v1e,
+            v2,
+            v2e,
+        }
     }
 }
 
-impl<T: Zero> Dual2Lanes<T> {
+impl<T: Zero> TangentLanes<T> {
     /// A number without derivatives.
     #[inline]
     pub fn from_re(re: T) -> Self {
-        Dual2Lanes::new(re, Lanes::zero(), Lanes::zero())
+        TangentLanes::new(
+            re,
+            T::zero(),
+            Lanes::zero(),
+            Lanes::zero(),
+            Lanes::zero(),
+            Lanes::zero(),
+        )
     }
 }
 
-// chain rule, lane by lane as num-dual's Dual2: f(x)' = f'·x', f(x)'' = f'·x'' + f''·x'²
-impl<T: DualNum> Dual2Lanes<T> {
+// chain rule, lane by lane as num-dual's Dual2<Dual64>, whose f, f', f'' at re + eps·ε are
+// (f0, f1·eps), (f1, f2·eps), (f2, f3·eps)
+impl<T: DualNum> TangentLanes<T> {
     #[inline]
-    fn chain_rule(&self, f0: T, f1: T, f2: T) -> Self {
-        Dual2Lanes::new(
+    fn chain_rule(&self, f0: T, f1: T, f2: T, f3: T) -> Self {
+        let e = self.eps.clone();
+        let (g1, g2, g3) = (f2.clone() * e.clone(), f3 * e.clone(), f2.clone());
+        TangentLanes::new(
             f0,
+            f1.clone() * e,
             self.v1.map(|v1| v1 * f1.clone()),
-            self.v2.zip(&self.v1, |v2, v1| {
-                v2 * f1.clone() + v1.clone() * v1 * f2.clone()
-            }),
+            Lanes(std::array::from_fn(|k| {
+                self.v1e.0[k].clone() * f1.clone() + self.v1.0[k].clone() * g1.clone()
+            })),
+            Lanes(std::array::from_fn(|k| {
+                let v1 = self.v1.0[k].clone();
+                self.v2.0[k].clone() * f1.clone() + v1.clone() * v1 * g3.clone()
+            })),
+            Lanes(std::array::from_fn(|k| {
+                let (v1, v1e) = (self.v1.0[k].clone(), self.v1e.0[k].clone());
+                (self.v2e.0[k].clone() * f1.clone() + self.v2.0[k].clone() * g1.clone())
+                    + (v1.clone() * v1e.clone() + v1e * v1.clone()) * g3.clone()
+                    + v1.clone() * v1 * g2.clone()
+            })),
         )
     }
 }
 
-// product rule, lane by lane as num-dual's Dual2 (a product's derivatives are sums)
+// product rule, lane by lane as num-dual's Dual2<Dual64> (a product's derivatives are sums)
 #[allow(clippy::suspicious_arithmetic_impl)]
-impl<T: DualNum> Mul<&Dual2Lanes<T>> for &Dual2Lanes<T> {
-    type Output = Dual2Lanes<T>;
+impl<T: DualNum> Mul<&TangentLanes<T>> for &TangentLanes<T> {
+    type Output = TangentLanes<T>;
     #[inline]
-    fn mul(self, other: &Dual2Lanes<T>) -> Dual2Lanes<T> {
+    fn mul(self, other: &TangentLanes<T>) -> TangentLanes<T> {
         let (a, b) = (self, other);
-        Dual2Lanes::new(
-            a.re.clone() * b.re.clone(),
+        let (ar, ae, br, be) = (a.re.clone(), a.eps.clone(), b.re.clone(), b.eps.clone());
+        TangentLanes::new(
+            ar.clone() * br.clone(),
+            ae.clone() * br.clone() + ar.clone() * be.clone(),
             Lanes(std::array::from_fn(|k| {
-                b.v1.0[k].clone() * a.re.clone() + a.v1.0[k].clone() * b.re.clone()
+                b.v1.0[k].clone() * ar.clone() + a.v1.0[k].clone() * br.clone()
             })),
             Lanes(std::array::from_fn(|k| {
-                b.v2.0[k].clone() * a.re.clone()
-                    + a.v1.0[k].clone() * b.v1.0[k].clone()
-                    + b.v1.0[k].clone() * a.v1.0[k].clone()
-                    + a.v2.0[k].clone() * b.re.clone()
+                (b.v1e.0[k].clone() * ar.clone() + b.v1.0[k].clone() * ae.clone())
+                    + (a.v1e.0[k].clone() * br.clone() + a.v1.0[k].clone() * be.clone())
+            })),
+            Lanes(std::array::from_fn(|k| {
+                let p = a.v1.0[k].clone() * b.v1.0[k].clone();
+                b.v2.0[k].clone() * ar.clone() + p.clone() + p + a.v2.0[k].clone() * br.clone()
+            })),
+            Lanes(std::array::from_fn(|k| {
+                let pe =
+                    a.v1e.0[k].clone() * b.v1.0[k].clone() + a.v1.0[k].clone() * b.v1e.0[k].clone();
+                (b.v2e.0[k].clone() * ar.clone() + b.v2.0[k].clone() * ae.clone())
+                    + pe.clone()
+                    + pe
+                    + (a.v2e.0[k].clone() * br.clone() + a.v2.0[k].clone() * be.clone())
             })),
         )
     }
 }
 
-// quotient rule, lane by lane as num-dual's Dual2
-impl<T: DualNum> Div<&Dual2Lanes<T>> for &Dual2Lanes<T> {
-    type Output = Dual2Lanes<T>;
+// quotient rule: the product with the reciprocal (from the chain rule)
+#[allow(clippy::suspicious_arithmetic_impl)]
+impl<T: DualNum> Div<&TangentLanes<T>> for &TangentLanes<T> {
+    type Output = TangentLanes<T>;
     #[inline]
-    fn div(self, other: &Dual2Lanes<T>) -> Dual2Lanes<T> {
-        let (a, b) = (self, other);
-        let inv = b.re.recip();
-        let inv2 = inv.clone() * inv.clone();
-        let two = T::one() + T::one();
-        Dual2Lanes::new(
-            a.re.clone() * inv.clone(),
-            Lanes(std::array::from_fn(|k| {
-                (a.v1.0[k].clone() * b.re.clone() - b.v1.0[k].clone() * a.re.clone()) * inv2.clone()
-            })),
-            Lanes(std::array::from_fn(|k| {
-                a.v2.0[k].clone() * inv.clone()
-                    - (b.v2.0[k].clone() * a.re.clone()
-                        + a.v1.0[k].clone() * b.v1.0[k].clone()
-                        + b.v1.0[k].clone() * a.v1.0[k].clone())
-                        * inv2.clone()
-                    + b.v1.0[k].clone()
-                        * b.v1.0[k].clone()
-                        * (two.clone() * a.re.clone() * inv2.clone() * inv.clone())
-            })),
-        )
+    fn div(self, other: &TangentLanes<T>) -> TangentLanes<T> {
+        self * &other.recip()
     }
 }
 
-impl<T: DualNum> fmt::Display for Dual2Lanes<T> {
+impl<T: DualNum> fmt::Display for TangentLanes<T> {
     fn fmt(&self, f: &mut fmt::Formatter) -> fmt::Result {
-        write!(f, "{} + {LANES} lanes of (ε, ε²)", self.re)
+        write!(f, "{} + {}ε + {LANES} lanes", self.re, self.eps)
     }
 }
 
-impl_second_derivatives!(Dual2Lanes, [v1, v2]);
-impl_dual!(Dual2Lanes, [v1, v2]);
+impl_third_derivatives!(TangentLanes, [eps, v1, v1e, v2, v2e]);
+impl_dual!(TangentLanes, [eps, v1, v1e, v2, v2e]);
 
 /// The scalar of the passes along [`LANES`] modes at once: each lane's second derivative,
-/// every part carrying its derivative with respect to one parameter (or coordinate) in the
-/// outer dual part.
-pub type SecondLanes = Dual<Dual2Lanes<f64>>;
+/// every part carrying its derivative with respect to one parameter (or coordinate).
+pub type SecondLanes = TangentLanes<f64>;
 
 /// A coordinate of a pass along [`LANES`] directions: its value `x` (with its derivative),
 /// each lane's direction entry `along[k]` and no second-order part.
 pub fn second_lanes_seed(x: Dual64, along: [f64; LANES]) -> SecondLanes {
-    Dual::new(
-        Dual2Lanes::new(x.re, Lanes(along), Lanes::zero()),
-        Dual2Lanes::from_re(x.eps),
+    TangentLanes::new(
+        x.re,
+        x.eps,
+        Lanes(along),
+        Lanes::zero(),
+        Lanes::zero(),
+        Lanes::zero(),
     )
+}
+
+/// The seed `x` moved along its own coordinate: its value's derivative set to 1 (the
+/// directions' entries do not move with it).
+pub fn second_lanes_moving(x: SecondLanes) -> SecondLanes {
+    TangentLanes { eps: 1.0, ..x }
 }
 
 /// Each lane's second derivative with its derivative: (v2, d v2) per lane.
 pub fn second_lanes_parts(value: &SecondLanes) -> [Dual64; LANES] {
-    std::array::from_fn(|k| Dual64::new(value.re.v2.0[k], value.eps.v2.0[k]))
+    std::array::from_fn(|k| Dual64::new(value.v2.0[k], value.v2e.0[k]))
 }
 
 /// The passes along several modes take constants that carry a parameter derivative.
 impl Lift<Dual64> for SecondLanes {
     #[inline]
     fn lift(constant: Dual64) -> Self {
-        Dual::new(
-            Dual2Lanes::from_re(constant.re),
-            Dual2Lanes::from_re(constant.eps),
-        )
+        TangentLanes {
+            eps: constant.eps,
+            ..TangentLanes::from_re(constant.re)
+        }
     }
     #[inline]
     fn times(self, constant: Dual64) -> Self {
-        // (a + b ε)(c + d ε) = a c + (a d + b c) ε, the lanes scaled by plain numbers
-        Dual::new(
-            self.re * constant.re,
-            self.re * constant.eps + self.eps * constant.re,
+        // (a + b ε)(c + d ε) = a c + (a d + b c) ε, part by part
+        let (c, d) = (constant.re, constant.eps);
+        TangentLanes::new(
+            self.re * c,
+            self.eps * c + self.re * d,
+            self.v1.map(|v| v * c),
+            self.v1e.zip(&self.v1, |ve, v| ve * c + v * d),
+            self.v2.map(|v| v * c),
+            self.v2e.zip(&self.v2, |ve, v| ve * c + v * d),
         )
     }
 }
@@ -308,8 +354,9 @@ mod tests {
                     "lane {k}: {got} against {want}"
                 );
             }
-            assert!((lanes.re.re - one.re.re).abs() <= 1e-15 * one.re.re.abs());
-            assert!((lanes.re.v1.0[k] - one.v1.re).abs() <= 1e-14 * one.v1.re.abs().max(1.0));
+            assert!((lanes.re - one.re.re).abs() <= 1e-15 * one.re.re.abs());
+            assert!((lanes.v1.0[k] - one.v1.re).abs() <= 1e-14 * one.v1.re.abs().max(1.0));
+            assert!((lanes.v1e.0[k] - one.v1.eps).abs() <= 1e-14 * one.v1.eps.abs().max(1.0));
         }
         // a constant with a derivative, lifted and multiplied in, moves the derivative part
         let k = Dual64::new(2.0, 3.0);

@@ -10,7 +10,10 @@ use nalgebra::{Matrix3, Vector3};
 use num_dual::{Dual, Dual2, Dual64, DualNum, HyperDual};
 
 mod lanes;
-pub use lanes::{Dual2Lanes, LANES, Lanes, SecondLanes, second_lanes_parts, second_lanes_seed};
+pub use lanes::{
+    LANES, Lanes, SecondLanes, TangentLanes, second_lanes_moving, second_lanes_parts,
+    second_lanes_seed,
+};
 
 /// The scalar every generic energy body is written over: `f64` for values, a dual number
 /// for derivatives (num-dual 0.15 writes the bound `DualNum<Primitive = f64> + Copy`).
