@@ -40,7 +40,9 @@ use crate::Lift;
 /// How many directions a [`TangentLanes`] carries.
 pub const LANES: usize = 6;
 
-/// One number per lane, added, subtracted and scaled lane by lane.
+/// One number per lane, added, subtracted and scaled lane by lane: a lane part of a
+/// [`TangentLanes`], with the operations num-dual's macros apply to each part of a dual
+/// number.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Lanes<T>(pub [T; LANES]);
 
