@@ -135,7 +135,9 @@ impl<T: DualNum> DivAssign<T> for Lanes<T> {
 /// its derivative), and per lane k the first (`v1[k]`, `v1e[k]`) and second (`v2[k]`,
 /// `v2e[k]`) derivative along direction k. Lane k alone is num-dual's `Dual2<Dual64>` with
 /// parts (re, eps), (v1, v1e), (v2, v2e); every part a plain number, so that the lanes
-/// vectorise and one product is one function.
+/// vectorise and one product is one function. The remainder `%` has no derivative and is
+/// not defined (num-dual's macros leave it unimplemented, as for num-dual's own numbers):
+/// no energy body uses it.
 #[derive(Clone, Copy, Debug)]
 pub struct TangentLanes<T> {
     /// The value.
