@@ -348,7 +348,9 @@ impl TangentTerm {
     }
 
     /// [`TangentTerm::second_along_frames`] with u = v, given every body's frame at x + εu
-    /// ([`tangent_frames_along`]): uᵀ H u by the cheaper second-order dual number.
+    /// ([`tangent_frames_along`]): uᵀ H u by the cheaper second-order dual number. One
+    /// direction at a time; the sensitivities take six at once
+    /// ([`TangentTerm::second_along_frames_lanes`]), whose tests compare each lane with this.
     pub fn second_along_frames_once(
         &self,
         frames: &[Frame<SecondTangent>],
