@@ -211,6 +211,39 @@ fn map_scalars_visits_every_generic_field() {
 }
 
 #[test]
+fn zip_scalars_into_rewrites_the_numbers_map_scalars_visits_in_its_order() {
+    // each number of a copy rewritten with its index in the visit: the copy's numbers,
+    // listed by map_scalars (checked above to reach every generic field), must then be
+    // 0, 1, 2, … — the same numbers in the same order, none left out or visited twice
+    let model = pendulum(M, L, R);
+    let mut copy = model.map_scalars(|x| x);
+    let mut index = 0.0;
+    assert!(model.zip_scalars_into(&mut copy, |_, y| {
+        *y = index;
+        index += 1.0;
+    }));
+    let visited: Vec<f64> = copy.scalars();
+    let count = visited.len();
+    assert_eq!(visited, (0..count).map(|k| k as f64).collect::<Vec<_>>());
+    // each pair is a number and its own place: the copy rewritten from the model is the model
+    assert!(model.zip_scalars_into(&mut copy, |x, y| *y = *x));
+    assert_eq!(copy.scalars(), model.scalars());
+    // models whose numbers differ in count or kind are refused
+    let mut fewer = model.map_scalars(|x| x);
+    fewer.springs.clear();
+    assert!(!model.zip_scalars_into(&mut fewer, |_, _| {}));
+    // the wire's top end has an explicit direction (three numbers); made automatic in the
+    // copy, the two no longer have the same numbers
+    assert!(matches!(
+        model.wires[0].ends[0].direction,
+        EndDirection::Explicit(_)
+    ));
+    let mut other_direction = model.map_scalars(|x| x);
+    other_direction.wires[0].ends[0].direction = EndDirection::Auto;
+    assert!(!model.zip_scalars_into(&mut other_direction, |_, _| {}));
+}
+
+#[test]
 fn a_wire_moves_exactly_when_one_of_its_own_numbers_does() {
     // `Wire::moves` lets the kinds leave out a wire's terms for a parameter that moves none
     // of its numbers (`Reference::moving_only`): it must see every generic number of the
@@ -464,6 +497,7 @@ fn a_chunk_build_carries_each_parameter_as_its_own_build_does() {
         let defaults = pendkit_model::Defaults::of(model).unwrap();
         let (_, resolved) = pendkit_model::parameters_with(&defaults, &Default::default()).unwrap();
         let names: Vec<String> = resolved.iter().map(|(n, _)| n.to_string()).collect();
+        let mut scratch = pendkit_model::DirectionScratch::default();
         for chunk in names.chunks(pendkit_params::TANGENT_CHUNK) {
             let chunk: Vec<&str> = chunk.iter().map(String::as_str).collect();
             let built = pendkit_model::build_tangent_chunk(model, &Default::default(), &chunk)
@@ -475,6 +509,27 @@ fn a_chunk_build_carries_each_parameter_as_its_own_build_does() {
             );
             for (k, name) in chunk.iter().enumerate() {
                 let from_chunk = built.direction(k);
+                // the same model rewritten in place, in a scratch shared with the chunk's
+                // other directions and with the other chunks (which copy it anew)
+                let in_scratch = built
+                    .direction_in(k, &mut scratch)
+                    .map(|system| system.scalars());
+                match (&from_chunk, &in_scratch) {
+                    (Ok(a), Ok(b)) => {
+                        let a = a.scalars();
+                        let bits = |v: &[num_dual::Dual64]| {
+                            v.iter()
+                                .map(|x| (x.re.to_bits(), x.eps.to_bits()))
+                                .collect::<Vec<_>>()
+                        };
+                        assert_eq!(bits(&a), bits(b), "{} {name}: in the scratch", model.name());
+                    }
+                    (Err(a), Err(b)) => assert_eq!(a, b, "{} {name}", model.name()),
+                    _ => panic!(
+                        "{} {name}: direction and direction_in disagree",
+                        model.name()
+                    ),
+                }
                 let alone = pendkit_model::build_tangent(model, &Default::default(), name);
                 match (from_chunk, alone) {
                     (Ok(a), Ok(b)) => {

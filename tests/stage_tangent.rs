@@ -92,6 +92,20 @@ fn check(spec: &str, sets: &[&str], stage: Stage, parameters: &[&str]) {
     )
     .expect("projection")
     .expect("the exact route is open");
+    // the same projection in two steps, as the sensitivities take it (the motion's
+    // coefficients computed beside the parameters' passes and added afterwards)
+    let at_rest = Projection::at_rest(
+        &system,
+        stage,
+        &a.equilibrium.coords,
+        &balance,
+        (&w, &pairs),
+    )
+    .expect("projection at rest");
+    let motion = at_rest
+        .motion(&system, &balance, 0)
+        .expect("motion")
+        .expect("the exact route is open");
     for &name in parameters {
         let p0 = resolved.get(name).expect("parameter");
         let h = 1e-4 * p0.abs();
@@ -153,6 +167,16 @@ fn check(spec: &str, sets: &[&str], stage: Stage, parameters: &[&str]) {
         // directions: the same derivative by two evaluations and two orders of the chain
         // rule, equal to rounding (10⁻¹⁰ of the projection's largest entry)
         let projected = tangent(Along::Projected(&projection));
+        // the two steps give the same numbers as one, to the last bit: the same sums in
+        // the same order
+        let mut two_steps = tangent(Along::Projected(&at_rest));
+        at_rest.add_motion(&motion, &mut two_steps.stiffness, &two_steps.equilibrium);
+        let bits = |m: &DMatrix<f64>| m.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        assert_eq!(
+            bits(&two_steps.stiffness),
+            bits(&projected.stiffness),
+            "{spec} {name}: the projection at rest plus its motion"
+        );
         let full = w.transpose() * &t.stiffness * &w;
         let worst = (&projected.stiffness - &full).amax();
         assert!(

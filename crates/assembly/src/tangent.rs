@@ -472,7 +472,15 @@ pub struct Projection {
     pairs: Vec<(usize, usize)>,
     directions: usize,
     groups: Vec<Group>,
-    /// One row per pair, one column per coordinate (0 on the coordinates that are not free).
+    /// The equilibrium's motion, once computed ([`Projection::at_rest`] has none).
+    motion: Option<Motion>,
+}
+
+/// The coefficients Wₐᵀ(∂K/∂qᵢ)W_b of a [`Projection`]'s pairs, one row per pair and one
+/// column per coordinate (0 on the coordinates that are not free): what the equilibrium's
+/// motion δq adds to each pair's entry of Wᵀ(dK/dp)W, Σᵢ δqᵢ Wₐᵀ(∂K/∂qᵢ)W_b.
+#[derive(Debug)]
+pub struct Motion {
     geometric: DMatrix<f64>,
 }
 
@@ -483,15 +491,37 @@ impl Projection {
     /// many as the machine has; the numbers do not depend on it). `None` when the model has
     /// terms without parameter derivatives (see [`stage_tangent`]). Costs one build of the
     /// plug-in terms and one pass over the terms on it per free coordinate, for every group
-    /// of up to [`LANES`] pairs along one direction and every pair across two.
+    /// of up to [`LANES`] pairs along one direction and every pair across two: what
+    /// [`Projection::at_rest`] and [`Projection::motion`] cost together.
     pub fn new(
         system: &System,
         stage: Stage,
         equilibrium: &[f64],
         balance: &Balance,
-        (vectors, pairs): (&DMatrix<f64>, &[(usize, usize)]),
+        directions: (&DMatrix<f64>, &[(usize, usize)]),
         threads: usize,
     ) -> Result<Option<Projection>, AssemblyError> {
+        let projection = Projection::at_rest(system, stage, equilibrium, balance, directions)?;
+        let Some(motion) = projection.motion(system, balance, threads)? else {
+            return Ok(None);
+        };
+        Ok(Some(projection.with_motion(motion)))
+    }
+
+    /// The projection without the equilibrium's motion: the pairs' groups and every body's
+    /// frame along them (what each parameter's terms at the fixed equilibrium are evaluated
+    /// on), cheap beside the motion's coefficients ([`Projection::motion`]), which a caller
+    /// may compute beside the parameters' passes and add afterwards
+    /// ([`Projection::add_motion`]). The arguments are [`Projection::new`]'s; a model with
+    /// terms without parameter derivatives is found by [`Projection::motion`] and
+    /// [`stage_tangent`] (`None`).
+    pub fn at_rest(
+        system: &System,
+        stage: Stage,
+        equilibrium: &[f64],
+        balance: &Balance,
+        (vectors, pairs): (&DMatrix<f64>, &[(usize, usize)]),
+    ) -> Result<Projection, AssemblyError> {
         let lifted = system.map_scalars(Dual64::from_re);
         check_equilibrium("Projection::new", &lifted, equilibrium)?;
         if !balance.fits(system) {
@@ -516,9 +546,6 @@ impl Projection {
                 given: a.max(b) + 1,
             });
         }
-        let Some(balanced) = balanced_terms(&lifted, false)? else {
-            return Ok(None);
-        };
         let columns: Vec<Vec<f64>> = (0..m)
             .map(|a| vectors.column(a).iter().copied().collect())
             .collect();
@@ -552,6 +579,36 @@ impl Projection {
                 )
             }))
         }));
+        Ok(Projection {
+            coords: coordinate_names(system),
+            stage,
+            equilibrium: equilibrium.to_vec(),
+            pairs: pairs.to_vec(),
+            directions: m,
+            groups,
+            motion: None,
+        })
+    }
+
+    /// The coefficients of the equilibrium's motion for this projection of `system` (the
+    /// model [`Projection::at_rest`] was given, with its `balance`), on `threads` threads:
+    /// one build of the plug-in terms and one pass over the terms on it per free
+    /// coordinate, for every group of pairs. `None` when the model has terms without
+    /// parameter derivatives.
+    pub fn motion(
+        &self,
+        system: &System,
+        balance: &Balance,
+        threads: usize,
+    ) -> Result<Option<Motion>, AssemblyError> {
+        if !balance.fits(system) || self.coords != balance.coords {
+            return Err(AssemblyError::ForeignBalance);
+        }
+        let lifted = system.map_scalars(Dual64::from_re);
+        let Some(balanced) = balanced_terms(&lifted, false)? else {
+            return Ok(None);
+        };
+        let (equilibrium, stage, n) = (&self.equilibrium, self.stage, self.coords.len());
         // per free coordinate: the bodies it moves, and the terms whose energy it changes
         // (the terms on it, and the plug-in terms built around x + ε eᵢ whose constants
         // moved with it)
@@ -586,42 +643,58 @@ impl Projection {
         // one unit of work per group and block of free coordinates
         let blocks: Vec<&[(usize, Vec<usize>, TangentSum)]> =
             coordinates.chunks(COORDINATES_PER_UNIT).collect();
-        let units = in_parallel(groups.len() * blocks.len(), threads, |u| {
-            groups[u / blocks.len()].geometric_rows(system, blocks[u % blocks.len()])
+        let units = in_parallel(self.groups.len() * blocks.len(), threads, |u| {
+            self.groups[u / blocks.len()].geometric_rows(system, blocks[u % blocks.len()])
         })?;
-        let mut geometric = DMatrix::zeros(pairs.len(), n);
+        let mut geometric = DMatrix::zeros(self.pairs.len(), n);
         for (u, rows) in units.into_iter().enumerate() {
-            let group = &groups[u / blocks.len()];
+            let group = &self.groups[u / blocks.len()];
             for (i, values) in rows {
                 for (&k, value) in group.pairs().iter().zip(values) {
                     geometric[(k, i)] = value;
                 }
             }
         }
-        Ok(Some(Projection {
-            coords: coordinate_names(system),
-            stage,
-            equilibrium: equilibrium.to_vec(),
-            pairs: pairs.to_vec(),
-            directions: m,
-            groups,
-            geometric,
-        }))
+        Ok(Some(Motion { geometric }))
+    }
+
+    /// This projection with the equilibrium's `motion` (from [`Projection::motion`] of this
+    /// projection): [`stage_tangent`] then adds it itself.
+    pub fn with_motion(self, motion: Motion) -> Projection {
+        Projection {
+            motion: Some(motion),
+            ..self
+        }
+    }
+
+    /// Adds the equilibrium's motion `delta` (dq*/dp, full coordinate vector, as
+    /// [`StageTangent::equilibrium`]) through `motion` (this projection's) to `stiffness`,
+    /// a [`StageTangent::stiffness`] computed with the projection at rest: the pairs'
+    /// entries and their mirrors.
+    pub fn add_motion(&self, motion: &Motion, stiffness: &mut DMatrix<f64>, delta: &[f64]) {
+        let moved = &motion.geometric * DVector::from_column_slice(delta);
+        for (k, &(a, b)) in self.pairs.iter().enumerate() {
+            stiffness[(a, b)] += moved[k];
+            if a != b {
+                stiffness[(b, a)] = stiffness[(a, b)];
+            }
+        }
     }
 
     /// Wᵀ(dK/dp)W (directions × directions, the pairs' entries and their mirrors, the rest
     /// 0): the terms whose constants move evaluated at the fixed equilibrium, plus the
-    /// coefficients times the equilibrium's motion `delta`.
+    /// coefficients times the equilibrium's motion `delta` when the projection has them.
     fn derivative(&self, moving: &TangentSum, delta: &[f64]) -> Result<DMatrix<f64>, EnergyError> {
         let mut out = DMatrix::zeros(self.directions, self.directions);
-        let motion = &self.geometric * DVector::from_column_slice(delta);
         for group in &self.groups {
             for (&k, partial) in group.pairs().iter().zip(group.seconds(moving)?) {
                 let (a, b) = self.pairs[k];
-                let value = partial.eps + motion[k];
-                out[(a, b)] = value;
-                out[(b, a)] = value;
+                out[(a, b)] = partial.eps;
+                out[(b, a)] = partial.eps;
             }
+        }
+        if let Some(motion) = &self.motion {
+            self.add_motion(motion, &mut out, delta);
         }
         Ok(out)
     }

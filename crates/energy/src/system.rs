@@ -467,27 +467,25 @@ impl<S: Real> System<S> {
                 );
             }
         }
+        // (what, its name, a body it refers to); the item's label is written only for an
+        // error (this runs at every entry of the assembly, once per parameter and more)
         let bodies = self
             .wires
             .iter()
-            .flat_map(|w| {
-                w.ends
+            .flat_map(|w| w.ends.iter().map(move |e| ("wire", &w.name, e.body)))
+            .chain(
+                self.springs
                     .iter()
-                    .map(move |e| (format!("wire '{}'", w.name), e.body))
-            })
-            .chain(self.springs.iter().flat_map(|s| {
-                s.ends
+                    .flat_map(|s| s.ends.iter().map(move |e| ("spring", &s.name, e.body))),
+            )
+            .chain(
+                self.plugin_elements
                     .iter()
-                    .map(move |e| (format!("spring '{}'", s.name), e.body))
-            }))
-            .chain(self.plugin_elements.iter().flat_map(|p| {
-                p.bodies
-                    .iter()
-                    .map(move |&b| (format!("element '{}'", p.name), b))
-            }));
-        for (item, b) in bodies {
+                    .flat_map(|p| p.bodies.iter().map(move |&b| ("element", &p.name, b))),
+            );
+        for (what, name, b) in bodies {
             if b >= n_bodies {
-                return out_of_range(item, "body", b, n_bodies);
+                return out_of_range(format!("{what} '{name}'"), "body", b, n_bodies);
             }
         }
         if let Some((&c, _)) = self.constraint_stiffness.range(n_coords..).next() {
@@ -729,6 +727,85 @@ impl<S: Real> System<S> {
             outputs: self.outputs.clone(),
             name_schemes: self.name_schemes.clone(),
         }
+    }
+
+    /// `f(x, y)` for each generic number x of this model and the number y in the same
+    /// place of `target`, in the order of [`System::map_scalars`]: for rewriting a model's
+    /// numbers without copying the rest of it (names, frames, signals). False, with
+    /// `target` partly rewritten, when the two models do not have the same numbers (a count
+    /// or an end's kind of direction differs).
+    pub fn zip_scalars_into<T: Real>(
+        &self,
+        target: &mut System<T>,
+        mut f: impl FnMut(&S, &mut T),
+    ) -> bool {
+        // the numbers of two fixed-size vectors or matrices, pairwise
+        fn each<'a, 'b, S: 'a, T: 'b>(
+            from: impl IntoIterator<Item = &'a S>,
+            to: impl IntoIterator<Item = &'b mut T>,
+            f: &mut impl FnMut(&S, &mut T),
+        ) {
+            from.into_iter().zip(to).for_each(|(x, y)| f(x, y));
+        }
+        let same = self.bodies.len() == target.bodies.len()
+            && self.wires.len() == target.wires.len()
+            && self.springs.len() == target.springs.len()
+            && self.plugin_elements.len() == target.plugin_elements.len();
+        if !same {
+            return false;
+        }
+        f(&self.gravity, &mut target.gravity);
+        for (a, b) in self.bodies.iter().zip(&mut target.bodies) {
+            f(&a.mass, &mut b.mass);
+            each(&a.inertia, &mut b.inertia, &mut f);
+            each(&a.centre_of_mass, &mut b.centre_of_mass, &mut f);
+        }
+        for (a, b) in self.wires.iter().zip(&mut target.wires) {
+            for (ea, eb) in a.ends.iter().zip(&mut b.ends) {
+                each(&ea.point, &mut eb.point, &mut f);
+                match (&ea.direction, &mut eb.direction) {
+                    (EndDirection::Explicit(da), EndDirection::Explicit(db)) => {
+                        each(da, db, &mut f)
+                    }
+                    (EndDirection::Auto, EndDirection::Auto)
+                    | (EndDirection::Hinged, EndDirection::Hinged) => {}
+                    _ => return false,
+                }
+            }
+            f(&a.stiffness, &mut b.stiffness);
+            f(&a.unstretched_length, &mut b.unstretched_length);
+            let (sa, sb) = (&a.section, &mut b.section);
+            f(&sa.youngs_modulus, &mut sb.youngs_modulus);
+            f(&sa.shear_modulus, &mut sb.shear_modulus);
+            f(&sa.area, &mut sb.area);
+            f(&sa.moment_1, &mut sb.moment_1);
+            f(&sa.moment_2, &mut sb.moment_2);
+            each(&sa.principal_axis, &mut sb.principal_axis, &mut f);
+            f(&sa.torsion_constant, &mut sb.torsion_constant);
+            f(&sa.polar_moment, &mut sb.polar_moment);
+            f(&sa.linear_density, &mut sb.linear_density);
+        }
+        for (a, b) in self.springs.iter().zip(&mut target.springs) {
+            for (ea, eb) in a.ends.iter().zip(&mut b.ends) {
+                each(&ea.point, &mut eb.point, &mut f);
+                each(&ea.angles, &mut eb.angles, &mut f);
+            }
+            each(&a.stiffness, &mut b.stiffness, &mut f);
+            each(&a.preload, &mut b.preload, &mut f);
+        }
+        for (a, b) in self.plugin_elements.iter().zip(&mut target.plugin_elements) {
+            let same = a.points.len() == b.points.len()
+                && a.values.len() == b.values.len()
+                && a.values.keys().eq(b.values.keys());
+            if !same {
+                return false;
+            }
+            for (pa, pb) in a.points.iter().zip(&mut b.points) {
+                each(pa, pb, &mut f);
+            }
+            each(a.values.values(), b.values.values_mut(), &mut f);
+        }
+        true
     }
 
     /// The model's generic numbers, in the order of [`System::map_scalars`].

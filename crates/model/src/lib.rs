@@ -14,6 +14,7 @@ mod fibre;
 pub mod losses;
 
 use std::collections::{BTreeMap, HashMap, HashSet};
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, OnceLock};
 
 use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
@@ -1127,17 +1128,36 @@ pub fn build_tangent_chunk(
     let defaults = Defaults::of(model)?;
     let (set, resolved) = parameters_with(&defaults, overrides)?;
     let tangent = set.resolve_tangents(parameters)?;
+    let build = model.build_tangents(&resolved, &tangent)?;
+    // told apart from every other chunk of the process, so that a scratch model is rewritten
+    // only by the chunk it was copied from
+    static CHUNKS_BUILT: AtomicU64 = AtomicU64::new(0);
     Ok(TangentChunk {
         parameters: parameters.iter().map(|p| p.to_string()).collect(),
-        build: model.build_tangents(&resolved, &tangent)?,
+        id: CHUNKS_BUILT.fetch_add(1, Ordering::Relaxed),
+        build,
     })
 }
 
 /// A model built once for a chunk of parameters ([`build_tangent_chunk`]), from which each
-/// parameter's model is taken when it is wanted (a copy of the model's numbers each).
+/// parameter's model is taken when it is wanted: a copy of the model
+/// ([`TangentChunk::direction`]), or its numbers rewritten in a model kept from the chunk's
+/// other parameters ([`TangentChunk::direction_in`]).
 pub struct TangentChunk {
     parameters: Vec<String>,
+    /// This chunk among the chunks built by the process.
+    id: u64,
     build: ChunkBuild,
+}
+
+/// A parameter's model kept between calls of [`TangentChunk::direction_in`]: taking another
+/// parameter of the same chunk rewrites the model's numbers in place, where
+/// [`TangentChunk::direction`] copies the whole model (its names, frames, signals and
+/// name schemes: about two hundred allocations for the quad).
+#[derive(Default)]
+pub struct DirectionScratch {
+    /// The chunk the model was copied from, and the model.
+    kept: Option<(u64, System<Dual64>)>,
 }
 
 impl TangentChunk {
@@ -1150,6 +1170,26 @@ impl TangentChunk {
     /// or why it has none: a derivative the build could not carry, one that is not finite,
     /// or `k` past the chunk.
     pub fn direction(&self, k: usize) -> Result<System<Dual64>, BuildError> {
+        let mut scratch = DirectionScratch::default();
+        self.direction_in(k, &mut scratch)?;
+        match scratch.kept {
+            Some((_, system)) => Ok(system),
+            // direction_in keeps the model whenever it succeeds
+            None => Err(BuildError::Invalid {
+                item: format!("direction {k}"),
+                message: "no model was taken".into(),
+            }),
+        }
+    }
+
+    /// [`TangentChunk::direction`] written into `scratch`: the numbers rewritten in place
+    /// when the scratch holds a model of this chunk, else a copy of the model. On an error
+    /// the scratch holds a model of the chunk whose numbers are not to be read.
+    pub fn direction_in<'s>(
+        &self,
+        k: usize,
+        scratch: &'s mut DirectionScratch,
+    ) -> Result<&'s System<Dual64>, BuildError> {
         let Some(parameter) = self.parameters.get(k) else {
             return Err(BuildError::Invalid {
                 item: format!("direction {k}"),
@@ -1161,11 +1201,25 @@ impl TangentChunk {
             return Err(why.clone());
         }
         let mut finite = true;
-        let one = self.build.system.map_scalars(|x| {
-            let x = pendkit_params::chunk_direction(&x, k);
+        let mut along = |x: &ChunkDual| {
+            let x = pendkit_params::chunk_direction(x, k);
             finite &= x.eps.is_finite();
             x
-        });
+        };
+        // the same chunk's model has the same numbers in the same places
+        let rewritten = match &mut scratch.kept {
+            Some((id, system)) if *id == self.id => self
+                .build
+                .system
+                .zip_scalars_into(system, |x, y| *y = along(x)),
+            _ => false,
+        };
+        if !rewritten {
+            scratch.kept = None;
+        }
+        let (_, system) = scratch
+            .kept
+            .get_or_insert_with(|| (self.id, self.build.system.map_scalars(|x| along(&x))));
         // a derivative that overflows or is undefined (a square root at zero) is not exact
         if !finite {
             return Err(BuildError::Invalid {
@@ -1173,7 +1227,7 @@ impl TangentChunk {
                 message: "no exact derivative: a model number's derivative is not finite".into(),
             });
         }
-        Ok(one)
+        Ok(system)
     }
 }
 

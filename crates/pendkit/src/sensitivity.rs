@@ -88,7 +88,10 @@ use std::collections::BTreeSet;
 
 use nalgebra::{Complex, DMatrix, DVector};
 use num_dual::Dual64;
-use pendkit_assembly::{Along, AssemblyOptions, Balance, Projection, assemble_with, in_parallel};
+use pendkit_assembly::{
+    Along, AssemblyOptions, Balance, Projection, assemble_with, in_parallel, in_parallel_with,
+    side_by_side,
+};
 use pendkit_dynamics::{
     Input, Modes, Output, Stability, StageModel, eliminate_floats, validate::check_frequencies,
 };
@@ -401,6 +404,10 @@ struct Column {
     refused: Option<String>,
     /// d(mode frequency)/dp, one per mode (empty when the modes were not asked for).
     dfdp: Vec<f64>,
+    /// The exact route's projections still without the equilibrium's motion, which
+    /// [`finish_modes`] adds once the projection's coefficients are known (`dfdp` is then
+    /// filled).
+    pending: Option<Projections>,
     /// dH/dp, one per frequency.
     d_tf: Vec<C>,
     /// d(noise PSD)/dp, one per frequency.
@@ -444,17 +451,27 @@ impl Tangents {
         Ok(Tangents { chunks, at })
     }
 
-    /// Parameter `j`'s model with the exact derivatives of its numbers, if it has them.
-    fn of(&self, j: usize) -> Option<System<Dual64>> {
+    /// Parameter `j`'s model with the exact derivatives of its numbers, if it has them,
+    /// written into `scratch` (a column's thread keeps one: the parameters of a chunk are
+    /// its columns in order, so most models are rewritten in place rather than copied).
+    fn of<'s>(
+        &self,
+        j: usize,
+        scratch: &'s mut pendkit_model::DirectionScratch,
+    ) -> Option<&'s System<Dual64>> {
         let (c, k) = self.at[j]?;
-        self.chunks[c].as_ref()?.direction(k).ok()
+        self.chunks[c].as_ref()?.direction_in(k, scratch).ok()
     }
 }
 
 /// Parameter `j`'s column: the stage rebuilt at the stencil's points and differenced, then
 /// the exact algebra of the module's documentation. `None` for a parameter nothing reads
 /// (every derivative exactly 0, nothing computed).
-fn column(shared: &Shared, j: usize) -> Result<Option<Column>, Error> {
+fn column(
+    shared: &Shared,
+    j: usize,
+    scratch: &mut pendkit_model::DirectionScratch,
+) -> Result<Option<Column>, Error> {
     let Shared {
         case,
         defaults,
@@ -485,14 +502,14 @@ fn column(shared: &Shared, j: usize) -> Result<Option<Column>, Error> {
     };
     // the model's numbers along their exact tangent, where the build offers one (else each
     // step rebuilds the model)
-    let tangent = shared.tangents.of(j);
-    let tangent = tangent.as_ref();
+    let tangent = shared.tangents.of(j, scratch);
     let mut out = Column {
         step: h,
         exact_build: tangent.is_some(),
         exact: false,
         refused: None,
         dfdp: vec![0.0; if request.modes { modes.len() } else { 0 }],
+        pending: None,
         d_tf: vec![C::new(0.0, 0.0); nf],
         d_noise: vec![0.0; nf],
     };
@@ -506,10 +523,11 @@ fn column(shared: &Shared, j: usize) -> Result<Option<Column>, Error> {
             // nothing computed
             out.exact = true;
         } else if let Some(dual) = tangent
-            && let Some((vk, vm)) = exact_projections(shared, j, p0, h, dual)?
+            && let Some(projections) = exact_projections(shared, j, p0, h, dual)?
         {
-            // the stage's matrices differentiated by the implicit function theorem
-            out.dfdp = mode_derivatives(shared, &vk, &vm)?;
+            // the stage's matrices differentiated by the implicit function theorem (the
+            // equilibrium's motion added by finish_modes)
+            out.pending = Some(projections);
             out.exact = true;
         }
         if out.exact && !responses {
@@ -622,8 +640,13 @@ fn overridden(case: &Case, name: &str, value: f64) -> pendkit_model::Overrides {
     overrides
 }
 
-/// The modes' projections (Vᵀ(dK_eff/dp)V, Vᵀ(dM/dp)V).
-type Projections = (DMatrix<f64>, DMatrix<f64>);
+/// The modes' projections Vᵀ(dK_eff/dp)V (without the equilibrium's motion) and
+/// Vᵀ(dM/dp)V, and dq*/dp (full coordinate vector), from [`exact_projections`].
+struct Projections {
+    stiffness: DMatrix<f64>,
+    mass: DMatrix<f64>,
+    equilibrium: Vec<f64>,
+}
 
 /// The modes' projections Vᵀ(dK_eff/dp)V and Vᵀ(dM/dp)V, exactly (docs/exact-sensitivities.md,
 /// step 4): the equilibrium's motion by the implicit function theorem and the stage's
@@ -689,8 +712,38 @@ fn exact_projections(
         return Ok(None);
     }
     let vectors = shared.vectors;
-    let vm = vectors.transpose() * &tangent.mass * vectors;
-    Ok(Some((tangent.stiffness, vm)))
+    Ok(Some(Projections {
+        mass: vectors.transpose() * &tangent.mass * vectors,
+        stiffness: tangent.stiffness,
+        equilibrium: tangent.equilibrium,
+    }))
+}
+
+/// The exact columns' mode derivatives: each column's projection with the equilibrium's
+/// `motion` added (the route's coefficients, computed beside the columns), then
+/// [`mode_derivatives`].
+fn finish_modes(
+    shared: &Shared,
+    motion: Option<&pendkit_assembly::Motion>,
+    columns: &mut [Option<Column>],
+) -> Result<(), Error> {
+    for column in columns.iter_mut().flatten() {
+        let Some(mut pending) = column.pending.take() else {
+            continue;
+        };
+        // a column took the exact route only where the route is open, and then the
+        // coefficients exist: stage_tangent and Projection::motion refuse the same models
+        let (Some(route), Some(motion)) = (&shared.exact, motion) else {
+            return Err(bad(
+                "the exact route lost the equilibrium's motion: no derivative",
+            ));
+        };
+        route
+            .projection
+            .add_motion(motion, &mut pending.stiffness, &pending.equilibrium);
+        column.dfdp = mode_derivatives(shared, &pending.stiffness, &pending.mass)?;
+    }
+    Ok(())
 }
 
 /// What the exact route shares between parameters: the equilibrium's factorised stiffness,
@@ -704,12 +757,11 @@ struct ExactRoute {
 impl ExactRoute {
     /// `None` when the route is closed to every parameter: a damping tag whose real
     /// multiplier at DC is not 1 (so the real stiffness the modes use is not the
-    /// tension-on Hessian), a model with terms without parameter derivatives, or a
-    /// singular float block.
+    /// tension-on Hessian), a model with terms without parameter derivatives (found by
+    /// each column's [`pendkit_assembly::stage_tangent`]), or a singular float block.
     fn new(
         base: &StageResult,
         stage: Stage,
-        threads: usize,
         real: &DMatrix<f64>,
         vectors: &DMatrix<f64>,
         clusters: &[Vec<usize>],
@@ -754,17 +806,15 @@ impl ExactRoute {
                     .flat_map(move |(i, &a)| c[i..].iter().map(move |&b| (a, b)))
             })
             .collect();
-        let Some(projection) = Projection::new(
+        // without the equilibrium's motion, whose coefficients are computed beside the
+        // parameters' columns
+        let projection = Projection::at_rest(
             &base.system,
             stage,
             &base.assembled.equilibrium.coords,
             &balance,
             (&directions, &pairs),
-            threads,
-        )?
-        else {
-            return Ok(None);
-        };
+        )?;
         Ok(Some(ExactRoute {
             balance,
             projection,
@@ -786,14 +836,23 @@ fn mode_derivatives(
     for cluster in shared.clusters {
         let w2: f64 =
             cluster.iter().map(|&k| modes[k].omega_squared).sum::<f64>() / cluster.len() as f64;
-        let g = DMatrix::from_fn(cluster.len(), cluster.len(), |a, b| {
-            let (ka, kb) = (cluster[a], cluster[b]);
-            vk[(ka, kb)] - w2 * vm[(ka, kb)]
-        });
-        let g = (&g + g.transpose()) * 0.5;
-        let mut d: Vec<f64> = g.symmetric_eigenvalues().iter().copied().collect();
-        d.sort_by(f64::total_cmp);
-        for (&k, dw2) in cluster.iter().zip(d) {
+        let entry = |ka: usize, kb: usize| vk[(ka, kb)] - w2 * vm[(ka, kb)];
+        let (alone, shared_frequency);
+        let d: &[f64] = if let [k] = cluster[..] {
+            // a mode alone (nearly every one): the matrix is its one entry
+            alone = [entry(k, k)];
+            &alone
+        } else {
+            let g = DMatrix::from_fn(cluster.len(), cluster.len(), |a, b| {
+                entry(cluster[a], cluster[b])
+            });
+            let g = (&g + g.transpose()) * 0.5;
+            let mut d: Vec<f64> = g.symmetric_eigenvalues().iter().copied().collect();
+            d.sort_by(f64::total_cmp);
+            shared_frequency = d;
+            &shared_frequency
+        };
+        for (&k, &dw2) in cluster.iter().zip(d) {
             let mode = &modes[k];
             if mode.omega_squared == 0.0 {
                 return Err(bad(format!(
@@ -1009,6 +1068,133 @@ impl<'a> MasterDerivative<'a> {
     }
 }
 
+/// Which parameters what reads, from the case's own builds.
+struct ParameterReads {
+    reach: Vec<Reach>,
+    /// Whether the damping's real multipliers ε'(f) depend on each parameter.
+    real_multiplier_reads: Vec<bool>,
+    /// Whether each parameter is read only by what moves no mode.
+    modes_blind: Vec<bool>,
+}
+
+impl ParameterReads {
+    /// The reads of the parameters `names` of `case`, whose build resolved `resolved`.
+    fn new(
+        case: &Case,
+        defaults: &Defaults,
+        resolved: &pendkit_params::Resolved,
+        names: &[String],
+    ) -> Result<Self, Error> {
+        // which parameters the mechanical build reads (with the definitions they follow), and
+        // which anything reads at all
+        let read_all = case.parameters_read(resolved)?;
+        let (_, fresh) = parameters_with(defaults, &case.overrides)?;
+        case.model.build(&fresh)?;
+        let read_mechanics = case.parameters_read(&fresh)?;
+        // the parameters the damping's real multipliers ε' depend on: only those can move ε'(0)
+        // away from 1 (the exact route's condition)
+        let real_reads = case.parameters_behind(pendkit_model::damping_real_symbols(
+            defaults,
+            &case.overrides,
+        ))?;
+        let real_multiplier_reads: Vec<bool> =
+            names.iter().map(|n| real_reads.contains(n)).collect();
+        // what the build adds that can move the modes: the real multipliers, and the switch
+        // that puts wire terms into the equilibrium; a parameter only the rest of the damping
+        // (loss angles, their temperatures) and the temperature read moves no mode
+        let switch_reads = case.parameters_behind([pendkit_model::WIRE_TERMS_EARLY.to_string()])?;
+        let reach: Vec<Reach> = names
+            .iter()
+            .map(|n| {
+                if read_mechanics.contains(n) {
+                    Reach::Mechanics
+                } else if read_all.contains(n) {
+                    Reach::DampingOnly
+                } else {
+                    Reach::Nothing
+                }
+            })
+            .collect();
+        let modes_blind: Vec<bool> = (0..names.len())
+            .map(|j| {
+                reach[j] == Reach::DampingOnly
+                    && !real_multiplier_reads[j]
+                    && !switch_reads.contains(&names[j])
+            })
+            .collect();
+        Ok(ParameterReads {
+            reach,
+            real_multiplier_reads,
+            modes_blind,
+        })
+    }
+}
+
+/// The nominal stage, and what every parameter's column shares from it.
+struct NominalStage {
+    point: Point,
+    /// The stability warning, where the request allows an unstable equilibrium.
+    warning: Option<String>,
+    /// The transfer function's ports and the noise output's, where asked for.
+    ports: Option<Ports>,
+    noise: Option<Ports>,
+    /// The modes' vectors, one column per mode.
+    vectors: DMatrix<f64>,
+    clusters: Vec<Vec<usize>>,
+    exact: Option<ExactRoute>,
+}
+
+impl NominalStage {
+    /// `system`'s stage as `request` asks for it.
+    fn new(system: System, request: &SensitivityRequest) -> Result<Self, Error> {
+        let base = run_stage(system, request.stage)?;
+        let warning = base.require_stable(request.allow_unstable)?;
+        let base_real = base.model.real_stiffness(&base.system.damping);
+        let base_k = eliminate_floats(&base_real, &base.assembled.layout, &base.system)?.k_eff;
+        let base_point = Point {
+            k_eff: base_k,
+            result: base,
+        };
+        let sizes = base_point.result.model.sizes;
+        let nx = sizes.0;
+
+        let base_ports = match &request.tf {
+            Some(tf) => Some(ports(&base_point, tf)?),
+            None => None,
+        };
+        let base_noise = match &request.noise {
+            Some(name) => Some(noise_port(&base_point, name)?),
+            None => None,
+        };
+
+        let modes = &base_point.result.modes.modes;
+        let vectors = DMatrix::from_fn(nx, modes.len(), |i, k| {
+            modes[k].vector.get(i).copied().unwrap_or(0.0)
+        });
+        let clusters = mode_clusters(modes);
+        let exact_route = if request.modes && !request.differences {
+            ExactRoute::new(
+                &base_point.result,
+                request.stage,
+                &base_real,
+                &vectors,
+                &clusters,
+            )?
+        } else {
+            None
+        };
+        Ok(NominalStage {
+            point: base_point,
+            warning,
+            ports: base_ports,
+            noise: base_noise,
+            vectors,
+            clusters,
+            exact: exact_route,
+        })
+    }
+}
+
 /// Sensitivities of `case` at the request's stage. See the module's documentation for the
 /// method and its accuracy.
 pub fn sensitivities(case: &Case, request: &SensitivityRequest) -> Result<Sensitivities, Error> {
@@ -1077,81 +1263,39 @@ pub fn sensitivities(case: &Case, request: &SensitivityRequest) -> Result<Sensit
         .map(|n| defaults.params.unit(n).unwrap_or_default().to_string())
         .collect();
 
-    // which parameters the mechanical build reads (with the definitions they follow), and
-    // which anything reads at all
-    let read_all = case.parameters_read(&resolved)?;
-    let (_, fresh) = parameters_with(&defaults, &case.overrides)?;
-    case.model.build(&fresh)?;
-    let read_mechanics = case.parameters_read(&fresh)?;
-    // the parameters the damping's real multipliers ε' depend on: only those can move ε'(0)
-    // away from 1 (the exact route's condition)
-    let real_reads = case.parameters_behind(pendkit_model::damping_real_symbols(
-        &defaults,
-        &case.overrides,
-    ))?;
-    let real_multiplier_reads: Vec<bool> = names.iter().map(|n| real_reads.contains(n)).collect();
-    // what the build adds that can move the modes: the real multipliers, and the switch
-    // that puts wire terms into the equilibrium; a parameter only the rest of the damping
-    // (loss angles, their temperatures) and the temperature read moves no mode
-    let switch_reads = case.parameters_behind([pendkit_model::WIRE_TERMS_EARLY.to_string()])?;
-    let reach: Vec<Reach> = names
-        .iter()
-        .map(|n| {
-            if read_mechanics.contains(n) {
-                Reach::Mechanics
-            } else if read_all.contains(n) {
-                Reach::DampingOnly
-            } else {
-                Reach::Nothing
-            }
-        })
-        .collect();
-    let modes_blind: Vec<bool> = (0..names.len())
-        .map(|j| {
-            reach[j] == Reach::DampingOnly
-                && !real_multiplier_reads[j]
-                && !switch_reads.contains(&names[j])
-        })
-        .collect();
-    let base = run_stage(system, request.stage)?;
-    let warning = base.require_stable(request.allow_unstable)?;
-    let base_real = base.model.real_stiffness(&base.system.damping);
-    let base_k = eliminate_floats(&base_real, &base.assembled.layout, &base.system)?.k_eff;
-    let base_point = Point {
-        k_eff: base_k,
-        result: base,
-    };
+    // the nominal stage (and what the exact route shares) beside which parameters what
+    // reads and the parameters' dual builds: neither needs the other
+    let (nominal_stage, reads) = side_by_side(
+        request.threads,
+        || NominalStage::new(system, request),
+        || -> Result<_, Error> {
+            let reads = ParameterReads::new(case, &defaults, &resolved, &names)?;
+            let tangents = Tangents::build(case, &names, &reads.reach, request.threads)?;
+            Ok((reads, tangents))
+        },
+    );
+    // a failing read comes first, as it would in order: the stage needs nothing read
+    let (
+        ParameterReads {
+            reach,
+            real_multiplier_reads,
+            modes_blind,
+        },
+        tangents,
+    ) = reads?;
+    let NominalStage {
+        point: base_point,
+        warning,
+        ports: base_ports,
+        noise: base_noise,
+        vectors,
+        clusters,
+        exact: exact_route,
+    } = nominal_stage?;
     let sizes = base_point.result.model.sizes;
-    let nx = sizes.0;
-
-    let base_ports = match &request.tf {
-        Some(tf) => Some(ports(&base_point, tf)?),
-        None => None,
-    };
-    let base_noise = match &request.noise {
-        Some(name) => Some(noise_port(&base_point, name)?),
-        None => None,
-    };
-
     let modes = &base_point.result.modes.modes;
     let modes_hz: Vec<f64> = modes.iter().map(|m| m.hz).collect();
     let mode_labels: Vec<String> = modes.iter().map(|m| m.label.clone()).collect();
-    let vectors = DMatrix::from_fn(nx, modes.len(), |i, k| {
-        modes[k].vector.get(i).copied().unwrap_or(0.0)
-    });
-    let clusters = mode_clusters(modes);
-    let exact_route = if request.modes && !request.differences {
-        ExactRoute::new(
-            &base_point.result,
-            request.stage,
-            request.threads,
-            &base_real,
-            &vectors,
-            &clusters,
-        )?
-    } else {
-        None
-    };
 
     let np = names.len();
     let nf = request.freqs.len();
@@ -1183,7 +1327,6 @@ pub fn sensitivities(case: &Case, request: &SensitivityRequest) -> Result<Sensit
         Vec::new()
     };
 
-    let tangents = Tangents::build(case, &names, &reach, request.threads)?;
     let shared = Shared {
         case,
         defaults: &defaults,
@@ -1203,7 +1346,28 @@ pub fn sensitivities(case: &Case, request: &SensitivityRequest) -> Result<Sensit
         exact: exact_route,
         tangents: &tangents,
     };
-    let columns = in_parallel(np, request.threads, |j| column(&shared, j))?;
+    // the columns beside the coefficients of the equilibrium's motion, which only their
+    // last step needs (finish_modes)
+    let (motion, columns) = side_by_side(
+        request.threads,
+        || match &shared.exact {
+            Some(route) => route
+                .projection
+                .motion(&base_point.result.system, &route.balance, request.threads)
+                .map_err(Error::from),
+            None => Ok(None),
+        },
+        || {
+            in_parallel_with(
+                np,
+                request.threads,
+                pendkit_model::DirectionScratch::default,
+                |scratch, j| column(&shared, j, scratch),
+            )
+        },
+    );
+    let mut columns = columns?;
+    finish_modes(&shared, motion?.as_ref(), &mut columns)?;
     for (j, col) in columns.into_iter().enumerate() {
         let Some(col) = col else {
             exact[j] = request.modes && !request.differences;
