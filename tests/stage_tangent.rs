@@ -170,7 +170,9 @@ fn check(spec: &str, sets: &[&str], stage: Stage, parameters: &[&str]) {
         // the two steps give the same numbers as one, to the last bit: the same sums in
         // the same order
         let mut two_steps = tangent(Along::Projected(&at_rest));
-        at_rest.add_motion(&motion, &mut two_steps.stiffness, &two_steps.equilibrium);
+        at_rest
+            .add_motion(&motion, &mut two_steps.stiffness, &two_steps.equilibrium)
+            .expect("the projection's own motion");
         let bits = |m: &DMatrix<f64>| m.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
         assert_eq!(
             bits(&two_steps.stiffness),
@@ -303,6 +305,35 @@ fn wrong_sizes_are_errors_naming_what_and_where() {
         Along::Projected(&other_stage),
     ));
     assert!(e.contains("projection") && !e.contains('\n'), "{e}");
+    // a motion belongs to the projection it was computed for, and its inputs must fit it
+    let at_rest =
+        |stage| Projection::at_rest(&qs, stage, q, &qb, (&w, &[(0, 0), (0, 1)])).expect("at rest");
+    let (one, other) = (at_rest(Stage::S2), at_rest(Stage::S2));
+    let motion = one.motion(&qs, &qb, 1).expect("motion").expect("open");
+    let add =
+        |projection: &Projection, stiffness: &mut DMatrix<f64>, delta: &[f64]| match projection
+            .add_motion(&motion, stiffness, delta)
+        {
+            Err(e) => e.to_string(),
+            Ok(()) => panic!("must fail"),
+        };
+    let e = add(&other, &mut DMatrix::zeros(2, 2), &vec![0.0; n]);
+    assert!(e.contains("another projection") && !e.contains('\n'), "{e}");
+    let e = add(&one, &mut DMatrix::zeros(2, 2), &vec![0.0; n - 1]);
+    assert!(
+        e.contains("Projection::add_motion") && e.contains("delta"),
+        "{e}"
+    );
+    let e = add(&one, &mut DMatrix::zeros(3, 2), &vec![0.0; n]);
+    assert!(e.contains("stiffness (rows)"), "{e}");
+    assert!(
+        one.add_motion(&motion, &mut DMatrix::zeros(2, 2), &vec![0.0; n])
+            .is_ok()
+    );
+    match other.with_motion(motion) {
+        Err(e) => assert!(e.to_string().contains("another projection"), "{e}"),
+        Ok(_) => panic!("must fail"),
+    }
     assert!(Balance::new(&qs, &q[1..]).is_err());
     // a NaN anywhere in the inputs is a one-line error naming the argument and the entry,
     // never NaN derivatives

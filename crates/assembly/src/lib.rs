@@ -104,6 +104,9 @@ pub enum AssemblyError {
     /// A [`Projection`] used with another model, stage or equilibrium than its own.
     #[error("stage_tangent: the projection was built for another model, stage or equilibrium")]
     ForeignProjection,
+    /// A [`Motion`] used with another [`Projection`] than the one it was computed for.
+    #[error("Projection::add_motion: the motion was computed for another projection")]
+    ForeignMotion,
     /// A float moves a body with mass or inertia (floats must be massless).
     #[error("float '{float}' moves body '{body}', which has mass: make it a variable")]
     MassiveFloat {

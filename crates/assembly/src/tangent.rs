@@ -30,6 +30,7 @@ use pendkit_geometry::Frame;
 use pendkit_rotations::{
     Constant, LANES, Real, SecondLanes, second_lanes_moving, second_lanes_seed, tr_mul, vee,
 };
+use std::sync::atomic::{AtomicU64, Ordering};
 
 use crate::equilibrium::{Evaluation, free_coordinates, free_slots, hessian_sum};
 use crate::evaluate::Evaluator;
@@ -307,7 +308,8 @@ pub enum Along<'a> {
     /// The entries (a, b) of Wᵀ (dK/dp) W that `projection` lists (the rest 0): one
     /// evaluation per term whose constants move with the parameter for every group of up
     /// to [`LANES`] pairs along one direction and for every pair across two, the rest from
-    /// the projection's coefficients.
+    /// the projection's coefficients (left out for a projection without them,
+    /// [`Projection::at_rest`]: [`Projection::add_motion`] adds them afterwards).
     Projected(&'a Projection),
 }
 
@@ -474,6 +476,8 @@ pub struct Projection {
     groups: Vec<Group>,
     /// The equilibrium's motion, once computed ([`Projection::at_rest`] has none).
     motion: Option<Motion>,
+    /// This projection among the projections made by the process (a motion belongs to one).
+    id: u64,
 }
 
 /// The coefficients Wₐᵀ(∂K/∂qᵢ)W_b of a [`Projection`]'s pairs, one row per pair and one
@@ -482,6 +486,8 @@ pub struct Projection {
 #[derive(Debug)]
 pub struct Motion {
     geometric: DMatrix<f64>,
+    /// The projection it was computed for.
+    projection: u64,
 }
 
 impl Projection {
@@ -505,7 +511,7 @@ impl Projection {
         let Some(motion) = projection.motion(system, balance, threads)? else {
             return Ok(None);
         };
-        Ok(Some(projection.with_motion(motion)))
+        Ok(Some(projection.with_motion(motion)?))
     }
 
     /// The projection without the equilibrium's motion: the pairs' groups and every body's
@@ -579,6 +585,7 @@ impl Projection {
                 )
             }))
         }));
+        static PROJECTIONS_MADE: AtomicU64 = AtomicU64::new(0);
         Ok(Projection {
             coords: coordinate_names(system),
             stage,
@@ -587,6 +594,7 @@ impl Projection {
             directions: m,
             groups,
             motion: None,
+            id: PROJECTIONS_MADE.fetch_add(1, Ordering::Relaxed),
         })
     }
 
@@ -655,23 +663,55 @@ impl Projection {
                 }
             }
         }
-        Ok(Some(Motion { geometric }))
+        Ok(Some(Motion {
+            geometric,
+            projection: self.id,
+        }))
     }
 
     /// This projection with the equilibrium's `motion` (from [`Projection::motion`] of this
-    /// projection): [`stage_tangent`] then adds it itself.
-    pub fn with_motion(self, motion: Motion) -> Projection {
-        Projection {
+    /// projection, else an error): [`stage_tangent`] then adds it itself.
+    pub fn with_motion(self, motion: Motion) -> Result<Projection, AssemblyError> {
+        if motion.projection != self.id {
+            return Err(AssemblyError::ForeignMotion);
+        }
+        Ok(Projection {
             motion: Some(motion),
             ..self
-        }
+        })
     }
 
     /// Adds the equilibrium's motion `delta` (dq*/dp, full coordinate vector, as
     /// [`StageTangent::equilibrium`]) through `motion` (this projection's) to `stiffness`,
     /// a [`StageTangent::stiffness`] computed with the projection at rest: the pairs'
-    /// entries and their mirrors.
-    pub fn add_motion(&self, motion: &Motion, stiffness: &mut DMatrix<f64>, delta: &[f64]) {
+    /// entries and their mirrors. Another projection's motion, or inputs of other sizes,
+    /// are errors.
+    pub fn add_motion(
+        &self,
+        motion: &Motion,
+        stiffness: &mut DMatrix<f64>,
+        delta: &[f64],
+    ) -> Result<(), AssemblyError> {
+        if motion.projection != self.id {
+            return Err(AssemblyError::ForeignMotion);
+        }
+        let length = |argument, expected, given| AssemblyError::Length {
+            function: "Projection::add_motion",
+            argument,
+            expected,
+            given,
+        };
+        if delta.len() != self.coords.len() {
+            return Err(length("delta", self.coords.len(), delta.len()));
+        }
+        for (argument, given) in [
+            ("stiffness (rows)", stiffness.nrows()),
+            ("stiffness (columns)", stiffness.ncols()),
+        ] {
+            if given != self.directions {
+                return Err(length(argument, self.directions, given));
+            }
+        }
         let moved = &motion.geometric * DVector::from_column_slice(delta);
         for (k, &(a, b)) in self.pairs.iter().enumerate() {
             stiffness[(a, b)] += moved[k];
@@ -679,12 +719,17 @@ impl Projection {
                 stiffness[(b, a)] = stiffness[(a, b)];
             }
         }
+        Ok(())
     }
 
     /// Wᵀ(dK/dp)W (directions × directions, the pairs' entries and their mirrors, the rest
     /// 0): the terms whose constants move evaluated at the fixed equilibrium, plus the
     /// coefficients times the equilibrium's motion `delta` when the projection has them.
-    fn derivative(&self, moving: &TangentSum, delta: &[f64]) -> Result<DMatrix<f64>, EnergyError> {
+    fn derivative(
+        &self,
+        moving: &TangentSum,
+        delta: &[f64],
+    ) -> Result<DMatrix<f64>, AssemblyError> {
         let mut out = DMatrix::zeros(self.directions, self.directions);
         for group in &self.groups {
             for (&k, partial) in group.pairs().iter().zip(group.seconds(moving)?) {
@@ -694,7 +739,7 @@ impl Projection {
             }
         }
         if let Some(motion) = &self.motion {
-            self.add_motion(motion, &mut out, delta);
+            self.add_motion(motion, &mut out, delta)?;
         }
         Ok(out)
     }

@@ -740,7 +740,7 @@ fn finish_modes(
         };
         route
             .projection
-            .add_motion(motion, &mut pending.stiffness, &pending.equilibrium);
+            .add_motion(motion, &mut pending.stiffness, &pending.equilibrium)?;
         column.dfdp = mode_derivatives(shared, &pending.stiffness, &pending.mass)?;
     }
     Ok(())
