@@ -68,7 +68,13 @@ impl<D: Real> Frame<D> {
     where
         D: Lift<C>,
     {
-        self.origin + self.direction(p)
+        // written out rather than as origin + direction: nalgebra's generic sum copies
+        // each entry, which for the passes' 208-byte numbers is a call to memmove
+        let (o, r) = (&self.origin, &self.rotation);
+        let row = |i: usize| {
+            o[i] + (r[(i, 0)].times(p[0]) + r[(i, 1)].times(p[1]) + r[(i, 2)].times(p[2]))
+        };
+        Vector3::new(row(0), row(1), row(2))
     }
 
     /// Lab components of a vector given in frame coordinates: R v (an `f64` vector is not
