@@ -14,7 +14,7 @@ use pendkit_rotations::{
 use crate::{
     Attached, Derivatives, Element, EnergyError, JetPoint, LocalFrames, OffForm, Potential,
     Reference, SharedBodies, SpringEnd, Stage, TangentPotential, TangentTerm, TensionOff, Term,
-    Wire, add_curvature, add_jacobian,
+    Wire, add_curvature, add_jacobian, term_label,
 };
 
 /// Tag of gravity terms (lossless whatever multipliers the tag is given).
@@ -143,7 +143,7 @@ fn gravity_energies<'r, S: Constant>(
                 centre_of_mass: body.centre_of_mass,
                 weight: body.mass * system.gravity,
             };
-            (format!("gravity {}", body.name), local, energy)
+            (term_label("gravity", &body.name), local, energy)
         })
 }
 
@@ -280,7 +280,7 @@ impl Element for WireStretch {
             .iter()
             .map(|wire| {
                 let (local, energy) = wire_stretch_energy(reference, wire)?;
-                let label = format!("wire-stretch {}", wire.name);
+                let label = term_label("wire-stretch", &wire.name);
                 let tag = wire.tags.stretch.clone();
                 Ok(Term::on_frames(label, "wire-stretch", tag, local, energy))
             })
@@ -294,7 +294,7 @@ impl Element for WireStretch {
         let wires = reference.system.wires.iter();
         let terms = wires.filter(|w| reference.keeps_wire(w)).map(|wire| {
             let (local, energy) = wire_stretch_energy(reference, wire)?;
-            let label = format!("wire-stretch {}", wire.name);
+            let label = term_label("wire-stretch", &wire.name);
             let tag = wire.tags.stretch.clone();
             Ok(TangentTerm::on_frames(
                 label,
@@ -644,7 +644,7 @@ fn spring_energies<'r, S: Constant>(
                 stiffness: s.stiffness,
                 preload: s.preload,
             };
-            (format!("spring {}", s.name), s.tag.clone(), local, energy)
+            (term_label("spring", &s.name), s.tag.clone(), local, energy)
         })
 }
 

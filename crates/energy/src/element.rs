@@ -340,6 +340,17 @@ pub fn find_kind(name: &str) -> Option<&'static dyn Element> {
     registry().into_iter().find(|k| k.kind() == name)
 }
 
+/// A term's label, `<kind> <element name>` (e.g. `wire-stretch fibre1`), in one allocation
+/// of the right size (`format!` guesses the size from the literal parts and grows the
+/// string; the sensitivities build terms for every parameter).
+pub fn term_label(kind: &str, name: &str) -> String {
+    let mut label = String::with_capacity(kind.len() + 1 + name.len());
+    label.push_str(kind);
+    label.push(' ');
+    label.push_str(name);
+    label
+}
+
 /// Frames of several bodies over one shared local coordinate vector: the union of the
 /// coordinates the bodies depend on, and each frame renumbered into it.
 #[derive(Clone, Debug, Default)]

@@ -22,7 +22,7 @@ pub use crate::core::{GRAVITY_TAG, GravityEnergy, SpringEnergy, WireStretchEnerg
 pub use damping::{Damping, TagDamping};
 pub use element::{
     DuplicateKind, Element, LocalFrames, Reference, Registration, SharedBodies,
-    check_registrations, duplicate_kind, find_kind, registrations, registry,
+    check_registrations, duplicate_kind, find_kind, registrations, registry, term_label,
 };
 pub use extra::{CONSTRAINT_TAG, constraint_terms, extra_terms};
 pub use fast::{

@@ -109,7 +109,7 @@ fn each_beam<C: Constant, T>(
     for (index, wire) in wires.filter(|(_, w)| reference.keeps_wire(w)) {
         if let Some((beam, frames)) = shared_beam(reference, shared, index)?.as_ref() {
             let (tag, off) = part_tag(wire, part);
-            let label = format!("{kind} {}", wire.name);
+            let label = pendkit_energy::term_label(kind, &wire.name);
             terms.push(term(label, tag, off, frames.clone(), beam.clone())?);
         }
     }

@@ -176,7 +176,7 @@ impl Element for WireTorsion {
         for wire in system.wires.iter().filter(|w| reference.keeps_wire(w)) {
             let local = shared.frames(system, &[wire.ends[0].body, wire.ends[1].body]);
             if let Some(energy) = torsion_energy(reference, wire, &local) {
-                let label = format!("wire-torsion {}", wire.name);
+                let label = pendkit_energy::term_label("wire-torsion", &wire.name);
                 let tag = wire.tags.torsion.clone();
                 terms.push(Term::on_frames(label, "wire-torsion", tag, local, energy));
             }
@@ -193,7 +193,7 @@ impl Element for WireTorsion {
         for wire in system.wires.iter().filter(|w| reference.keeps_wire(w)) {
             let local = shared.frames(system, &[wire.ends[0].body, wire.ends[1].body]);
             if let Some(energy) = torsion_energy(reference, wire, &local) {
-                let label = format!("wire-torsion {}", wire.name);
+                let label = pendkit_energy::term_label("wire-torsion", &wire.name);
                 let tag = wire.tags.torsion.clone();
                 terms.push(TangentTerm::on_frames(
                     label,
