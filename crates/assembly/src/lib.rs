@@ -27,7 +27,9 @@ use pendkit_geometry::FrameJet;
 
 pub use equilibrium::{Equilibrium, EquilibriumOptions, find_equilibrium};
 pub use evaluate::DerivativePath;
-pub use parallel::{in_parallel, in_parallel_with, side_by_side, thread_count};
+pub use parallel::{
+    MAX_THREADS_PER_CORE, in_parallel, in_parallel_with, side_by_side, thread_count,
+};
 pub use pendkit_energy::OffHessian;
 pub use tangent::{Along, Balance, Motion, Projection, StageTangent, stage_tangent};
 pub use timing::{Phase, PhaseTimes, timed};

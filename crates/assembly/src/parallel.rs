@@ -40,14 +40,20 @@ fn pool(threads: usize) -> Option<Arc<rayon::ThreadPool>> {
 }
 
 /// The kept workers for `threads` (0: as many as the machine has) when that is more than
-/// one thread and they can be started.
+/// one thread and they can be started. At most [`MAX_THREADS_PER_CORE`] times the machine's
+/// threads are made (the work is arithmetic: more would only wait their turn), so that a
+/// huge count asked for costs no more than that.
 fn workers(threads: usize) -> Option<(usize, Arc<rayon::ThreadPool>)> {
-    let threads = thread_count(threads);
+    let most = MAX_THREADS_PER_CORE * thread_count(0).max(1);
+    let threads = thread_count(threads).min(most);
     if threads < 2 {
         return None;
     }
     pool(threads).map(|pool| (threads, pool))
 }
+
+/// How many kept threads per thread of the machine [`in_parallel`] makes at most.
+pub const MAX_THREADS_PER_CORE: usize = 4;
 
 /// `work(j)` for every j in 0..n on up to `threads` threads (0: as many as the machine
 /// has), the results in j order. Each j is computed exactly as on one thread (the numbers
@@ -157,6 +163,9 @@ mod tests {
             assert_eq!(failing, Err("failed at 3".to_string()));
         }
         assert_eq!(in_parallel(0, 2, Ok::<usize, ()>), Ok(vec![]));
+        // a huge thread count is capped, not made
+        let squares = in_parallel(5, usize::MAX, |j| Ok::<_, ()>(j * j));
+        assert_eq!(squares, Ok(vec![0, 1, 4, 9, 16]));
     }
 
     #[test]
