@@ -20,7 +20,9 @@
 //! wᵀ dK w = vᵀ dK_eff v), for each mode and each pair within a cluster, split by the chain
 //! rule into the terms whose constants move with p at the fixed equilibrium and the
 //! equilibrium's motion through coefficients computed once per request
-//! ([`pendkit_assembly::Projection`]). No step, no difference. A parameter nothing reads,
+//! ([`pendkit_assembly::Projection`]; computed beside the parameters' columns, which add
+//! the motion at their last step, as the nominal stage is computed beside the parameters'
+//! dual builds: [`pendkit_assembly::side_by_side`]). No step, no difference. A parameter nothing reads,
 //! or only the damping's loss angles and the temperature read (no real multiplier, no
 //! switch), moves no mode: its derivatives are exactly 0, computed from nothing, and
 //! called exact. The route is closed (and the parameter goes the difference route below) for
@@ -837,7 +839,7 @@ fn mode_derivatives(
         let w2: f64 =
             cluster.iter().map(|&k| modes[k].omega_squared).sum::<f64>() / cluster.len() as f64;
         let entry = |ka: usize, kb: usize| vk[(ka, kb)] - w2 * vm[(ka, kb)];
-        let (alone, shared_frequency);
+        let (alone, cluster_eigenvalues);
         let d: &[f64] = if let [k] = cluster[..] {
             // a mode alone (nearly every one): the matrix is its one entry
             alone = [entry(k, k)];
@@ -849,8 +851,8 @@ fn mode_derivatives(
             let g = (&g + g.transpose()) * 0.5;
             let mut d: Vec<f64> = g.symmetric_eigenvalues().iter().copied().collect();
             d.sort_by(f64::total_cmp);
-            shared_frequency = d;
-            &shared_frequency
+            cluster_eigenvalues = d;
+            &cluster_eigenvalues
         };
         for (&k, &dw2) in cluster.iter().zip(d) {
             let mode = &modes[k];
