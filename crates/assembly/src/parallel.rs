@@ -19,14 +19,34 @@ pub fn thread_count(threads: usize) -> usize {
     }
 }
 
+/// The kept workers of one process: its id, and one set per thread count asked for.
+struct Pools {
+    process: u32,
+    sets: Vec<(usize, Arc<rayon::ThreadPool>)>,
+}
+
 /// The worker threads of `threads` threads (made on first use, then kept for the process's
 /// life: one set per thread count asked for). `None` if the system will not start them,
 /// in which case the work runs in order on the calling thread (the numbers are the same).
 fn pool(threads: usize) -> Option<Arc<rayon::ThreadPool>> {
-    static POOLS: Mutex<Vec<(usize, Arc<rayon::ThreadPool>)>> = Mutex::new(Vec::new());
+    static POOLS: Mutex<Pools> = Mutex::new(Pools {
+        process: 0,
+        sets: Vec::new(),
+    });
     // a panic while the lock was held left the list as it was (a push is the only change)
     let mut pools = POOLS.lock().unwrap_or_else(PoisonError::into_inner);
-    if let Some((_, pool)) = pools.iter().find(|(n, _)| *n == threads) {
+    // a process forked from one that had workers (Python's multiprocessing, for one) has
+    // their handles but not their threads: work handed to them would wait forever. Its
+    // own are made anew; the parent's are left alone (dropping them would signal threads
+    // that do not exist here)
+    let process = std::process::id();
+    if pools.process != process {
+        for set in std::mem::take(&mut pools.sets) {
+            std::mem::forget(set);
+        }
+        pools.process = process;
+    }
+    if let Some((_, pool)) = pools.sets.iter().find(|(n, _)| *n == threads) {
         return Some(pool.clone());
     }
     let pool = rayon::ThreadPoolBuilder::new()
@@ -35,7 +55,7 @@ fn pool(threads: usize) -> Option<Arc<rayon::ThreadPool>> {
         .build()
         .ok()?;
     let pool = Arc::new(pool);
-    pools.push((threads, pool.clone()));
+    pools.sets.push((threads, pool.clone()));
     Some(pool)
 }
 

@@ -55,3 +55,32 @@ def test_bad_parameter_is_an_error(cli):
     with pytest.raises(PendkitError) as e:
         pendkit.Model("pendulum").sensitivities(parameters=["nope"])
     assert str(e.value) == cli.error("sensitivity", "pendulum", "--parameters", "nope")
+
+
+def _sensitivities_in_child(queue):
+    s = pendkit.Model("double-pendulum").sensitivities("2")
+    queue.put(s.dfdp.tolist())
+
+
+@pytest.mark.skipif(
+    "fork" not in __import__("multiprocessing").get_all_start_methods(),
+    reason="no fork on this platform",
+)
+def test_a_forked_process_computes_after_its_parent_did():
+    # the library keeps worker threads once it has used them; a process forked afterwards
+    # (multiprocessing's fork start method) has their handles but not the threads, and must
+    # make its own rather than hand them work (which waited forever before this test)
+    import multiprocessing
+
+    parent = pendkit.Model("double-pendulum").sensitivities("2")
+    context = multiprocessing.get_context("fork")
+    queue = context.Queue()
+    child = context.Process(target=_sensitivities_in_child, args=(queue,))
+    child.start()
+    child.join(60)
+    if child.is_alive():
+        child.kill()
+        pytest.fail("the forked process did not finish in 60 s")
+    assert child.exitcode == 0
+    # the same numbers as the parent's (the same library on the same inputs)
+    assert np.array_equal(np.array(queue.get(timeout=5)), parent.dfdp)
