@@ -160,6 +160,9 @@ pub struct Balance {
     /// of the free coordinates ([`weightings`]) and H z, the balanced terms' stiffness
     /// along it from their dual forms, both over the free coordinates.
     checks: [(Vec<f64>, Vec<f64>); 2],
+    /// The balanced terms of the model with constants that carry no derivative (the
+    /// projection's motion passes over them too).
+    balanced: Vec<TangentTerm>,
 }
 
 impl Balance {
@@ -215,6 +218,7 @@ impl Balance {
             lu: stiffness.hessian.lu(),
             forces,
             checks: [first?, second?],
+            balanced,
         }))
     }
 
@@ -265,9 +269,9 @@ fn balanced_terms(
 }
 
 /// `equilibrium` is a finite full coordinate vector of `system`, whose indices are valid.
-fn check_equilibrium(
+fn check_equilibrium<S: Real>(
     function: &'static str,
-    system: &System<Dual64>,
+    system: &System<S>,
     equilibrium: &[f64],
 ) -> Result<(), AssemblyError> {
     let n = system.coords.len();
@@ -528,8 +532,7 @@ impl Projection {
         balance: &Balance,
         (vectors, pairs): (&DMatrix<f64>, &[(usize, usize)]),
     ) -> Result<Projection, AssemblyError> {
-        let lifted = system.map_scalars(Dual64::from_re);
-        check_equilibrium("Projection::new", &lifted, equilibrium)?;
+        check_equilibrium("Projection::new", system, equilibrium)?;
         if !balance.fits(system) {
             return Err(AssemblyError::ForeignBalance);
         }
@@ -612,10 +615,10 @@ impl Projection {
         if !balance.fits(system) || self.coords != balance.coords {
             return Err(AssemblyError::ForeignBalance);
         }
+        // the plug-in terms are built around x + ε eᵢ below; the balanced ones, whose
+        // constants do not depend on where they are built, are the balance's
         let lifted = system.map_scalars(Dual64::from_re);
-        let Some(balanced) = balanced_terms(&lifted, false)? else {
-            return Ok(None);
-        };
+        let balanced = &balance.balanced;
         let (equilibrium, stage, n) = (&self.equilibrium, self.stage, self.coords.len());
         // per free coordinate: the bodies it moves, and the terms whose energy it changes
         // (the terms on it, and the plug-in terms built around x + ε eᵢ whose constants
