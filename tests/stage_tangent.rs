@@ -414,6 +414,64 @@ fn dual_terms_at_rest(
 }
 
 #[test]
+fn a_gradient_from_frames_shared_by_all_terms_is_the_terms_own() {
+    // each parameter's ∂g/∂p reads the bodies' frames the balance evaluated once at the
+    // equilibrium of the nominal model (`GradientFrames`), instead of each term evaluating
+    // its own: sound only if the numbers are the same, bit for bit (the same arithmetic on
+    // the same numbers), for every term of every kind at stage 2 of a model built with a
+    // parameter seeded, the frames taken from the f64 model without the seed.
+    use pendkit_energy::GradientFrames;
+    let cases: [(&str, &[&str]); 3] = [
+        ("pendulum", &["m1", "l_fibre"]),
+        ("quad", &["m3", "l3", "nn0", "Y2"]),
+        ("triple", &["m3", "d0"]),
+    ];
+    let mut compared = 0;
+    for (model, parameters) in cases {
+        let case = Case::open(model).expect("case");
+        let (nominal, _) = case.build().expect("build");
+        for &name in parameters {
+            let (_, at_rest, terms) = dual_terms_at_rest(&case, name);
+            let x: Vec<f64> = at_rest.iter().map(|v| v.re).collect();
+            let frames = GradientFrames::new(&nominal, &x).expect("frames");
+            assert!(frames.are_at(&x) && !frames.are_at(&x[1..]));
+            for term in &terms {
+                let own = term.gradient(&at_rest).expect("gradient");
+                let shared = term.gradient_from(&frames).expect("gradient_from");
+                let bits = |d: &pendkit_energy::TangentDerivatives| -> Vec<u64> {
+                    std::iter::once(&d.value)
+                        .chain(&d.gradient)
+                        .flat_map(|v| [v.re.to_bits(), v.eps.to_bits()])
+                        .collect()
+                };
+                assert_eq!(bits(&own), bits(&shared), "{model} {name}: '{}'", term.label);
+                compared += 1;
+            }
+        }
+    }
+    assert!(compared > 100, "{compared} terms compared");
+
+    // frames at too short a configuration, or of a model with fewer bodies, are errors
+    let case = Case::open("quad").expect("case");
+    let (nominal, _) = case.build().expect("build");
+    let (_, at_rest, terms) = dual_terms_at_rest(&case, "m3");
+    let x: Vec<f64> = at_rest.iter().map(|v| v.re).collect();
+    let e = GradientFrames::new(&nominal, &x[..3]).unwrap_err().to_string();
+    assert!(e.contains("x") && e.contains("3"), "{e}");
+    let pendulum = Case::open("pendulum").expect("case").build().expect("build").0;
+    let short = GradientFrames::new(&pendulum, &vec![0.0; pendulum.coords.len()]).expect("frames");
+    let errors: Vec<String> = terms
+        .iter()
+        .filter_map(|t| t.gradient_from(&short).err())
+        .map(|e| e.to_string())
+        .collect();
+    assert!(!errors.is_empty(), "no term of the quad refused the pendulum's frames");
+    for e in &errors {
+        assert!(e.contains("x_global") || e.contains("gradient frames"), "{e}");
+    }
+}
+
+#[test]
 fn terms_that_do_not_move_have_no_derivative_at_fixed_coordinates() {
     // the projected route evaluates, at the fixed equilibrium, only the terms that say
     // their constants move with the parameter (`TangentTerm::moves`): sound only if every

@@ -9,14 +9,22 @@
 //! caller's own ([`side_by_side`]) needs threads that already exist.
 
 use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::{Arc, Mutex, PoisonError};
+use std::sync::{Arc, Mutex, OnceLock, PoisonError};
 
 /// The thread count `threads` asks for: 0 is as many as the machine has.
 pub fn thread_count(threads: usize) -> usize {
     match threads {
-        0 => std::thread::available_parallelism().map_or(1, usize::from),
+        0 => machine_threads(),
         n => n,
     }
+}
+
+/// The machine's threads, read once per process: the standard library reads them from the
+/// system (cgroup files on Linux) at every call, which took a few percent of a sensitivity
+/// request that asked at each of its parallel calls.
+fn machine_threads() -> usize {
+    static MACHINE_THREADS: OnceLock<usize> = OnceLock::new();
+    *MACHINE_THREADS.get_or_init(|| std::thread::available_parallelism().map_or(1, usize::from))
 }
 
 /// The kept workers of one process: its id, and one set per thread count asked for.
@@ -64,6 +72,9 @@ fn pool(threads: usize) -> Option<Arc<rayon::ThreadPool>> {
 /// threads are made (the work is arithmetic: more would only wait their turn), so that a
 /// huge count asked for costs no more than that.
 fn workers(threads: usize) -> Option<(usize, Arc<rayon::ThreadPool>)> {
+    if threads == 1 {
+        return None;
+    }
     let most = MAX_THREADS_PER_CORE * thread_count(0).max(1);
     let threads = thread_count(threads).min(most);
     if threads < 2 {

@@ -23,8 +23,8 @@
 use nalgebra::{DMatrix, DVector, Vector3};
 use num_dual::{Dual, Dual64};
 use pendkit_energy::{
-    CoordKind, EarlyWireTerms, EnergyError, HyperTangent, Reference, SharedBodies, Stage, System,
-    TangentSum, TangentTerm, registry,
+    CoordKind, EarlyWireTerms, EnergyError, GradientFrames, HyperTangent, Reference, SharedBodies,
+    Stage, System, TangentDerivatives, TangentSum, TangentTerm, registry,
 };
 use pendkit_geometry::Frame;
 use pendkit_rotations::{
@@ -126,12 +126,25 @@ fn accumulate<'t>(
     sums: &mut Sums,
     hessian: bool,
 ) -> Result<(), EnergyError> {
-    for term in terms {
-        let d = if hessian {
-            term.derivatives(x)?
+    add_derivatives(terms, sums, |term| {
+        if hessian {
+            term.derivatives(x)
         } else {
-            term.gradient(x)?
-        };
+            term.gradient(x)
+        }
+    })
+}
+
+/// Adds each term's derivatives `derive(term)` (their gradient, and their Hessian where
+/// they have one) into `sums`.
+fn add_derivatives<'t>(
+    terms: impl IntoIterator<Item = &'t TangentTerm>,
+    sums: &mut Sums,
+    derive: impl Fn(&TangentTerm) -> Result<TangentDerivatives, EnergyError>,
+) -> Result<(), EnergyError> {
+    for term in terms {
+        let d = derive(term)?;
+        let hessian = !d.hessian.is_empty();
         let m = term.coords.len();
         for (a, &ga) in term.coords.iter().enumerate() {
             sums.gradient[ga] += d.gradient[a];
@@ -163,6 +176,9 @@ pub struct Balance {
     /// The balanced terms of the model with constants that carry no derivative (the
     /// projection's motion passes over them too).
     balanced: Vec<TangentTerm>,
+    /// Every body's frame at the equilibrium, with its moves along each coordinate: what
+    /// each parameter's ∂g/∂p reads ([`stage_tangent`]).
+    frames: GradientFrames,
 }
 
 impl Balance {
@@ -219,6 +235,7 @@ impl Balance {
             forces,
             checks: [first?, second?],
             balanced,
+            frames: GradientFrames::new(system, equilibrium)?,
         }))
     }
 
@@ -412,22 +429,27 @@ impl<T: PairScalar> PairGroup<T> {
         system: &System,
         coordinates: &[(usize, Vec<usize>, TangentSum)],
     ) -> Result<Vec<(usize, Vec<f64>)>, EnergyError> {
-        // copies whose moved coordinate and bodies are put back after each coordinate
+        // copies in which one coordinate at a time moves, with the bodies on it
         let mut frames = self.frames.clone();
         let mut seeds = self.seeds.clone();
         let mut rows = Vec::with_capacity(coordinates.len());
+        let mut moved: &[usize] = &[];
         for (i, bodies, terms) in coordinates {
             let i = *i;
+            // the bodies the coordinate before moved go back to rest, but for those this one
+            // moves (re-evaluated below): consecutive coordinates are mostly on the same
+            // bodies, whose frames are then not copied back only to be evaluated again
+            for &b in moved.iter().filter(|b| !bodies.contains(b)) {
+                frames[b] = self.frames[b].clone();
+            }
             seeds[i] = self.seeds[i].moving();
             for &b in bodies {
                 frames[b] = system.bodies[b].frame.eval(&seeds);
             }
-            let sums = T::seconds(terms, &frames, self.pairs.len());
-            for &b in bodies {
-                frames[b] = self.frames[b].clone();
-            }
             seeds[i] = self.seeds[i];
-            rows.push((i, sums?.iter().map(|v| v.eps).collect()));
+            moved = bodies;
+            let sums = T::seconds(terms, &frames, self.pairs.len())?;
+            rows.push((i, sums.iter().map(|v| v.eps).collect()));
         }
         Ok(rows)
     }
@@ -808,12 +830,16 @@ pub fn stage_tangent(
     // δq = −K⁻¹ ∂g/∂p
     let at_rest: Vec<Dual64> = equilibrium.iter().map(|&v| Dual64::from_re(v)).collect();
     let mut rest = Sums::gradient_only(n);
-    accumulate(
-        balanced.iter().filter(|t| t.moves()),
-        &at_rest,
-        &mut rest,
-        false,
-    )?;
+    let moving_balanced = balanced.iter().filter(|t| t.moves());
+    if balance.frames.are_at(equilibrium) {
+        // the bodies' frames the balance evaluated at the equilibrium, shared by every term
+        // (and every parameter): the same numbers as each term's own
+        add_derivatives(moving_balanced, &mut rest, |t| {
+            t.gradient_from(&balance.frames)
+        })?;
+    } else {
+        accumulate(moving_balanced, &at_rest, &mut rest, false)?;
+    }
     let dg_free = DVector::from_fn(free.len(), |a, _| rest.gradient[free[a]].eps);
     let delta_free = if dg_free.amax() == 0.0 {
         DVector::zeros(free.len())

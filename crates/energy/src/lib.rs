@@ -33,7 +33,7 @@ pub use pendkit_rotations::Real;
 pub use stage::{Stage, UnknownStage};
 pub use system::*;
 pub use tangent::{
-    DualTangent, HyperTangent, SecondTangent, TangentDerivatives, TangentPotential,
+    DualTangent, GradientFrames, HyperTangent, SecondTangent, TangentDerivatives, TangentPotential,
     TangentSharedPotential, TangentSum, TangentTerm, tangent_frames, tangent_frames_along,
     tangent_frames_along_lanes,
 };

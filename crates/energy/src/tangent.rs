@@ -264,14 +264,14 @@ impl TangentTerm {
     }
 
     /// `x_global` covers every coordinate of the term.
-    fn check_length(&self, function: &'static str, x_global: &[Dual64]) -> Result<(), EnergyError> {
+    fn check_length(&self, function: &'static str, given: usize) -> Result<(), EnergyError> {
         let expected = self.coords.iter().max().map_or(0, |&i| i + 1);
-        if x_global.len() < expected {
+        if given < expected {
             return Err(EnergyError::Length {
                 function,
                 argument: "x_global (coordinates)",
                 expected,
-                given: x_global.len(),
+                given,
             });
         }
         Ok(())
@@ -282,7 +282,7 @@ impl TangentTerm {
     /// to the parameter (at fixed coordinates when `x_global` carries no derivative). Each
     /// frame is evaluated once, and again only for the coordinates it reads.
     pub fn gradient(&self, x_global: &[Dual64]) -> Result<TangentDerivatives, EnergyError> {
-        self.check_length("TangentTerm::gradient", x_global)?;
+        self.check_length("TangentTerm::gradient", x_global.len())?;
         let maps = &self.frames.frames;
         if maps.len() > MAX_FRAMES {
             return Err(EnergyError::Element {
@@ -331,6 +331,64 @@ impl TangentTerm {
             for (k, _) in maps.iter().enumerate().filter(|(_, m)| reads(m)) {
                 frames[k] = at_x[k].clone();
             }
+        }
+        Ok(out)
+    }
+
+    /// [`TangentTerm::gradient`] at the configuration of `frames` (which carries no
+    /// parameter derivative), from every body's frames evaluated there once for all the
+    /// terms ([`GradientFrames`]) instead of per term and per coordinate: the same numbers,
+    /// bit for bit.
+    pub fn gradient_from(
+        &self,
+        frames: &GradientFrames,
+    ) -> Result<TangentDerivatives, EnergyError> {
+        self.check_length("TangentTerm::gradient_from", frames.x.len())?;
+        let bodies = &self.frames.bodies;
+        let missing = |index: usize| EnergyError::Index {
+            item: format!("term '{}'", self.label),
+            what: "body (gradient frames)",
+            index,
+            len: frames.at_x.len(),
+        };
+        if bodies.len() > MAX_FRAMES {
+            return Err(EnergyError::Element {
+                kind: self.kind,
+                element: self.label.clone(),
+                message: format!(
+                    "reads {} bodies; a term's derivatives with respect to a parameter take \
+                     at most {MAX_FRAMES}",
+                    bodies.len()
+                ),
+            });
+        }
+        if let Some(&b) = bodies.iter().find(|&&b| b >= frames.at_x.len()) {
+            return Err(missing(b));
+        }
+        let zero = Dual64::from_re(0.0);
+        // the energy with each body at rest, or moved along `moved` (a global coordinate)
+        let energy = |moved: Option<usize>| {
+            let Some(&first) = bodies.first() else {
+                return self.body.value_d(&[], self.own_part());
+            };
+            let pick = |b: BodyId| {
+                moved
+                    .and_then(|g| frames.reads[b].iter().position(|&v| v == g))
+                    .map_or(&frames.at_x[b], |r| &frames.moved[b][r])
+            };
+            let mut refs = [pick(first); MAX_FRAMES];
+            for (slot, &b) in refs.iter_mut().zip(bodies) {
+                *slot = pick(b);
+            }
+            self.body.value_d(&refs[..bodies.len()], self.own_part())
+        };
+        let mut out = TangentDerivatives {
+            value: energy(None).re,
+            gradient: vec![zero; self.coords.len()],
+            hessian: Vec::new(),
+        };
+        for (slot, &g) in out.gradient.iter_mut().zip(&self.coords) {
+            *slot = energy(Some(g)).eps;
         }
         Ok(out)
     }
@@ -430,7 +488,7 @@ impl TangentTerm {
     /// is its derivative with respect to the parameter along the coordinates' own
     /// derivative.
     pub fn derivatives(&self, x_global: &[Dual64]) -> Result<TangentDerivatives, EnergyError> {
-        self.check_length("TangentTerm::derivatives", x_global)?;
+        self.check_length("TangentTerm::derivatives", x_global.len())?;
         let n = self.coords.len();
         let mut x: Vec<HyperTangent> = self
             .coords
@@ -554,6 +612,65 @@ pub fn tangent_frames<S: Real>(
         [("x", x.len()), ("u", u.len()), ("v", v.len())],
         |i| HyperTangent::new(x[i], Dual64::from_re(u[i]), Dual64::from_re(v[i]), zero),
     )
+}
+
+/// Every body's frame at a configuration x whose coordinates carry no parameter
+/// derivative, and that frame moved along each coordinate it reads (dual part 1 on it):
+/// what [`TangentTerm::gradient_from`] reads. Evaluated once, they serve every term and
+/// every parameter's model (whose frames are the nominal model's: a parameter moves the
+/// points on a body, not how its frame follows the coordinates), where
+/// [`TangentTerm::gradient`] evaluates its bodies' frames per term and per coordinate.
+#[derive(Clone, Debug)]
+pub struct GradientFrames {
+    /// The configuration.
+    x: Vec<f64>,
+    /// Per body: its frame at x.
+    at_x: Vec<Frame<DualTangent>>,
+    /// Per body: the coordinates its frame reads, and the frame moved along each.
+    reads: Vec<Vec<usize>>,
+    moved: Vec<Vec<Frame<DualTangent>>>,
+}
+
+impl GradientFrames {
+    /// The frames of `system`'s bodies at `x` (a full coordinate vector).
+    pub fn new<S: Real>(system: &crate::System<S>, x: &[f64]) -> Result<Self, EnergyError> {
+        let zero = Dual64::from_re(0.0);
+        let at_rest = |v: f64| DualTangent::from_re(Dual64::from_re(v));
+        let at_x = frames_at(system, [("x", x.len())], |i| at_rest(x[i]))?;
+        let mut seeds: Vec<DualTangent> = x.iter().map(|&v| at_rest(v)).collect();
+        let reads: Vec<Vec<usize>> = system
+            .bodies
+            .iter()
+            .map(|b| b.frame.var_list().to_vec())
+            .collect();
+        let moved = system
+            .bodies
+            .iter()
+            .zip(&reads)
+            .map(|(body, reads)| {
+                reads
+                    .iter()
+                    .map(|&g| {
+                        seeds[g].eps = Dual64::from_re(1.0);
+                        let frame = body.frame.eval(&seeds);
+                        seeds[g].eps = zero;
+                        frame
+                    })
+                    .collect()
+            })
+            .collect();
+        Ok(GradientFrames {
+            x: x.to_vec(),
+            at_x,
+            reads,
+            moved,
+        })
+    }
+
+    /// Whether these are the frames at `x`.
+    pub fn are_at(&self, x: &[f64]) -> bool {
+        self.x == x
+    }
 }
 
 /// Every body's frame of `system` at x + εu: the frames
