@@ -1241,6 +1241,9 @@ pub fn build_with(
 ) -> Result<(System, Resolved), BuildError> {
     let defaults = Defaults::of(model)?;
     let (_, resolved) = parameters_with(&defaults, overrides)?;
+    // checked before the model's build too, which a refused value then does not cost (the
+    // sensitivities' differences step the switch off its allowed values)
+    built_in_settings(&resolved)?;
     let system = model.build(&resolved)?;
     let system = attach_to_build(system, &defaults, overrides, &resolved)?;
     Ok((system, resolved))
@@ -1328,17 +1331,20 @@ pub fn attach_to_build(
             system.damping.set_temperature(tag, t);
         }
     }
-    system.temperature = resolved.get("temperature")?;
-    if system.temperature <= 0.0 {
+    (system.temperature, system.early_wire_terms) = built_in_settings(resolved)?;
+    Ok(system)
+}
+
+/// The temperature (K) and the "wire terms early" switch at `resolved`, checked.
+fn built_in_settings(resolved: &Resolved) -> Result<(f64, EarlyWireTerms), BuildError> {
+    let temperature = resolved.get("temperature")?;
+    if temperature <= 0.0 {
         return Err(BuildError::Invalid {
             item: "parameter 'temperature'".into(),
-            message: format!(
-                "must be positive (got {} K)",
-                number_text(system.temperature)
-            ),
+            message: format!("must be positive (got {} K)", number_text(temperature)),
         });
     }
-    system.early_wire_terms = match resolved.get(WIRE_TERMS_EARLY)? {
+    let early_wire_terms = match resolved.get(WIRE_TERMS_EARLY)? {
         0.0 => EarlyWireTerms::No,
         1.0 => EarlyWireTerms::Yes,
         2.0 => EarlyWireTerms::EquilibriumOnly,
@@ -1352,5 +1358,5 @@ pub fn attach_to_build(
             });
         }
     };
-    Ok(system)
+    Ok((temperature, early_wire_terms))
 }
