@@ -1239,14 +1239,29 @@ pub fn build_with(
     model: &dyn Model,
     overrides: &Overrides,
 ) -> Result<(System, Resolved), BuildError> {
+    build_with_mechanical_reads(model, overrides).map(|(system, resolved, _)| (system, resolved))
+}
+
+/// [`build_with`], with the parameters the model's own build read (before the damping,
+/// the temperature and the "wire terms early" switch were attached: what the mechanics
+/// depend on directly; add what their definitions refer to for all they depend on).
+pub fn build_with_mechanical_reads(
+    model: &dyn Model,
+    overrides: &Overrides,
+) -> Result<(System, Resolved, Vec<String>), BuildError> {
     let defaults = Defaults::of(model)?;
     let (_, resolved) = parameters_with(&defaults, overrides)?;
     // checked before the model's build too, which a refused value then does not cost (the
-    // sensitivities' differences step the switch off its allowed values)
-    built_in_settings(&resolved)?;
+    // sensitivities' differences step the switch off its allowed values); looked at
+    // without recording a read, so that the reads after the build are the model's own
+    let unread = |name: &str| resolved.iter().find(|(n, _)| *n == name).map(|(_, v)| v);
+    if let (Some(temperature), Some(switch)) = (unread("temperature"), unread(WIRE_TERMS_EARLY)) {
+        built_in_settings(temperature, switch)?;
+    }
     let system = model.build(&resolved)?;
+    let mechanical_reads = resolved.read_names().into_iter().map(String::from).collect();
     let system = attach_to_build(system, &defaults, overrides, &resolved)?;
-    Ok((system, resolved))
+    Ok((system, resolved, mechanical_reads))
 }
 
 /// The parameter that switches the "wire terms early" mode of [`attach_to_build`] (0 no,
@@ -1331,20 +1346,26 @@ pub fn attach_to_build(
             system.damping.set_temperature(tag, t);
         }
     }
-    (system.temperature, system.early_wire_terms) = built_in_settings(resolved)?;
+    (system.temperature, system.early_wire_terms) = built_in_settings(
+        resolved.get("temperature")?,
+        resolved.get(WIRE_TERMS_EARLY)?,
+    )?;
     Ok(system)
 }
 
-/// The temperature (K) and the "wire terms early" switch at `resolved`, checked.
-fn built_in_settings(resolved: &Resolved) -> Result<(f64, EarlyWireTerms), BuildError> {
-    let temperature = resolved.get("temperature")?;
+/// The temperature (K) and the "wire terms early" switch of the parameters `temperature`
+/// and `wire_terms_early`, checked.
+fn built_in_settings(
+    temperature: f64,
+    wire_terms_early: f64,
+) -> Result<(f64, EarlyWireTerms), BuildError> {
     if temperature <= 0.0 {
         return Err(BuildError::Invalid {
             item: "parameter 'temperature'".into(),
             message: format!("must be positive (got {} K)", number_text(temperature)),
         });
     }
-    let early_wire_terms = match resolved.get(WIRE_TERMS_EARLY)? {
+    let early_wire_terms = match wire_terms_early {
         0.0 => EarlyWireTerms::No,
         1.0 => EarlyWireTerms::Yes,
         2.0 => EarlyWireTerms::EquilibriumOnly,

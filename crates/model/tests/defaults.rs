@@ -210,3 +210,24 @@ fn temperature_and_early_wire_terms_are_part_of_the_defaults() {
     assert_eq!(r.get("temperature"), Ok(pendkit_model::DEFAULT_TEMPERATURE));
     assert_eq!(r.get("wire_terms_early"), Ok(0.0));
 }
+
+#[test]
+fn the_mechanical_reads_are_the_model_builds_own() {
+    // what the sensitivities take for the parameters that move the mechanics: the reads of
+    // the model's own build (here m and k), not the damping's loss angle nor the built-in
+    // temperature and switch that the build then attaches (which the whole build reads)
+    use pendkit_model::build_with_mechanical_reads;
+    let model = Oscillator::new("reads", false);
+    let (_, resolved, mechanical) =
+        build_with_mechanical_reads(&model, &Overrides::default()).expect("builds");
+    assert_eq!(mechanical, ["m", "k"]);
+    let all = resolved.read_names();
+    for name in ["m", "k", "phi", "temperature", "wire_terms_early"] {
+        assert!(all.contains(&name), "{name} not read by the whole build: {all:?}");
+    }
+    // a switch off its values is refused, as by build_with, with the reads left as they are
+    let o = overrides(&[("wire_terms_early", "0.5")], None);
+    let e = build_with_mechanical_reads(&model, &o).unwrap_err().to_string();
+    assert_eq!(e, build_with(&model, &o).unwrap_err().to_string());
+    assert!(e.contains("wire_terms_early") && e.contains("0.5"), "{e}");
+}

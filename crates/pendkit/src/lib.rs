@@ -429,7 +429,17 @@ impl Case {
     /// that nothing reads (neither the model's build, nor its damping, nor the definition
     /// of a parameter read) is an error: it would change nothing, silently.
     pub fn build(&self) -> Result<(System, Resolved), Error> {
-        let (system, resolved) = pendkit_model::build_with(self.model, &self.overrides)?;
+        self.build_with_mechanical_reads()
+            .map(|(system, resolved, _)| (system, resolved))
+    }
+
+    /// [`Case::build`], with the parameters the model's own build read directly
+    /// ([`pendkit_model::build_with_mechanical_reads`]).
+    pub(crate) fn build_with_mechanical_reads(
+        &self,
+    ) -> Result<(System, Resolved, Vec<String>), Error> {
+        let (system, resolved, mechanical_reads) =
+            pendkit_model::build_with_mechanical_reads(self.model, &self.overrides)?;
         let read = self.parameters_read(&resolved)?;
         if let Some((name, _)) = self
             .overrides
@@ -443,7 +453,7 @@ impl Case {
                 read: read.iter().cloned().collect::<Vec<_>>().join(" "),
             });
         }
-        Ok((system, resolved))
+        Ok((system, resolved, mechanical_reads))
     }
 
     /// The parameters a build that gave `resolved` depends on: those it read, and what

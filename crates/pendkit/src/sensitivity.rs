@@ -1080,19 +1080,19 @@ struct ParameterReads {
 }
 
 impl ParameterReads {
-    /// The reads of the parameters `names` of `case`, whose build resolved `resolved`.
+    /// The reads of the parameters `names` of `case`, whose build resolved `resolved`, the
+    /// model's own build (without the damping) reading `mechanical_reads` directly.
     fn new(
         case: &Case,
         defaults: &Defaults,
         resolved: &pendkit_params::Resolved,
+        mechanical_reads: &[String],
         names: &[String],
     ) -> Result<Self, Error> {
         // which parameters the mechanical build reads (with the definitions they follow), and
         // which anything reads at all
         let read_all = case.parameters_read(resolved)?;
-        let (_, fresh) = parameters_with(defaults, &case.overrides)?;
-        case.model.build(&fresh)?;
-        let read_mechanics = case.parameters_read(&fresh)?;
+        let read_mechanics = case.parameters_behind(mechanical_reads.iter().cloned())?;
         // the parameters the damping's real multipliers ε' depend on: only those can move ε'(0)
         // away from 1 (the exact route's condition)
         let real_reads = case.parameters_behind(pendkit_model::damping_real_symbols(
@@ -1222,7 +1222,7 @@ pub fn sensitivities(case: &Case, request: &SensitivityRequest) -> Result<Sensit
         ));
     }
 
-    let (system, resolved) = case.build()?;
+    let (system, resolved, mechanical_reads) = case.build_with_mechanical_reads()?;
     let defaults = Defaults::of(case.model)?;
     let all: Vec<(String, f64)> = resolved.iter().map(|(n, v)| (n.to_string(), v)).collect();
     let names: Vec<String> = match &request.parameters {
@@ -1271,7 +1271,7 @@ pub fn sensitivities(case: &Case, request: &SensitivityRequest) -> Result<Sensit
         request.threads,
         || NominalStage::new(system, request),
         || -> Result<_, Error> {
-            let reads = ParameterReads::new(case, &defaults, &resolved, &names)?;
+            let reads = ParameterReads::new(case, &defaults, &resolved, &mechanical_reads, &names)?;
             let tangents = Tangents::build(case, &names, &reads.reach, request.threads)?;
             Ok((reads, tangents))
         },
