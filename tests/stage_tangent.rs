@@ -417,9 +417,10 @@ fn dual_terms_at_rest(
 fn a_gradient_from_frames_shared_by_all_terms_is_the_terms_own() {
     // each parameter's ∂g/∂p reads the bodies' frames the balance evaluated once at the
     // equilibrium of the nominal model (`GradientFrames`), instead of each term evaluating
-    // its own: sound only if the numbers are the same, bit for bit (the same arithmetic on
-    // the same numbers), for every term of every kind at stage 2 of a model built with a
-    // parameter seeded, the frames taken from the f64 model without the seed.
+    // its own, and so do the balance's checks along two directions: sound only if the
+    // numbers are the same, bit for bit (the same arithmetic on the same numbers), for
+    // every term of every kind at stage 2 of a model built with a parameter seeded, the
+    // frames taken from the f64 model without the seed.
     use pendkit_energy::GradientFrames;
     let cases: [(&str, &[&str]); 3] = [
         ("pendulum", &["m1", "l_fibre"]),
@@ -432,19 +433,33 @@ fn a_gradient_from_frames_shared_by_all_terms_is_the_terms_own() {
         let (nominal, _) = case.build().expect("build");
         for &name in parameters {
             let (_, at_rest, terms) = dual_terms_at_rest(&case, name);
-            let x: Vec<f64> = at_rest.iter().map(|v| v.re).collect();
-            let frames = GradientFrames::new(&nominal, &x).expect("frames");
-            assert!(frames.are_at(&x) && !frames.are_at(&x[1..]));
+            let frames = GradientFrames::new(&nominal, &at_rest).expect("frames");
+            assert!(frames.are_at(&at_rest) && !frames.are_at(&at_rest[1..]));
+            // and at the equilibrium moved along a direction (the balance's check of H z)
+            let along: Vec<num_dual::Dual64> = at_rest
+                .iter()
+                .enumerate()
+                .map(|(i, v)| num_dual::Dual64::new(v.re, 0.1 + 0.01 * i as f64))
+                .collect();
+            let frames_along = GradientFrames::new(&nominal, &along).expect("frames");
+            assert!(!frames_along.are_at(&at_rest));
             for term in &terms {
-                let own = term.gradient(&at_rest).expect("gradient");
-                let shared = term.gradient_from(&frames).expect("gradient_from");
                 let bits = |d: &pendkit_energy::TangentDerivatives| -> Vec<u64> {
                     std::iter::once(&d.value)
                         .chain(&d.gradient)
                         .flat_map(|v| [v.re.to_bits(), v.eps.to_bits()])
                         .collect()
                 };
-                assert_eq!(bits(&own), bits(&shared), "{model} {name}: '{}'", term.label);
+                for (x, frames) in [(&at_rest, &frames), (&along, &frames_along)] {
+                    let own = term.gradient(x).expect("gradient");
+                    let shared = term.gradient_from(frames).expect("gradient_from");
+                    assert_eq!(
+                        bits(&own),
+                        bits(&shared),
+                        "{model} {name}: '{}'",
+                        term.label
+                    );
+                }
                 compared += 1;
             }
         }
@@ -455,19 +470,31 @@ fn a_gradient_from_frames_shared_by_all_terms_is_the_terms_own() {
     let case = Case::open("quad").expect("case");
     let (nominal, _) = case.build().expect("build");
     let (_, at_rest, terms) = dual_terms_at_rest(&case, "m3");
-    let x: Vec<f64> = at_rest.iter().map(|v| v.re).collect();
-    let e = GradientFrames::new(&nominal, &x[..3]).unwrap_err().to_string();
+    let e = GradientFrames::new(&nominal, &at_rest[..3])
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("x") && e.contains("3"), "{e}");
-    let pendulum = Case::open("pendulum").expect("case").build().expect("build").0;
-    let short = GradientFrames::new(&pendulum, &vec![0.0; pendulum.coords.len()]).expect("frames");
+    let pendulum = Case::open("pendulum")
+        .expect("case")
+        .build()
+        .expect("build")
+        .0;
+    let zeros = vec![num_dual::Dual64::from_re(0.0); pendulum.coords.len()];
+    let short = GradientFrames::new(&pendulum, &zeros).expect("frames");
     let errors: Vec<String> = terms
         .iter()
         .filter_map(|t| t.gradient_from(&short).err())
         .map(|e| e.to_string())
         .collect();
-    assert!(!errors.is_empty(), "no term of the quad refused the pendulum's frames");
+    assert!(
+        !errors.is_empty(),
+        "no term of the quad refused the pendulum's frames"
+    );
     for e in &errors {
-        assert!(e.contains("x_global") || e.contains("gradient frames"), "{e}");
+        assert!(
+            e.contains("x_global") || e.contains("gradient frames"),
+            "{e}"
+        );
     }
 }
 

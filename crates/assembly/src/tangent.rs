@@ -190,6 +190,8 @@ impl Balance {
         let Some(balanced) = balanced_terms(&lifted, false)? else {
             return Ok(None);
         };
+        let lifted_equilibrium: Vec<Dual64> =
+            equilibrium.iter().map(|&v| Dual64::from_re(v)).collect();
         // the same terms in f64 (the stage-0A kinds built around the start), whose fast
         // Hessians are the stiffness: the dual forms would give it too, at ten times the
         // cost, to rounding
@@ -221,8 +223,9 @@ impl Balance {
                 .zip(&z)
                 .map(|(&v, &d)| Dual64::new(v, d))
                 .collect();
+            let frames = GradientFrames::new(system, &along)?;
             let mut sums = Sums::gradient_only(equilibrium.len());
-            accumulate(&balanced, &along, &mut sums, false)?;
+            add_derivatives(&balanced, &mut sums, |t| t.gradient_from(&frames))?;
             let weights = free.iter().map(|&i| z[i]).collect();
             let stiffness = free.iter().map(|&i| sums.gradient[i].eps).collect();
             Ok::<_, EnergyError>((weights, stiffness))
@@ -235,7 +238,7 @@ impl Balance {
             forces,
             checks: [first?, second?],
             balanced,
-            frames: GradientFrames::new(system, equilibrium)?,
+            frames: GradientFrames::new(system, &lifted_equilibrium)?,
         }))
     }
 
@@ -831,7 +834,7 @@ pub fn stage_tangent(
     let at_rest: Vec<Dual64> = equilibrium.iter().map(|&v| Dual64::from_re(v)).collect();
     let mut rest = Sums::gradient_only(n);
     let moving_balanced = balanced.iter().filter(|t| t.moves());
-    if balance.frames.are_at(equilibrium) {
+    if balance.frames.are_at(&at_rest) {
         // the bodies' frames the balance evaluated at the equilibrium, shared by every term
         // (and every parameter): the same numbers as each term's own
         add_derivatives(moving_balanced, &mut rest, |t| {

@@ -335,10 +335,9 @@ impl TangentTerm {
         Ok(out)
     }
 
-    /// [`TangentTerm::gradient`] at the configuration of `frames` (which carries no
-    /// parameter derivative), from every body's frames evaluated there once for all the
-    /// terms ([`GradientFrames`]) instead of per term and per coordinate: the same numbers,
-    /// bit for bit.
+    /// [`TangentTerm::gradient`] at the configuration of `frames`, from every body's frames
+    /// evaluated there once for all the terms ([`GradientFrames`]) instead of per term and
+    /// per coordinate: the same numbers, bit for bit.
     pub fn gradient_from(
         &self,
         frames: &GradientFrames,
@@ -614,16 +613,16 @@ pub fn tangent_frames<S: Real>(
     )
 }
 
-/// Every body's frame at a configuration x whose coordinates carry no parameter
-/// derivative, and that frame moved along each coordinate it reads (dual part 1 on it):
-/// what [`TangentTerm::gradient_from`] reads. Evaluated once, they serve every term and
-/// every parameter's model (whose frames are the nominal model's: a parameter moves the
-/// points on a body, not how its frame follows the coordinates), where
-/// [`TangentTerm::gradient`] evaluates its bodies' frames per term and per coordinate.
+/// Every body's frame at a configuration x, and that frame moved along each coordinate it
+/// reads (dual part 1 on it): what [`TangentTerm::gradient_from`] reads. Evaluated once,
+/// they serve every term, where [`TangentTerm::gradient`] evaluates its bodies' frames per
+/// term and per coordinate; at an x that carries no parameter derivative they serve every
+/// parameter's model too (whose frames are the nominal model's: a parameter moves the
+/// points on a body, not how its frame follows the coordinates).
 #[derive(Clone, Debug)]
 pub struct GradientFrames {
-    /// The configuration.
-    x: Vec<f64>,
+    /// The configuration, with its derivatives.
+    x: Vec<Dual64>,
     /// Per body: its frame at x.
     at_x: Vec<Frame<DualTangent>>,
     /// Per body: the coordinates its frame reads, and the frame moved along each.
@@ -632,12 +631,12 @@ pub struct GradientFrames {
 }
 
 impl GradientFrames {
-    /// The frames of `system`'s bodies at `x` (a full coordinate vector).
-    pub fn new<S: Real>(system: &crate::System<S>, x: &[f64]) -> Result<Self, EnergyError> {
+    /// The frames of `system`'s bodies at `x` (a full coordinate vector, each coordinate
+    /// with its derivative).
+    pub fn new<S: Real>(system: &crate::System<S>, x: &[Dual64]) -> Result<Self, EnergyError> {
         let zero = Dual64::from_re(0.0);
-        let at_rest = |v: f64| DualTangent::from_re(Dual64::from_re(v));
-        let at_x = frames_at(system, [("x", x.len())], |i| at_rest(x[i]))?;
-        let mut seeds: Vec<DualTangent> = x.iter().map(|&v| at_rest(v)).collect();
+        let at_x = frames_at(system, [("x", x.len())], |i| DualTangent::from_re(x[i]))?;
+        let mut seeds: Vec<DualTangent> = x.iter().map(|&v| DualTangent::from_re(v)).collect();
         let reads: Vec<Vec<usize>> = system
             .bodies
             .iter()
@@ -667,9 +666,10 @@ impl GradientFrames {
         })
     }
 
-    /// Whether these are the frames at `x`.
-    pub fn are_at(&self, x: &[f64]) -> bool {
-        self.x == x
+    /// Whether these are the frames at `x` (values and derivatives, bit for bit).
+    pub fn are_at(&self, x: &[Dual64]) -> bool {
+        let bits = |v: &Dual64| (v.re.to_bits(), v.eps.to_bits());
+        self.x.iter().map(bits).eq(x.iter().map(bits))
     }
 }
 

@@ -1259,7 +1259,11 @@ pub fn build_with_mechanical_reads(
         built_in_settings(temperature, switch)?;
     }
     let system = model.build(&resolved)?;
-    let mechanical_reads = resolved.read_names().into_iter().map(String::from).collect();
+    let mechanical_reads = resolved
+        .read_names()
+        .into_iter()
+        .map(String::from)
+        .collect();
     let system = attach_to_build(system, &defaults, overrides, &resolved)?;
     Ok((system, resolved, mechanical_reads))
 }

@@ -223,11 +223,16 @@ fn the_mechanical_reads_are_the_model_builds_own() {
     assert_eq!(mechanical, ["m", "k"]);
     let all = resolved.read_names();
     for name in ["m", "k", "phi", "temperature", "wire_terms_early"] {
-        assert!(all.contains(&name), "{name} not read by the whole build: {all:?}");
+        assert!(
+            all.contains(&name),
+            "{name} not read by the whole build: {all:?}"
+        );
     }
     // a switch off its values is refused, as by build_with, with the reads left as they are
     let o = overrides(&[("wire_terms_early", "0.5")], None);
-    let e = build_with_mechanical_reads(&model, &o).unwrap_err().to_string();
+    let e = build_with_mechanical_reads(&model, &o)
+        .unwrap_err()
+        .to_string();
     assert_eq!(e, build_with(&model, &o).unwrap_err().to_string());
     assert!(e.contains("wire_terms_early") && e.contains("0.5"), "{e}");
 }
