@@ -435,6 +435,7 @@ fn a_gradient_from_frames_shared_by_all_terms_is_the_terms_own() {
             let (_, at_rest, terms) = dual_terms_at_rest(&case, name);
             let frames = GradientFrames::new(&nominal, &at_rest).expect("frames");
             assert!(frames.are_at(&at_rest) && !frames.are_at(&at_rest[1..]));
+            assert!(frames.have_bodies_of(&nominal));
             // and at the equilibrium moved along a direction (the balance's check of H z)
             let along: Vec<num_dual::Dual64> = at_rest
                 .iter()
@@ -481,6 +482,7 @@ fn a_gradient_from_frames_shared_by_all_terms_is_the_terms_own() {
         .0;
     let zeros = vec![num_dual::Dual64::from_re(0.0); pendulum.coords.len()];
     let short = GradientFrames::new(&pendulum, &zeros).expect("frames");
+    assert!(!short.have_bodies_of(&nominal));
     let errors: Vec<String> = terms
         .iter()
         .filter_map(|t| t.gradient_from(&short).err())

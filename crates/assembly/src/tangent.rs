@@ -834,7 +834,7 @@ pub fn stage_tangent(
     let at_rest: Vec<Dual64> = equilibrium.iter().map(|&v| Dual64::from_re(v)).collect();
     let mut rest = Sums::gradient_only(n);
     let moving_balanced = balanced.iter().filter(|t| t.moves());
-    if balance.frames.are_at(&at_rest) {
+    if balance.frames.are_at(&at_rest) && balance.frames.have_bodies_of(system) {
         // the bodies' frames the balance evaluated at the equilibrium, shared by every term
         // (and every parameter): the same numbers as each term's own
         add_derivatives(moving_balanced, &mut rest, |t| {

@@ -671,6 +671,17 @@ impl GradientFrames {
         let bits = |v: &Dual64| (v.re.to_bits(), v.eps.to_bits());
         self.x.iter().map(bits).eq(x.iter().map(bits))
     }
+
+    /// Whether `system` has the bodies these frames are of, each reading the same
+    /// coordinates (what a term's gradient picks its frames by).
+    pub fn have_bodies_of<S: Real>(&self, system: &crate::System<S>) -> bool {
+        self.reads.len() == system.bodies.len()
+            && self
+                .reads
+                .iter()
+                .zip(&system.bodies)
+                .all(|(reads, body)| reads.as_slice() == body.frame.var_list())
+    }
 }
 
 /// Every body's frame of `system` at x + εu: the frames
