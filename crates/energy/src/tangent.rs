@@ -277,6 +277,21 @@ impl TangentTerm {
         Ok(())
     }
 
+    /// A term on more bodies than the dual passes take ([`MAX_FRAMES`]) is an error.
+    fn check_frame_count(&self, bodies: usize) -> Result<(), EnergyError> {
+        if bodies > MAX_FRAMES {
+            return Err(EnergyError::Element {
+                kind: self.kind,
+                element: self.label.clone(),
+                message: format!(
+                    "reads {bodies} bodies; a term's derivatives with respect to a parameter \
+                     take at most {MAX_FRAMES}"
+                ),
+            });
+        }
+        Ok(())
+    }
+
     /// Value and gradient over the term's own coordinates at `x_global`, by one dual
     /// evaluation per coordinate: the gradient's dual parts are its derivatives with respect
     /// to the parameter (at fixed coordinates when `x_global` carries no derivative). Each
@@ -284,17 +299,7 @@ impl TangentTerm {
     pub fn gradient(&self, x_global: &[Dual64]) -> Result<TangentDerivatives, EnergyError> {
         self.check_length("TangentTerm::gradient", x_global.len())?;
         let maps = &self.frames.frames;
-        if maps.len() > MAX_FRAMES {
-            return Err(EnergyError::Element {
-                kind: self.kind,
-                element: self.label.clone(),
-                message: format!(
-                    "reads {} bodies; a term's derivatives with respect to a parameter take \
-                     at most {MAX_FRAMES}",
-                    maps.len()
-                ),
-            });
-        }
+        self.check_frame_count(maps.len())?;
         let mut x: Vec<DualTangent> = self
             .coords
             .iter()
@@ -344,25 +349,14 @@ impl TangentTerm {
     ) -> Result<TangentDerivatives, EnergyError> {
         self.check_length("TangentTerm::gradient_from", frames.x.len())?;
         let bodies = &self.frames.bodies;
-        let missing = |index: usize| EnergyError::Index {
-            item: format!("term '{}'", self.label),
-            what: "body (gradient frames)",
-            index,
-            len: frames.at_x.len(),
-        };
-        if bodies.len() > MAX_FRAMES {
-            return Err(EnergyError::Element {
-                kind: self.kind,
-                element: self.label.clone(),
-                message: format!(
-                    "reads {} bodies; a term's derivatives with respect to a parameter take \
-                     at most {MAX_FRAMES}",
-                    bodies.len()
-                ),
+        self.check_frame_count(bodies.len())?;
+        if let Some(&index) = bodies.iter().find(|&&b| b >= frames.at_x.len()) {
+            return Err(EnergyError::Index {
+                item: format!("term '{}'", self.label),
+                what: "body (gradient frames)",
+                index,
+                len: frames.at_x.len(),
             });
-        }
-        if let Some(&b) = bodies.iter().find(|&&b| b >= frames.at_x.len()) {
-            return Err(missing(b));
         }
         let zero = Dual64::from_re(0.0);
         // the energy with each body at rest, or moved along `moved` (a global coordinate)
