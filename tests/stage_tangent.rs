@@ -501,6 +501,59 @@ fn a_gradient_from_frames_shared_by_all_terms_is_the_terms_own() {
 }
 
 #[test]
+fn terms_built_on_another_builds_local_frames_are_the_same_terms() {
+    // each parameter's model builds its terms on the local frames of the balance's build
+    // (`SharedBodies::with_frames`) instead of making them again: sound only if the terms
+    // are the same (labels, coordinates, gradient bit for bit) and take the frames given.
+    use pendkit_energy::{Reference, SharedBodies};
+    let case = Case::open("quad").expect("case");
+    let (nominal, _) = case.build().expect("build");
+    let lifted = nominal.map_scalars(num_dual::Dual64::from_re);
+    let at_rest = stage_2_at_rest(&nominal);
+    let first = tangent_terms_to_stage_2(&Reference::new(&lifted, &at_rest));
+    let given: Vec<_> = first.iter().map(|t| t.local_frames().clone()).collect();
+    for name in ["m3", "l1", "nn0"] {
+        let dual = pendkit_model::build_tangent(case.model, &case.overrides, name)
+            .unwrap_or_else(|e| panic!("{name}: {e}"));
+        let reference = Reference::new(&dual, &at_rest);
+        let fresh = tangent_terms_to_stage_2(&reference);
+        let shared = SharedBodies::with_frames(given.iter().cloned());
+        let mut seeded = Vec::new();
+        for kind in pendkit_energy::registry() {
+            if dual.element_stage(kind).is_some_and(|s| s <= Stage::S2) {
+                seeded.extend(kind.tangent_terms(&reference, &shared).unwrap().unwrap());
+            }
+        }
+        assert_eq!(fresh.len(), seeded.len(), "{name}");
+        let mut taken = 0;
+        for (a, b) in fresh.iter().zip(&seeded) {
+            assert_eq!((&a.label, &a.coords), (&b.label, &b.coords), "{name}");
+            let bits = |t: &pendkit_energy::TangentTerm| -> Vec<u64> {
+                let d = t.gradient(&at_rest).expect("gradient");
+                std::iter::once(&d.value)
+                    .chain(&d.gradient)
+                    .flat_map(|v| [v.re.to_bits(), v.eps.to_bits()])
+                    .collect()
+            };
+            assert_eq!(bits(a), bits(b), "{name}: '{}'", a.label);
+            if given
+                .iter()
+                .any(|g| std::sync::Arc::ptr_eq(g, b.local_frames()))
+            {
+                taken += 1;
+            }
+        }
+        // not vacuous: the seeded build took the frames given rather than making its own
+        assert_eq!(
+            taken,
+            seeded.len(),
+            "{name}: {taken} of {} took them",
+            seeded.len()
+        );
+    }
+}
+
+#[test]
 fn terms_that_do_not_move_have_no_derivative_at_fixed_coordinates() {
     // the projected route evaluates, at the fixed equilibrium, only the terms that say
     // their constants move with the parameter (`TangentTerm::moves`): sound only if every

@@ -23,13 +23,14 @@
 use nalgebra::{DMatrix, DVector, Vector3};
 use num_dual::{Dual, Dual64};
 use pendkit_energy::{
-    CoordKind, EarlyWireTerms, EnergyError, GradientFrames, HyperTangent, Reference, SharedBodies,
-    Stage, System, TangentDerivatives, TangentSum, TangentTerm, registry,
+    CoordKind, EarlyWireTerms, EnergyError, GradientFrames, HyperTangent, LocalFrames, Reference,
+    SharedBodies, Stage, System, TangentDerivatives, TangentSum, TangentTerm, registry,
 };
 use pendkit_geometry::Frame;
 use pendkit_rotations::{
     Constant, LANES, Real, SecondLanes, second_lanes_moving, second_lanes_seed, tr_mul, vee,
 };
+use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
 
 use crate::equilibrium::{Evaluation, free_coordinates, free_slots, hessian_sum};
@@ -66,20 +67,23 @@ pub struct StageTangent {
 /// The kinds' tangent terms whose stage passes `include`, built around `coords`; `None`
 /// when some kind has none (the caller falls back to differences). With `moving_only` the
 /// caller keeps only the terms whose constants move, and the kinds may leave out the
-/// others ([`Reference::moving_only`]).
+/// others ([`Reference::moving_only`]). `frames`: local frames of another build of the same
+/// model, taken instead of made again ([`SharedBodies::with_frames`]).
 fn kind_tangent_terms(
     system: &System<Dual64>,
     coords: &[Dual64],
     include: impl Fn(Stage) -> bool,
     moving_only: bool,
+    frames: &[Arc<LocalFrames>],
 ) -> Result<Option<Vec<TangentTerm>>, EnergyError> {
     let reference = if moving_only {
         Reference::moving_only(system, coords)
     } else {
         Reference::new(system, coords)
     };
-    // one beam per wire for its bending and extra-stretch terms, as in the f64 assembly
-    let shared = SharedBodies::new();
+    // one beam per wire for its bending and extra-stretch terms, as in the f64 assembly;
+    // the local frames another build of the model made, where the caller has them
+    let shared = SharedBodies::with_frames(frames.iter().cloned());
     let mut terms = Vec::new();
     for kind in registry()
         .into_iter()
@@ -179,6 +183,9 @@ pub struct Balance {
     /// Every body's frame at the equilibrium, with its moves along each coordinate: what
     /// each parameter's ∂g/∂p reads ([`stage_tangent`]).
     frames: GradientFrames,
+    /// The local frames of the balanced terms, one per set of bodies: the terms of every
+    /// parameter's model are built on them ([`SharedBodies::with_frames`]).
+    local_frames: Vec<Arc<LocalFrames>>,
 }
 
 impl Balance {
@@ -187,9 +194,18 @@ impl Balance {
     pub fn new(system: &System, equilibrium: &[f64]) -> Result<Option<Balance>, AssemblyError> {
         let lifted = system.map_scalars(Dual64::from_re);
         check_equilibrium("Balance::new", &lifted, equilibrium)?;
-        let Some(balanced) = balanced_terms(&lifted, false)? else {
+        let Some(balanced) = balanced_terms(&lifted, false, &[])? else {
             return Ok(None);
         };
+        // the local frames of its terms, one per set of bodies, for the builds of every
+        // parameter's model
+        let mut local_frames: Vec<Arc<LocalFrames>> = Vec::new();
+        for term in &balanced {
+            let frames = term.local_frames();
+            if !local_frames.iter().any(|f| f.bodies == frames.bodies) {
+                local_frames.push(frames.clone());
+            }
+        }
         let lifted_equilibrium: Vec<Dual64> =
             equilibrium.iter().map(|&v| Dual64::from_re(v)).collect();
         // the same terms in f64 (the stage-0A kinds built around the start), whose fast
@@ -239,6 +255,7 @@ impl Balance {
             checks: [first?, second?],
             balanced,
             frames: GradientFrames::new(system, &lifted_equilibrium)?,
+            local_frames,
         }))
     }
 
@@ -257,6 +274,16 @@ impl Balance {
                 worst.max(sum.abs())
             }
         })
+    }
+
+    /// The local frames a build of `system` may take from the balance's model: all of
+    /// them when its bodies read the same coordinates, else none.
+    fn local_frames_for<S: Real>(&self, system: &System<S>) -> &[Arc<LocalFrames>] {
+        if self.frames.have_bodies_of(system) {
+            &self.local_frames
+        } else {
+            &[]
+        }
     }
 
     /// Whether `system` has the coordinates this balance was built for.
@@ -280,12 +307,13 @@ fn coordinate_names<S: Real>(system: &System<S>) -> Vec<String> {
 fn balanced_terms(
     system: &System<Dual64>,
     moving_only: bool,
+    frames: &[Arc<LocalFrames>],
 ) -> Result<Option<Vec<TangentTerm>>, EnergyError> {
     if !system.extra_terms.is_empty() || system.early_wire_terms != EarlyWireTerms::No {
         return Ok(None);
     }
     let start: Vec<Dual64> = system.start().into_iter().map(Dual64::from_re).collect();
-    kind_tangent_terms(system, &start, |s| s == Stage::S0A, moving_only)
+    kind_tangent_terms(system, &start, |s| s == Stage::S0A, moving_only, frames)
 }
 
 /// `equilibrium` is a finite full coordinate vector of `system`, whose indices are valid.
@@ -653,7 +681,13 @@ impl Projection {
             moved[balance.free[a]].eps = 1.0;
             // kept below: the terms whose constants moved with the coordinate, and the terms
             // on it, whose bodies' frames move with it; no other term is needed
-            kind_tangent_terms(&lifted, &moved, |s| s != Stage::S0A && s <= stage, true)
+            kind_tangent_terms(
+                &lifted,
+                &moved,
+                |s| s != Stage::S0A && s <= stage,
+                true,
+                balance.local_frames_for(system),
+            )
         })?;
         let Some(plugins) = plugins.into_iter().collect::<Option<Vec<_>>>() else {
             return Ok(None);
@@ -826,7 +860,8 @@ pub fn stage_tangent(
     // the projected route evaluates only the terms whose constants move at the fixed
     // equilibrium (the equilibrium's motion is the projection's), so only those are built
     let moving_only = matches!(along, Along::Projected(_));
-    let Some(balanced) = balanced_terms(system, moving_only)? else {
+    let local_frames = balance.local_frames_for(system);
+    let Some(balanced) = balanced_terms(system, moving_only, local_frames)? else {
         return Ok(None);
     };
     // ∂g/∂p at the fixed equilibrium (only the terms whose constants move have one), and
@@ -868,7 +903,9 @@ pub fn stage_tangent(
         Along::Full => {
             // the stage's plug-in terms built around the moving equilibrium, and every
             // term's Hessian there
-            let Some(plugins) = kind_tangent_terms(system, &moving, plugin_stage, false)? else {
+            let Some(plugins) =
+                kind_tangent_terms(system, &moving, plugin_stage, false, local_frames)?
+            else {
                 return Ok(None);
             };
             let mut sums = Sums::new(n);
@@ -880,7 +917,9 @@ pub fn stage_tangent(
         Along::Projected(projection) => {
             // the plug-in terms built around the fixed equilibrium: the parameter's own
             // part; the equilibrium's motion is the projection's
-            let Some(plugins) = kind_tangent_terms(system, &at_rest, plugin_stage, true)? else {
+            let Some(plugins) =
+                kind_tangent_terms(system, &at_rest, plugin_stage, true, local_frames)?
+            else {
                 return Ok(None);
             };
             let moving_terms =

@@ -4,6 +4,8 @@
 //! closed form from the attachment points' jets, springs by the chain rule through the
 //! deflection Δ, whose derivatives come from the two frames' jets.
 
+use std::sync::Arc;
+
 use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
 use num_dual::Dual64;
 use pendkit_geometry::{Frame, FrameMap};
@@ -12,9 +14,9 @@ use pendkit_rotations::{
 };
 
 use crate::{
-    Attached, Derivatives, Element, EnergyError, JetPoint, LocalFrames, OffForm, Potential,
-    Reference, SharedBodies, SpringEnd, Stage, TangentPotential, TangentTerm, TensionOff, Term,
-    Wire, add_curvature, add_jacobian, term_label,
+    Attached, BodyId, Derivatives, Element, EnergyError, JetPoint, LocalFrames, OffForm, Potential,
+    Reference, SharedBodies, SpringEnd, Stage, System, TangentPotential, TangentTerm, TensionOff,
+    Term, Wire, add_curvature, add_jacobian, term_label,
 };
 
 /// Tag of gravity terms (lossless whatever multipliers the tag is given).
@@ -106,7 +108,7 @@ impl Element for Gravity {
         "m g z of every massive body (lossless)"
     }
     fn terms(&self, reference: &Reference) -> Result<Vec<Term>, EnergyError> {
-        Ok(gravity_energies(reference)
+        Ok(gravity_energies(reference, &new_frames(reference.system))
             .map(|(label, local, energy)| {
                 Term::on_frames(label, "gravity", GRAVITY_TAG, local, energy)
             })
@@ -115,10 +117,10 @@ impl Element for Gravity {
     fn tangent_terms(
         &self,
         reference: &Reference<Dual64>,
-        _shared: &SharedBodies,
+        shared: &SharedBodies,
     ) -> Result<Option<Vec<TangentTerm>>, EnergyError> {
         Ok(Some(
-            gravity_energies(reference)
+            gravity_energies(reference, &shared_frames(reference.system, shared))
                 .map(|(label, local, energy)| {
                     TangentTerm::on_frames(label, "gravity", GRAVITY_TAG, local, energy)
                 })
@@ -127,17 +129,35 @@ impl Element for Gravity {
     }
 }
 
+/// Where a kind's build takes the local frames of a set of bodies from.
+type FramesOf<'a> = dyn Fn(&[BodyId]) -> Arc<LocalFrames> + 'a;
+
+/// Local frames made anew (the `f64` terms).
+fn new_frames<S: Constant>(system: &System<S>) -> impl Fn(&[BodyId]) -> Arc<LocalFrames> + '_ {
+    move |bodies| Arc::new(LocalFrames::new(system, bodies))
+}
+
+/// Local frames shared by every term on the same bodies, and taken from another build of
+/// the model where `shared` has them ([`SharedBodies::with_frames`]).
+fn shared_frames<'a, S: Constant>(
+    system: &'a System<S>,
+    shared: &'a SharedBodies,
+) -> impl Fn(&[BodyId]) -> Arc<LocalFrames> + 'a {
+    move |bodies| shared.frames(system, bodies)
+}
+
 /// The gravity term of every body with mass (or whose mass moves with the parameter) that
 /// `reference` keeps ([`Reference::keeps_body`]).
 fn gravity_energies<'r, S: Constant>(
     reference: &'r Reference<'_, S>,
-) -> impl Iterator<Item = (String, LocalFrames, GravityEnergy<S>)> + 'r {
+    frames_of: &'r FramesOf<'r>,
+) -> impl Iterator<Item = (String, Arc<LocalFrames>, GravityEnergy<S>)> + 'r {
     let system = reference.system;
     (0..system.bodies.len())
         .filter(|&b| !system.bodies[b].mass.is_exactly_zero() && reference.keeps_body(b))
-        .map(|b| {
+        .map(move |b| {
             let body = &system.bodies[b];
-            let local = LocalFrames::new(system, &[b]);
+            let local = frames_of(&[b]);
             let energy = GravityEnergy {
                 frame: local.frames[0].clone(),
                 centre_of_mass: body.centre_of_mass,
@@ -279,7 +299,8 @@ impl Element for WireStretch {
             .wires
             .iter()
             .map(|wire| {
-                let (local, energy) = wire_stretch_energy(reference, wire)?;
+                let (local, energy) =
+                    wire_stretch_energy(reference, wire, &new_frames(reference.system))?;
                 let label = term_label("wire-stretch", &wire.name);
                 let tag = wire.tags.stretch.clone();
                 Ok(Term::on_frames(label, "wire-stretch", tag, local, energy))
@@ -289,11 +310,12 @@ impl Element for WireStretch {
     fn tangent_terms(
         &self,
         reference: &Reference<Dual64>,
-        _shared: &SharedBodies,
+        shared: &SharedBodies,
     ) -> Result<Option<Vec<TangentTerm>>, EnergyError> {
+        let frames_of = shared_frames(reference.system, shared);
         let wires = reference.system.wires.iter();
         let terms = wires.filter(|w| reference.keeps_wire(w)).map(|wire| {
-            let (local, energy) = wire_stretch_energy(reference, wire)?;
+            let (local, energy) = wire_stretch_energy(reference, wire, &frames_of)?;
             let label = term_label("wire-stretch", &wire.name);
             let tag = wire.tags.stretch.clone();
             Ok(TangentTerm::on_frames(
@@ -312,14 +334,15 @@ impl Element for WireStretch {
 fn wire_stretch_energy<S: Constant>(
     reference: &Reference<S>,
     wire: &Wire<S>,
-) -> Result<(LocalFrames, WireStretchEnergy<S>), EnergyError> {
+    frames_of: &FramesOf,
+) -> Result<(Arc<LocalFrames>, WireStretchEnergy<S>), EnergyError> {
     let length = reference.wire_length(wire).re();
     if length.is_nan() || length <= 0.0 {
         return Err(EnergyError::ZeroLengthWire {
             wire: wire.name.clone(),
         });
     }
-    let local = LocalFrames::new(reference.system, &[wire.ends[0].body, wire.ends[1].body]);
+    let local = frames_of(&[wire.ends[0].body, wire.ends[1].body]);
     let energy = WireStretchEnergy {
         frames: [local.frames[0].clone(), local.frames[1].clone()],
         points: [wire.ends[0].point, wire.ends[1].point],
@@ -603,17 +626,17 @@ impl Element for SpringKind {
         "six-axis spring ½ Δᵀ K Δ + fᵀ Δ between two attachment frames"
     }
     fn terms(&self, reference: &Reference) -> Result<Vec<Term>, EnergyError> {
-        Ok(spring_energies(reference)
+        Ok(spring_energies(reference, &new_frames(reference.system))
             .map(|(label, tag, local, energy)| Term::on_frames(label, "spring", tag, local, energy))
             .collect())
     }
     fn tangent_terms(
         &self,
         reference: &Reference<Dual64>,
-        _shared: &SharedBodies,
+        shared: &SharedBodies,
     ) -> Result<Option<Vec<TangentTerm>>, EnergyError> {
         Ok(Some(
-            spring_energies(reference)
+            spring_energies(reference, &shared_frames(reference.system, shared))
                 .map(|(label, tag, local, energy)| {
                     TangentTerm::on_frames(label, "spring", tag, local, energy)
                 })
@@ -626,14 +649,15 @@ impl Element for SpringKind {
 /// label and tag.
 fn spring_energies<'r, S: Constant>(
     reference: &'r Reference<'_, S>,
-) -> impl Iterator<Item = (String, String, LocalFrames, SpringEnergy<S>)> + 'r {
+    frames_of: &'r FramesOf<'r>,
+) -> impl Iterator<Item = (String, String, Arc<LocalFrames>, SpringEnergy<S>)> + 'r {
     let system = reference.system;
     system
         .springs
         .iter()
         .filter(|s| reference.keeps_spring(s))
-        .map(|s| {
-            let local = LocalFrames::new(system, &[s.ends[0].body, s.ends[1].body]);
+        .map(move |s| {
+            let local = frames_of(&[s.ends[0].body, s.ends[1].body]);
             let energy = SpringEnergy {
                 frames: [local.frames[0].clone(), local.frames[1].clone()],
                 ends: s.ends.clone(),

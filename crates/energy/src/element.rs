@@ -223,6 +223,17 @@ impl SharedBodies {
         SharedBodies::default()
     }
 
+    /// A collection that starts with `frames`, the local frames of another build of a model
+    /// whose bodies follow the coordinates as this one's do (the same poses: local frames
+    /// depend on nothing else), so that this build does not make them again (the exact
+    /// sensitivities build the terms of every parameter's model of one model).
+    pub fn with_frames(frames: impl IntoIterator<Item = Arc<LocalFrames>>) -> Self {
+        SharedBodies {
+            bodies: RefCell::default(),
+            frames: RefCell::new(frames.into_iter().collect()),
+        }
+    }
+
     /// The frames of `bodies` of `system` over one local vector, shared by every term on
     /// the same bodies (a wire's torsion and beam).
     pub fn frames<S: Constant>(&self, system: &System<S>, bodies: &[BodyId]) -> Arc<LocalFrames> {

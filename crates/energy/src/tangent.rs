@@ -277,6 +277,11 @@ impl TangentTerm {
         Ok(())
     }
 
+    /// The frames of the term's bodies over its local coordinate vector.
+    pub fn local_frames(&self) -> &Arc<LocalFrames> {
+        &self.frames
+    }
+
     /// A term on more bodies than the dual passes take ([`MAX_FRAMES`]) is an error.
     fn check_frame_count(&self, bodies: usize) -> Result<(), EnergyError> {
         if bodies > MAX_FRAMES {
