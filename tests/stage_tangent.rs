@@ -13,7 +13,10 @@
 
 use nalgebra::DMatrix;
 use pendkit::{Case, Stage};
-use pendkit_assembly::{Along, AssemblyOptions, Balance, Projection, assemble_with, stage_tangent};
+use pendkit_assembly::{
+    Along, AssemblyOptions, Balance, Projection, ROUNDING_MARGIN, assemble_with,
+    moves_beyond_rounding, stage_tangent,
+};
 
 struct Solved {
     coords: Vec<f64>,
@@ -133,11 +136,23 @@ fn check(spec: &str, sets: &[&str], stage: Stage, parameters: &[&str]) {
         let dq = difference([&q[0], &q[1], &q[2], &q[3]], h);
         let exact_dq = DMatrix::from_column_slice(t.equilibrium.len(), 1, &t.equilibrium);
         let what = |x: &str| format!("{spec} stage {stage} d{x}/d{name}");
+        let dq_floor = DMatrix::from_element(1, 1, 1e-3 / p0.abs());
+        close(&what("q*"), &exact_dq, &dq, &dq_floor);
+        // an entry within its rounding bound is 0 for the re-solved differences too (to
+        // their own noise, the tolerance above): the bound leaves out no coordinate the
+        // equilibrium moves along
+        let moved: Vec<bool> = t
+            .equilibrium
+            .iter()
+            .zip(&t.equilibrium_rounding)
+            .map(|(&d, &r)| moves_beyond_rounding(d, r))
+            .collect();
+        let still = DMatrix::from_fn(n, 1, |i, _| if moved[i] { 0.0 } else { dq[i] });
         close(
-            &what("q*"),
-            &exact_dq,
-            &dq,
-            &DMatrix::from_element(1, 1, 1e-3 / p0.abs()),
+            &what("q* (entries within rounding)"),
+            &DMatrix::zeros(n, 1),
+            &still,
+            &dq_floor,
         );
         let k: Vec<&DMatrix<f64>> = at.iter().map(|s| &s.stiffness).collect();
         let dk = difference([k[0], k[1], k[2], k[3]], h);
@@ -171,7 +186,12 @@ fn check(spec: &str, sets: &[&str], stage: Stage, parameters: &[&str]) {
         // the same order
         let mut two_steps = tangent(Along::Projected(&at_rest));
         at_rest
-            .add_motion(&motion, &mut two_steps.stiffness, &two_steps.equilibrium)
+            .add_motion(
+                &motion,
+                &mut two_steps.stiffness,
+                &two_steps.equilibrium,
+                &two_steps.equilibrium_rounding,
+            )
             .expect("the projection's own motion");
         let bits = |m: &DMatrix<f64>| m.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
         assert_eq!(
@@ -184,6 +204,30 @@ fn check(spec: &str, sets: &[&str], stage: Stage, parameters: &[&str]) {
         assert!(
             worst <= 1e-10 * full.amax(),
             "{spec} {name}: directional vs full dK differ by {worst:e} of {:e}",
+            full.amax()
+        );
+        // the motion along only the coordinates this parameter moves beyond rounding: what
+        // it leaves out is δqᵢ times its coefficients for entries within ROUNDING_MARGIN of
+        // their rounding bound (≲ 10⁻¹³ of the whole), so the same to 10⁻¹⁰ of the largest
+        // entry, as the full matrix above
+        let along = at_rest
+            .motion_along(&system, &balance, 0, &moved)
+            .expect("motion along")
+            .expect("the exact route is open");
+        let mut skipped = tangent(Along::Projected(&at_rest));
+        at_rest
+            .add_motion(
+                &along,
+                &mut skipped.stiffness,
+                &skipped.equilibrium,
+                &skipped.equilibrium_rounding,
+            )
+            .expect("the motion along the coordinates it moves");
+        let worst = (&skipped.stiffness - &projected.stiffness).amax();
+        assert!(
+            worst <= 1e-10 * full.amax(),
+            "{spec} {name}: the motion along {} of {n} coordinates differs by {worst:e} of {:e}",
+            moved.iter().filter(|&&m| m).count(),
             full.amax()
         );
     }
@@ -310,26 +354,84 @@ fn wrong_sizes_are_errors_naming_what_and_where() {
         |stage| Projection::at_rest(&qs, stage, q, &qb, (&w, &[(0, 0), (0, 1)])).expect("at rest");
     let (one, other) = (at_rest(Stage::S2), at_rest(Stage::S2));
     let motion = one.motion(&qs, &qb, 1).expect("motion").expect("open");
-    let add =
-        |projection: &Projection, stiffness: &mut DMatrix<f64>, delta: &[f64]| match projection
-            .add_motion(&motion, stiffness, delta)
-        {
+    let zeros = vec![0.0; n];
+    let add_with =
+        |projection: &Projection,
+         motion: &pendkit_assembly::Motion,
+         stiffness: &mut DMatrix<f64>,
+         delta: &[f64],
+         rounding: &[f64]| match projection.add_motion(motion, stiffness, delta, rounding) {
             Err(e) => e.to_string(),
             Ok(()) => panic!("must fail"),
         };
-    let e = add(&other, &mut DMatrix::zeros(2, 2), &vec![0.0; n]);
+    let add = |projection: &Projection, stiffness: &mut DMatrix<f64>, delta: &[f64]| {
+        add_with(projection, &motion, stiffness, delta, &zeros)
+    };
+    let e = add(&other, &mut DMatrix::zeros(2, 2), &zeros);
     assert!(e.contains("another projection") && !e.contains('\n'), "{e}");
     let e = add(&one, &mut DMatrix::zeros(2, 2), &vec![0.0; n - 1]);
     assert!(
         e.contains("Projection::add_motion") && e.contains("delta"),
         "{e}"
     );
-    let e = add(&one, &mut DMatrix::zeros(3, 2), &vec![0.0; n]);
+    let e = add_with(
+        &one,
+        &motion,
+        &mut DMatrix::zeros(2, 2),
+        &zeros,
+        &zeros[1..],
+    );
+    assert!(
+        e.contains("Projection::add_motion") && e.contains("rounding"),
+        "{e}"
+    );
+    let e = add(&one, &mut DMatrix::zeros(3, 2), &zeros);
     assert!(e.contains("stiffness (rows)"), "{e}");
     assert!(
-        one.add_motion(&motion, &mut DMatrix::zeros(2, 2), &vec![0.0; n])
+        one.add_motion(&motion, &mut DMatrix::zeros(2, 2), &zeros, &zeros)
             .is_ok()
     );
+    // a motion that left out a coordinate refuses a δq that moves along it beyond its
+    // rounding bound, naming it, and takes one that moves within it
+    let z0 = qs.coords.iter().position(|c| c.name == "z0").expect("z0");
+    let mut moved = vec![true; n];
+    moved[z0] = false;
+    let without_z0 = one
+        .motion_along(&qs, &qb, 1, &moved)
+        .expect("motion along")
+        .expect("open");
+    let mut delta = zeros.clone();
+    delta[z0] = 1e-3;
+    let mut rounding = zeros.clone();
+    let e = add_with(
+        &one,
+        &without_z0,
+        &mut DMatrix::zeros(2, 2),
+        &delta,
+        &rounding,
+    );
+    assert!(
+        e.contains("'z0'") && e.contains("left out") && !e.contains('\n'),
+        "{e}"
+    );
+    rounding[z0] = 1e-3 / ROUNDING_MARGIN;
+    assert!(
+        one.add_motion(&without_z0, &mut DMatrix::zeros(2, 2), &delta, &rounding)
+            .is_ok()
+    );
+    delta[z0] = f64::NAN;
+    let e = add_with(
+        &one,
+        &without_z0,
+        &mut DMatrix::zeros(2, 2),
+        &delta,
+        &rounding,
+    );
+    assert!(e.contains("'z0'"), "{e}");
+    match one.motion_along(&qs, &qb, 1, &moved[1..]) {
+        Err(e) => assert!(e.to_string().contains("moved"), "{e}"),
+        Ok(_) => panic!("must fail"),
+    }
     match other.with_motion(motion) {
         Err(e) => assert!(e.to_string().contains("another projection"), "{e}"),
         Ok(_) => panic!("must fail"),
@@ -797,4 +899,73 @@ fn a_moving_only_reference_leaves_out_no_term_that_moves() {
         compared > 500 && 2 * built_moving_only < built_all,
         "{compared} parameters: {built_moving_only} terms built moving-only, {built_all} in all"
     );
+}
+
+#[test]
+fn the_symmetric_quads_lateral_motion_is_rounding() {
+    // the quad is symmetric about its longitudinal (x–z) plane and every one of its
+    // parameters acts on both sides alike, so by symmetry the equilibrium does not move
+    // along y, roll or yaw with any of them (exactly 0; the computed entries are the
+    // rounding of wires' lateral forces that cancel). The rounding bound must say so for
+    // every parameter, and must not swallow a motion: the vertical entries that do move
+    // are many orders beyond it.
+    let case = Case::open("quad").expect("case");
+    let (system, resolved) = case.build().expect("build");
+    let a = assemble_with(&system, Stage::S2, &AssemblyOptions::default(), None).expect("assemble");
+    let q = &a.equilibrium.coords;
+    let balance = Balance::new(&system, q).expect("balance").expect("open");
+    let n = system.coords.len();
+    let w = DMatrix::from_element(n, 1, 1.0);
+    let projection =
+        Projection::at_rest(&system, Stage::S2, q, &balance, (&w, &[(0, 0)])).expect("at rest");
+    let lateral = |name: &str| ["y", "roll", "yaw"].iter().any(|p| name.starts_with(p));
+    let mut checked = 0;
+    let mut moves_far = std::collections::BTreeSet::new();
+    for (name, _) in resolved.iter() {
+        // a parameter without a dual build (a count, a switch) has no exact route
+        let Ok(dual) = pendkit_model::build_tangent(case.model, &case.overrides, name) else {
+            continue;
+        };
+        let Some(t) = stage_tangent(
+            &dual,
+            Stage::S2,
+            q,
+            &a.layout,
+            &balance,
+            Along::Projected(&projection),
+        )
+        .expect("stage tangent") else {
+            continue;
+        };
+        checked += 1;
+        for (i, c) in system.coords.iter().enumerate() {
+            let (d, r) = (t.equilibrium[i], t.equilibrium_rounding[i]);
+            if lateral(&c.name) {
+                assert!(
+                    !moves_beyond_rounding(d, r),
+                    "quad d{}/d{name}: {d:e} beyond its rounding bound {r:e}",
+                    c.name
+                );
+            }
+            if d.abs() > 1e8 * r && r > 0.0 {
+                moves_far.insert(c.name.clone());
+            }
+        }
+    }
+    assert!(
+        checked > 60,
+        "only {checked} quad parameters took the exact route"
+    );
+    // some parameter (a length, a height) moves every stage's longitudinal coordinates
+    // 10⁸ times their bound at least (measured 10¹²: the bound is ε times the solve's
+    // condition)
+    for body in 0..4 {
+        for axis in ["x", "z", "pitch"] {
+            let c = format!("{axis}{body}");
+            assert!(
+                moves_far.contains(&c),
+                "no quad parameter moves {c} beyond 1e8 times its bound"
+            );
+        }
+    }
 }

@@ -31,7 +31,10 @@ pub use parallel::{
     MAX_THREADS_PER_CORE, in_parallel, in_parallel_with, side_by_side, thread_count,
 };
 pub use pendkit_energy::OffHessian;
-pub use tangent::{Along, Balance, Motion, Projection, StageTangent, stage_tangent};
+pub use tangent::{
+    Along, Balance, Motion, Projection, ROUNDING_MARGIN, StageTangent, moves_beyond_rounding,
+    stage_tangent,
+};
 pub use timing::{Phase, PhaseTimes, timed};
 
 use evaluate::Evaluator;
@@ -109,6 +112,15 @@ pub enum AssemblyError {
     /// A [`Motion`] used with another [`Projection`] than the one it was computed for.
     #[error("Projection::add_motion: the motion was computed for another projection")]
     ForeignMotion,
+    /// A [`Motion`] without the coefficients of a coordinate the equilibrium moves along.
+    #[error(
+        "Projection::add_motion: the equilibrium moves along '{coordinate}', which the motion \
+         left out (Projection::motion_along)"
+    )]
+    MotionLeftOut {
+        /// The coordinate's name.
+        coordinate: String,
+    },
     /// A float moves a body with mass or inertia (floats must be massless).
     #[error("float '{float}' moves body '{body}', which has mass: make it a variable")]
     MassiveFloat {

@@ -17,8 +17,10 @@
 //! rule: Wᵀ(dK/dp)W = Wᵀ(∂K/∂p)W + Σᵢ δqᵢ Wᵀ(∂K/∂qᵢ)W, the first at the fixed
 //! equilibrium, the second with the terms rebuilt around q* + ε eᵢ. The second's
 //! coefficients do not depend on the parameter: a [`Projection`] computes them once per
-//! stage (one pass per free coordinate, over the terms on it), and each parameter then
-//! evaluates only the terms whose constants move with it ([`TangentTerm::moves`]).
+//! stage (one pass per free coordinate, over the terms on it; or only along the
+//! coordinates some parameter moves beyond rounding, [`Projection::motion_along`]), and
+//! each parameter then evaluates only the terms whose constants move with it
+//! ([`TangentTerm::moves`]).
 
 use nalgebra::{DMatrix, DVector, Vector3};
 use num_dual::{Dual, Dual64};
@@ -44,6 +46,13 @@ pub struct StageTangent {
     /// dq*/dp, one entry per coordinate (m or rad per unit of the parameter; 0 on the
     /// coordinates Newton does not move: parameters and pinned ones).
     pub equilibrium: Vec<f64>,
+    /// A bound on the rounding of each entry of `equilibrium` (same units; 0 on the
+    /// coordinates Newton does not move): ε (|K⁻¹| (|K| |δq| + Σₜ |∂gₜ/∂p|)) with Σₜ over the
+    /// balanced terms' forces, from the rounding of the sum ∂g/∂p (terms' forces that cancel)
+    /// and of the solve. An entry within a small multiple of it is 0 but for rounding: the
+    /// lateral coordinates of a suspension symmetric about its longitudinal plane, whose
+    /// wires' lateral forces cancel. [`Projection::motion_along`] leaves such coordinates out.
+    pub equilibrium_rounding: Vec<f64>,
     /// dK/dp (tension on) along the moving equilibrium (N/m, N, N m/rad per unit of the
     /// parameter): over all coordinates, global order (n × n), or projected on the
     /// directions asked for ([`Along`]).
@@ -98,10 +107,13 @@ fn kind_tangent_terms(
 }
 
 /// Sums of the terms' derivatives over the full coordinate vector: Hessian and gradient
-/// (value parts in `.re`, parameter derivatives in `.eps`).
+/// (value parts in `.re`, parameter derivatives in `.eps`), and where asked for the sums of
+/// the gradients' |parameter derivatives| (the scale of the sum's rounding).
 struct Sums {
     hessian: DMatrix<Dual64>,
     gradient: DVector<Dual64>,
+    /// Σₜ |∂gₜ/∂p| per coordinate, or empty (not kept).
+    magnitudes: Vec<f64>,
 }
 
 impl Sums {
@@ -110,6 +122,7 @@ impl Sums {
         Sums {
             hessian: DMatrix::from_element(n, n, zero),
             gradient: DVector::from_element(n, zero),
+            magnitudes: Vec::new(),
         }
     }
 
@@ -119,6 +132,15 @@ impl Sums {
         Sums {
             hessian: DMatrix::from_element(0, 0, Dual64::from_re(0.0)),
             gradient: DVector::from_element(n, Dual64::from_re(0.0)),
+            magnitudes: Vec::new(),
+        }
+    }
+
+    /// [`Sums::gradient_only`] that also keeps Σₜ |∂gₜ/∂p| per coordinate.
+    fn gradient_with_magnitudes(n: usize) -> Self {
+        Sums {
+            magnitudes: vec![0.0; n],
+            ..Sums::gradient_only(n)
         }
     }
 }
@@ -150,8 +172,12 @@ fn add_derivatives<'t>(
         let d = derive(term)?;
         let hessian = !d.hessian.is_empty();
         let m = term.coords.len();
+        let magnitudes = !sums.magnitudes.is_empty();
         for (a, &ga) in term.coords.iter().enumerate() {
             sums.gradient[ga] += d.gradient[a];
+            if magnitudes {
+                sums.magnitudes[ga] += d.gradient[a].eps.abs();
+            }
             if hessian {
                 for (b, &gb) in term.coords.iter().enumerate() {
                     sums.hessian[(ga, gb)] += d.hessian[a * m + b];
@@ -170,6 +196,9 @@ pub struct Balance {
     coords: Vec<String>,
     free: Vec<usize>,
     lu: nalgebra::LU<f64, nalgebra::Dyn, nalgebra::Dyn>,
+    /// |K| and |K⁻¹| entry by entry over the free coordinates, for the rounding bound of
+    /// δq ([`StageTangent::equilibrium_rounding`]); `None` when K has no inverse.
+    abs_stiffness_and_inverse: Option<(DMatrix<f64>, DMatrix<f64>)>,
     /// The largest sum over the balanced terms of their |force| on one free coordinate
     /// (N or N m).
     forces: f64,
@@ -247,10 +276,15 @@ impl Balance {
             Ok::<_, EnergyError>((weights, stiffness))
         });
         let [first, second] = checks;
+        let lu = stiffness.hessian.clone().lu();
+        let abs_stiffness_and_inverse = lu
+            .try_inverse()
+            .map(|inverse| (stiffness.hessian.map(f64::abs), inverse.map(f64::abs)));
         Ok(Some(Balance {
             coords: coordinate_names(system),
             free,
-            lu: stiffness.hessian.lu(),
+            lu,
+            abs_stiffness_and_inverse,
             forces,
             checks: [first?, second?],
             balanced,
@@ -274,6 +308,21 @@ impl Balance {
                 worst.max(sum.abs())
             }
         })
+    }
+
+    /// The rounding bound of the motion `delta` solved from the forces' derivative whose
+    /// terms' |parts| sum to `magnitudes` (both over the free coordinates):
+    /// ε (|K⁻¹| (|K| |δq| + magnitudes)), the first-order bound of the sum's rounding and the
+    /// solve's carried through K⁻¹ ([`StageTangent::equilibrium_rounding`]). 0 (nothing is
+    /// rounding) when K has no inverse, and for an entry whose bound is not finite.
+    fn motion_rounding(&self, delta: &DVector<f64>, magnitudes: &DVector<f64>) -> DVector<f64> {
+        match &self.abs_stiffness_and_inverse {
+            Some((stiffness, inverse)) => {
+                let bound = inverse * (stiffness * delta.map(f64::abs) + magnitudes);
+                bound.map(|b| if b.is_finite() { b * f64::EPSILON } else { 0.0 })
+            }
+            None => DVector::zeros(delta.len()),
+        }
     }
 
     /// The local frames a build of `system` may take from the balance's model: all of
@@ -512,9 +561,10 @@ impl Group {
 }
 
 /// How many free coordinates one unit of the projection's parallel work takes: enough
-/// units for the threads when there are only a few groups (the quad's 24 modes make four),
-/// few enough that each unit's copy of the frames is small beside its passes.
-const COORDINATES_PER_UNIT: usize = 8;
+/// units for the threads when there are only a few groups and coordinates (the quad's 24
+/// modes make four groups, and the 12 coordinates its parameters move three blocks), few
+/// enough that each unit's copy of the frames is small beside its passes.
+const COORDINATES_PER_UNIT: usize = 4;
 
 /// What the directional derivatives Wᵀ(dK/dp)W of one stage share between parameters:
 /// the directions W (full coordinate vectors, e.g. the modes lifted to the floats), the
@@ -543,8 +593,24 @@ pub struct Projection {
 #[derive(Debug)]
 pub struct Motion {
     geometric: DMatrix<f64>,
+    /// Per coordinate, whether its column was computed ([`Projection::motion_along`]).
+    covered: Vec<bool>,
     /// The projection it was computed for.
     projection: u64,
+}
+
+/// How many times its rounding bound ([`StageTangent::equilibrium_rounding`]) an entry of
+/// dq*/dp may be and still count as 0. The entries of the bundled quads and triples that
+/// are rounding (lateral coordinates no parameter moves) measure at up to ≈ 65 times the
+/// bound over every parameter; an entry that moves is 10¹⁰ times it and more. Leaving out a
+/// coordinate within the margin changes the result by at most this many times the rounding
+/// the coordinate's motion already carries.
+pub const ROUNDING_MARGIN: f64 = 1e3;
+
+/// Whether an entry `delta` of dq*/dp moves beyond its `rounding` bound (by more than
+/// [`ROUNDING_MARGIN`] times it; a NaN entry or bound does).
+pub fn moves_beyond_rounding(delta: f64, rounding: f64) -> bool {
+    delta.is_nan() || rounding.is_nan() || delta.abs() > ROUNDING_MARGIN * rounding
 }
 
 impl Projection {
@@ -665,9 +731,33 @@ impl Projection {
         balance: &Balance,
         threads: usize,
     ) -> Result<Option<Motion>, AssemblyError> {
+        self.motion_along(system, balance, threads, &vec![true; self.coords.len()])
+    }
+
+    /// [`Projection::motion`] for the free coordinates `moved` marks (one flag per
+    /// coordinate) only: the others' coefficients are not computed, and
+    /// [`Projection::add_motion`] refuses a motion δq that moves along one of them beyond
+    /// rounding. For a request whose parameters' motions are known first: the lateral
+    /// coordinates of a symmetric suspension, which no parameter moves, cost nothing.
+    pub fn motion_along(
+        &self,
+        system: &System,
+        balance: &Balance,
+        threads: usize,
+        moved: &[bool],
+    ) -> Result<Option<Motion>, AssemblyError> {
         if !balance.fits(system) || self.coords != balance.coords {
             return Err(AssemblyError::ForeignBalance);
         }
+        if moved.len() != self.coords.len() {
+            return Err(AssemblyError::Length {
+                function: "Projection::motion_along",
+                argument: "moved",
+                expected: self.coords.len(),
+                given: moved.len(),
+            });
+        }
+        let free: Vec<usize> = balance.free.iter().copied().filter(|&i| moved[i]).collect();
         // the plug-in terms are built around x + ε eᵢ below; the balanced ones, whose
         // constants do not depend on where they are built, are the balance's
         let lifted = system.map_scalars(Dual64::from_re);
@@ -676,9 +766,13 @@ impl Projection {
         // per free coordinate: the bodies it moves, and the terms whose energy it changes
         // (the terms on it, and the plug-in terms built around x + ε eᵢ whose constants
         // moved with it)
-        let plugins = in_parallel(balance.free.len(), threads, |a| {
+        // (with no coordinate, one build at rest still finds a kind without tangent terms)
+        let builds = free.len().max(1);
+        let plugins = in_parallel(builds, threads, |a| {
             let mut moved: Vec<Dual64> = equilibrium.iter().map(|&v| Dual64::from_re(v)).collect();
-            moved[balance.free[a]].eps = 1.0;
+            if let Some(&i) = free.get(a) {
+                moved[i].eps = 1.0;
+            }
             // kept below: the terms whose constants moved with the coordinate, and the terms
             // on it, whose bodies' frames move with it; no other term is needed
             kind_tangent_terms(
@@ -692,8 +786,7 @@ impl Projection {
         let Some(plugins) = plugins.into_iter().collect::<Option<Vec<_>>>() else {
             return Ok(None);
         };
-        let coordinates: Vec<(usize, Vec<usize>, TangentSum)> = balance
-            .free
+        let coordinates: Vec<(usize, Vec<usize>, TangentSum)> = free
             .iter()
             .zip(&plugins)
             .map(|(&i, plugins)| {
@@ -725,8 +818,13 @@ impl Projection {
                 }
             }
         }
+        let mut covered = vec![false; n];
+        for &i in &free {
+            covered[i] = true;
+        }
         Ok(Some(Motion {
             geometric,
+            covered,
             projection: self.id,
         }))
     }
@@ -744,15 +842,17 @@ impl Projection {
     }
 
     /// Adds the equilibrium's motion `delta` (dq*/dp, full coordinate vector, as
-    /// [`StageTangent::equilibrium`]) through `motion` (this projection's) to `stiffness`,
-    /// a [`StageTangent::stiffness`] computed with the projection at rest: the pairs'
-    /// entries and their mirrors. Another projection's motion, or inputs of other sizes,
-    /// are errors.
+    /// [`StageTangent::equilibrium`], with its `rounding`, [`StageTangent::equilibrium_rounding`])
+    /// through `motion` (this projection's) to `stiffness`, a [`StageTangent::stiffness`]
+    /// computed with the projection at rest: the pairs' entries and their mirrors. Another
+    /// projection's motion, inputs of other sizes, or a δq that moves beyond rounding along a
+    /// coordinate the motion left out ([`Projection::motion_along`]) are errors.
     pub fn add_motion(
         &self,
         motion: &Motion,
         stiffness: &mut DMatrix<f64>,
         delta: &[f64],
+        rounding: &[f64],
     ) -> Result<(), AssemblyError> {
         if motion.projection != self.id {
             return Err(AssemblyError::ForeignMotion);
@@ -763,8 +863,17 @@ impl Projection {
             expected,
             given,
         };
-        if delta.len() != self.coords.len() {
-            return Err(length("delta", self.coords.len(), delta.len()));
+        for (argument, given) in [("delta", delta.len()), ("rounding", rounding.len())] {
+            if given != self.coords.len() {
+                return Err(length(argument, self.coords.len(), given));
+            }
+        }
+        if let Some(i) = (0..delta.len())
+            .find(|&i| !motion.covered[i] && moves_beyond_rounding(delta[i], rounding[i]))
+        {
+            return Err(AssemblyError::MotionLeftOut {
+                coordinate: self.coords[i].clone(),
+            });
         }
         for (argument, given) in [
             ("stiffness (rows)", stiffness.nrows()),
@@ -791,6 +900,7 @@ impl Projection {
         &self,
         moving: &TangentSum,
         delta: &[f64],
+        rounding: &[f64],
     ) -> Result<DMatrix<f64>, AssemblyError> {
         let mut out = DMatrix::zeros(self.directions, self.directions);
         for group in &self.groups {
@@ -801,7 +911,7 @@ impl Projection {
             }
         }
         if let Some(motion) = &self.motion {
-            self.add_motion(motion, &mut out, delta)?;
+            self.add_motion(motion, &mut out, delta, rounding)?;
         }
         Ok(out)
     }
@@ -867,7 +977,7 @@ pub fn stage_tangent(
     // ∂g/∂p at the fixed equilibrium (only the terms whose constants move have one), and
     // δq = −K⁻¹ ∂g/∂p
     let at_rest: Vec<Dual64> = equilibrium.iter().map(|&v| Dual64::from_re(v)).collect();
-    let mut rest = Sums::gradient_only(n);
+    let mut rest = Sums::gradient_with_magnitudes(n);
     let moving_balanced = balanced.iter().filter(|t| t.moves());
     if balance.frames.are_at(&at_rest) && balance.frames.have_bodies_of(system) {
         // the bodies' frames the balance evaluated at the equilibrium, shared by every term
@@ -887,9 +997,13 @@ pub fn stage_tangent(
             .solve(&(-&dg_free))
             .ok_or(AssemblyError::SingularEquilibrium)?
     };
+    let magnitudes_free = DVector::from_fn(free.len(), |a, _| rest.magnitudes[free[a]]);
+    let rounding_free = balance.motion_rounding(&delta_free, &magnitudes_free);
     let mut delta = vec![0.0; n];
+    let mut equilibrium_rounding = vec![0.0; n];
     for (a, &gi) in free.iter().enumerate() {
         delta[gi] = delta_free[a];
+        equilibrium_rounding[gi] = rounding_free[a];
     }
     // the equilibrium moving with the parameter
     let moving: Vec<Dual64> = equilibrium
@@ -924,11 +1038,12 @@ pub fn stage_tangent(
             };
             let moving_terms =
                 TangentSum::new(balanced.iter().chain(&plugins).filter(|t| t.moves()));
-            projection.derivative(&moving_terms, &delta)?
+            projection.derivative(&moving_terms, &delta, &equilibrium_rounding)?
         }
     };
     Ok(Some(StageTangent {
         equilibrium: delta,
+        equilibrium_rounding,
         stiffness,
         mass: mass_tangent(system, layout, &moving),
         residual,

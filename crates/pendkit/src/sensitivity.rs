@@ -20,9 +20,11 @@
 //! wᵀ dK w = vᵀ dK_eff v), for each mode and each pair within a cluster, split by the chain
 //! rule into the terms whose constants move with p at the fixed equilibrium and the
 //! equilibrium's motion through coefficients computed once per request
-//! ([`pendkit_assembly::Projection`]; computed beside the parameters' columns, which add
-//! the motion at their last step, as the nominal stage is computed beside the parameters'
-//! dual builds: [`pendkit_assembly::side_by_side`]). No step, no difference. A parameter nothing reads,
+//! ([`pendkit_assembly::Projection`]; the nominal stage is computed beside the parameters'
+//! dual builds, [`pendkit_assembly::side_by_side`]). The coefficients are computed after the
+//! columns, only along the coordinates some column's dq*/dp moves beyond its rounding
+//! bound ([`pendkit_assembly::Projection::motion_along`]): a symmetric suspension's lateral
+//! coordinates, which no parameter moves, cost nothing. No step, no difference. A parameter nothing reads,
 //! or only the damping's loss angles and the temperature read (no real multiplier, no
 //! switch), moves no mode: its derivatives are exactly 0, computed from nothing, and
 //! called exact. The route is closed (and the parameter goes the difference route below) for
@@ -648,6 +650,8 @@ struct Projections {
     stiffness: DMatrix<f64>,
     mass: DMatrix<f64>,
     equilibrium: Vec<f64>,
+    /// The rounding bound of each entry of `equilibrium`.
+    equilibrium_rounding: Vec<f64>,
 }
 
 /// The modes' projections Vᵀ(dK_eff/dp)V and Vᵀ(dM/dp)V, exactly (docs/exact-sensitivities.md,
@@ -718,31 +722,55 @@ fn exact_projections(
         mass: vectors.transpose() * &tangent.mass * vectors,
         stiffness: tangent.stiffness,
         equilibrium: tangent.equilibrium,
+        equilibrium_rounding: tangent.equilibrium_rounding,
     }))
 }
 
-/// The exact columns' mode derivatives: each column's projection with the equilibrium's
-/// `motion` added (the route's coefficients, computed beside the columns), then
-/// [`mode_derivatives`].
-fn finish_modes(
-    shared: &Shared,
-    motion: Option<&pendkit_assembly::Motion>,
-    columns: &mut [Option<Column>],
-) -> Result<(), Error> {
+/// The exact columns' mode derivatives: the coefficients of the equilibrium's motion along
+/// the coordinates some column's dq*/dp moves beyond rounding (the lateral ones of a
+/// symmetric suspension move no further: their coefficients are not computed), each
+/// column's projection with the motion added, then [`mode_derivatives`].
+fn finish_modes(shared: &Shared, columns: &mut [Option<Column>]) -> Result<(), Error> {
+    let pending: Vec<&Projections> = columns
+        .iter()
+        .flatten()
+        .filter_map(|c| c.pending.as_ref())
+        .collect();
+    let Some(first) = pending.first() else {
+        return Ok(());
+    };
+    let mut moved = vec![false; first.equilibrium.len()];
+    for p in &pending {
+        for (i, m) in moved.iter_mut().enumerate() {
+            *m |= pendkit_assembly::moves_beyond_rounding(
+                p.equilibrium[i],
+                p.equilibrium_rounding[i],
+            );
+        }
+    }
+    // a column took the exact route only where the route is open, and then the
+    // coefficients exist: stage_tangent and Projection::motion refuse the same models
+    let lost = || bad("the exact route lost the equilibrium's motion: no derivative");
+    let route = shared.exact.as_ref().ok_or_else(lost)?;
+    let motion = route
+        .projection
+        .motion_along(
+            &shared.base_point.result.system,
+            &route.balance,
+            shared.request.threads,
+            &moved,
+        )?
+        .ok_or_else(lost)?;
     for column in columns.iter_mut().flatten() {
         let Some(mut pending) = column.pending.take() else {
             continue;
         };
-        // a column took the exact route only where the route is open, and then the
-        // coefficients exist: stage_tangent and Projection::motion refuse the same models
-        let (Some(route), Some(motion)) = (&shared.exact, motion) else {
-            return Err(bad(
-                "the exact route lost the equilibrium's motion: no derivative",
-            ));
-        };
-        route
-            .projection
-            .add_motion(motion, &mut pending.stiffness, &pending.equilibrium)?;
+        route.projection.add_motion(
+            &motion,
+            &mut pending.stiffness,
+            &pending.equilibrium,
+            &pending.equilibrium_rounding,
+        )?;
         column.dfdp = mode_derivatives(shared, &pending.stiffness, &pending.mass)?;
     }
     Ok(())
@@ -1348,28 +1376,15 @@ pub fn sensitivities(case: &Case, request: &SensitivityRequest) -> Result<Sensit
         exact: exact_route,
         tangents: &tangents,
     };
-    // the columns beside the coefficients of the equilibrium's motion, which only their
-    // last step needs (finish_modes)
-    let (motion, columns) = side_by_side(
+    // the columns, then the coefficients of the equilibrium's motion along the coordinates
+    // their dq*/dp move (finish_modes)
+    let mut columns = in_parallel_with(
+        np,
         request.threads,
-        || match &shared.exact {
-            Some(route) => route
-                .projection
-                .motion(&base_point.result.system, &route.balance, request.threads)
-                .map_err(Error::from),
-            None => Ok(None),
-        },
-        || {
-            in_parallel_with(
-                np,
-                request.threads,
-                pendkit_model::DirectionScratch::default,
-                |scratch, j| column(&shared, j, scratch),
-            )
-        },
-    );
-    let mut columns = columns?;
-    finish_modes(&shared, motion?.as_ref(), &mut columns)?;
+        pendkit_model::DirectionScratch::default,
+        |scratch, j| column(&shared, j, scratch),
+    )?;
+    finish_modes(&shared, &mut columns)?;
     for (j, col) in columns.into_iter().enumerate() {
         let Some(col) = col else {
             exact[j] = request.modes && !request.differences;
