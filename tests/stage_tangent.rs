@@ -400,16 +400,19 @@ fn wrong_sizes_are_errors_naming_what_and_where() {
         .motion_along(&qs, &qb, 1, &moved)
         .expect("motion along")
         .expect("open");
+    let refused_without_z0 = |delta: &[f64], rounding: &[f64]| {
+        add_with(
+            &one,
+            &without_z0,
+            &mut DMatrix::zeros(2, 2),
+            delta,
+            rounding,
+        )
+    };
     let mut delta = zeros.clone();
     delta[z0] = 1e-3;
     let mut rounding = zeros.clone();
-    let e = add_with(
-        &one,
-        &without_z0,
-        &mut DMatrix::zeros(2, 2),
-        &delta,
-        &rounding,
-    );
+    let e = refused_without_z0(&delta, &rounding);
     assert!(
         e.contains("'z0'") && e.contains("left out") && !e.contains('\n'),
         "{e}"
@@ -420,13 +423,7 @@ fn wrong_sizes_are_errors_naming_what_and_where() {
             .is_ok()
     );
     delta[z0] = f64::NAN;
-    let e = add_with(
-        &one,
-        &without_z0,
-        &mut DMatrix::zeros(2, 2),
-        &delta,
-        &rounding,
-    );
+    let e = refused_without_z0(&delta, &rounding);
     assert!(e.contains("'z0'"), "{e}");
     match one.motion_along(&qs, &qb, 1, &moved[1..]) {
         Err(e) => assert!(e.to_string().contains("moved"), "{e}"),
