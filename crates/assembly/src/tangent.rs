@@ -600,9 +600,9 @@ pub struct Motion {
 }
 
 /// How many times its rounding bound ([`StageTangent::equilibrium_rounding`]) an entry of
-/// dq*/dp may be and still count as 0. The entries of the bundled quads and triples that
-/// are rounding (lateral coordinates no parameter moves) measure at up to ≈ 65 times the
-/// bound over every parameter, and most entries that move 10¹⁰ times it and more (in the
+/// dq*/dp may be and still count as 0. The entries of the quad and the triple that are
+/// rounding (lateral coordinates no parameter moves) measure at up to ≈ 65 times the bound
+/// over every parameter (below 10² on every bundled model), and most entries that move 10¹⁰ times it and more (in the
 /// beaded models, whose stiffness is ill-conditioned, a few entries fall between, 10²–10⁵
 /// times their bound). Leaving out a coordinate within the margin changes the result by at most this
 /// many times the rounding the coordinate's motion already carries, so the margin is kept
