@@ -1239,7 +1239,7 @@ pub fn build_with(
     model: &dyn Model,
     overrides: &Overrides,
 ) -> Result<(System, Resolved), BuildError> {
-    build_with_mechanical_reads(model, overrides).map(|(system, resolved, _)| (system, resolved))
+    build_observed(model, overrides, |_| ()).map(|(system, resolved, ())| (system, resolved))
 }
 
 /// [`build_with`], with the parameters the model's own build read (before the damping,
@@ -1249,6 +1249,23 @@ pub fn build_with_mechanical_reads(
     model: &dyn Model,
     overrides: &Overrides,
 ) -> Result<(System, Resolved, Vec<String>), BuildError> {
+    build_observed(model, overrides, |resolved| {
+        resolved
+            .read_names()
+            .into_iter()
+            .map(String::from)
+            .collect()
+    })
+}
+
+/// [`build_with`], with what `after_model` makes of the parameters right after the model's
+/// own build (before the built-in parts are attached): nothing for a plain build, which
+/// then allocates nothing for it.
+fn build_observed<T>(
+    model: &dyn Model,
+    overrides: &Overrides,
+    after_model: impl FnOnce(&Resolved) -> T,
+) -> Result<(System, Resolved, T), BuildError> {
     let defaults = Defaults::of(model)?;
     let (_, resolved) = parameters_with(&defaults, overrides)?;
     // checked before the model's build too, which a refused value then does not cost (the
@@ -1259,13 +1276,9 @@ pub fn build_with_mechanical_reads(
         built_in_settings(temperature, switch)?;
     }
     let system = model.build(&resolved)?;
-    let mechanical_reads = resolved
-        .read_names()
-        .into_iter()
-        .map(String::from)
-        .collect();
+    let observed = after_model(&resolved);
     let system = attach_to_build(system, &defaults, overrides, &resolved)?;
-    Ok((system, resolved, mechanical_reads))
+    Ok((system, resolved, observed))
 }
 
 /// The parameter that switches the "wire terms early" mode of [`attach_to_build`] (0 no,

@@ -429,8 +429,9 @@ impl Case {
     /// that nothing reads (neither the model's build, nor its damping, nor the definition
     /// of a parameter read) is an error: it would change nothing, silently.
     pub fn build(&self) -> Result<(System, Resolved), Error> {
-        self.build_with_mechanical_reads()
-            .map(|(system, resolved, _)| (system, resolved))
+        let (system, resolved) = pendkit_model::build_with(self.model, &self.overrides)?;
+        self.check_overrides_read(&resolved)?;
+        Ok((system, resolved))
     }
 
     /// [`Case::build`], with the parameters the model's own build read directly
@@ -440,7 +441,14 @@ impl Case {
     ) -> Result<(System, Resolved, Vec<String>), Error> {
         let (system, resolved, mechanical_reads) =
             pendkit_model::build_with_mechanical_reads(self.model, &self.overrides)?;
-        let read = self.parameters_read(&resolved)?;
+        self.check_overrides_read(&resolved)?;
+        Ok((system, resolved, mechanical_reads))
+    }
+
+    /// An override of a parameter that nothing read in the build that gave `resolved` is
+    /// an error.
+    fn check_overrides_read(&self, resolved: &Resolved) -> Result<(), Error> {
+        let read = self.parameters_read(resolved)?;
         if let Some((name, _)) = self
             .overrides
             .parameters
@@ -453,7 +461,7 @@ impl Case {
                 read: read.iter().cloned().collect::<Vec<_>>().join(" "),
             });
         }
-        Ok((system, resolved, mechanical_reads))
+        Ok(())
     }
 
     /// The parameters a build that gave `resolved` depends on: those it read, and what
