@@ -17,7 +17,7 @@ use pendkit_model::{Defaults, Model, Overrides, parameters_with};
 
 const PI: f64 = std::f64::consts::PI;
 
-fn model(name: &str) -> &'static dyn Model {
+fn model(name: &str) -> std::sync::Arc<dyn Model> {
     pendkit::find_model(name).unwrap()
 }
 
@@ -58,7 +58,7 @@ fn the_quads_are_the_published_2005_table() {
     assert!(published.len() > 60, "{} rows", published.len());
     for name in ["quad", "quad-lite", "quad-full", "quad-lateral", "quad-v5"] {
         let (params, values) =
-            parameters_with(&Defaults::of(model(name)).unwrap(), &Overrides::default()).unwrap();
+            parameters_with(&Defaults::of(&*model(name)).unwrap(), &Overrides::default()).unwrap();
         for (row, value, unit) in published
             .iter()
             .filter(|(n, _, _)| !DERIVED_OR_STRUCTURE.contains(&n.as_str()))
@@ -83,8 +83,11 @@ fn the_quads_are_the_published_2005_table() {
 #[test]
 fn the_materials_are_the_published_table() {
     let text = table("materials.csv");
-    let (_, values) =
-        parameters_with(&Defaults::of(model("quad")).unwrap(), &Overrides::default()).unwrap();
+    let (_, values) = parameters_with(
+        &Defaults::of(&*model("quad")).unwrap(),
+        &Overrides::default(),
+    )
+    .unwrap();
     let columns = ["rho", "C", "K", "alpha", "dlnE_dT", "phi", "Y", "dissdepth"];
     let mut checked = 0;
     for line in text.lines().filter(|l| !l.starts_with('#')).skip(1) {

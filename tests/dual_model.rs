@@ -368,6 +368,7 @@ fn every_bundled_model_differentiates_its_build_exactly() {
     let mut moved_poses = 0;
     let mut refused = Vec::new();
     for model in pendkit::models() {
+        let model = &*model;
         let defaults = pendkit_model::Defaults::of(model).unwrap();
         let (_, resolved) = pendkit_model::parameters_with(&defaults, &Default::default()).unwrap();
         let names: Vec<(String, f64)> = resolved.iter().map(|(n, v)| (n.to_string(), v)).collect();
@@ -465,7 +466,7 @@ fn a_driven_body_placed_by_a_parameter_has_no_exact_derivative() {
     assert!(text.contains("h_support\"]"), "the edit applies");
     let case = pendkit::Case::from_text(std::path::Path::new("moved-support.toml"), &text)
         .expect("the file builds");
-    let e = pendkit_model::build_tangent(case.model, &case.overrides, "h_support")
+    let e = pendkit_model::build_tangent(&*case.model, &case.overrides, "h_support")
         .expect_err("no exact derivative")
         .to_string();
     assert!(
@@ -473,7 +474,7 @@ fn a_driven_body_placed_by_a_parameter_has_no_exact_derivative() {
         "{e}"
     );
     // the fibre length still has one
-    assert!(pendkit_model::build_tangent(case.model, &case.overrides, "l_fibre").is_ok());
+    assert!(pendkit_model::build_tangent(&*case.model, &case.overrides, "l_fibre").is_ok());
     let mut request = pendkit::SensitivityRequest::modes(pendkit::Stage::S2);
     request.parameters = Some(vec!["h_support".into(), "l_fibre".into()]);
     let s = pendkit::sensitivities(&case, &request).expect("sensitivities");
@@ -494,6 +495,7 @@ fn a_chunk_build_carries_each_parameter_as_its_own_build_does() {
     let mut carried = 0;
     let mut refused = 0;
     for model in pendkit::models() {
+        let model = &*model;
         let defaults = pendkit_model::Defaults::of(model).unwrap();
         let (_, resolved) = pendkit_model::parameters_with(&defaults, &Default::default()).unwrap();
         let names: Vec<String> = resolved.iter().map(|(n, _)| n.to_string()).collect();

@@ -263,11 +263,11 @@ fn extreme_values_in_messages_are_short_and_say_what_is_wrong() {
             "l1=1e-300",
             "length 1e-300 m does not reach across 0.14 m",
         ),
-        // ρ π r² with the fibre's r = 0.2 mm: −1e300 · 1.2566e-7 kg/m
+        // a density the material's domain refuses, whether or not a part reads it
         (
             "quad",
             "silica_rho=-1e300",
-            "linear density is negative (-1.2566",
+            "density = -1e300 kg/m^3 is outside its domain",
         ),
         (
             "quad",
@@ -327,7 +327,7 @@ fn extreme_values_in_messages_are_short_and_say_what_is_wrong() {
 fn a_bad_damping_field_names_the_argument_and_the_field() {
     let e = build_error("quad", &["damping.fibre_stretch.phi=1"]);
     assert!(
-        e.starts_with("--set 'damping.fibre_stretch.phi=1': unknown damping field 'phi'"),
+        e.starts_with("override 'damping.fibre_stretch.phi': unknown damping field 'phi'"),
         "{e}"
     );
     assert!(!e.contains("expected NAME=EXPR"), "{e}");
@@ -337,7 +337,7 @@ fn a_bad_damping_field_names_the_argument_and_the_field() {
         let e = build_error("quad", &[set]);
         assert_eq!(
             e,
-            format!("--set '{set}': expected NAME=EXPR or damping.<tag>.<field>=EXPR")
+            format!("override '{set}': expected NAME=EXPR or damping.<tag>.<field>=EXPR")
         );
     }
 }
@@ -358,4 +358,114 @@ fn a_file_without_bodies_or_a_model_says_which_it_lacks() {
             "{text:?}: {e}"
         );
     }
+}
+
+/// Typed overrides: a value is the parameter's exact f64, a value that is not a finite number
+/// is refused naming the parameter, a parameter or damping field given twice in one list is
+/// refused, and a damping field outside the schema names the fields there are.
+#[test]
+fn typed_overrides_are_exact_and_refused_in_the_librarys_own_terms() {
+    use pendkit::Override;
+    // 0.1 + 0.2 is not 0.3 in binary: its text must read back as the same f64
+    let value = 0.1 + 0.2;
+    let case = Case::model("pendulum")
+        .unwrap()
+        .with([Override::value("m1", 40.0 * value)])
+        .unwrap();
+    let (_, resolved) = case.build().unwrap();
+    assert_eq!(
+        resolved.get("m1").unwrap().to_bits(),
+        (40.0 * value).to_bits()
+    );
+    for bad in [f64::NAN, f64::INFINITY] {
+        let e = Case::model("pendulum")
+            .unwrap()
+            .with([Override::value("m1", bad)])
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(
+            e.starts_with("override 'm1': ") && e.contains("not a finite number"),
+            "{e}"
+        );
+    }
+    let twice = Case::model("pendulum").unwrap().with([
+        Override::value("m1", 40.0),
+        Override::expression("m1", "41"),
+    ]);
+    assert_eq!(
+        twice.err().unwrap().to_string(),
+        "'m1' is overridden twice: give each parameter or damping field once"
+    );
+    let e = Case::model("pendulum")
+        .unwrap()
+        .with([Override::damping("fibre_bending", "phi", "1e-7")])
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(
+        e.contains("unknown damping field 'phi'") && e.contains("thermoelastic.tau, temperature"),
+        "{e}"
+    );
+}
+
+/// A parameter's declared `domain` is checked for its default (at the file's line) and for
+/// every override, whether or not the command reads it; `params` lists it.
+#[test]
+fn a_declared_parameter_domain_is_checked_for_the_default_and_every_override() {
+    let file = |value: &str| {
+        format!(
+            r#"
+[parameters]
+m = {{ value = 40, unit = "kg", domain = "> 0", description = "the bob" }}
+unused = {{ value = {value}, unit = "K", domain = "> 0", description = "read by nothing" }}
+[materials.silica]
+youngs_modulus = 72e9
+poisson_ratio = 0.17
+[bodies.support]
+coordinates = "00"
+driven = true
+[bodies.bob]
+coordinates = "1"
+dof = "xyz"
+mass = "m"
+[stages.bob]
+from = "support"
+[stages.bob.fibres]
+upper = {{ at = [0.005, 0.17, 0], mirror = ["y", "x"] }}
+lower = {{ at = [0.005, 0.17, 0], mirror = ["y", "x"], hinged = 1 }}
+length = 0.6
+radius = 0.2e-3
+material = "silica"
+"#
+        )
+    };
+    let path = std::path::Path::new("bob.toml");
+    // the default outside its own domain: the file's error, at the parameter's line
+    let e = Case::from_text(path, &file("-3"))
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(
+        e.starts_with("bob.toml:4: parameters.unused: ") && e.contains("must be > 0"),
+        "{e}"
+    );
+    let case = Case::from_text(path, &file("3")).unwrap();
+    let refused = |set: &str| {
+        case.clone()
+            .with_sets(&[set.to_string()])
+            .and_then(|c| c.build())
+            .err()
+            .unwrap()
+            .to_string()
+    };
+    assert_eq!(
+        refused("m=0"),
+        "parameter 'm' = 0 kg: outside its declared domain: must be > 0"
+    );
+    // a parameter nothing reads is checked all the same (its domain before its being unread)
+    assert!(refused("unused=-1").contains("outside its declared domain"));
+    let rows = pendkit::parameter_table(&case).unwrap();
+    let m = rows.iter().find(|r| r.name == "m").unwrap();
+    assert_eq!((m.unit.as_str(), m.domain.as_str()), ("kg", "> 0"));
 }

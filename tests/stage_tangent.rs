@@ -112,7 +112,7 @@ fn check(spec: &str, sets: &[&str], stage: Stage, parameters: &[&str]) {
     for &name in parameters {
         let p0 = resolved.get(name).expect("parameter");
         let h = 1e-4 * p0.abs();
-        let dual = pendkit_model::build_tangent(case.model, &case.overrides, name)
+        let dual = pendkit_model::build_tangent(&*case.model, &case.overrides, name)
             .unwrap_or_else(|e| panic!("{spec} {name}: no exact build: {e}"));
         let tangent = |along| {
             stage_tangent(
@@ -283,7 +283,7 @@ fn wrong_sizes_are_errors_naming_what_and_where() {
     };
     let (_, pa, pb) = solved(&pendulum);
     let (qs, qa, qb) = solved(&quad);
-    let dual = pendkit_model::build_tangent(quad.model, &quad.overrides, "m1").expect("dual");
+    let dual = pendkit_model::build_tangent(&*quad.model, &quad.overrides, "m1").expect("dual");
     let q = &qa.equilibrium.coords;
     let err = |r: Result<Option<pendkit_assembly::StageTangent>, _>| match r {
         Err(e) => pendkit_assembly::AssemblyError::to_string(&e),
@@ -506,7 +506,7 @@ fn dual_terms_at_rest(
 ) {
     let (system, _) = case.build().expect("build");
     let at_rest = stage_2_at_rest(&system);
-    let dual = pendkit_model::build_tangent(case.model, &case.overrides, name)
+    let dual = pendkit_model::build_tangent(&*case.model, &case.overrides, name)
         .unwrap_or_else(|e| panic!("{name}: {e}"));
     let terms = tangent_terms_to_stage_2(&pendkit_energy::Reference::new(&dual, &at_rest));
     (dual, at_rest, terms)
@@ -612,7 +612,7 @@ fn terms_built_on_another_builds_local_frames_are_the_same_terms() {
     let first = tangent_terms_to_stage_2(&Reference::new(&lifted, &at_rest));
     let given: Vec<_> = first.iter().map(|t| t.local_frames().clone()).collect();
     for name in ["m3", "l1", "nn0"] {
-        let dual = pendkit_model::build_tangent(case.model, &case.overrides, name)
+        let dual = pendkit_model::build_tangent(&*case.model, &case.overrides, name)
             .unwrap_or_else(|e| panic!("{name}: {e}"));
         let reference = Reference::new(&dual, &at_rest);
         let fresh = tangent_terms_to_stage_2(&reference);
@@ -846,6 +846,7 @@ fn a_moving_only_reference_leaves_out_no_term_that_moves() {
             .collect()
     };
     for model in pendkit::models() {
+        let model = &*model;
         let (system, resolved) =
             pendkit_model::build_with(model, &Default::default()).expect("build");
         let at_rest = stage_2_at_rest(&system);
@@ -920,7 +921,7 @@ fn the_symmetric_quads_lateral_motion_is_rounding() {
     let mut moves_far = std::collections::BTreeSet::new();
     for (name, _) in resolved.iter() {
         // a parameter without a dual build (a count, a switch) has no exact route
-        let Ok(dual) = pendkit_model::build_tangent(case.model, &case.overrides, name) else {
+        let Ok(dual) = pendkit_model::build_tangent(&*case.model, &case.overrides, name) else {
             continue;
         };
         let Some(t) = stage_tangent(

@@ -43,8 +43,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let root = tree::parse(&Source::new(repo_path.as_str(), None, text))?;
         let packed_path = out.join(format!("{dir}-{name}.packed"));
         fs::write(&packed_path, packed::pack(&root))?;
+        // the file's own `summary`, so that listing the models reads none of them
+        let summary = match &root.value {
+            tree::Value::Table(t) => match t.get("summary").map(|n| &n.value) {
+                Some(tree::Value::Str(s)) => s.clone(),
+                _ => String::new(),
+            },
+            _ => String::new(),
+        };
         table += &format!(
-            "    File {{ name: {name:?}, file: BundledFile {{ path: {repo_path:?}, \
+            "    File {{ name: {name:?}, summary: {summary:?}, file: BundledFile {{ path: {repo_path:?}, \
              text: include_str!({:?}), packed: include_str!({:?}) }} }},\n",
             path.display().to_string(),
             packed_path.display().to_string(),

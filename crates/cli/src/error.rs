@@ -8,8 +8,9 @@ use pendkit_plot::PlotError;
 /// Why a command failed.
 #[derive(Debug, thiserror::Error)]
 pub enum CliError {
-    /// The calculation failed.
-    #[error(transparent)]
+    /// The calculation failed (the library's message, with the overrides named as the
+    /// `--set` arguments that gave them).
+    #[error("{}", in_flag_terms(.0))]
     Pendkit(#[from] pendkit::Error),
     /// A figure could not be drawn or written.
     #[error("--plot: {0}")]
@@ -33,6 +34,21 @@ pub enum CliError {
         /// The underlying error.
         source: std::io::Error,
     },
+}
+
+/// The library's error as the command line says it: an override is a `--set` argument.
+fn in_flag_terms(e: &pendkit::Error) -> String {
+    use pendkit::Error;
+    match e {
+        Error::OverrideSyntax(text) => {
+            format!("--set '{text}': expected NAME=EXPR or damping.<tag>.<field>=EXPR")
+        }
+        Error::OverrideRefused { key, message } => format!("--set {key}=...: {message}"),
+        Error::OverriddenTwice(key) => {
+            format!("--set '{key}' is given twice: give each parameter or damping field once")
+        }
+        other => other.to_string(),
+    }
 }
 
 impl CliError {

@@ -49,6 +49,20 @@ pub fn run(a: Args) -> Result<String, CliError> {
         per_term: a.breakdown && !a.csv,
     };
     let noise = run.result.noise_with(&a.output, &freqs, &options)?;
+    // lossy parts that leave this output still: a column of exact zeros is a result, but
+    // not one to print without saying why
+    if noise.total.iter().all(|&psd| psd == 0.0) {
+        eprintln!(
+            "warning: the thermal noise of {} is exactly 0 at every frequency: no lossy term moves it (the model's tags: {})",
+            a.output,
+            noise
+                .tags
+                .iter()
+                .map(|(tag, _)| tag.as_str())
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+    }
     if let Some(path) = &a.plot {
         plotting::save(
             &plotting::noise_budget(&run, &a.output, &freqs, &noise),

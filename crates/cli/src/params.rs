@@ -59,6 +59,9 @@ pub fn run(a: Args) -> Result<String, CliError> {
         if r.definition.trim().parse::<f64>().is_err() {
             let _ = writeln!(out, "    = {}", r.definition);
         }
+        if !r.domain.is_empty() {
+            let _ = writeln!(out, "    domain: {}", r.domain);
+        }
         if !r.read_by.is_empty() {
             let _ = writeln!(out, "    read by: {}", r.read_by.join(", "));
         }

@@ -302,12 +302,34 @@ fn noise_names_the_dominant_tag_or_with_breakdown_the_dominant_term() {
     );
     let by_term = table(&["--breakdown"]);
     assert!(by_term.contains("wire-bending wn"), "{by_term}");
-    // a lossless model (the double pendulum has no damping): a zero PSD, no share dominates
+    // the double pendulum's lossy terms leave x1 still (hinged wires: bending stores
+    // nothing; horizontal motion stretches no wire to first order): a zero PSD, no share
+    // dominates, and stderr says why the column is zero
     let (ok, out, stderr) =
         pendkit(&["noise", "double-pendulum", "--output", "x1", "--freqs", "1"]);
     assert!(ok, "{stderr}");
     let row = out.lines().nth(2).unwrap();
     assert!(row.ends_with("0.000000e0  -"), "{row}");
+    assert!(
+        stderr.contains("exactly 0 at every frequency: no lossy term moves it"),
+        "{stderr}"
+    );
+    // a model with no loss at all has no thermal noise: an error naming the lossless tags
+    let (ok, _, stderr) = pendkit(&[
+        "noise",
+        "pendulum",
+        "--output",
+        "x1",
+        "--freqs",
+        "1",
+        "--set",
+        "phi_fibre=0",
+    ]);
+    assert!(!ok);
+    assert!(
+        stderr.contains("no loss on the tags fibre_bending, fibre_stretch, fibre_torsion"),
+        "{stderr}"
+    );
 }
 
 #[test]

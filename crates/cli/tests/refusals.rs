@@ -107,7 +107,11 @@ fn negative_loss_and_non_finite_damping_are_refused_naming_the_tag() {
             "--set",
             "damping.fibre_stretch.structural=-1e-7",
         ],
-        &["fibre_stretch", "negative loss"],
+        &[
+            "fibre_stretch",
+            "structural = -1e-7 rad is outside its domain",
+            ">= 0",
+        ],
     );
     refused(
         &[
@@ -128,13 +132,20 @@ fn negative_loss_and_non_finite_damping_are_refused_naming_the_tag() {
         let mut args = vec!["sensitivity", "quad", "--freqs", "1", "--parameters", "m3"];
         args.extend_from_slice(response);
         args.extend_from_slice(&["--set", "damping.fibre_stretch.structural=-1e-7"]);
-        refused(&args, &["fibre_stretch", "at 1 Hz", "negative loss"]);
+        refused(
+            &args,
+            &[
+                "fibre_stretch",
+                "structural = -1e-7 rad is outside its domain",
+            ],
+        );
     }
 }
 
-/// A temperature so high that the fibres' thermoelastic loss overflows makes the damping
-/// multiplier 1 + inf i at every frequency of the sweep: the sweep names the tag and the
-/// frequency, as the state-space export already did, instead of reporting a singular solve.
+/// A temperature so high that the fibres' thermoelastic loss overflows would make the
+/// damping multiplier 1 + inf i at every frequency of the sweep: its Δ is not finite, which
+/// the damping's domain check refuses when the model is built, naming the tag and the field,
+/// instead of a singular solve being reported.
 #[test]
 fn damping_that_overflows_at_a_sweep_frequency_is_named_not_called_singular() {
     for command in [
@@ -145,7 +156,15 @@ fn damping_that_overflows_at_a_sweep_frequency_is_named_not_called_singular() {
     ] {
         let mut args = command.to_vec();
         args.extend(["--set", "temperature=1e300"]);
-        let message = refused(&args, &["damping tag", "fibre_bending", "not finite"]);
+        // refused where the damping is built, before any sweep: the tag and the field
+        let message = refused(
+            &args,
+            &[
+                "fibre_bending",
+                "thermoelastic.delta = inf",
+                "not a finite number",
+            ],
+        );
         assert!(!message.contains("singular"), "{message}");
     }
 }
@@ -428,7 +447,7 @@ fn poisson_ratio_outside_its_physical_range_is_refused() {
         &[
             "pendulum.toml",
             "poisson_ratio",
-            "Poisson's ratio 1e300",
+            "poisson_ratio = 1e300 is outside its domain",
             "(-1, 0.5)",
         ],
     );
@@ -731,4 +750,62 @@ fn negative_stiffness_near_the_bottom_of_f64_is_unstable_not_a_hang() {
         &["modes", "toy", "--set", "k2=-1e-305"],
         &["unstable", "e-folding time 3.162e152 s"],
     );
+}
+
+/// A physically impossible value is refused by every command, whether or not the command
+/// reads it (`modes` reads no heat capacity), naming the field, its value with its unit and
+/// its domain: the material constants and damping fields of the schema
+/// (`pendkit_model::schema`), and a parameter's own declared domain.
+#[test]
+fn impossible_values_are_refused_by_every_command_whether_or_not_it_reads_them() {
+    let report = std::env::temp_dir().join(format!("pendkit-impossible-{}", std::process::id()));
+    let report = report.to_str().unwrap();
+    let commands: [&[&str]; 9] = [
+        &["modes", "quad"],
+        &[
+            "tf", "quad", "--input", "x00", "--output", "x3", "--points", "3",
+        ],
+        &["noise", "quad", "--output", "x3", "--points", "3"],
+        &["params", "quad"],
+        &["sweep", "quad", "--vary", "m3=39:40:2", "--modes"],
+        &["sensitivity", "quad", "--parameters", "m3"],
+        &["bench", "quad", "--repeat", "1"],
+        &["report", "quad", "--out", report, "--points", "3"],
+        &["ss", "quad", "--out", "never-written.json"],
+    ];
+    let impossible = [
+        (
+            "steel_C=-486",
+            "specific_heat = -486 J/(kg K) is outside its domain",
+        ),
+        ("steel_rho=0", "density = 0 kg/m^3 is outside its domain"),
+        (
+            "steel_phi=-2e-4",
+            "loss_angle = -0.0002 rad is outside its domain",
+        ),
+        (
+            "silica_K=-1",
+            "conductivity = -1 W/(m K) is outside its domain",
+        ),
+        ("nu_steel=0.5", "poisson_ratio = 0.5 is outside its domain"),
+        (
+            "maraging_Y=0",
+            "youngs_modulus = 0 Pa is outside its domain",
+        ),
+        (
+            "damping.fibre_bending.temperature=0",
+            "temperature = 0 K is outside its domain",
+        ),
+        (
+            "damping.w1_bending.viscous=-1",
+            "viscous = -1 rad is outside its domain",
+        ),
+    ];
+    for command in commands {
+        for (set, words) in impossible {
+            let args = [command, &["--set", set]].concat();
+            refused(&args, &[words, "must be"]);
+        }
+    }
+    assert!(!std::path::Path::new("never-written.json").exists());
 }

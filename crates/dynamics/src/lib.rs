@@ -116,6 +116,18 @@ pub enum DynamicsError {
     /// A temperature that is not positive and finite.
     #[error("temperature must be positive and finite (got {0} K)")]
     Temperature(f64),
+    /// Thermal noise of a model whose every tag is lossless: it would be exactly zero at
+    /// every frequency, which would look like an answer.
+    #[error(
+        "thermal noise of {output} is exactly 0 at every frequency: no loss on the tags {}; give a loss in [damping.<tag>] (structural, viscous, thermoelastic, imag) or a material's loss_angle",
+        if lossless.is_empty() { "(the model has none)".to_string() } else { lossless.join(", ") }
+    )]
+    NoLoss {
+        /// The output, as the caller names it (or `the output`).
+        output: String,
+        /// The model's tags, none of which carries a loss.
+        lossless: Vec<String>,
+    },
     /// An index (of a variable, float or parameter) beyond the model's.
     #[error("{what} index {index} is out of range (the model has {len})")]
     Index {

@@ -25,6 +25,7 @@ use std::path::{Path, PathBuf};
 
 use pendkit_model::{DampingSpec, Overrides};
 use toml::Spanned;
+use toml::de::{DeTable, DeValue};
 
 /// A parsed case file.
 #[derive(Clone, Debug, Default)]
@@ -59,30 +60,22 @@ pub enum FileError {
 
 /// Form of a case file: `model = "name"`, a `[parameters]` table whose values are numbers
 /// or expression strings (including `scale(x)` and `increment(x)`), and `[damping.<tag>]`
-/// tables with `real`, `structural`, `viscous`, `imag` (expressions, `f` in Hz allowed in
-/// `real` and `imag`) and `thermoelastic = [delta, tau]`. Values keep their spans, so that a
-/// number is read from the literal the file writes and every error names its line.
+/// tables of the fields of [`pendkit_model::schema::DAMPING_FIELDS`] (expressions; `f` in
+/// Hz allowed in `real` and `imag`; `thermoelastic` the pair `[delta, tau]` or the table
+/// `{ delta, tau }`, also written as dotted keys `thermoelastic.tau = ...`). Serde checks
+/// the form; the values are then read from the file's own parse ([`DeTable`]), which keeps
+/// every value's span, so that a number is read from the literal the file writes and every
+/// error names its line.
 #[derive(serde::Deserialize)]
 #[serde(deny_unknown_fields)]
 struct CaseToml {
     model: String,
     #[serde(default)]
     description: Option<String>,
-    #[serde(default)]
-    parameters: BTreeMap<String, Spanned<toml::Value>>,
-    #[serde(default)]
-    damping: BTreeMap<String, DampingToml>,
-}
-
-/// A `[damping.<tag>]` table of a case file.
-#[derive(serde::Deserialize)]
-#[serde(deny_unknown_fields)]
-struct DampingToml {
-    real: Option<Spanned<toml::Value>>,
-    structural: Option<Spanned<toml::Value>>,
-    viscous: Option<Spanned<toml::Value>>,
-    imag: Option<Spanned<toml::Value>>,
-    thermoelastic: Option<[Spanned<toml::Value>; 2]>,
+    #[serde(default, rename = "parameters")]
+    _parameters: BTreeMap<String, toml::Value>,
+    #[serde(default, rename = "damping")]
+    _damping: BTreeMap<String, toml::Table>,
 }
 
 /// The 1-based line of byte offset `offset` of `text`.
@@ -93,11 +86,7 @@ fn line_of(text: &str, offset: usize) -> usize {
 /// A TOML number or string of the case file `text` as expression text; `what` names the
 /// field. A float is read from the literal the file writes (TOML parsers round it to an
 /// `f64` first, so `1e-400` would arrive as 0): one that an `f64` cannot hold is refused here.
-fn expression_text(
-    text: &str,
-    what: &str,
-    value: &Spanned<toml::Value>,
-) -> Result<String, FileError> {
+fn expression_text(text: &str, what: &str, value: &Spanned<DeValue>) -> Result<String, FileError> {
     let error = |message: String| FileError::Parse {
         message: format!(
             "line {}: {what}: {message}",
@@ -105,15 +94,14 @@ fn expression_text(
         ),
     };
     match value.get_ref() {
-        toml::Value::String(s) => Ok(s.clone()),
-        toml::Value::Integer(i) => Ok(i.to_string()),
+        DeValue::String(s) => Ok(s.to_string()),
+        DeValue::Integer(i) => i64::from_str_radix(&i.as_str().replace('_', ""), i.radix())
+            .map(|i| i.to_string())
+            .map_err(|e| error(format!("integer {}: {e}", i.as_str()))),
         // the literal as written (checked by `check_float_literals`): the parsed f64 of
         // `0e-999` or `1.5e-7` prints differently, and that of `nan` means nothing
-        toml::Value::Float(f) => {
-            let literal = text
-                .get(value.span())
-                .map(|l| l.replace('_', ""))
-                .unwrap_or_else(|| format!("{f:e}"));
+        DeValue::Float(f) => {
+            let literal = f.as_str().replace('_', "");
             pendkit_expr::number_literal(&literal).map_err(|e| error(e.to_string()))?;
             Ok(literal.trim_start_matches('+').to_string())
         }
@@ -128,7 +116,6 @@ fn expression_text(
 /// `f64` cannot hold: the TOML parser reads `1e-400` as 0 and refuses `1e400` without
 /// naming the field, so the literals are checked as written, before the values are read.
 fn check_float_literals(text: &str) -> Result<(), FileError> {
-    use toml::de::{DeTable, DeValue};
     fn walk(text: &str, path: &str, value: &Spanned<DeValue>) -> Result<(), FileError> {
         match value.get_ref() {
             DeValue::Float(f) => {
@@ -179,45 +166,82 @@ pub fn parse_case(text: &str) -> Result<CaseFile, FileError> {
             message: format!("{at}{}", e.message().trim()),
         }
     })?;
+    // serde accepted the form: the same text parses again, now keeping every value's span
+    let root = DeTable::parse(text).map_err(|e| FileError::Parse {
+        message: e.message().trim().to_string(),
+    })?;
+    let section = |key: &str| -> Vec<(&str, &Spanned<DeValue>)> {
+        let mut entries: Vec<_> = match root.get_ref().get(key).map(Spanned::get_ref) {
+            Some(DeValue::Table(table)) => table
+                .iter()
+                .map(|(name, value)| (name.get_ref().as_ref(), value))
+                .collect(),
+            _ => Vec::new(),
+        };
+        // in file order
+        entries.sort_by_key(|(_, value)| value.span().start);
+        entries
+    };
     let mut overrides = Overrides::default();
-    // in file order (the map is sorted by name)
-    let mut parameters: Vec<_> = file.parameters.iter().collect();
-    parameters.sort_by_key(|(_, value)| value.span().start);
-    for (name, value) in parameters {
+    for (name, value) in section("parameters") {
         let expression = expression_text(text, &format!("parameters.{name}"), value)?;
-        overrides.parameters.push((name.clone(), expression));
+        overrides.parameters.push((name.to_string(), expression));
     }
-    for (tag, d) in &file.damping {
-        let field = |name: &str, v: &Option<Spanned<toml::Value>>| {
-            v.as_ref()
-                .map(|v| expression_text(text, &format!("damping.{tag}.{name}"), v))
-                .transpose()
-        };
-        let thermoelastic = match &d.thermoelastic {
-            None => None,
-            Some([delta, tau]) => {
-                let what = format!("damping.{tag}.thermoelastic");
-                Some((
-                    expression_text(text, &what, delta)?,
-                    expression_text(text, &what, tau)?,
-                ))
-            }
-        };
-        let spec = DampingSpec {
-            real: field("real", &d.real)?,
-            structural: field("structural", &d.structural)?,
-            viscous: field("viscous", &d.viscous)?,
-            imag: field("imag", &d.imag)?,
-            thermoelastic,
-            ..Default::default()
-        };
-        overrides.damping.insert(tag.clone(), spec);
+    for (tag, table) in section("damping") {
+        if let DeValue::Table(table) = table.get_ref() {
+            overrides
+                .damping
+                .insert(tag.to_string(), damping_spec(text, tag, table)?);
+        }
     }
     Ok(CaseFile {
         model: file.model,
         description: file.description,
         overrides,
     })
+}
+
+/// The damping fields of the case file `text`'s table `[damping.<tag>]`, each set through
+/// [`DampingSpec::set_field`] (the one list of fields and their names).
+fn damping_spec(text: &str, tag: &str, table: &DeTable) -> Result<DampingSpec, FileError> {
+    let mut spec = DampingSpec::default();
+    let mut set = |name: &str, value: &Spanned<DeValue>| {
+        let expression = expression_text(text, &format!("damping.{tag}.{name}"), value)?;
+        spec.set_field(name, &expression)
+            .map_err(|message| FileError::Parse {
+                message: format!(
+                    "line {}: damping.{tag}: {message}",
+                    line_of(text, value.span().start)
+                ),
+            })
+    };
+    for (name, value) in table {
+        let name: &str = name.get_ref();
+        match (name, value.get_ref()) {
+            ("thermoelastic", DeValue::Array(pair)) => match &pair[..] {
+                [delta, tau] => {
+                    set("thermoelastic.delta", delta)?;
+                    set("thermoelastic.tau", tau)?;
+                }
+                _ => {
+                    return Err(FileError::Parse {
+                        message: format!(
+                            "line {}: damping.{tag}.thermoelastic: expected [delta, tau], got {} entries",
+                            line_of(text, value.span().start),
+                            pair.len()
+                        ),
+                    });
+                }
+            },
+            ("thermoelastic", DeValue::Table(halves)) => {
+                for (half, entry) in halves {
+                    set(&format!("thermoelastic.{}", half.get_ref()), entry)?;
+                }
+            }
+            _ => set(name, value)?,
+        }
+    }
+    Ok(spec)
 }
 
 /// Whether `text` is a case file (a TOML table with a top-level `model`) rather than a
@@ -273,10 +297,8 @@ mod tests {
         .unwrap();
         let d = &c.overrides.damping["w2_bending"];
         assert_eq!(d.structural.as_deref(), Some("0"));
-        assert_eq!(
-            d.thermoelastic,
-            Some(("1e-3".to_string(), "0.5".to_string()))
-        );
+        assert_eq!(d.thermoelastic_delta.as_deref(), Some("1e-3"));
+        assert_eq!(d.thermoelastic_tau.as_deref(), Some("0.5"));
         assert_eq!(d.real, None);
     }
 

@@ -4,10 +4,11 @@
 use std::sync::OnceLock;
 
 use pendkit_energy::TagDamping;
-use pendkit_expr::{Expr, Slot, number_text, parse};
+use pendkit_expr::{Expr, Slot, parse};
 use pendkit_params::Resolved;
 
 use crate::BuildError;
+use crate::schema::{self, DAMPING_FIELDS, DAMPING_TEMPERATURE, Domain, Field};
 
 /// The damping of one tag: each field an expression over the model's parameters; `real`
 /// and `imag` may also use `f` (Hz). The imaginary multiplier is the sum of the parts given.
@@ -20,8 +21,11 @@ pub struct DampingSpec {
     /// Viscous loss: ε'' = viscous · f, i.e. the loss angle at 1 Hz (for a spring k with
     /// dashpot c, viscous = 2π c / k).
     pub viscous: Option<String>,
-    /// Thermoelastic (Δ, τ in s): ε'' = Δ ωτ / (1 + (ωτ)²), ω = 2π f.
-    pub thermoelastic: Option<(String, String)>,
+    /// Thermoelastic relaxation strength Δ: ε'' = Δ ωτ / (1 + (ωτ)²), ω = 2π f; 0 when
+    /// only τ is given.
+    pub thermoelastic_delta: Option<String>,
+    /// Thermoelastic relaxation time τ (s); 0 when only Δ is given.
+    pub thermoelastic_tau: Option<String>,
     /// Any further ε''(f).
     pub imag: Option<String>,
     /// Temperature (K) of the terms with this tag for thermal noise, an expression over the
@@ -38,53 +42,74 @@ impl DampingSpec {
         }
     }
 
-    /// Replaces the fields that `other` sets.
-    pub fn merge(&mut self, other: &DampingSpec) {
-        let pick = |a: &mut Option<String>, b: &Option<String>| {
-            if b.is_some() {
-                a.clone_from(b);
-            }
-        };
-        pick(&mut self.real, &other.real);
-        pick(&mut self.structural, &other.structural);
-        pick(&mut self.viscous, &other.viscous);
-        pick(&mut self.imag, &other.imag);
-        pick(&mut self.temperature, &other.temperature);
-        if other.thermoelastic.is_some() {
-            self.thermoelastic.clone_from(&other.thermoelastic);
+    /// Thermoelastic damping with strength `delta` and relaxation time `tau` (s), both
+    /// expressions.
+    pub fn thermoelastic(delta: &str, tau: &str) -> Self {
+        DampingSpec {
+            thermoelastic_delta: Some(delta.to_string()),
+            thermoelastic_tau: Some(tau.to_string()),
+            ..Default::default()
         }
     }
 
-    /// Sets one field by name (`real`, `structural`, `viscous`, `imag`,
-    /// `thermoelastic.delta`, `thermoelastic.tau`, `temperature`), as
-    /// `--set damping.<tag>.<field>=...` does.
-    pub fn set_field(&mut self, field: &str, text: &str) -> Result<(), String> {
-        let t = Some(text.to_string());
-        match field {
-            "real" => self.real = t,
-            "structural" => self.structural = t,
-            "viscous" => self.viscous = t,
-            "imag" => self.imag = t,
-            "temperature" => self.temperature = t,
-            "thermoelastic.delta" | "thermoelastic.tau" => {
-                let (mut d, mut tau) = self
-                    .thermoelastic
-                    .clone()
-                    .unwrap_or(("0".into(), "0".into()));
-                if field.ends_with("delta") {
-                    d = text.to_string();
-                } else {
-                    tau = text.to_string();
-                }
-                self.thermoelastic = Some((d, tau));
-            }
-            _ => {
-                return Err(format!(
-                    "unknown damping field '{field}' (real, structural, viscous, imag, thermoelastic.delta, thermoelastic.tau, temperature)"
-                ));
-            }
+    /// Replaces the fields that `other` sets, each on its own (a case that sets only
+    /// `thermoelastic.tau` keeps the model's Δ).
+    pub fn merge(&mut self, other: &DampingSpec) {
+        for (field, text) in other.fields() {
+            *self.slot(field.name) = Some(text.to_string());
         }
-        Ok(())
+    }
+
+    /// Sets one field by its name in [`DAMPING_FIELDS`] (`real`, `structural`, `viscous`,
+    /// `imag`, `thermoelastic.delta`, `thermoelastic.tau`, `temperature`): what case files,
+    /// suspension files and `--set damping.<tag>.<field>=...` all call.
+    pub fn set_field(&mut self, field: &str, text: &str) -> Result<(), String> {
+        match schema::find(DAMPING_FIELDS, field) {
+            Some(field) => {
+                *self.slot(field.name) = Some(text.to_string());
+                Ok(())
+            }
+            None => Err(format!(
+                "unknown damping field '{field}' ({})",
+                schema::names(DAMPING_FIELDS)
+            )),
+        }
+    }
+
+    /// The place of the field called `name` in [`DAMPING_FIELDS`] (a name outside the
+    /// table is `imag`'s place: callers look the name up in the table first).
+    fn slot(&mut self, name: &str) -> &mut Option<String> {
+        match name {
+            "real" => &mut self.real,
+            "structural" => &mut self.structural,
+            "viscous" => &mut self.viscous,
+            "temperature" => &mut self.temperature,
+            "thermoelastic.delta" => &mut self.thermoelastic_delta,
+            "thermoelastic.tau" => &mut self.thermoelastic_tau,
+            _ => &mut self.imag,
+        }
+    }
+
+    /// The expression text of the field called `name` in [`DAMPING_FIELDS`], if it is set.
+    pub fn field(&self, name: &str) -> Option<&str> {
+        match name {
+            "real" => self.real.as_deref(),
+            "structural" => self.structural.as_deref(),
+            "viscous" => self.viscous.as_deref(),
+            "imag" => self.imag.as_deref(),
+            "temperature" => self.temperature.as_deref(),
+            "thermoelastic.delta" => self.thermoelastic_delta.as_deref(),
+            "thermoelastic.tau" => self.thermoelastic_tau.as_deref(),
+            _ => None,
+        }
+    }
+
+    /// The fields that are set, in the order of [`DAMPING_FIELDS`], with their expression
+    /// texts: what a writer of case files writes (`fit --out`).
+    pub fn fields(&self) -> impl Iterator<Item = (&'static Field, &str)> {
+        DAMPING_FIELDS
+            .iter()
+            .filter_map(|f| Some((f, self.field(f.name)?)))
     }
 
     /// Compiles the multipliers of tag `tag` against resolved parameters
@@ -116,14 +141,13 @@ impl DampingSpec {
             })?;
         // every symbol is a parameter's value, so nothing is read; NaN is refused below
         let value: f64 = compiled.eval(&[]).unwrap_or(f64::NAN);
-        if value.is_finite() && value > 0.0 {
-            Ok(Some(value))
-        } else {
-            Err(BuildError::Invalid {
-                item: which,
-                message: format!("must be positive (got {} K)", number_text(value)),
-            })
-        }
+        DAMPING_TEMPERATURE
+            .check(value)
+            .map_err(|message| BuildError::Invalid {
+                item: format!("damping of tag '{tag}'"),
+                message,
+            })?;
+        Ok(Some(value))
     }
 
     /// Parses the multipliers of tag `tag`: ε' (`real`, 1 when absent) and ε'' (the sum of
@@ -137,7 +161,9 @@ impl DampingSpec {
         if let Some(v) = &self.viscous {
             imag_parts.push(format!("({v})*f"));
         }
-        if let Some((delta, tau)) = &self.thermoelastic {
+        if self.thermoelastic_delta.is_some() || self.thermoelastic_tau.is_some() {
+            let delta = self.thermoelastic_delta.as_deref().unwrap_or("0");
+            let tau = self.thermoelastic_tau.as_deref().unwrap_or("0");
             imag_parts.push(format!("({delta})*(2*pi*f*({tau}))/(1+(2*pi*f*({tau}))^2)"));
         }
         if let Some(e) = &self.imag {
@@ -159,10 +185,19 @@ impl DampingSpec {
         let mut inputs = real.symbols();
         inputs.extend(imag.symbols());
         inputs.remove("f");
+        // the parts with a domain narrower than "finite" that do not depend on f, each
+        // checked on its own when compiled (the temperature by `temperature_value`)
+        let mut checked = Vec::new();
+        for (field, text) in self.fields() {
+            if field.domain != Domain::Finite && *field != DAMPING_TEMPERATURE {
+                checked.push((field, parse_part(text, field.name)?));
+            }
+        }
         Ok(ParsedDamping {
             spec: self.clone(),
             real,
             imag,
+            checked,
             inputs: inputs.into_iter().collect(),
             first: OnceLock::new(),
         })
@@ -187,6 +222,8 @@ pub struct ParsedDamping {
     spec: DampingSpec,
     real: Expr,
     imag: Expr,
+    /// The fields with a domain to check, parsed on their own.
+    checked: Vec<(&'static Field, Expr)>,
     /// The parameters the multipliers read (every symbol but `f`), sorted.
     inputs: Vec<String>,
     /// The first compilation: the inputs' values then, and its result.
@@ -229,6 +266,14 @@ impl ParsedDamping {
             real: compile(&self.real, "real")?,
             imag: compile(&self.imag, "imag")?,
         };
+        for (field, expr) in &self.checked {
+            // NaN (a part that reads f) is refused by the check
+            let value = compile(expr, field.name)?.eval(&[]).unwrap_or(f64::NAN);
+            field.check(value).map_err(|message| BuildError::Invalid {
+                item: format!("damping of tag '{tag}'"),
+                message,
+            })?;
+        }
         if let Some(values) = values {
             // a concurrent build may have set it first, with its own values: either is right
             let _ = self.first.set((values, compiled.clone()));
@@ -254,10 +299,7 @@ mod tests {
     fn thermoelastic_peak_matches_the_oracle_table() {
         // docs/reference-values.md §7, silica fibre with the stress term: Δ = 1.945745e-5,
         // τ = 1.450933e-2 s; φ_TE(1, 10, 100, 500 Hz) printed to 7 digits.
-        let spec = DampingSpec {
-            thermoelastic: Some(("delta".into(), "tau".into())),
-            ..Default::default()
-        };
+        let spec = DampingSpec::thermoelastic("delta", "tau");
         let d = spec.resolve("t", &params()).unwrap();
         for (f, printed) in [
             (1.0, 1.759213e-6),
@@ -275,10 +317,7 @@ mod tests {
     fn parts_add_and_fields_merge() {
         // §6: φ_w(ω) = φ + Δ ωτ/(1 + ω²τ²) = 9.787251e-6 at 10 Hz with φ = 1e-7.
         let mut spec = DampingSpec::structural("phi");
-        spec.merge(&DampingSpec {
-            thermoelastic: Some(("delta".into(), "tau".into())),
-            ..Default::default()
-        });
+        spec.merge(&DampingSpec::thermoelastic("delta", "tau"));
         let (_, im) = spec.resolve("t", &params()).unwrap().at(10.0);
         assert!((im - 9.787251e-6).abs() <= 0.5e-12);
         spec.set_field("viscous", "2e-3").unwrap();

@@ -12,6 +12,7 @@ pub mod beads;
 mod damping;
 mod fibre;
 pub mod losses;
+pub mod schema;
 
 use std::collections::{BTreeMap, HashMap, HashSet};
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -916,7 +917,7 @@ fn check_inertia(item: &str, inertia: &Matrix3<f64>) -> Result<(), BuildError> {
 
 /// A model: default parameters and a function that builds a [`System`] from resolved
 /// parameter values. Bundled models implement it; so can a downstream tool.
-pub trait Model: Sync {
+pub trait Model: Send + Sync {
     /// Name used on the command line, e.g. `pendulum`.
     fn name(&self) -> &str;
     /// One line describing the model.
@@ -1073,12 +1074,46 @@ impl DefaultsCache {
 
 /// What a case changes in a model: parameter overrides (name, expression text, applied in
 /// order) and damping fields per tag.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct Overrides {
     /// Parameter overrides: a value, an expression, `scale(x)` or `increment(x)`.
     pub parameters: Vec<(String, String)>,
     /// Damping overrides per tag; the fields given replace the model's.
     pub damping: BTreeMap<String, DampingSpec>,
+}
+
+impl Overrides {
+    /// The text of a case file of `model` (a bundled model's name or a suspension file's
+    /// path) with these overrides: every parameter override, then every damping field each
+    /// by its name in [`schema::DAMPING_FIELDS`], so that reading the text back gives the
+    /// same overrides. `note(name)` is a comment written after a parameter's line.
+    pub fn case_file(
+        &self,
+        model: &str,
+        description: &str,
+        note: &dyn Fn(&str) -> Option<String>,
+    ) -> String {
+        // a TOML basic string: the expression texts and names as they are
+        let quote = |s: &str| format!("\"{}\"", s.replace('\\', "\\\\").replace('"', "\\\""));
+        let mut out = format!(
+            "model = {}\ndescription = {}\n\n[parameters]\n",
+            quote(model),
+            quote(description)
+        );
+        for (name, text) in &self.parameters {
+            let note = note(name).map(|n| format!("  # {n}")).unwrap_or_default();
+            out += &format!("{} = {}{note}\n", quote(name), quote(text));
+        }
+        for (tag, spec) in &self.damping {
+            out += &format!("\n[damping.{}]\n", quote(tag));
+            // `thermoelastic.tau = ...` is a TOML dotted key: both file readers take it as
+            // the thermoelastic table
+            for (field, value) in spec.fields() {
+                out += &format!("{} = {}\n", field.name, quote(value));
+            }
+        }
+        out
+    }
 }
 
 /// `defaults`' parameters with the overrides applied, and their values.

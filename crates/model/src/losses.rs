@@ -123,7 +123,8 @@ impl WireLoss<'_> {
                 format!("{}_bending", self.set),
                 at_temperature(DampingSpec {
                     structural: Some(bending),
-                    thermoelastic: Some((delta, tau)),
+                    thermoelastic_delta: Some(delta),
+                    thermoelastic_tau: Some(tau),
                     ..Default::default()
                 }),
             ),
@@ -148,10 +149,8 @@ pub fn blade_loss(material: &LossMaterial, thickness: &str, temperature: &str) -
     );
     DampingSpec {
         structural: Some(m.phi.clone()),
-        thermoelastic: Some((
-            format!("({y})*({alpha})^2*({temperature})/(({rho})*({c}))"),
-            format!("({rho})*({c})*({thickness})^2/(pi^2*({k}))"),
-        )),
+        thermoelastic_delta: Some(format!("({y})*({alpha})^2*({temperature})/(({rho})*({c}))")),
+        thermoelastic_tau: Some(format!("({rho})*({c})*({thickness})^2/(pi^2*({k}))")),
         temperature: (temperature != "temperature").then(|| temperature.to_string()),
         ..Default::default()
     }

@@ -174,7 +174,6 @@ pub fn thermal_noise_with(
     let v = &v.rows(0, v.len().min(model.unknowns())).into_owned();
     let input = Input::Force(v.clone());
     let output = Output::Displacement(v.clone());
-    let mut sweep = Sweep::new(model, damping, &input, &output, options.solver)?;
     // a tag without damping, or whose loss is the constant zero, never dissipates: its form
     // stays empty, so its products are neither computed nor summed per frequency
     let lossy: Vec<bool> = model
@@ -186,6 +185,16 @@ pub fn thermal_noise_with(
                 .is_some_and(|d| d.imag.as_const() != Some(0.0))
         })
         .collect();
+    // a model that dissipates nothing has no thermal noise: an ASD of exactly 0 everywhere
+    // would look like an answer, so it is refused, naming the tags (an output that only
+    // lossless parts move is a result: its zeros are reported as such by the callers)
+    if !lossy.contains(&true) {
+        return Err(DynamicsError::NoLoss {
+            output: "the output".to_string(),
+            lossless: model.by_tag.iter().map(|(name, _)| name.clone()).collect(),
+        });
+    }
+    let mut sweep = Sweep::new(model, damping, &input, &output, options.solver)?;
     // per-tag forms over the solved unknowns, from the tags' values on the pattern
     let mut tag_forms = Forms::default();
     for ((_, values), &lossy) in model.by_tag.iter().zip(&lossy) {

@@ -13,6 +13,7 @@
 //! assert!((r.get("k").unwrap() - 3.0 * 9.81 / 0.5).abs() < 1e-12);
 //! ```
 
+mod domain;
 mod resolve;
 mod tangent;
 
@@ -21,6 +22,7 @@ use std::sync::Arc;
 
 use pendkit_expr::{BinOp, Expr, ExprError, parse};
 
+pub use domain::Domain;
 pub use resolve::Resolved;
 pub use tangent::{ChunkDual, TANGENT_CHUNK, Tangent, Values, chunk_direction};
 
@@ -148,7 +150,7 @@ pub enum ParamError {
     /// A parameter whose value its unit rules out (a frequency not positive), or a
     /// subnormal number (below 2.2e-308 in magnitude: never a physical value,
     /// and its reciprocal overflows).
-    #[error("parameter '{name}' = {value:e} {unit}: {why}")]
+    #[error("parameter '{name}' = {} {unit}: {why}", pendkit_expr::number_text(*value))]
     OutOfRange {
         /// The parameter name.
         name: String,
@@ -157,7 +159,7 @@ pub enum ParamError {
         /// Its declared unit (empty if none).
         unit: String,
         /// What the value must be.
-        why: &'static str,
+        why: String,
     },
     /// A numeric value asked of a parameter that depends on free symbols.
     #[error("parameter '{name}' has no numeric value: it depends on {}", free.join(", "))]
@@ -208,6 +210,8 @@ pub struct ParamSet {
     index: Arc<HashMap<Arc<str>, usize>>,
     /// Units of the parameters that declare one (for reports; not checked).
     units: Arc<HashMap<Arc<str>, Arc<str>>>,
+    /// Domains of the parameters that declare one: every resolved value is checked.
+    domains: Arc<HashMap<Arc<str>, Domain>>,
 }
 
 impl ParamSet {
@@ -261,6 +265,20 @@ impl ParamSet {
         let name = self.entries[i].name.clone();
         Arc::make_mut(&mut self.units).insert(name, unit.trim().into());
         Ok(())
+    }
+
+    /// Declares the domain of an existing parameter: every value it resolves to, with any
+    /// override, must lie in it ([`ParamError::OutOfRange`] otherwise). Overrides keep it.
+    pub fn set_domain(&mut self, name: &str, domain: Domain) -> Result<(), ParamError> {
+        let i = self.position(name)?;
+        let name = self.entries[i].name.clone();
+        Arc::make_mut(&mut self.domains).insert(name, domain);
+        Ok(())
+    }
+
+    /// The domain declared for `name`, if any.
+    pub fn domain(&self, name: &str) -> Option<Domain> {
+        self.domains.get(name).copied()
     }
 
     /// The unit declared for `name`, if any.
@@ -368,11 +386,13 @@ impl ParamSet {
     fn check_range(&self, name: &str, value: f64) -> Result<(), ParamError> {
         let unit = self.unit(name).unwrap_or_default();
         let why = if value != 0.0 && value.abs() < f64::MIN_POSITIVE {
-            Some("subnormal (magnitude below 2.2e-308): not a physical value")
+            Some("subnormal (magnitude below 2.2e-308): not a physical value".to_string())
         } else if unit == "Hz" && value <= 0.0 {
-            Some("a frequency must be positive")
+            Some("a frequency must be positive".to_string())
         } else {
-            None
+            self.domain(name)
+                .filter(|domain| !domain.contains(value))
+                .map(|domain| format!("outside its declared domain: must be {}", domain.describe()))
         };
         match why {
             Some(why) => Err(ParamError::OutOfRange {

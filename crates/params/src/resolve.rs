@@ -205,6 +205,16 @@ impl Resolved {
         }
     }
 
+    /// The numeric value of `name`, if it has one, without recording a read: for checks
+    /// that look at every value whether or not anything uses it (a domain check must not
+    /// make an override count as read).
+    pub fn peek(&self, name: &str) -> Option<f64> {
+        match &self.entries[*self.index.get(name)?].1 {
+            Value::Number(x) => Some(*x),
+            Value::Symbolic(_) => None,
+        }
+    }
+
     /// The numeric value of `name`. Fails if it is unknown or depends on free symbols.
     pub fn get(&self, name: &str) -> Result<f64, ParamError> {
         match self.lookup(name)? {

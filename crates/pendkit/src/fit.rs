@@ -1048,54 +1048,38 @@ impl FitResult {
     /// A case file (see [`Case::from_file`]) of model `model` (a bundled name or a
     /// suspension file's path) with `case`'s overrides and the fitted values.
     pub fn case_file(&self, model: &str, case: &Case) -> String {
-        let quote = |s: &str| format!("\"{}\"", s.replace('\\', "\\\\").replace('"', "\\\""));
-        let mut out = format!(
-            "# written by pendkit fit {}: {} free parameters, chi^2/dof = {}\nmodel = {}\n",
+        let fitted = |name: &str| self.parameters.iter().find(|p| p.name == name);
+        let mut overrides = case.overrides.clone();
+        overrides
+            .parameters
+            .retain(|(name, _)| fitted(name).is_none());
+        // `{:e}`: every digit of the f64, whatever the magnitude
+        overrides.parameters.extend(
+            self.parameters
+                .iter()
+                .map(|p| (p.name.clone(), format!("{:e}", p.value))),
+        );
+        let note = |name: &str| {
+            fitted(name).map(|p| match p.uncertainty {
+                Some(u) => format!("+- {u:.3e}"),
+                None => "undetermined: start value".to_string(),
+            })
+        };
+        let header = format!(
+            "# written by pendkit fit {}: {} free parameters, chi^2/dof = {}\n",
             crate::VERSION,
             self.parameters.len(),
             self.reduced_chi_squared.map_or_else(
                 || "- (no degrees of freedom)".to_string(),
                 |r| format!("{r:.4}")
             ),
-            quote(model)
         );
-        out += &format!(
-            "description = {}\n\n[parameters]\n",
-            quote(&format!("{} fitted to measured modes", case.name))
-        );
-        let fitted = |name: &str| self.parameters.iter().any(|p| p.name == name);
-        for (name, text) in &case.overrides.parameters {
-            if !fitted(name) {
-                out += &format!("{} = {}\n", quote(name), quote(text));
-            }
-        }
-        for p in &self.parameters {
-            let note = match p.uncertainty {
-                Some(u) => format!("+- {u:.3e}"),
-                None => "undetermined: start value".to_string(),
-            };
-            // `{:e}`: a TOML float whatever the magnitude, every digit of the f64
-            out += &format!("{} = {:e}  # {note}\n", quote(&p.name), p.value);
-        }
-        for (tag, spec) in &case.overrides.damping {
-            out += &format!("\n[damping.{}]\n", quote(tag));
-            let fields = [
-                ("real", &spec.real),
-                ("structural", &spec.structural),
-                ("viscous", &spec.viscous),
-                ("imag", &spec.imag),
-                ("temperature", &spec.temperature),
-            ];
-            for (field, value) in fields {
-                if let Some(v) = value {
-                    out += &format!("{field} = {}\n", quote(v));
-                }
-            }
-            if let Some((delta, tau)) = &spec.thermoelastic {
-                out += &format!("thermoelastic = [{}, {}]\n", quote(delta), quote(tau));
-            }
-        }
-        out
+        header
+            + &overrides.case_file(
+                model,
+                &format!("{} fitted to measured modes", case.name),
+                &note,
+            )
     }
 }
 
@@ -1256,7 +1240,7 @@ pub fn fit(
     let mut state = evaluate(&start, &matched, &first)?;
     let mut solves = 1;
     let scale = scales(&start);
-    let defaults = pendkit_model::Defaults::of(case.model)?;
+    let defaults = pendkit_model::Defaults::of(&*case.model)?;
     let units: Vec<Option<String>> = free
         .iter()
         .map(|name| defaults.params.unit(name).map(str::to_string))

@@ -67,6 +67,7 @@ mod suspension_files;
 pub mod tradeoff;
 
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 use nalgebra::{DVector, Vector3};
 use pendkit_assembly::{Assembled, AssemblyError, assemble_with, timed};
@@ -106,6 +107,7 @@ pub use pendkit_dynamics::{
 };
 pub use pendkit_energy::{Stage, System};
 pub use pendkit_model::{Model, Overrides};
+
 pub use pendkit_noise::{NoiseOptions, ThermalNoise};
 pub use pendkit_params::Resolved;
 
@@ -146,21 +148,23 @@ pub enum Error {
     /// line and field.
     #[error(transparent)]
     SuspensionFile(#[from] pendkit_suspension::FileError),
-    /// A `--set NAME=EXPR` argument without '=', or with nothing on one side of it.
-    #[error("--set '{0}': expected NAME=EXPR or damping.<tag>.<field>=EXPR")]
-    SetSyntax(String),
-    /// A `--set damping.<tag>.<field>=EXPR` the damping field refuses.
-    #[error("--set '{set}': {message}")]
-    SetDamping {
-        /// The argument as given.
-        set: String,
+    /// An override written as text (`NAME=EXPR`, `damping.<tag>.<field>=EXPR`) without '=',
+    /// or with nothing on one side of it.
+    #[error("override '{0}': expected NAME=EXPR or damping.<tag>.<field>=EXPR")]
+    OverrideSyntax(String),
+    /// An override the parameter or the damping field refuses: a damping field that does
+    /// not exist, a value that is not a finite number.
+    #[error("override '{key}': {message}")]
+    OverrideRefused {
+        /// The parameter's name or `damping.<tag>.<field>`.
+        key: String,
         /// What is wrong with it.
         message: String,
     },
     /// Two overrides of the same parameter or damping field in one list: the later would
     /// silently replace the earlier.
-    #[error("--set '{0}' is given twice: give each parameter or damping field once")]
-    SetTwice(String),
+    #[error("'{0}' is overridden twice: give each parameter or damping field once")]
+    OverriddenTwice(String),
     /// An override of a parameter that nothing the model builds reads.
     #[error(
         "parameter '{name}' is read by nothing in model '{model}': overriding it would change nothing (parameters read: {read})"
@@ -260,15 +264,14 @@ pub const MAX_REPEAT: usize = 100_000;
 
 /// Every bundled model: each is a suspension file under `models/`, embedded in the
 /// program ([`bundled_files`]).
-pub fn models() -> Vec<&'static dyn Model> {
+pub fn models() -> Vec<Arc<dyn Model>> {
     pendkit_models::models()
 }
 
 /// The bundled model called `name`.
-pub fn find_model(name: &str) -> Result<&'static dyn Model, Error> {
-    models()
-        .into_iter()
-        .find(|m| m.name() == name)
+pub fn find_model(name: &str) -> Result<Arc<dyn Model>, Error> {
+    pendkit_models::find(name)
+        .map(|m| m as Arc<dyn Model>)
         .ok_or_else(|| Error::UnknownModel {
             name: name.to_string(),
             known: models()
@@ -279,6 +282,98 @@ pub fn find_model(name: &str) -> Result<&'static dyn Model, Error> {
         })
 }
 
+/// One change a case makes to its model ([`Case::with`]).
+#[derive(Clone, Debug, PartialEq)]
+pub enum Override {
+    /// A parameter set to a number, in the parameter's SI unit.
+    Value {
+        /// The parameter.
+        name: String,
+        /// Its new value (finite).
+        value: f64,
+    },
+    /// A parameter set to an expression of the model's parameters, or `scale(x)` /
+    /// `increment(x)` of its current definition.
+    Expression {
+        /// The parameter.
+        name: String,
+        /// The expression.
+        expression: String,
+    },
+    /// A field of a damping tag ([`model::schema::DAMPING_FIELDS`]: `structural`,
+    /// `thermoelastic.tau`, `temperature`, ...), as an expression of the parameters (and of
+    /// `f`, Hz, in `real` and `imag`).
+    Damping {
+        /// The damping tag (`fibre_bending`).
+        tag: String,
+        /// The field's name.
+        field: String,
+        /// The expression.
+        expression: String,
+    },
+}
+
+impl Override {
+    /// Parameter `name` set to `value` (in its SI unit).
+    pub fn value(name: impl Into<String>, value: f64) -> Override {
+        Override::Value {
+            name: name.into(),
+            value,
+        }
+    }
+
+    /// Parameter `name` set to `expression`.
+    pub fn expression(name: impl Into<String>, expression: impl Into<String>) -> Override {
+        Override::Expression {
+            name: name.into(),
+            expression: expression.into(),
+        }
+    }
+
+    /// Damping field `field` of tag `tag` set to `expression`.
+    pub fn damping(
+        tag: impl Into<String>,
+        field: impl Into<String>,
+        expression: impl Into<String>,
+    ) -> Override {
+        Override::Damping {
+            tag: tag.into(),
+            field: field.into(),
+            expression: expression.into(),
+        }
+    }
+
+    /// Reads `NAME=EXPR` (an [`Override::Expression`]) or `damping.<tag>.<field>=EXPR` (an
+    /// [`Override::Damping`]).
+    pub fn parse(text: &str) -> Result<Override, Error> {
+        let syntax = || Error::OverrideSyntax(text.to_string());
+        let (name, expression) = text.split_once('=').ok_or_else(syntax)?;
+        let (name, expression) = (name.trim(), expression.trim());
+        // `=3`, `m1=` or `damping.tag.field=`: a half that is missing is named as such, not
+        // looked up as the parameter '' or parsed as the expression "()"
+        if name.is_empty() || expression.is_empty() {
+            return Err(syntax());
+        }
+        Ok(
+            match name
+                .strip_prefix("damping.")
+                .and_then(|rest| rest.split_once('.'))
+            {
+                Some((tag, field)) => Override::damping(tag, field, expression),
+                None => Override::expression(name, expression),
+            },
+        )
+    }
+
+    /// What the override changes: the parameter's name, or `damping.<tag>.<field>`.
+    pub fn key(&self) -> String {
+        match self {
+            Override::Value { name, .. } | Override::Expression { name, .. } => name.clone(),
+            Override::Damping { tag, field, .. } => format!("damping.{tag}.{field}"),
+        }
+    }
+}
+
 /// A case: a model with parameter and damping overrides.
 #[derive(Clone)]
 pub struct Case {
@@ -286,8 +381,8 @@ pub struct Case {
     pub name: String,
     /// What the case is for (from the case file).
     pub description: Option<String>,
-    /// The model it refines.
-    pub model: &'static dyn Model,
+    /// The model it refines, shared between the cases made from it.
+    pub model: Arc<dyn Model>,
     /// Parameter and damping overrides.
     pub overrides: Overrides,
 }
@@ -387,49 +482,71 @@ impl Case {
         Case::model(spec)
     }
 
-    /// Adds `NAME=EXPR` overrides (applied after the case's own); `damping.<tag>.<field>=EXPR`
-    /// sets a damping field.
-    pub fn with_sets(mut self, sets: &[String]) -> Result<Case, Error> {
+    /// The case with `overrides` applied after its own (a case file's, or earlier calls'):
+    /// each parameter or damping field at most once in the list.
+    ///
+    /// ```
+    /// use pendkit::{Case, Override};
+    /// let case = Case::model("quad")?.with([
+    ///     Override::value("m3", 40.5),                       // kg
+    ///     Override::expression("l3", "scale(1.01)"),         // 1 % longer fibres
+    ///     Override::damping("fibre_bending", "structural", "2*silica_phi"),
+    /// ])?;
+    /// assert_eq!(case.overrides.parameters.len(), 2);
+    /// # Ok::<(), pendkit::Error>(())
+    /// ```
+    pub fn with(mut self, overrides: impl IntoIterator<Item = Override>) -> Result<Case, Error> {
         let mut seen = std::collections::BTreeSet::new();
-        for s in sets {
-            let (name, expr) = s
-                .split_once('=')
-                .ok_or_else(|| Error::SetSyntax(s.clone()))?;
-            let (name, expr) = (name.trim(), expr.trim());
-            // `=3`, `m1=` or `damping.tag.field=`: a half that is missing is named as such,
-            // not looked up as the parameter '' or parsed as the expression "()"
-            if name.is_empty() || expr.is_empty() {
-                return Err(Error::SetSyntax(s.clone()));
+        for o in overrides {
+            let key = o.key();
+            if !seen.insert(key.clone()) {
+                return Err(Error::OverriddenTwice(key));
             }
-            if !seen.insert(name) {
-                return Err(Error::SetTwice(name.to_string()));
-            }
-            match name
-                .strip_prefix("damping.")
-                .and_then(|rest| rest.split_once('.'))
-            {
-                Some((tag, field)) => {
-                    let spec = self.overrides.damping.entry(tag.to_string()).or_default();
-                    spec.set_field(field, expr)
-                        .map_err(|message| Error::SetDamping {
-                            set: s.clone(),
-                            message,
-                        })?;
+            match o {
+                Override::Value { name, value } => {
+                    if !value.is_finite() {
+                        return Err(Error::OverrideRefused {
+                            key,
+                            message: format!("{value} is not a finite number"),
+                        });
+                    }
+                    // `{:e}` prints the shortest text that reads back as the same f64
+                    let text = format!("{value:e}");
+                    self.overrides.parameters.push((name, text));
                 }
-                None => self
-                    .overrides
-                    .parameters
-                    .push((name.to_string(), expr.to_string())),
+                Override::Expression { name, expression } => {
+                    self.overrides.parameters.push((name, expression));
+                }
+                Override::Damping {
+                    tag,
+                    field,
+                    expression,
+                } => {
+                    let spec = self.overrides.damping.entry(tag).or_default();
+                    spec.set_field(&field, &expression)
+                        .map_err(|message| Error::OverrideRefused { key, message })?;
+                }
             }
         }
         Ok(self)
+    }
+
+    /// [`Case::with`] overrides written as text, `NAME=EXPR` or
+    /// `damping.<tag>.<field>=EXPR` ([`Override::parse`]): what the command line's `--set`
+    /// and the Python package's `sets` take.
+    pub fn with_sets(self, sets: &[String]) -> Result<Case, Error> {
+        let overrides = sets
+            .iter()
+            .map(|s| Override::parse(s))
+            .collect::<Result<Vec<_>, _>>()?;
+        self.with(overrides)
     }
 
     /// Resolves the parameters and builds the numeric model. An override of a parameter
     /// that nothing reads (neither the model's build, nor its damping, nor the definition
     /// of a parameter read) is an error: it would change nothing, silently.
     pub fn build(&self) -> Result<(System, Resolved), Error> {
-        let (system, resolved) = pendkit_model::build_with(self.model, &self.overrides)?;
+        let (system, resolved) = pendkit_model::build_with(&*self.model, &self.overrides)?;
         self.check_overrides_read(&resolved)?;
         Ok((system, resolved))
     }
@@ -440,7 +557,7 @@ impl Case {
         &self,
     ) -> Result<(System, Resolved, Vec<String>), Error> {
         let (system, resolved, mechanical_reads) =
-            pendkit_model::build_with_mechanical_reads(self.model, &self.overrides)?;
+            pendkit_model::build_with_mechanical_reads(&*self.model, &self.overrides)?;
         self.check_overrides_read(&resolved)?;
         Ok((system, resolved, mechanical_reads))
     }
@@ -479,7 +596,7 @@ impl Case {
         &self,
         names: impl IntoIterator<Item = String>,
     ) -> Result<std::collections::BTreeSet<String>, Error> {
-        let mut params = pendkit_model::Defaults::of(self.model)?.params.clone();
+        let mut params = pendkit_model::Defaults::of(&*self.model)?.params.clone();
         for (name, text) in &self.overrides.parameters {
             params
                 .apply_text(name, text)
@@ -534,7 +651,7 @@ impl Case {
     /// The provenance of a build of this case that resolved to `resolved`: each parameter
     /// with its value, its unit where the model declares one, and its definition.
     pub fn provenance(&self, resolved: &Resolved) -> Result<Provenance, Error> {
-        let defaults = pendkit_model::Defaults::of(self.model)?;
+        let defaults = pendkit_model::Defaults::of(&*self.model)?;
         let parameters = resolved
             .iter()
             .map(|(name, value)| {
@@ -1127,7 +1244,14 @@ impl StageResult {
                     self.system.temperature,
                     freqs,
                     options,
-                )?;
+                )
+                .map_err(|e| match e {
+                    DynamicsError::NoLoss { lossless, .. } => DynamicsError::NoLoss {
+                        output: format!("'{output}'"),
+                        lossless,
+                    },
+                    other => other,
+                })?;
                 let what = format!("thermal noise of {output}");
                 check_finite(&what, freqs, &noise.total, 1)?;
                 for (_, series) in &noise.tags {

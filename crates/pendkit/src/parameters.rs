@@ -14,6 +14,9 @@ pub struct ParameterRow {
     pub value: f64,
     /// Unit (empty for a pure number or when the model declares none).
     pub unit: String,
+    /// The values it may take (`> 0`, `>= 0`, `in (-1, 0.5)`), empty when the model
+    /// declares none.
+    pub domain: String,
     /// The definition: a number or an expression of other parameters.
     pub definition: String,
     /// What it is (empty when the model says nothing).
@@ -27,7 +30,11 @@ pub struct ParameterRow {
 /// definition, and what the model says about it ([`pendkit_model::Model::parameter_info`]).
 /// The bundled models are suspension files, which say all of it.
 pub fn parameter_table(case: &Case) -> Result<Vec<ParameterRow>, Error> {
-    let defaults = Defaults::of(case.model)?;
+    // the case is built as every command builds it, so that the values `params` lists are
+    // ones every other command accepts (a damping field outside its domain is refused here
+    // too, though the table shows no damping)
+    case.build()?;
+    let defaults = Defaults::of(&*case.model)?;
     let (params, resolved) = parameters_with(&defaults, &case.overrides)?;
     let info = case.model.parameter_info(&resolved)?;
     let about = |name: &str| -> Option<&ParameterInfo> { info.iter().find(|i| i.name == name) };
@@ -42,6 +49,10 @@ pub fn parameter_table(case: &Case) -> Result<Vec<ParameterRow>, Error> {
                     .unit(name)
                     .map(str::to_string)
                     .or_else(|| known.map(|i| i.unit.clone()))
+                    .unwrap_or_default(),
+                domain: params
+                    .domain(name)
+                    .map(|d| d.describe())
                     .unwrap_or_default(),
                 definition: params
                     .get(name)

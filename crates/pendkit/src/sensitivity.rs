@@ -443,7 +443,7 @@ impl Tangents {
         let chunks = in_parallel(groups.len(), threads, |c| {
             let chunk: Vec<&str> = groups[c].iter().map(|&j| names[j].as_str()).collect();
             Ok::<_, Error>(
-                pendkit_model::build_tangent_chunk(case.model, &case.overrides, &chunk).ok(),
+                pendkit_model::build_tangent_chunk(&*case.model, &case.overrides, &chunk).ok(),
             )
         })?;
         let mut at = vec![None; names.len()];
@@ -544,7 +544,7 @@ fn column(
         let overrides = overridden(case, name, value);
         let built = match tangent {
             Some(dual) => stepped(dual, k * h, defaults, &overrides),
-            None => pendkit_model::build_with(case.model, &overrides).map(|(system, _)| system),
+            None => pendkit_model::build_with(&*case.model, &overrides).map(|(system, _)| system),
         }
         .map_err(Error::from);
         let system = match built {
@@ -1251,7 +1251,7 @@ pub fn sensitivities(case: &Case, request: &SensitivityRequest) -> Result<Sensit
     }
 
     let (system, resolved, mechanical_reads) = case.build_with_mechanical_reads()?;
-    let defaults = Defaults::of(case.model)?;
+    let defaults = Defaults::of(&*case.model)?;
     let all: Vec<(String, f64)> = resolved.iter().map(|(n, v)| (n.to_string(), v)).collect();
     let names: Vec<String> = match &request.parameters {
         None => all.iter().map(|(n, _)| n.clone()).collect(),

@@ -155,7 +155,7 @@ impl Variant {
         name
     }
 
-    fn key(&self) -> (&'static str, Stage, Option<usize>, bool) {
+    fn key(&self) -> (&str, Stage, Option<usize>, bool) {
         (
             self.case.model.name(),
             self.stage,
@@ -503,7 +503,7 @@ impl Tradeoff {
 /// The variants of `case`'s ladder: the reference first, then the others (see the module's
 /// doc), without repeats.
 pub fn ladder(case: &Case, ladder: &Ladder) -> Result<Vec<Variant>, Error> {
-    let has_beads = pendkit_model::Defaults::of(case.model)?
+    let has_beads = pendkit_model::Defaults::of(&*case.model)?
         .params
         .get("n_beads")
         .is_some();

@@ -245,8 +245,8 @@ impl Model {
 
     /// The bundled model the case refines.
     #[getter]
-    fn model(&self) -> &'static str {
-        self.case.model.name()
+    fn model(&self) -> String {
+        self.case.model.name().to_string()
     }
 
     /// The case file's description, if any.
@@ -637,8 +637,8 @@ impl StageRun {
 
     /// Model name.
     #[getter]
-    fn model(&self) -> &'static str {
-        self.run.case.model.name()
+    fn model(&self) -> String {
+        self.run.case.model.name().to_string()
     }
 
     /// Temperature of the thermal noise (K).
@@ -1042,10 +1042,10 @@ impl StateSpace {
 
 /// The bundled models as (name, one-line summary) pairs.
 #[pyfunction]
-fn models() -> Vec<(&'static str, &'static str)> {
+fn models() -> Vec<(String, String)> {
     pendkit::models()
         .into_iter()
-        .map(|m| (m.name(), m.summary()))
+        .map(|m| (m.name().to_string(), m.summary().to_string()))
         .collect()
 }
 

@@ -19,6 +19,7 @@ use pendkit_energy::{
 };
 use pendkit_expr::{Expr, number_text};
 use pendkit_model::beads::{BeadedFibre, add_beaded_fibre, beads_mass};
+use pendkit_model::schema::{self, MATERIAL_FIELDS};
 use pendkit_model::{BodySpec, BuildError, FibreProfile, Shape, SystemBuilder};
 use pendkit_params::{ChunkDual, Resolved, Values};
 
@@ -414,7 +415,30 @@ impl<S: Real> PlannedStage<'_, S> {
 
 /// The built system of `spec` at the parameter values of `ctx`.
 pub fn build<S: BuildScalar>(spec: &Spec, ctx: &Ctx<S>) -> Result<System<S>, BuildError> {
+    check_material_domains(spec, ctx.params)?;
     Interpreter::new(spec, ctx)?.run()
+}
+
+/// Every constant of every material the file defines, checked against its domain in
+/// [`MATERIAL_FIELDS`] whether or not a part (or the command at hand) reads it: a negative
+/// heat capacity is refused by `modes` as by `noise`. The values are looked at without
+/// recording a read, so that an override nothing uses is still refused as unread.
+fn check_material_domains(spec: &Spec, params: &Resolved) -> Result<(), BuildError> {
+    for material in &spec.materials {
+        for (name, ex) in material.fields() {
+            let (Some(ex), Some(field)) = (ex, schema::find(MATERIAL_FIELDS, name)) else {
+                continue;
+            };
+            // an expression that does not evaluate is reported where a part reads it
+            let Ok(value) = ex.expr.eval(&|s| params.peek(s)) else {
+                continue;
+            };
+            field
+                .check(value)
+                .map_err(|message| invalid(&ex.at, format!("{message} (`{}`)", ex.text)))?;
+        }
+    }
+    Ok(())
 }
 
 struct Interpreter<'s, 'c, S: BuildScalar> {
@@ -1687,17 +1711,9 @@ pub fn damping_reads(
         .iter()
         .map(|(tag, d)| {
             let mut symbols = BTreeSet::new();
-            let texts = [&d.real, &d.structural, &d.viscous, &d.imag]
-                .into_iter()
-                .flatten()
-                .cloned()
-                .chain(
-                    d.thermoelastic
-                        .iter()
-                        .flat_map(|(a, b)| [a.clone(), b.clone()]),
-                );
+            let texts = d.fields().map(|(_, text)| text);
             for text in texts {
-                if let Ok(e) = pendkit_expr::parse(&text) {
+                if let Ok(e) = pendkit_expr::parse(text) {
                     symbols.extend(e.symbols());
                 }
             }

@@ -48,19 +48,12 @@ pub fn damping(spec: &Spec) -> Result<BTreeMap<String, DampingSpec>, FileError> 
         }
     }
     for d in &spec.damping {
-        let text = |e: &Option<Ex>| e.as_ref().map(|e| e.text.clone());
-        let given = DampingSpec {
-            real: text(&d.real),
-            structural: text(&d.structural),
-            viscous: text(&d.viscous),
-            imag: text(&d.imag),
-            thermoelastic: d
-                .thermoelastic
-                .as_ref()
-                .map(|(delta, tau)| (delta.text.clone(), tau.text.clone())),
-            temperature: text(&d.temperature),
-        };
-        out.entry(d.tag.clone()).or_default().merge(&given);
+        let given = out.entry(d.tag.clone()).or_default();
+        for (field, ex) in &d.fields {
+            given
+                .set_field(field.name, &ex.text)
+                .map_err(|e| ex.at.error(e))?;
+        }
     }
     Ok(out)
 }

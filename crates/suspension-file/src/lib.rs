@@ -382,6 +382,11 @@ fn check_parameters(spec: &Spec) -> Result<(), FileError> {
     for p in &spec.parameters {
         set.define(&p.name, &p.value.text)
             .map_err(|e| p.at.error(e.to_string()))?;
+        // a default outside its own declared domain is the file's error, at its line
+        if let Some(domain) = &p.domain {
+            set.set_domain(&p.name, domain.value)
+                .map_err(|e| p.at.error(e.to_string()))?;
+        }
     }
     match set.resolve() {
         Ok(_) => Ok(()),
@@ -536,6 +541,9 @@ impl Model for Suspension {
             set.define(&p.name, &p.value.text)?;
             if !p.unit.is_empty() {
                 set.set_unit(&p.name, unit_of(&p.unit))?;
+            }
+            if let Some(domain) = &p.domain {
+                set.set_domain(&p.name, domain.value)?;
             }
         }
         if let Some(g) = &self.generator {

@@ -4,6 +4,7 @@
 
 use pendkit_energy::{CoordKind, Stage};
 use pendkit_model::beads::BeadJoints;
+use pendkit_model::schema::{self, DAMPING_FIELDS, Domain, Field};
 
 use crate::read::{Ex, Fields, expr_array};
 use crate::source::{At, FileError, Located, join};
@@ -76,6 +77,9 @@ pub struct ParameterSpec {
     pub description: String,
     /// `allowed`: the only values the parameter may take (a switch such as 0 or 1).
     pub allowed: Option<Located<Vec<f64>>>,
+    /// `domain`: the values it may physically take (`> 0`, `>= 0`, `in (-1, 0.5)`),
+    /// checked for every value it takes, overrides included.
+    pub domain: Option<Located<Domain>>,
     /// Where the parameter is defined.
     pub at: At,
 }
@@ -107,6 +111,25 @@ pub struct MaterialSpec {
     pub dlne_dt: Option<Ex>,
     /// Surface-loss dissipation depth d_s (m).
     pub dissipation_depth: Option<Ex>,
+}
+
+impl MaterialSpec {
+    /// Each constant with its name in [`pendkit_model::schema::MATERIAL_FIELDS`] (the
+    /// reader's keys), in that table's order.
+    pub fn fields(&self) -> [(&'static str, &Option<Ex>); 10] {
+        [
+            ("youngs_modulus", &self.youngs_modulus),
+            ("shear_modulus", &self.shear_modulus),
+            ("poisson_ratio", &self.poisson_ratio),
+            ("density", &self.density),
+            ("loss_angle", &self.loss_angle),
+            ("specific_heat", &self.specific_heat),
+            ("conductivity", &self.conductivity),
+            ("thermal_expansion", &self.thermal_expansion),
+            ("dlnE_dT", &self.dlne_dt),
+            ("dissipation_depth", &self.dissipation_depth),
+        ]
+    }
 }
 
 /// A coordinate declared by hand.
@@ -479,26 +502,16 @@ pub struct LinkFile {
     pub angles: Option<Located<Vec<Ex>>>,
 }
 
-/// A `[damping.<tag>]` table: the case-file damping fields.
+/// A `[damping.<tag>]` table: the damping fields of [`pendkit_model::schema::DAMPING_FIELDS`]
+/// that it gives, in the table's order.
 #[derive(Clone, Debug)]
 pub struct DampingFile {
     /// The tag.
     pub tag: String,
     /// Where it is written.
     pub at: At,
-    /// ε'(f).
-    pub real: Option<Ex>,
-    /// Structural φ.
-    pub structural: Option<Ex>,
-    /// Viscous (loss angle at 1 Hz).
-    pub viscous: Option<Ex>,
-    /// Thermoelastic (Δ, τ in s).
-    pub thermoelastic: Option<(Ex, Ex)>,
-    /// Any ε''(f).
-    pub imag: Option<Ex>,
-    /// Temperature (K) of the terms with this tag for thermal noise; the model's
-    /// `temperature` when absent.
-    pub temperature: Option<Ex>,
+    /// Each field given and its expression.
+    pub fields: Vec<(&'static Field, Ex)>,
 }
 
 /// An element kind moved or switched off.
@@ -683,6 +696,13 @@ fn parameter(name: String, node: &Node, at: At) -> Result<ParameterSpec, FileErr
                 })
             }
         };
+        let domain = match f.string("domain")? {
+            None => None,
+            Some(text) => Some(Located {
+                value: text.value.parse::<Domain>().map_err(|e| text.at.error(e))?,
+                at: text.at,
+            }),
+        };
         f.finish()?;
         Ok(ParameterSpec {
             name,
@@ -690,6 +710,7 @@ fn parameter(name: String, node: &Node, at: At) -> Result<ParameterSpec, FileErr
             unit,
             description,
             allowed,
+            domain,
             at,
         })
     } else {
@@ -699,6 +720,7 @@ fn parameter(name: String, node: &Node, at: At) -> Result<ParameterSpec, FileErr
             unit: String::new(),
             description: String::new(),
             allowed: None,
+            domain: None,
             at,
         })
     }
@@ -1213,26 +1235,43 @@ fn spring_set(body: &str, node: &Node, at: At) -> Result<SpringSet, FileError> {
 
 fn damping(tag: String, node: &Node, at: At) -> Result<DampingFile, FileError> {
     let mut f = Fields::of(node, at.clone())?;
-    let thermoelastic = match f.exprs("thermoelastic", Some(2))? {
-        None => None,
-        Some(mut pair) => {
-            let tau = pair.value.pop();
-            let delta = pair.value.pop();
-            delta.zip(tau)
+    let mut fields = Vec::new();
+    for field in DAMPING_FIELDS {
+        // `thermoelastic.delta` and `.tau`: read below, from one pair or one table
+        if !field.name.contains('.')
+            && let Some(ex) = f.expr(field.name)?
+        {
+            fields.push((field, ex));
         }
-    };
-    let d = DampingFile {
-        tag,
-        at,
-        real: f.expr("real")?,
-        structural: f.expr("structural")?,
-        viscous: f.expr("viscous")?,
-        thermoelastic,
-        imag: f.expr("imag")?,
-        temperature: f.expr("temperature")?,
-    };
+    }
+    if let Some((node, te_at)) = f.node("thermoelastic") {
+        let halves: Vec<Option<Ex>> = match &node.value {
+            // `thermoelastic = [delta, tau]`
+            Value::Array(_) => expr_array(node, te_at, Some(2))?
+                .value
+                .into_iter()
+                .map(Some)
+                .collect(),
+            // `thermoelastic = { delta = ..., tau = ... }`, or the dotted keys
+            // `thermoelastic.delta = ...` (the same table): what `fit --out` writes
+            _ => {
+                let mut pair = Fields::of(node, te_at)?;
+                let halves = vec![pair.expr("delta")?, pair.expr("tau")?];
+                pair.finish()?;
+                halves
+            }
+        };
+        for (name, ex) in ["thermoelastic.delta", "thermoelastic.tau"]
+            .into_iter()
+            .zip(halves)
+        {
+            if let (Some(field), Some(ex)) = (schema::find(DAMPING_FIELDS, name), ex) {
+                fields.push((field, ex));
+            }
+        }
+    }
     f.finish()?;
-    Ok(d)
+    Ok(DampingFile { tag, at, fields })
 }
 
 fn element(kind: String, node: &Node, at: At) -> Result<ElementChoice, FileError> {
