@@ -18,7 +18,7 @@ use pendkit_model::{Defaults, Model, Overrides, parameters_with};
 const PI: f64 = std::f64::consts::PI;
 
 fn model(name: &str) -> std::sync::Arc<dyn Model> {
-    pendkit::find_model(name).unwrap()
+    pendkit::catalogue::find_model(name).unwrap()
 }
 
 /// The rows (name, value, unit) of a `name,value,unit,...` table, skipping comments.
@@ -213,8 +213,9 @@ fn the_chain_is_its_generators_file() {
         let _ = std::fs::remove_dir_all(&dir);
         // six coordinates per body and six of the support (driven)
         assert_eq!(bundled.coords.len(), 6 * (n + 1));
-        let names =
-            |s: &pendkit::System| s.coords.iter().map(|c| c.name.clone()).collect::<Vec<_>>();
+        let names = |s: &pendkit::energy::System| {
+            s.coords.iter().map(|c| c.name.clone()).collect::<Vec<_>>()
+        };
         assert_eq!(names(&bundled), names(&written));
         let a = run_stage(bundled, Stage::S2).unwrap();
         let b = run_stage(written, Stage::S2).unwrap();

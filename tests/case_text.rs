@@ -112,7 +112,7 @@ fn every_settable_field_survives_the_case_file_writer() {
     let (written_system, written_values) = build_with(&*quad.model, &overrides).unwrap();
     let (read_system, read_values) = build_with(&*read.model, &read.overrides).unwrap();
     assert_eq!(format!("{written_system:?}"), format!("{read_system:?}"));
-    let values = |r: &pendkit::Resolved| format!("{:?}", r.iter().collect::<Vec<_>>());
+    let values = |r: &pendkit::params::Resolved| format!("{:?}", r.iter().collect::<Vec<_>>());
     assert_eq!(values(&written_values), values(&read_values));
     // and the overrides took: the model is not the default quad
     let (default_system, _) = quad.build().unwrap();
@@ -126,6 +126,7 @@ fn every_settable_field_survives_the_case_file_writer() {
     let mut explicit = overrides.clone();
     explicit.damping.insert("w1_bending".into(), in_full);
     let (explicit_system, _) = build_with(&*quad.model, &explicit).unwrap();
-    let loss = |system: &pendkit::System| system.damping.get("w1_bending").unwrap().at(10.0);
+    let loss =
+        |system: &pendkit::energy::System| system.damping.get("w1_bending").unwrap().at(10.0);
     assert_eq!(loss(&read_system), loss(&explicit_system));
 }

@@ -367,7 +367,7 @@ fn every_bundled_model_differentiates_its_build_exactly() {
     let mut checked = 0;
     let mut moved_poses = 0;
     let mut refused = Vec::new();
-    for model in pendkit::models() {
+    for model in pendkit::catalogue::models() {
         let model = &*model;
         let defaults = pendkit_model::Defaults::of(model).unwrap();
         let (_, resolved) = pendkit_model::parameters_with(&defaults, &Default::default()).unwrap();
@@ -475,9 +475,9 @@ fn a_driven_body_placed_by_a_parameter_has_no_exact_derivative() {
     );
     // the fibre length still has one
     assert!(pendkit_model::build_tangent(&*case.model, &case.overrides, "l_fibre").is_ok());
-    let mut request = pendkit::SensitivityRequest::modes(pendkit::Stage::S2);
+    let mut request = pendkit::sensitivity::SensitivityRequest::modes(pendkit::Stage::S2);
     request.parameters = Some(vec!["h_support".into(), "l_fibre".into()]);
-    let s = pendkit::sensitivities(&case, &request).expect("sensitivities");
+    let s = pendkit::sensitivity::sensitivities(&case, &request).expect("sensitivities");
     assert_eq!(s.exact, vec![false, true]);
 }
 
@@ -494,7 +494,7 @@ fn a_chunk_build_carries_each_parameter_as_its_own_build_does() {
     // build refuses it.
     let mut carried = 0;
     let mut refused = 0;
-    for model in pendkit::models() {
+    for model in pendkit::catalogue::models() {
         let model = &*model;
         let defaults = pendkit_model::Defaults::of(model).unwrap();
         let (_, resolved) = pendkit_model::parameters_with(&defaults, &Default::default()).unwrap();

@@ -465,7 +465,7 @@ material = "silica"
     );
     // a parameter nothing reads is checked all the same (its domain before its being unread)
     assert!(refused("unused=-1").contains("outside its declared domain"));
-    let rows = pendkit::parameter_table(&case).unwrap();
+    let rows = pendkit::describe::parameter_table(&case).unwrap();
     let m = rows.iter().find(|r| r.name == "m").unwrap();
     assert_eq!((m.unit.as_str(), m.domain.as_str()), ("kg", "> 0"));
 }

@@ -62,7 +62,7 @@ fn build(model: &str, sets: &[&str]) -> System {
 /// Every bundled model at its defaults, and the equilibrium-early variants of the wire
 /// models (plug-in terms built at the start and evaluated away from it, or rebuilt).
 fn cases() -> Vec<(String, System)> {
-    let mut cases: Vec<(String, System)> = pendkit::models()
+    let mut cases: Vec<(String, System)> = pendkit::catalogue::models()
         .iter()
         .map(|m| (m.name().to_string(), build(m.name(), &[])))
         .collect();
@@ -129,7 +129,7 @@ fn every_bundled_model_at_every_stage_matches_the_reference() {
 #[test]
 fn mode_frequencies_are_those_of_the_reference_path() {
     // Each path finds its own equilibrium (Newton with its own derivatives) and modes.
-    let reference = pendkit::RunOptions {
+    let reference = pendkit::stage::RunOptions {
         assembly: AssemblyOptions {
             equilibrium: EquilibriumOptions::default(),
             derivatives: DerivativePath::Reference,
@@ -139,7 +139,8 @@ fn mode_frequencies_are_those_of_the_reference_path() {
     for (name, system) in cases() {
         for stage in Stage::ALL {
             let fast = pendkit::run_stage(system.clone(), stage).unwrap();
-            let slow = pendkit::run_stage_with(system.clone(), stage, &reference, None).unwrap();
+            let slow =
+                pendkit::stage::run_stage_with(system.clone(), stage, &reference, None).unwrap();
             assert_eq!(fast.modes.modes.len(), slow.modes.modes.len());
             let lowest = slow
                 .modes
@@ -465,14 +466,14 @@ fn very_stiff_wires_converge_on_the_reference_path_too() {
     // path from each term's own cancellation scale (k (|p0| + |p1| + l0) for a wire): both
     // find the nominal geometry of the stiff double pendulum
     let system = build("double-pendulum", &["r_wire=scale(30)"]);
-    let options = pendkit::RunOptions {
+    let options = pendkit::stage::RunOptions {
         assembly: AssemblyOptions {
             derivatives: DerivativePath::Reference,
             ..AssemblyOptions::default()
         },
         ..Default::default()
     };
-    let r = pendkit::run_stage_with(system, Stage::S0A, &options, None).unwrap();
+    let r = pendkit::stage::run_stage_with(system, Stage::S0A, &options, None).unwrap();
     let i = r.system.coord("z2").unwrap();
     assert!((r.assembled.equilibrium.coords[i] + 1.2).abs() < 1e-12);
 }

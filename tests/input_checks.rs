@@ -546,23 +546,24 @@ fn mode_pairing_and_fit_jacobians_of_mismatched_sizes_are_errors_naming_the_argu
     use pendkit::fit::MatchedModes;
     let (i2, i3) = (DMatrix::identity(2, 2), DMatrix::identity(3, 3));
     // two modes over two coordinates against masses and shapes over three
-    let e = pendkit::pair_modes_by_overlap(&i2, &i2, &i2, &i3).unwrap_err();
+    let e = pendkit::fit::pair_modes_by_overlap(&i2, &i2, &i2, &i3).unwrap_err();
     assert_eq!(
         e.to_string(),
         "pair_modes_by_overlap: new_mass is 3 x 3, expected over old_shapes' 2 coordinates"
     );
-    let e = pendkit::pair_modes_by_overlap(&i2, &i3, &i2, &i2).unwrap_err();
+    let e = pendkit::fit::pair_modes_by_overlap(&i2, &i3, &i2, &i2).unwrap_err();
     assert!(
         e.to_string()
             .starts_with("pair_modes_by_overlap: old_mass is 3 x 3")
     );
-    let e = pendkit::pair_modes_by_overlap(&i2, &i2, &DMatrix::identity(3, 2), &i2).unwrap_err();
+    let e =
+        pendkit::fit::pair_modes_by_overlap(&i2, &i2, &DMatrix::identity(3, 2), &i2).unwrap_err();
     assert!(
         e.to_string()
             .starts_with("pair_modes_by_overlap: new_shapes (rows) is 3 x 2")
     );
     // the same shapes pair with themselves, overlap 1 (mass-normalised columns of I)
-    let pairs = pendkit::pair_modes_by_overlap(&i2, &i2, &i2, &i2).unwrap();
+    let pairs = pendkit::fit::pair_modes_by_overlap(&i2, &i2, &i2, &i2).unwrap();
     assert_eq!(pairs, [Some((0, 1.0)), Some((1, 1.0))]);
     // a Jacobian with one value for two free parameters, or a zero step
     let case = Case::model("toy").unwrap();
@@ -575,13 +576,14 @@ fn mode_pairing_and_fit_jacobians_of_mismatched_sizes_are_errors_naming_the_argu
         overlaps: vec![1.0],
     };
     let free = ["k1".to_string(), "m".to_string()];
-    let e = pendkit::mode_jacobian(&case, Stage::S2, &free, &[1.0], &matched, 1e-4).unwrap_err();
+    let e =
+        pendkit::fit::mode_jacobian(&case, Stage::S2, &free, &[1.0], &matched, 1e-4).unwrap_err();
     assert_eq!(
         e.to_string(),
         "mode_jacobian: values is 1, expected one value per free parameter (2)"
     );
-    let e =
-        pendkit::mode_jacobian(&case, Stage::S2, &free[..1], &[1.0], &matched, 0.0).unwrap_err();
+    let e = pendkit::fit::mode_jacobian(&case, Stage::S2, &free[..1], &[1.0], &matched, 0.0)
+        .unwrap_err();
     assert!(
         e.to_string()
             .starts_with("mode_jacobian: relative_step is 0")

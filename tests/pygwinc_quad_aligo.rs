@@ -186,7 +186,7 @@ fn parameter(sets: &[&str], name: &str) -> f64 {
     let case = pendkit::Case::model("quad-aligo")
         .and_then(|c| c.with_sets(&sets))
         .expect("case");
-    pendkit::parameter_table(&case)
+    pendkit::describe::parameter_table(&case)
         .expect("parameters")
         .into_iter()
         .find(|row| row.name == name)

@@ -4,7 +4,8 @@
 //! (x3 + θ z3), and one-line errors for impossible fibres. The comparison with pygwinc is
 //! in `pygwinc_quad_aligo.rs`.
 
-use pendkit::{Case, ThermalNoise};
+use pendkit::Case;
+use pendkit::noise::ThermalNoise;
 use pendkit_energy::Stage;
 use pendkit_tests::run;
 

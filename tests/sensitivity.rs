@@ -1,4 +1,4 @@
-//! Sensitivities (`pendkit::sensitivities`) against independent references: closed forms
+//! Sensitivities (`pendkit::sensitivity::sensitivities`) against independent references: closed forms
 //! (a simple pendulum, a mass on two springs) and central differences of the answers of
 //! the same model re-solved from scratch (`Case::with_sets`, the whole pipeline: build,
 //! equilibrium, stage, modes or responses), with the modes matched by shape (MAC), not by
@@ -9,7 +9,10 @@
 //! ASD) instead, so the two share only the model.
 
 use pendkit::nalgebra::DMatrix;
-use pendkit::{Case, Sensitivities, SensitivityRequest, Stage, run_stage, sensitivities};
+use pendkit::sensitivity::Sensitivities;
+use pendkit::sensitivity::SensitivityRequest;
+use pendkit::sensitivity::sensitivities;
+use pendkit::{Case, Stage, run_stage};
 
 fn case(spec: &str) -> Case {
     Case::open(spec).expect("case")
@@ -752,7 +755,7 @@ fn every_bundled_model_exact_against_the_difference_route() {
     // pendkit::sensitivity::ZERO_STEP = 10⁻⁶ of its unit) ε·f_max/10⁻⁶ ≈ 2·10⁻¹⁰ f_max
     // with a margin of 50: 10⁻⁸ f_max (the quad's top-wire separation sn = 0, whose
     // derivative is exactly 0 by symmetry, differences to ~10⁻⁸ Hz/m).
-    for model in pendkit::models() {
+    for model in pendkit::catalogue::models() {
         let name = model.name();
         let case = case(name);
         let run = |differences: bool| {

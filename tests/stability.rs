@@ -6,7 +6,8 @@
 use std::f64::consts::PI;
 
 use nalgebra::DMatrix;
-use pendkit::{Case, StageResult, Verdict, run_stage};
+use pendkit::dynamics::Verdict;
+use pendkit::{Case, StageResult, run_stage};
 use pendkit_energy::Stage;
 
 fn run(model: &str, sets: &[&str], stage: Stage) -> StageResult {
@@ -950,7 +951,9 @@ fn a_float_zero_within_rounding_but_strongly_coupled_is_unstable_whatever_its_si
 /// stated errors.
 #[test]
 fn shift_invert_modes_near_their_shift_report_no_spurious_growing_modes() {
-    use pendkit::{ModeSelection, RunOptions, run_stage_with};
+    use pendkit::stage::ModeSelection;
+    use pendkit::stage::RunOptions;
+    use pendkit::stage::run_stage_with;
     let sets = vec!["d4=-1.3787476e-2".to_string(), "n_beads=40".to_string()];
     let (system, _) = Case::model("quad-v5")
         .unwrap()
@@ -963,7 +966,7 @@ fn shift_invert_modes_near_their_shift_report_no_spurious_growing_modes() {
         ..Default::default()
     };
     let below = run_stage_with(system.clone(), Stage::S2, &options, None).expect("runs");
-    assert!(below.modes.coordinates.len() > pendkit::DENSE_MODES_LIMIT);
+    assert!(below.modes.coordinates.len() > pendkit::stage::DENSE_MODES_LIMIT);
     let all = run_stage(system, Stage::S2).expect("runs");
     assert_eq!(
         below.stability.verdict, all.stability.verdict,
@@ -986,7 +989,8 @@ fn shift_invert_modes_near_their_shift_report_no_spurious_growing_modes() {
 /// agree too.
 #[test]
 fn stated_errors_cover_the_difference_between_the_two_derivative_paths() {
-    use pendkit::{RunOptions, run_stage_with};
+    use pendkit::stage::RunOptions;
+    use pendkit::stage::run_stage_with;
     use pendkit_assembly::{AssemblyOptions, DerivativePath};
     let points: Vec<(&str, Vec<&str>, Stage)> = vec![
         ("quad", vec!["d4=-1.3787475950811184e-2"], Stage::S2),

@@ -845,7 +845,7 @@ fn a_moving_only_reference_leaves_out_no_term_that_moves() {
             .map(|t| t.label.clone())
             .collect()
     };
-    for model in pendkit::models() {
+    for model in pendkit::catalogue::models() {
         let model = &*model;
         let (system, resolved) =
             pendkit_model::build_with(model, &Default::default()).expect("build");

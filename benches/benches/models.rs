@@ -13,7 +13,7 @@ use pendkit_assembly::solve_equilibrium;
 use pendkit_energy::Stage;
 
 fn models(c: &mut Criterion) {
-    for model in pendkit::models() {
+    for model in pendkit::catalogue::models() {
         let name = model.name();
         let case = Case::model(name).expect("bundled model");
         let (system, _) = case.build().unwrap_or_else(|e| panic!("{name}: {e}"));

@@ -1,5 +1,5 @@
 //! The issue-15 target in one run: the mode sensitivities of the quad at stage 2 (all 24
-//! modes × all its parameters, `pendkit::sensitivities`) against one stage run of the same
+//! modes × all its parameters, `pendkit::sensitivity::sensitivities`) against one stage run of the same
 //! model (build to modes: `Case::build` and `run_stage`), so that the ratio is read off
 //! numbers measured side by side. The sensitivities are timed on one thread and on the
 //! machine's threads, by the exact route and by the difference route. Beside them, the
@@ -10,7 +10,9 @@
 use std::time::Duration;
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use pendkit::{Case, SensitivityRequest, run_stage, sensitivities};
+use pendkit::sensitivity::SensitivityRequest;
+use pendkit::sensitivity::sensitivities;
+use pendkit::{Case, run_stage};
 use pendkit_energy::Stage;
 
 fn sensitivity(c: &mut Criterion) {

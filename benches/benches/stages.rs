@@ -32,7 +32,7 @@ fn bench_stages(group: &mut BenchmarkGroup<WallTime>, name: &str, case: &Case, s
 
 fn stages(c: &mut Criterion) {
     let mut group = c.benchmark_group("stage");
-    for name in pendkit::models().iter().map(|m| m.name()) {
+    for name in pendkit::catalogue::models().iter().map(|m| m.name()) {
         let case = Case::model(name).unwrap_or_else(|e| panic!("{name}: {e}"));
         bench_stages(&mut group, name, &case, &Stage::ALL);
     }

@@ -107,7 +107,7 @@ fn small(c: &mut Criterion) {
     }
 }
 
-/// Multi-stage families (every model named `quad*` or `triple*` in `pendkit::models()`),
+/// Multi-stage families (every model named `quad*` or `triple*` in `pendkit::catalogue::models()`),
 /// output `x3`: the noise of every variant at 1000 points; for the family's base model
 /// (named exactly `quad`, `triple`) also the transfer function and the noise at 10 000
 /// points (and for the quad at 1000 points, with the per-term breakdown, and over every
@@ -115,7 +115,7 @@ fn small(c: &mut Criterion) {
 fn chains(c: &mut Criterion) {
     const OUTPUT: &str = "x3";
     for family in ["quad", "triple"] {
-        for model in pendkit::models()
+        for model in pendkit::catalogue::models()
             .into_iter()
             .filter(|m| m.name().starts_with(family))
         {

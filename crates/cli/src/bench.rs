@@ -33,7 +33,7 @@ pub struct Args {
 /// Runs the command and returns what it prints.
 pub fn run(a: Args) -> Result<String, Error> {
     let noise = a.noise.as_deref().map(|output| (output, a.points));
-    let report = pendkit::bench(&a.model, &a.sets, a.stage, a.repeat, noise)?;
+    let report = pendkit::stage::bench(&a.model, &a.sets, a.stage, a.repeat, noise)?;
     Ok(if a.json {
         serde_json::to_string_pretty(&report).unwrap_or_default() + "\n"
     } else {
@@ -41,7 +41,7 @@ pub fn run(a: Args) -> Result<String, Error> {
     })
 }
 
-fn bench_table(r: &pendkit::BenchReport, repeat: usize) -> String {
+fn bench_table(r: &pendkit::stage::BenchReport, repeat: usize) -> String {
     let mut out = String::new();
     let _ = writeln!(
         out,

@@ -7,9 +7,12 @@ use std::path::PathBuf;
 use pendkit::assembly::PhaseTimes;
 use pendkit::dynamics::Solver;
 use pendkit::energy::Stage;
-use pendkit::{
-    Case, Error, ModeSelection, Provenance, Resolved, RunOptions, StageResult, run_stage_with,
-};
+use pendkit::params::Resolved;
+use pendkit::stage::ModeSelection;
+use pendkit::stage::Provenance;
+use pendkit::stage::RunOptions;
+use pendkit::stage::run_stage_with;
+use pendkit::{Case, Error, StageResult};
 
 use crate::error::CliError;
 use crate::progress::Progress;

@@ -6,8 +6,13 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
+use pendkit::Case;
 use pendkit::energy::Stage;
-use pendkit::{Case, FitOptions, FitResult, MeasuredModes, MeasuredTf, fit};
+use pendkit::fit::FitOptions;
+use pendkit::fit::FitResult;
+use pendkit::fit::MeasuredModes;
+use pendkit::fit::MeasuredTf;
+use pendkit::fit::fit;
 use serde_json::json;
 
 use crate::common::DEFAULT_STAGE;
@@ -40,7 +45,7 @@ pub struct Args {
     /// from the same request; default) or differences (central differences of the
     /// re-solved model).
     #[arg(long, value_name = "METHOD", default_value = "exact")]
-    jacobian: pendkit::JacobianMethod,
+    jacobian: pendkit::fit::JacobianMethod,
     /// Write the fitted case file (TOML) here.
     #[arg(long, value_name = "FILE")]
     out: Option<PathBuf>,
@@ -140,8 +145,8 @@ fn table(case: &Case, stage: Stage, r: &FitResult, tf: Option<&MeasuredTf>) -> S
         r.iterations,
         r.solves,
         match r.jacobian {
-            pendkit::JacobianMethod::Exact => "exact Jacobian",
-            pendkit::JacobianMethod::Differences => "central-difference Jacobian",
+            pendkit::fit::JacobianMethod::Exact => "exact Jacobian",
+            pendkit::fit::JacobianMethod::Differences => "central-difference Jacobian",
         }
     );
     let _ = writeln!(

@@ -134,7 +134,7 @@ fn run(cli: Cli) -> Result<String, CliError> {
         }
         Command::Models => {
             let mut out = String::new();
-            for m in pendkit::models() {
+            for m in pendkit::catalogue::models() {
                 let _ = writeln!(out, "{:<18} {}", m.name(), m.summary());
             }
             Ok(out)

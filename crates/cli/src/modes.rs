@@ -4,8 +4,8 @@
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
-use pendkit::ModeSelection;
 use pendkit::dynamics::lab_motion;
+use pendkit::stage::ModeSelection;
 use serde_json::json;
 
 use crate::common::{ModelArgs, Run, check_plot_path};

@@ -5,7 +5,8 @@
 
 use std::fmt::Write as _;
 
-use pendkit::{Case, parameter_table};
+use pendkit::Case;
+use pendkit::describe::parameter_table;
 
 use crate::error::CliError;
 use crate::format::sci;
@@ -104,11 +105,11 @@ pub struct ModelFileArgs {
 /// found wherever the copy is).
 pub fn model_file(a: ModelFileArgs) -> Result<String, CliError> {
     use pendkit::suspension::Library as _;
-    pendkit::bundled_files::Bundled
+    pendkit::catalogue::bundled::Bundled
         .file(&a.model)
         .map(|file| file.text.to_string())
         .ok_or_else(|| {
-            let known: Vec<&str> = pendkit::bundled_files::files()
+            let known: Vec<&str> = pendkit::catalogue::bundled::files()
                 .map(|(name, _, _)| name.trim_end_matches(".toml"))
                 .collect();
             CliError::usage(format!(

@@ -3,9 +3,10 @@
 //! and `report` share these, so a figure looks the same whichever command draws it.
 
 use nalgebra::Vector3;
+use pendkit::NoiseOptions;
 use pendkit::dynamics::Mode;
 use pendkit::energy::{BodyId, Shape};
-use pendkit::{NoiseOptions, ThermalNoise};
+use pendkit::noise::ThermalNoise;
 use pendkit_plot::{
     BodeSeries, BodyAxis, BodyOutline, Contribution, ModeChart, ModeMarker, ModeShapePlot,
     NoiseBudget, Orientation, Solid, WireSegment,

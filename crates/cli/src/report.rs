@@ -8,8 +8,8 @@ use std::fmt::Write as _;
 use std::path::PathBuf;
 use std::time::Instant;
 
-use pendkit::ModeSelection;
 use pendkit::energy::{CoordKind, Shape, Stage, registrations};
+use pendkit::stage::ModeSelection;
 use pendkit_plot::Figure;
 
 use crate::common::{GridArgs, ModelArgs, Run};

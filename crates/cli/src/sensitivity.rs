@@ -4,8 +4,11 @@
 
 use std::fmt::Write as _;
 
+use pendkit::Case;
 use pendkit::energy::Stage;
-use pendkit::{Case, Sensitivities, SensitivityRequest, sensitivities};
+use pendkit::sensitivity::Sensitivities;
+use pendkit::sensitivity::SensitivityRequest;
+use pendkit::sensitivity::sensitivities;
 use serde_json::json;
 
 use crate::common::{DEFAULT_STAGE, GridArgs};

@@ -6,7 +6,8 @@ use std::fmt::Write as _;
 use std::path::PathBuf;
 
 use nalgebra::DMatrix;
-use pendkit::{ModeSelection, unit_slug};
+use pendkit::describe::unit_slug;
+use pendkit::stage::ModeSelection;
 use pendkit_plot::{Axis, BodePlot, BodeSeries, Figure, LinePlot, Scale, Series};
 
 use crate::common::{GridArgs, ModelArgs, Run, check_plot_path, split_pair};
@@ -179,7 +180,7 @@ pub fn match_modes(
     new_mass: &DMatrix<f64>,
 ) -> Result<Vec<(usize, f64)>, pendkit::Error> {
     Ok(
-        pendkit::pair_modes_by_overlap(old_shapes, old_mass, new_shapes, new_mass)?
+        pendkit::fit::pair_modes_by_overlap(old_shapes, old_mass, new_shapes, new_mass)?
             .into_iter()
             .enumerate()
             .map(|(j, m)| m.unwrap_or((j, 0.0)))

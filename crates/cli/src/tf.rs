@@ -4,7 +4,7 @@
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
-use pendkit::unit_slug;
+use pendkit::describe::unit_slug;
 
 use crate::common::{GridArgs, ModelArgs, check_plot_path, solver};
 use crate::error::CliError;

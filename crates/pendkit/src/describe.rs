@@ -3,12 +3,17 @@
 //! in other schemes (LIGO's `L3_P`), which body is the support and which the test mass, and
 //! the standard transfer functions between them. Everything is read from the model's data
 //! (its bodies' own pose coordinates, shapes and declared names), never from its name.
+//!
+//! Also the table of a case's parameters with their units, domains and readers
+//! ([`parameter_table`], what `pendkit params` prints).
 
 use nalgebra::Vector3;
 use pendkit_dynamics::Mode;
 use pendkit_energy::{BodyId, CoordId, CoordKind, NameScheme};
 
 use crate::{Error, StageResult};
+
+pub use crate::parameters::{ParameterRow, parameter_table};
 
 /// Degree-of-freedom family of each pose entry (x, y, z, yaw, pitch, roll): longitudinal L,
 /// transverse T, vertical V, yaw Y, pitch P, roll R (the axes of the conventions, with

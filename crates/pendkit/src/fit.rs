@@ -45,7 +45,7 @@
 //!
 //! The modes' rows are the exact sensitivities by default ([`exact_mode_jacobian`]: the
 //! implicit function theorem through the equilibrium and Hellmann–Feynman through the
-//! eigenproblem, [`crate::sensitivities`]), one stage solution and no step per iteration;
+//! eigenproblem, [`crate::sensitivity::sensitivities`]), one stage solution and no step per iteration;
 //! [`JacobianMethod::Differences`] takes central differences of the re-solved model
 //! instead ([`mode_jacobian`], two solutions per free parameter, the modes followed by
 //! shape at each step). The |TF| points' rows come with the exact Jacobian from the same
@@ -803,12 +803,12 @@ pub fn mode_jacobian(
     Ok((matched.hz.clone(), jacobian))
 }
 
-/// [`mode_jacobian`] by the exact sensitivities ([`crate::sensitivities`]) instead of
+/// [`mode_jacobian`] by the exact sensitivities ([`crate::sensitivity::sensitivities`]) instead of
 /// differences: the frequencies of the `matched` modes of `case` with the free parameters
 /// at `values` (the solution `matched` comes from), and d(frequency)/d(parameter) (Hz per
 /// unit of the parameter; one row per matched mode, one column per free parameter), with
 /// no step. A parameter the exact route is closed to has its stage matrices differenced
-/// there (see [`crate::sensitivities`]), still without following any mode. Modes within a
+/// there (see [`crate::sensitivity::sensitivities`]), still without following any mode. Modes within a
 /// cluster of equal frequencies get the eigenvalues of the cluster's derivative in
 /// ascending order, as their frequencies are ordered.
 pub fn exact_mode_jacobian(
@@ -826,7 +826,7 @@ pub fn exact_mode_jacobian(
 /// The fit's whole Jacobian with [`JacobianMethod::Exact`]: the rows of
 /// [`exact_mode_jacobian`], and with `tf` d|H|/dp at its points' frequencies (one row per
 /// point, |H|'s unit per unit of the parameter) from the same request: the stage's
-/// matrices differenced and everything after them exact (see [`crate::sensitivities`]),
+/// matrices differenced and everything after them exact (see [`crate::sensitivity::sensitivities`]),
 /// so that a point on a sharp resonance gets its true derivative, which a difference of
 /// |H| itself misses when the step moves the peak by a fraction of its width.
 pub fn exact_jacobian(
@@ -860,13 +860,13 @@ fn exact_rows(
         });
     }
     let at = case.clone().with_sets(&sets(free, values))?;
-    let request = crate::SensitivityRequest {
+    let request = crate::sensitivity::SensitivityRequest {
         parameters: Some(free.to_vec()),
         tf: tf.map(|t| (t.input.clone(), t.output.clone())),
         freqs,
-        ..crate::SensitivityRequest::modes(stage)
+        ..crate::sensitivity::SensitivityRequest::modes(stage)
     };
-    let sensitivities = crate::sensitivities(&at, &request).map_err(|e| match e {
+    let sensitivities = crate::sensitivity::sensitivities(&at, &request).map_err(|e| match e {
         // a count or a switch among the free parameters, a neutral mode: said as the fit's
         Error::Sensitivity(why) => Error::Sensitivity(format!("the fit's exact Jacobian: {why}")),
         e => e,

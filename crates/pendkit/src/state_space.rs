@@ -4,7 +4,7 @@
 use pendkit_dynamics::StateSpace;
 
 #[cfg(feature = "export")]
-use crate::Provenance;
+use crate::stage::Provenance;
 use crate::{Error, StageResult};
 
 /// A state space with the units of its states, inputs and outputs.

@@ -51,7 +51,9 @@ use pendkit_dynamics::Mode;
 
 use pendkit_model::BuildError;
 
-use crate::{Case, Error, ModeSelection, NoiseOptions, RunOptions, Solver, Stage, log_grid};
+use crate::catalogue::find_model;
+use crate::stage::{ModeSelection, RunOptions, run_stage_with};
+use crate::{Case, Error, NoiseOptions, Solver, Stage, log_grid};
 
 /// Modes are computed below the band's top times this, so that a reference mode just under
 /// the top can find its counterpart in a variant where it sits just over.
@@ -218,7 +220,7 @@ pub fn answer(variant: &Variant, question: &Question, grid: &[f64]) -> Result<An
         modes: ModeSelection::Below(question.band_hz.1 * MODE_SEARCH_MARGIN),
         ..Default::default()
     };
-    let result = crate::run_stage_with(system, variant.stage, &options, None)?;
+    let result = run_stage_with(system, variant.stage, &options, None)?;
     result.stability()?;
     let noise = result.noise_with(
         &question.output,
@@ -588,7 +590,7 @@ fn family_of(case: &Case) -> Vec<Case> {
         .unwrap_or(name);
     let members: Vec<Case> = FAMILY_SUFFIXES
         .iter()
-        .filter_map(|suffix| crate::find_model(&format!("{stem}{suffix}")).ok())
+        .filter_map(|suffix| find_model(&format!("{stem}{suffix}")).ok())
         .map(|model| Case {
             name: model.name().to_string(),
             model,

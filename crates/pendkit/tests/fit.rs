@@ -6,11 +6,15 @@
 
 use std::path::Path;
 
+use pendkit::fit::FitError;
+use pendkit::fit::FitOptions;
+use pendkit::fit::JacobianMethod;
+use pendkit::fit::exact_jacobian;
+use pendkit::fit::exact_mode_jacobian;
+use pendkit::fit::fit;
+use pendkit::fit::mode_jacobian;
 use pendkit::fit::{MatchedModes, MeasuredMode, MeasuredModes};
-use pendkit::{
-    Case, Error, FitError, FitOptions, JacobianMethod, Stage, exact_jacobian, exact_mode_jacobian,
-    fit, mode_jacobian, run_stage,
-};
+use pendkit::{Case, Error, Stage, run_stage};
 
 /// SplitMix64 and Box–Muller: a reproducible standard normal sequence.
 struct Normal(u64);
@@ -353,7 +357,7 @@ fn a_measured_transfer_function_joins_the_modes() {
         let sigma = 1e-3 * z.norm();
         text += &format!("{f},{},{sigma}\n", z.norm() + sigma * rng.sample());
     }
-    let tf = pendkit::MeasuredTf::parse(Path::new("tf.csv"), &text).unwrap();
+    let tf = pendkit::fit::MeasuredTf::parse(Path::new("tf.csv"), &text).unwrap();
     let all = synthetic(&["l3=0.606", "m3=40.392"], 1e-4, 5);
     let keep = ["x3", "pitch3", "z3"];
     let measured = MeasuredModes {
@@ -407,7 +411,7 @@ fn the_exact_jacobian_follows_a_resonance_that_differences_of_h_miss() {
     for f in freqs {
         text += &format!("{f:e},1,0.1\n");
     }
-    let tf = pendkit::MeasuredTf::parse(Path::new("tf.csv"), &text).unwrap();
+    let tf = pendkit::fit::MeasuredTf::parse(Path::new("tf.csv"), &text).unwrap();
     let free = names(&["l3", "m3"]);
     // the nominal values (the solution `matched` comes from)
     let (_, resolved) = case.build().unwrap();
@@ -467,12 +471,13 @@ fn the_exact_jacobian_follows_a_resonance_that_differences_of_h_miss() {
 
 #[test]
 fn a_transfer_function_file_names_its_input_and_output() {
-    let err = pendkit::MeasuredTf::parse(Path::new("tf.csv"), "freq_hz,abs,sigma_abs\n1,2,0.1\n")
-        .unwrap_err()
-        .to_string();
+    let err =
+        pendkit::fit::MeasuredTf::parse(Path::new("tf.csv"), "freq_hz,abs,sigma_abs\n1,2,0.1\n")
+            .unwrap_err()
+            .to_string();
     assert_eq!(err, "tf.csv: no '# input = NAME' line before the data");
     let err =
-        pendkit::MeasuredTf::parse(Path::new("tf.csv"), "# input = x00\n# output = x3\n1,2\n")
+        pendkit::fit::MeasuredTf::parse(Path::new("tf.csv"), "# input = x00\n# output = x3\n1,2\n")
             .unwrap_err()
             .to_string();
     assert_eq!(
@@ -500,13 +505,13 @@ fn a_transfer_function_file_names_its_input_and_output() {
         ),
     ];
     for (text, expected) in cases {
-        let err = pendkit::MeasuredTf::parse(Path::new("tf.csv"), text)
+        let err = pendkit::fit::MeasuredTf::parse(Path::new("tf.csv"), text)
             .unwrap_err()
             .to_string();
         assert!(err.starts_with(expected), "{err}");
     }
     // a header line before the directives is still a header
-    let tf = pendkit::MeasuredTf::parse(
+    let tf = pendkit::fit::MeasuredTf::parse(
         Path::new("tf.csv"),
         "freq_hz,abs,sigma_abs\n# input = x00\n# output = x3\n1,2,0.1\n",
     )
@@ -521,7 +526,7 @@ fn a_transfer_function_file_names_its_input_and_output() {
 fn a_weighted_residual_too_large_to_square_names_its_line() {
     let measured =
         MeasuredModes::parse(Path::new("m.csv"), "x3,0.4328,0.001\ny3,0.4681,0.001\n").unwrap();
-    let tf = pendkit::MeasuredTf::parse(
+    let tf = pendkit::fit::MeasuredTf::parse(
         Path::new("tf.csv"),
         "# input = x00\n# output = x3\n0.5,1e-300,1e-301\n",
     )

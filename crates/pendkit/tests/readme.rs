@@ -34,3 +34,59 @@ fn the_readme_example_is_the_tested_crate_example() {
         "the README's ```rust block differs from the first example of crates/pendkit/src/lib.rs"
     );
 }
+
+/// The crate root stays small (issue 32: at most 30 names, the layers reachable as modules):
+/// every name `lib.rs` makes public at the root, counted from its `pub` items and the names
+/// in its `pub use` lists.
+#[test]
+fn the_crate_root_has_at_most_thirty_names() {
+    let lib = include_str!("../src/lib.rs");
+    let mut names = Vec::new();
+    for line in lib.lines() {
+        let Some(item) = line.strip_prefix("pub ") else {
+            continue;
+        };
+        let words: Vec<&str> = item.split_whitespace().collect();
+        match words.first().copied() {
+            Some("use") => {
+                let path = item.trim_start_matches("use ").trim_end_matches(';');
+                match path.split_once('{') {
+                    Some((_, list)) => names.extend(
+                        list.trim_end_matches('}')
+                            .split(',')
+                            .map(|n| n.trim().to_string())
+                            .filter(|n| !n.is_empty()),
+                    ),
+                    None => names.push(path.rsplit([' ', ':']).next().unwrap_or("").to_string()),
+                }
+            }
+            Some("mod" | "fn" | "struct" | "enum" | "const" | "trait" | "type") => {
+                let name = words[1]
+                    .split(['(', ':', '<', ';', '{'])
+                    .next()
+                    .unwrap_or("");
+                names.push(name.to_string());
+            }
+            _ => {}
+        }
+    }
+    for expected in [
+        "Case",
+        "Override",
+        "StageResult",
+        "run_stage",
+        "Error",
+        "model",
+        "catalogue",
+    ] {
+        assert!(
+            names.iter().any(|n| n == expected),
+            "{expected} missing from {names:?}"
+        );
+    }
+    assert!(
+        names.len() <= 30,
+        "{} names at the crate root: {names:?}",
+        names.len()
+    );
+}

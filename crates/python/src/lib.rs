@@ -15,10 +15,11 @@ use numpy::ndarray::Array2;
 use numpy::{
     Complex64, IntoPyArray, PyArray1, PyArray2, PyArrayDyn, PyArrayMethods, PyUntypedArrayMethods,
 };
-use pendkit::{
-    Case, Error, NamedStateSpace, NoiseOptions, Resolved, RunOptions, Stage, StageResult,
-    run_stage_with,
-};
+use pendkit::params::Resolved;
+use pendkit::stage::NamedStateSpace;
+use pendkit::stage::RunOptions;
+use pendkit::stage::run_stage_with;
+use pendkit::{Case, Error, NoiseOptions, Stage, StageResult};
 use pyo3::create_exception;
 use pyo3::exceptions::{PyImportError, PyValueError};
 use pyo3::prelude::*;
@@ -128,9 +129,9 @@ fn fspath(path: &Bound<'_, PyAny>) -> PyResult<String> {
 
 /// Measured modes from a CSV file's path, or from a list of `(label, hz, sigma_hz[,
 /// shape])` tuples (checked as a file's lines are; the errors name item k, from 0, `modes:k+1`).
-fn measured_modes(modes: &Bound<'_, PyAny>) -> PyResult<pendkit::MeasuredModes> {
+fn measured_modes(modes: &Bound<'_, PyAny>) -> PyResult<pendkit::fit::MeasuredModes> {
     if modes.is_instance_of::<PyString>() || modes.hasattr("__fspath__")? {
-        return pendkit::MeasuredModes::read(Path::new(&fspath(modes)?)).map_err(error);
+        return pendkit::fit::MeasuredModes::read(Path::new(&fspath(modes)?)).map_err(error);
     }
     let mut rows: Vec<Vec<String>> = Vec::new();
     for item in modes.try_iter().map_err(|_| {
@@ -156,7 +157,7 @@ fn measured_modes(modes: &Bound<'_, PyAny>) -> PyResult<pendkit::MeasuredModes> 
         rows.push(fields);
     }
     // the items are rows, not a file's lines: a '#' or ',' in a label is the label's
-    pendkit::MeasuredModes::from_rows(Path::new("modes"), &rows).map_err(error)
+    pendkit::fit::MeasuredModes::from_rows(Path::new("modes"), &rows).map_err(error)
 }
 
 impl Model {
@@ -304,24 +305,24 @@ impl Model {
         jacobian: &str,
     ) -> PyResult<Bound<'py, PyAny>> {
         let stage = stage_or_complete(stage)?;
-        let jacobian: pendkit::JacobianMethod = jacobian
+        let jacobian: pendkit::fit::JacobianMethod = jacobian
             .parse()
             .map_err(|e: String| PyValueError::new_err(e))?;
         let measured = measured_modes(modes)?;
         let tf = match tf {
             None => None,
             Some(path) => {
-                Some(pendkit::MeasuredTf::read(Path::new(&fspath(path)?)).map_err(error)?)
+                Some(pendkit::fit::MeasuredTf::read(Path::new(&fspath(path)?)).map_err(error)?)
             }
         };
         let case = self.case.clone();
-        let options = pendkit::FitOptions {
+        let options = pendkit::fit::FitOptions {
             stage,
             jacobian,
-            ..pendkit::FitOptions::default()
+            ..pendkit::fit::FitOptions::default()
         };
         let result = py
-            .detach(|| pendkit::fit(&case, &measured, tf.as_ref(), &free, &options))
+            .detach(|| pendkit::fit::fit(&case, &measured, tf.as_ref(), &free, &options))
             .map_err(error)?;
         let case_file = match &self.source {
             Source::Bundled(name) => Some(result.case_file(name, &case)),
@@ -382,7 +383,7 @@ impl Model {
             Some(f) => frequencies(f)?,
             None => Vec::new(),
         };
-        let request = pendkit::SensitivityRequest {
+        let request = pendkit::sensitivity::SensitivityRequest {
             stage,
             modes,
             tf,
@@ -395,7 +396,7 @@ impl Model {
         };
         let case = &self.case;
         let s = py
-            .detach(|| pendkit::sensitivities(case, &request))
+            .detach(|| pendkit::sensitivity::sensitivities(case, &request))
             .map_err(error)?;
         let rows = |m: &[Vec<f64>], columns: usize| {
             let data: Vec<f64> = m.iter().flatten().copied().collect();
@@ -1043,7 +1044,7 @@ impl StateSpace {
 /// The bundled models as (name, one-line summary) pairs.
 #[pyfunction]
 fn models() -> Vec<(String, String)> {
-    pendkit::models()
+    pendkit::catalogue::models()
         .into_iter()
         .map(|m| (m.name().to_string(), m.summary().to_string()))
         .collect()
