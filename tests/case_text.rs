@@ -6,34 +6,11 @@ use std::path::Path;
 
 use pendkit::{Case, Stage, run_stage};
 
-/// A bob on four hinged vertical fibres of length `length` m (the suspension-file crate's
-/// documentation example).
+/// A bob on four hinged vertical fibres of length `length` m.
 fn pendulum(length: f64) -> String {
-    format!(
-        r#"
-[parameters]
-m = {{ value = 40, unit = "kg", description = "the bob" }}
-[materials.silica]
-youngs_modulus = 72e9
-poisson_ratio = 0.17
-density = 2200
-loss_angle = 1e-7
-[bodies.support]
-coordinates = "00"
-driven = true
-[bodies.bob]
-coordinates = "1"
-dof = "xyz"
-mass = "m"
-[stages.bob]
-from = "support"
-[stages.bob.fibres]
-upper = {{ at = [0.005, 0.17, 0], mirror = ["y", "x"] }}
-lower = {{ at = [0.005, 0.17, 0], mirror = ["y", "x"], hinged = 1 }}
-length = {length}
-radius = 0.2e-3
-material = "silica"
-"#
+    pendkit_tests::hinged_bob(
+        r#"m = { value = 40, unit = "kg", description = "the bob" }"#,
+        length,
     )
 }
 

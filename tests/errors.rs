@@ -414,31 +414,11 @@ fn typed_overrides_are_exact_and_refused_in_the_librarys_own_terms() {
 #[test]
 fn a_declared_parameter_domain_is_checked_for_the_default_and_every_override() {
     let file = |value: &str| {
-        format!(
-            r#"
-[parameters]
-m = {{ value = 40, unit = "kg", domain = "> 0", description = "the bob" }}
-unused = {{ value = {value}, unit = "K", domain = "> 0", description = "read by nothing" }}
-[materials.silica]
-youngs_modulus = 72e9
-poisson_ratio = 0.17
-[bodies.support]
-coordinates = "00"
-driven = true
-[bodies.bob]
-coordinates = "1"
-dof = "xyz"
-mass = "m"
-[stages.bob]
-from = "support"
-[stages.bob.fibres]
-upper = {{ at = [0.005, 0.17, 0], mirror = ["y", "x"] }}
-lower = {{ at = [0.005, 0.17, 0], mirror = ["y", "x"], hinged = 1 }}
-length = 0.6
-radius = 0.2e-3
-material = "silica"
-"#
-        )
+        let parameters = format!(
+            "m = {{ value = 40, unit = \"kg\", domain = \"> 0\", description = \"the bob\" }}\n\
+             unused = {{ value = {value}, unit = \"K\", domain = \"> 0\", description = \"read by nothing\" }}"
+        );
+        pendkit_tests::hinged_bob(&parameters, 0.6)
     };
     let path = std::path::Path::new("bob.toml");
     // the default outside its own domain: the file's error, at the parameter's line

@@ -246,3 +246,35 @@ pub fn assert_nominal_equilibrium(model: &str) {
         );
     }
 }
+
+/// A suspension file's text: a bob of mass `m` on four hinged vertical silica fibres of
+/// length `length` m (the suspension-file crate's documentation example), with `parameters`
+/// the lines of its `[parameters]` table (which must define `m`, kg).
+pub fn hinged_bob(parameters: &str, length: f64) -> String {
+    format!(
+        r#"
+[parameters]
+{parameters}
+[materials.silica]
+youngs_modulus = 72e9
+poisson_ratio = 0.17
+density = 2200
+loss_angle = 1e-7
+[bodies.support]
+coordinates = "00"
+driven = true
+[bodies.bob]
+coordinates = "1"
+dof = "xyz"
+mass = "m"
+[stages.bob]
+from = "support"
+[stages.bob.fibres]
+upper = {{ at = [0.005, 0.17, 0], mirror = ["y", "x"] }}
+lower = {{ at = [0.005, 0.17, 0], mirror = ["y", "x"], hinged = 1 }}
+length = {length}
+radius = 0.2e-3
+material = "silica"
+"#
+    )
+}

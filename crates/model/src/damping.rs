@@ -4,7 +4,7 @@
 use std::sync::OnceLock;
 
 use pendkit_energy::TagDamping;
-use pendkit_expr::{Expr, Slot, parse};
+use pendkit_expr::{BinOp, Expr, Slot, parse};
 use pendkit_params::Resolved;
 
 use crate::BuildError;
@@ -154,45 +154,34 @@ impl DampingSpec {
     /// the parts given, 0 when none is). Which parameters they use is only checked when
     /// they are compiled.
     pub fn parse(&self, tag: &str) -> Result<ParsedDamping, BuildError> {
-        let mut imag_parts = Vec::new();
-        if let Some(phi) = &self.structural {
-            imag_parts.push(format!("({phi})"));
-        }
-        if let Some(v) = &self.viscous {
-            imag_parts.push(format!("({v})*f"));
-        }
-        if self.thermoelastic_delta.is_some() || self.thermoelastic_tau.is_some() {
-            let delta = self.thermoelastic_delta.as_deref().unwrap_or("0");
-            let tau = self.thermoelastic_tau.as_deref().unwrap_or("0");
-            imag_parts.push(format!("({delta})*(2*pi*f*({tau}))/(1+(2*pi*f*({tau}))^2)"));
-        }
-        if let Some(e) = &self.imag {
-            imag_parts.push(format!("({e})"));
-        }
-        let imag = if imag_parts.is_empty() {
-            "0".to_string()
-        } else {
-            imag_parts.join("+")
-        };
-        let real = self.real.as_deref().unwrap_or("1");
         let parse_part = |text: &str, which: &str| {
             parse(text).map_err(|e| BuildError::Expression {
                 context: context(tag, which),
                 message: e.to_string(),
             })
         };
-        let (real, imag) = (parse_part(real, "real")?, parse_part(&imag, "imag")?);
+        // every field parsed once, by its own name
+        let mut parts: Vec<(&'static Field, Expr)> = Vec::new();
+        for (field, text) in self.fields() {
+            parts.push((field, parse_part(text, field.name)?));
+        }
+        let part = |name: &str| parts.iter().find(|(f, _)| f.name == name).map(|(_, e)| e);
+        let real = part("real").cloned().unwrap_or(Expr::Num(1.0));
+        let imag = imaginary_multiplier(
+            part("structural"),
+            part("viscous"),
+            (part("thermoelastic.delta"), part("thermoelastic.tau")),
+            part("imag"),
+        );
         let mut inputs = real.symbols();
         inputs.extend(imag.symbols());
         inputs.remove("f");
         // the parts with a domain narrower than "finite" that do not depend on f, each
         // checked on its own when compiled (the temperature by `temperature_value`)
-        let mut checked = Vec::new();
-        for (field, text) in self.fields() {
-            if field.domain != Domain::Finite && *field != DAMPING_TEMPERATURE {
-                checked.push((field, parse_part(text, field.name)?));
-            }
-        }
+        let checked = parts
+            .into_iter()
+            .filter(|(field, _)| field.domain != Domain::Finite && **field != DAMPING_TEMPERATURE)
+            .collect();
         Ok(ParsedDamping {
             spec: self.clone(),
             real,
@@ -202,6 +191,49 @@ impl DampingSpec {
             first: OnceLock::new(),
         })
     }
+}
+
+/// ε''(f), the sum of the parts given (0 when none is): `structural + viscous·f +
+/// Δ ωτ/(1 + (ωτ)²) + imag` with ω = 2π f, a half of the thermoelastic pair that is not
+/// given being 0. Built from the parsed parts as the tree the parser makes of
+/// `(φ)+(v)*f+(Δ)*(2*pi*f*(τ))/(1+(2*pi*f*(τ))^2)+(imag)` (the sum left-associative), so
+/// that it evaluates to the same numbers.
+fn imaginary_multiplier(
+    structural: Option<&Expr>,
+    viscous: Option<&Expr>,
+    thermoelastic: (Option<&Expr>, Option<&Expr>),
+    imag: Option<&Expr>,
+) -> Expr {
+    let binary = |op, a: Expr, b: Expr| Expr::Binary(op, Box::new(a), Box::new(b));
+    let f = || Expr::Sym("f".into());
+    let mut terms: Vec<Expr> = Vec::new();
+    terms.extend(structural.cloned());
+    terms.extend(viscous.map(|v| binary(BinOp::Mul, v.clone(), f())));
+    if thermoelastic.0.is_some() || thermoelastic.1.is_some() {
+        let zero = Expr::Num(0.0);
+        let delta = thermoelastic.0.unwrap_or(&zero).clone();
+        let tau = thermoelastic.1.unwrap_or(&zero).clone();
+        // 2*pi*f*(τ): ((2·pi)·f)·τ
+        let omega_tau = || {
+            let two_pi = binary(BinOp::Mul, Expr::Num(2.0), Expr::Sym("pi".into()));
+            binary(BinOp::Mul, binary(BinOp::Mul, two_pi, f()), tau.clone())
+        };
+        let peak = binary(
+            BinOp::Div,
+            binary(BinOp::Mul, delta, omega_tau()),
+            binary(
+                BinOp::Add,
+                Expr::Num(1.0),
+                binary(BinOp::Pow, omega_tau(), Expr::Num(2.0)),
+            ),
+        );
+        terms.push(peak);
+    }
+    terms.extend(imag.cloned());
+    terms
+        .into_iter()
+        .reduce(|sum, term| binary(BinOp::Add, sum, term))
+        .unwrap_or(Expr::Num(0.0))
 }
 
 /// Where a damping expression sits, for error messages.
@@ -332,6 +364,41 @@ mod tests {
                 .unwrap_err()
                 .to_string()
                 .contains("nosuch")
+        );
+    }
+
+    /// ε'' built from the parsed parts is the tree the parser makes of the parts written
+    /// out as one expression (the text the multiplier was parsed from before): the same
+    /// numbers, to the last bit.
+    #[test]
+    fn the_imaginary_multiplier_is_the_parsers_tree_of_its_parts() {
+        let (s, v, d, t, i) = ("phi*(1+2)", "-3e-3", "delta^2", "tau/2", "1e-7*(1+f/100)");
+        let whole = format!("({s})+({v})*f+({d})*(2*pi*f*({t}))/(1+(2*pi*f*({t}))^2)+({i})");
+        let mut spec = DampingSpec::default();
+        for (field, text) in [
+            ("structural", s),
+            ("viscous", v),
+            ("thermoelastic.delta", d),
+            ("thermoelastic.tau", t),
+            ("imag", i),
+        ] {
+            spec.set_field(field, text).unwrap();
+        }
+        assert_eq!(spec.parse("t").unwrap().imag, parse(&whole).unwrap());
+        // one half of the pair: the other is 0; no part at all: 0
+        let half = DampingSpec {
+            thermoelastic_tau: Some(t.into()),
+            ..Default::default()
+        };
+        let written = format!("(0)*(2*pi*f*({t}))/(1+(2*pi*f*({t}))^2)");
+        assert_eq!(half.parse("t").unwrap().imag, parse(&written).unwrap());
+        assert_eq!(
+            DampingSpec::default().parse("t").unwrap().imag,
+            Expr::Num(0.0)
+        );
+        assert_eq!(
+            DampingSpec::default().parse("t").unwrap().real,
+            Expr::Num(1.0)
         );
     }
 

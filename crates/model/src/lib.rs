@@ -928,6 +928,15 @@ pub trait Model: Send + Sync {
     fn damping(&self) -> BTreeMap<String, DampingSpec> {
         BTreeMap::new()
     }
+    /// [`Model::damping`] parsed ([`DampingSpec::parse`]); a model that parsed it already
+    /// (to check it when it was read, as suspension files do) hands out its copy instead of
+    /// parsing it again.
+    fn parsed_damping(&self) -> Result<BTreeMap<String, ParsedDamping>, BuildError> {
+        self.damping()
+            .into_iter()
+            .map(|(tag, spec)| Ok((tag.clone(), spec.parse(&tag)?)))
+            .collect()
+    }
     /// Builds the numeric model from resolved parameters.
     fn build(&self, params: &Resolved) -> Result<System, BuildError>;
     /// Builds the model with dual numbers seeded in the directions of up to
@@ -1025,11 +1034,7 @@ impl Defaults {
             params.define_value("wire_terms_early", 0.0)?;
             params.set_unit("wire_terms_early", "")?;
         }
-        let damping = model
-            .damping()
-            .into_iter()
-            .map(|(tag, spec)| Ok((tag.clone(), spec.parse(&tag)?)))
-            .collect::<Result<_, BuildError>>()?;
+        let damping = model.parsed_damping()?;
         Ok(Defaults {
             model: model.name().to_string(),
             params,

@@ -64,7 +64,8 @@ use std::sync::Arc;
 
 use pendkit_energy::System;
 use pendkit_model::{
-    BuildError, ChunkBuild, DampingSpec, DefaultsCache, Model, ParameterInfo, whole_number,
+    BuildError, ChunkBuild, DampingSpec, DefaultsCache, Model, ParameterInfo, ParsedDamping,
+    whole_number,
 };
 use pendkit_params::{ChunkDual, ParamError, ParamSet, Resolved, Tangent};
 
@@ -157,6 +158,8 @@ pub struct Suspension {
     source_name: String,
     spec: Spec,
     damping: BTreeMap<String, DampingSpec>,
+    /// `damping` parsed when the file was read (which checks it): the defaults take it.
+    parsed_damping: BTreeMap<String, ParsedDamping>,
     generator: Option<Generator>,
     cache: DefaultsCache,
 }
@@ -254,13 +257,15 @@ impl Suspension {
         );
         check_parameters(&spec)?;
         let damping = damping::damping(&spec)?;
+        let mut parsed_damping = BTreeMap::new();
         for (tag, d) in &damping {
-            d.parse(tag).map_err(|e| {
+            let parsed = d.parse(tag).map_err(|e| {
                 spec.damping.iter().find(|x| &x.tag == tag).map_or_else(
                     || FileError::file(&source.name, e.to_string()),
                     |x| x.at.error(e.to_string()),
                 )
             })?;
+            parsed_damping.insert(tag.clone(), parsed);
         }
         Ok(Suspension {
             name,
@@ -268,6 +273,7 @@ impl Suspension {
             source_name: source.name.clone(),
             spec,
             damping,
+            parsed_damping,
             generator: None,
             cache: DefaultsCache::new(),
         })
@@ -561,6 +567,10 @@ impl Model for Suspension {
 
     fn damping(&self) -> BTreeMap<String, DampingSpec> {
         self.damping.clone()
+    }
+
+    fn parsed_damping(&self) -> Result<BTreeMap<String, ParsedDamping>, BuildError> {
+        Ok(self.parsed_damping.clone())
     }
 
     fn build(&self, params: &Resolved) -> Result<System, BuildError> {

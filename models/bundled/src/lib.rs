@@ -6,7 +6,7 @@ use std::collections::BTreeMap;
 use std::sync::{Arc, LazyLock, OnceLock};
 
 use pendkit_energy::System;
-use pendkit_model::{BuildError, DampingSpec, DefaultsCache, Model, ParameterInfo};
+use pendkit_model::{BuildError, DampingSpec, DefaultsCache, Model, ParameterInfo, ParsedDamping};
 use pendkit_params::{ParamError, ParamSet, Resolved};
 use pendkit_suspension::generate::{MAX_CHAIN_STAGES, chain};
 use pendkit_suspension::{BundledFile, FileError, Generator, Library, Suspension};
@@ -123,6 +123,11 @@ impl Model for BundledModel {
 
     fn damping(&self) -> BTreeMap<String, DampingSpec> {
         self.suspension().map(|s| s.damping()).unwrap_or_default()
+    }
+
+    fn parsed_damping(&self) -> Result<BTreeMap<String, ParsedDamping>, BuildError> {
+        self.suspension()
+            .map_or_else(|_| Ok(BTreeMap::new()), |s| s.parsed_damping())
     }
 
     fn build(&self, params: &Resolved) -> Result<System, BuildError> {
