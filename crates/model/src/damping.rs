@@ -56,7 +56,9 @@ impl DampingSpec {
     /// `thermoelastic.tau` keeps the model's Δ).
     pub fn merge(&mut self, other: &DampingSpec) {
         for (field, text) in other.fields() {
-            *self.slot(field.name) = Some(text.to_string());
+            if let Some(slot) = self.slot(field.name) {
+                *slot = Some(text.to_string());
+            }
         }
     }
 
@@ -64,9 +66,9 @@ impl DampingSpec {
     /// `imag`, `thermoelastic.delta`, `thermoelastic.tau`, `temperature`): what case files,
     /// suspension files and `--set damping.<tag>.<field>=...` all call.
     pub fn set_field(&mut self, field: &str, text: &str) -> Result<(), String> {
-        match schema::find(DAMPING_FIELDS, field) {
-            Some(field) => {
-                *self.slot(field.name) = Some(text.to_string());
+        match self.slot(field) {
+            Some(slot) => {
+                *slot = Some(text.to_string());
                 Ok(())
             }
             None => Err(format!(
@@ -76,18 +78,19 @@ impl DampingSpec {
         }
     }
 
-    /// The place of the field called `name` in [`DAMPING_FIELDS`] (a name outside the
-    /// table is `imag`'s place: callers look the name up in the table first).
-    fn slot(&mut self, name: &str) -> &mut Option<String> {
-        match name {
+    /// The place of the field called `name` in [`DAMPING_FIELDS`] (a test checks that every
+    /// field of the table has one, and [`DampingSpec::field`] reads it).
+    fn slot(&mut self, name: &str) -> Option<&mut Option<String>> {
+        Some(match name {
             "real" => &mut self.real,
             "structural" => &mut self.structural,
             "viscous" => &mut self.viscous,
+            "imag" => &mut self.imag,
             "temperature" => &mut self.temperature,
             "thermoelastic.delta" => &mut self.thermoelastic_delta,
             "thermoelastic.tau" => &mut self.thermoelastic_tau,
-            _ => &mut self.imag,
-        }
+            _ => return None,
+        })
     }
 
     /// The expression text of the field called `name` in [`DAMPING_FIELDS`], if it is set.
@@ -365,6 +368,22 @@ mod tests {
                 .to_string()
                 .contains("nosuch")
         );
+    }
+
+    /// Every field of the schema has its place: set by its name, read back by its name,
+    /// and no other field changes.
+    #[test]
+    fn every_schema_field_is_set_and_read_by_its_name() {
+        for (k, field) in DAMPING_FIELDS.iter().enumerate() {
+            let mut spec = DampingSpec::default();
+            spec.set_field(field.name, &format!("{k}")).unwrap();
+            let set: Vec<_> = spec
+                .fields()
+                .map(|(f, t)| (f.name, t.to_string()))
+                .collect();
+            assert_eq!(set, vec![(field.name, format!("{k}"))]);
+        }
+        assert!(DampingSpec::default().set_field("phi", "1").is_err());
     }
 
     /// ε'' built from the parsed parts is the tree the parser makes of the parts written
