@@ -10,7 +10,7 @@
 //! [parameters]
 //! m3 = 50                      # a value, an expression, "scale(1.2)" or "increment(0.5)"
 //! [damping.fibre_bending]
-//! structural = "10*silica_phi" # real, structural, viscous, imag, thermoelastic = [delta, tau]
+//! structural = "10*silica_phi" # the fields of pendkit_model::schema::DAMPING_FIELDS
 //! "#)?;
 //! assert_eq!(case.model, "quad");
 //! assert_eq!(case.overrides.parameters, vec![("m3".to_string(), "50".to_string())]);
@@ -115,7 +115,7 @@ fn expression_text(text: &str, what: &str, value: &Spanned<DeValue>) -> Result<S
 /// Refuses, naming its line and field, the first float literal of the TOML `text` that an
 /// `f64` cannot hold: the TOML parser reads `1e-400` as 0 and refuses `1e400` without
 /// naming the field, so the literals are checked as written, before the values are read.
-fn check_float_literals(text: &str) -> Result<(), FileError> {
+fn check_float_literals(text: &str, root: &DeTable) -> Result<(), FileError> {
     fn walk(text: &str, path: &str, value: &Spanned<DeValue>) -> Result<(), FileError> {
         match value.get_ref() {
             DeValue::Float(f) => {
@@ -147,16 +147,17 @@ fn check_float_literals(text: &str) -> Result<(), FileError> {
         }
         Ok(())
     }
-    // a file that is not TOML is reported by the reader below
-    match DeTable::parse(text) {
-        Ok(table) => walk_table(text, "", table.get_ref()),
-        Err(_) => Ok(()),
-    }
+    walk_table(text, "", root)
 }
 
 /// Parses the text of a case file.
 pub fn parse_case(text: &str) -> Result<CaseFile, FileError> {
-    check_float_literals(text)?;
+    // one parse keeping every value's span (a text that is not TOML is reported by serde
+    // below, with its line)
+    let root = DeTable::parse(text).ok();
+    if let Some(root) = &root {
+        check_float_literals(text, root.get_ref())?;
+    }
     let file: CaseToml = toml::from_str(text).map_err(|e| {
         let at = e
             .span()
@@ -166,10 +167,12 @@ pub fn parse_case(text: &str) -> Result<CaseFile, FileError> {
             message: format!("{at}{}", e.message().trim()),
         }
     })?;
-    // serde accepted the form: the same text parses again, now keeping every value's span
-    let root = DeTable::parse(text).map_err(|e| FileError::Parse {
-        message: e.message().trim().to_string(),
-    })?;
+    // serde accepted the form, so the text is TOML and `root` was read
+    let Some(root) = root else {
+        return Err(FileError::Parse {
+            message: "not a TOML document".into(),
+        });
+    };
     let section = |key: &str| -> Vec<(&str, &Spanned<DeValue>)> {
         let mut entries: Vec<_> = match root.get_ref().get(key).map(Spanned::get_ref) {
             Some(DeValue::Table(table)) => table
@@ -300,6 +303,34 @@ mod tests {
         assert_eq!(d.thermoelastic_delta.as_deref(), Some("1e-3"));
         assert_eq!(d.thermoelastic_tau.as_deref(), Some("0.5"));
         assert_eq!(d.real, None);
+    }
+
+    #[test]
+    fn every_damping_field_of_the_schema_is_read_in_each_form() {
+        // the pair, the table and the dotted keys are one field each; `temperature` too (a
+        // case file once refused it though `fit --out` wrote it)
+        for (te, delta, tau) in [
+            ("thermoelastic = [1e-3, \"0.5\"]", Some("1e-3"), Some("0.5")),
+            ("thermoelastic = { tau = 0.5 }", None, Some("0.5")),
+            ("thermoelastic.delta = \"d\"", Some("d"), None),
+        ] {
+            let c = parse_case(&format!(
+                "model = \"quad\"\n[damping.t]\n{te}\ntemperature = 100\nviscous = \"1e-9\"\n"
+            ))
+            .unwrap();
+            let d = &c.overrides.damping["t"];
+            assert_eq!(d.thermoelastic_delta.as_deref(), delta, "{te}");
+            assert_eq!(d.thermoelastic_tau.as_deref(), tau, "{te}");
+            assert_eq!(d.temperature.as_deref(), Some("100"));
+            assert_eq!(d.viscous.as_deref(), Some("1e-9"));
+        }
+        let e = parse_case("model = \"quad\"\n[damping.t]\nthermoelastic = { tua = 1 }\n")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with("line 3: damping.t: unknown damping field 'thermoelastic.tua'"),
+            "{e}"
+        );
     }
 
     #[test]

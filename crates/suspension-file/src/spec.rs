@@ -1319,3 +1319,41 @@ fn extra(name: String, node: &Node, at: At) -> Result<ExtraFile, FileError> {
         at,
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use pendkit_model::schema::MATERIAL_FIELDS;
+
+    use super::*;
+
+    /// A material's constants are named as the schema names them, in its order: the
+    /// domain check of every constant (build.rs) finds each one's field.
+    #[test]
+    fn material_constants_are_the_schemas_fields() {
+        let origin = crate::source::Origin {
+            source: crate::source::Source::new("m.toml", None, ""),
+            span: 0..0,
+        };
+        let at = At {
+            origin,
+            path: "materials.m".into(),
+        };
+        let m = MaterialSpec {
+            name: "m".into(),
+            at,
+            youngs_modulus: None,
+            shear_modulus: None,
+            poisson_ratio: None,
+            density: None,
+            loss_angle: None,
+            specific_heat: None,
+            conductivity: None,
+            thermal_expansion: None,
+            dlne_dt: None,
+            dissipation_depth: None,
+        };
+        let names: Vec<&str> = m.fields().iter().map(|(name, _)| *name).collect();
+        let schema: Vec<&str> = MATERIAL_FIELDS.iter().map(|f| f.name).collect();
+        assert_eq!(names, schema);
+    }
+}
