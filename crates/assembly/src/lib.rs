@@ -18,7 +18,7 @@ mod timing;
 
 use std::collections::BTreeMap;
 
-use nalgebra::{DMatrix, Vector3};
+use nalgebra::{DMatrix, DVector, Vector3};
 use pendkit_energy::{
     CoordKind, EarlyWireTerms, EnergyError, ExtraPhase, Reference, SharedBodies, Stage, System,
     Term, constraint_terms, extra_terms, registry,
@@ -234,7 +234,53 @@ pub struct Assembled {
     pub mass: DMatrix<f64>,
 }
 
+/// A point on a body as the linearised geometry at equilibrium sees it: how far it moves
+/// along a lab direction per unit of each unknown (variables, then floats) and of each
+/// parameter ([`Assembled::point_weights`]). The same weights are the generalised force of a
+/// unit force there.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PointWeights {
+    /// Per unit of each variable, then each float (m/m or m/rad).
+    pub unknowns: DVector<f64>,
+    /// Per unit of each parameter coordinate (the support's pose).
+    pub parameters: DVector<f64>,
+}
+
 impl Assembled {
+    /// How far `point` (m, body coordinates) on body `body` of `system` moves along
+    /// `direction` (lab axes, normalised here) per unit of every unknown (variables, then
+    /// floats) and every parameter coordinate: the linearised geometry at this equilibrium.
+    /// `None` when a weight is not finite or the body index is out of range.
+    pub fn point_weights(
+        &self,
+        system: &System,
+        body: usize,
+        point: &Vector3<f64>,
+        direction: &Vector3<f64>,
+    ) -> Option<PointWeights> {
+        let jac = system
+            .bodies
+            .get(body)?
+            .frame
+            .try_jacobian(&self.equilibrium.coords, point)
+            .ok()?;
+        let d = direction.normalize();
+        let along = |ids: &mut dyn Iterator<Item = &usize>| {
+            DVector::from_vec(ids.map(|&g| jac.position.column(g).dot(&d)).collect())
+        };
+        let layout = &self.layout;
+        let weights = PointWeights {
+            unknowns: along(&mut layout.variables.iter().chain(&layout.floats)),
+            parameters: along(&mut layout.parameters.iter()),
+        };
+        let finite = weights
+            .unknowns
+            .iter()
+            .chain(weights.parameters.iter())
+            .all(|x| x.is_finite());
+        finite.then_some(weights)
+    }
+
     /// Scatters per-term local matrices, each chosen by `pick` (None = skip), into one
     /// master matrix in layout order.
     pub fn scatter(&self, pick: impl Fn(&TermMatrices) -> Option<&[f64]>) -> DMatrix<f64> {

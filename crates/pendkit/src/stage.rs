@@ -12,7 +12,7 @@ use pendkit_dynamics::{
 use pendkit_energy::{NamedSignal, SignalTerm};
 use pendkit_noise::thermal_noise_with;
 
-use pendkit_assembly::{AssemblyOptions, PhaseTimes};
+use pendkit_assembly::{AssemblyOptions, PhaseTimes, PointWeights};
 use pendkit_dynamics::{Input, Modes, Output, Solver, Stability, StageModel};
 use pendkit_energy::{Stage, System};
 use pendkit_noise::{NoiseOptions, ThermalNoise};
@@ -233,14 +233,6 @@ fn dense_modes(
     Ok(modes)
 }
 
-/// A point on a body as the linearised geometry at equilibrium sees it: how far it moves
-/// along a lab direction per unit of each unknown (variables, then floats) and of each
-/// parameter.
-struct PointWeights {
-    unknowns: DVector<f64>,
-    parameters: DVector<f64>,
-}
-
 impl StageResult {
     /// One line saying what grows, as an error, unless the equilibrium is stable (or
     /// neutral). Every calculation that answers with a linearised model checks this first.
@@ -313,52 +305,10 @@ impl StageResult {
                         .join(" ")
                 ),
             })?;
-            self.weights_of_point(b, &p, &d)
+            self.assembled
+                .point_weights(&self.system, b, &p, &d)
                 .ok_or_else(|| bad("its motion is not finite at the equilibrium"))
         })())
-    }
-
-    /// How far `point` (m, body coordinates) on body `body` moves along `direction` (lab
-    /// axes, normalised here) per unit of every unknown (variables, then floats) and every
-    /// parameter: the linearised geometry at the equilibrium. `None` when a weight is not
-    /// finite (or the body index is out of range).
-    fn weights_of_point(
-        &self,
-        body: usize,
-        point: &Vector3<f64>,
-        direction: &Vector3<f64>,
-    ) -> Option<PointWeights> {
-        let jac = self
-            .system
-            .bodies
-            .get(body)?
-            .frame
-            .try_jacobian(&self.assembled.equilibrium.coords, point)
-            .ok()?;
-        let d = direction.normalize();
-        let layout = &self.assembled.layout;
-        let along = |ids: &[usize]| {
-            DVector::from_iterator(
-                ids.len(),
-                ids.iter().map(|&g| jac.position.column(g).dot(&d)),
-            )
-        };
-        let unknowns: Vec<usize> = layout
-            .variables
-            .iter()
-            .chain(&layout.floats)
-            .copied()
-            .collect();
-        let weights = PointWeights {
-            unknowns: along(&unknowns),
-            parameters: along(&layout.parameters),
-        };
-        let finite = weights
-            .unknowns
-            .iter()
-            .chain(weights.parameters.iter())
-            .all(|x| x.is_finite());
-        finite.then_some(weights)
     }
 
     /// The vector of a model's named input or output (`[inputs]`/`[outputs]` of a
@@ -424,7 +374,8 @@ impl StageResult {
                     direction,
                 } => {
                     let w = self
-                        .weights_of_point(*body, point, direction)
+                        .assembled
+                        .point_weights(&self.system, *body, point, direction)
                         .ok_or_else(|| {
                             bad("a point whose motion is not finite at the equilibrium".into())
                         })?;
