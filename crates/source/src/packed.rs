@@ -117,7 +117,11 @@ impl Reader<'_> {
 
     fn integer(&mut self) -> Result<usize, FileError> {
         let rest = self.packed.get(self.at..).ok_or_else(|| self.corrupt())?;
-        let end = rest.find(';').ok_or_else(|| self.corrupt())?;
+        // a byte search: the packed form is ASCII up to its texts, which `text` skips whole
+        let end = rest
+            .bytes()
+            .position(|b| b == b';')
+            .ok_or_else(|| self.corrupt())?;
         let value = rest[..end].parse().map_err(|_| self.corrupt())?;
         self.at += end + 1;
         Ok(value)
