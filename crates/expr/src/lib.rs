@@ -24,7 +24,7 @@ use num_dual::DualNum;
 
 pub use compile::{Compiled, Slot};
 pub use number::{NumberError, number_literal, number_text};
-pub use parse::parse;
+pub use parse::{is_symbol_name, parse};
 
 /// A binary operator.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]

@@ -14,12 +14,13 @@ enum Kind {
     End,
 }
 
-#[derive(Debug, Clone)]
-struct Token {
+/// A token borrows its text from the input, so lexing allocates only the token list.
+#[derive(Debug, Clone, Copy)]
+struct Token<'a> {
     kind: Kind,
     /// 1-based character column.
     col: usize,
-    text: String,
+    text: &'a str,
 }
 
 /// Parses an expression.
@@ -54,6 +55,25 @@ pub fn parse(src: &str) -> Result<Expr, ExprError> {
     Ok(expr)
 }
 
+/// Whether `name` can be used as a parameter's name: it reads back as exactly that symbol
+/// (`[A-Za-z_][A-Za-z0-9_.]*`, as the lexer reads a name), and it is neither `pi` nor a
+/// function's name.
+pub fn is_symbol_name(name: &str) -> bool {
+    let mut chars = name.chars();
+    chars.next().is_some_and(starts_name)
+        && chars.all(continues_name)
+        && name != "pi"
+        && Func::from_name(name).is_none()
+}
+
+fn starts_name(c: char) -> bool {
+    c.is_ascii_alphabetic() || c == '_'
+}
+
+fn continues_name(c: char) -> bool {
+    c.is_ascii_alphanumeric() || c == '_' || c == '.'
+}
+
 fn syntax(src: &str, message: String, column: usize) -> ExprError {
     ExprError::Syntax {
         message,
@@ -62,8 +82,15 @@ fn syntax(src: &str, message: String, column: usize) -> ExprError {
     }
 }
 
-fn lex(src: &str) -> Result<Vec<Token>, ExprError> {
+fn lex(src: &str) -> Result<Vec<Token<'_>>, ExprError> {
     let chars: Vec<char> = src.chars().collect();
+    // The byte offset of each character (and of the end), to slice a token's text.
+    let offsets: Vec<usize> = src
+        .char_indices()
+        .map(|(at, _)| at)
+        .chain(std::iter::once(src.len()))
+        .collect();
+    let text_of = |start: usize, end: usize| &src[offsets[start]..offsets[end]];
     let is_digit = |i: usize| chars.get(i).is_some_and(char::is_ascii_digit);
     let mut tokens = Vec::new();
     let mut i = 0;
@@ -95,17 +122,13 @@ fn lex(src: &str) -> Result<Vec<Token>, ExprError> {
                     }
                 }
             }
-            let text: String = chars[start..i].iter().collect();
-            match crate::number_literal(&text) {
+            match crate::number_literal(text_of(start, i)) {
                 Ok(x) => Kind::Num(x),
                 Err(e) => return Err(syntax(src, e.to_string(), start + 1)),
             }
-        } else if c.is_ascii_alphabetic() || c == '_' {
+        } else if starts_name(c) {
             i += 1;
-            while chars
-                .get(i)
-                .is_some_and(|&c| c.is_ascii_alphanumeric() || c == '_' || c == '.')
-            {
+            while chars.get(i).copied().is_some_and(continues_name) {
                 i += 1;
             }
             Kind::Ident
@@ -122,13 +145,13 @@ fn lex(src: &str) -> Result<Vec<Token>, ExprError> {
         tokens.push(Token {
             kind,
             col: start + 1,
-            text: chars[start..i].iter().collect(),
+            text: text_of(start, i),
         });
     }
     tokens.push(Token {
         kind: Kind::End,
         col: chars.len() + 1,
-        text: String::new(),
+        text: "",
     });
     Ok(tokens)
 }
@@ -139,13 +162,13 @@ type Parsed = Result<(Expr, usize), ExprError>;
 struct Parser<'a> {
     src: &'a str,
     /// Always ends with a `Kind::End` token, which is never consumed.
-    tokens: Vec<Token>,
+    tokens: Vec<Token<'a>>,
     pos: usize,
     nesting: usize,
 }
 
-impl Parser<'_> {
-    fn peek(&self) -> &Token {
+impl<'a> Parser<'a> {
+    fn peek(&self) -> &Token<'a> {
         let last = self.tokens.len().saturating_sub(1);
         &self.tokens[self.pos.min(last)]
     }
@@ -245,7 +268,7 @@ impl Parser<'_> {
     }
 
     fn atom(&mut self) -> Parsed {
-        let token = self.peek().clone();
+        let token = *self.peek();
         match token.kind {
             Kind::Num(x) => {
                 self.advance();
@@ -258,7 +281,7 @@ impl Parser<'_> {
                 } else if Func::from_name(&token.text).is_some() {
                     Err(self.error_here(format!("expected '(' after function '{}'", token.text)))
                 } else {
-                    Ok((Expr::Sym(token.text), 1))
+                    Ok((Expr::Sym(token.text.to_string()), 1))
                 }
             }
             Kind::Punct('(') => {
@@ -275,9 +298,9 @@ impl Parser<'_> {
     }
 
     /// Parses the arguments of a call; the name and `(` are already consumed.
-    fn call(&mut self, name: &Token) -> Parsed {
+    fn call(&mut self, name: &Token<'a>) -> Parsed {
         let func = Func::from_name(&name.text).ok_or_else(|| ExprError::UnknownFunction {
-            name: name.text.clone(),
+            name: name.text.to_string(),
             column: name.col,
             input: self.src.to_string(),
         })?;

@@ -5,7 +5,7 @@ use std::collections::BTreeSet;
 use std::f64::consts::PI;
 
 use num_dual::{Dual2_64, Dual64, first_derivative, second_derivative};
-use pendkit_expr::{BinOp, Expr, ExprError, Func, Slot, parse};
+use pendkit_expr::{BinOp, Expr, ExprError, Func, Slot, is_symbol_name, parse};
 use proptest::prelude::*;
 
 /// Evaluates `src` over f64 with a = 2, b = 3, x = 0.3.
@@ -465,5 +465,19 @@ proptest! {
             prop_assert!(c.eval::<f64>(&[]).is_err());
             prop_assert!(c.eval_points(&[&a[..2], &b[..2]], &mut short).is_err());
         }
+    }
+}
+
+/// `is_symbol_name` is a shortcut for "parses as exactly this one symbol, and is not `pi`":
+/// the second method here is the parser itself.
+#[test]
+fn a_symbol_name_is_what_parses_back_as_that_symbol() {
+    let by_parsing = |name: &str| matches!(parse(name), Ok(Expr::Sym(s)) if s == name && s != "pi");
+    for name in [
+        "m1", "_x", "a.b", "a..", "stage1.m", "e", "nan", "inf", "pi", "pix", "sqrt", "sqrtx",
+        "atan2", "min", "max", "1e3", "1a", ".5", "", " a", "a ", "a b", "a-b", "a(b)", "é", "aé",
+        "A_9", "_", "x.", "x^2",
+    ] {
+        assert_eq!(is_symbol_name(name), by_parsing(name), "{name:?}");
     }
 }

@@ -20,7 +20,7 @@ mod tangent;
 use std::collections::HashMap;
 use std::sync::Arc;
 
-use pendkit_expr::{BinOp, Expr, ExprError, parse};
+use pendkit_expr::{BinOp, Expr, ExprError, is_symbol_name, parse};
 
 pub use domain::Domain;
 pub use resolve::Resolved;
@@ -231,6 +231,19 @@ impl ParamSet {
         Ok(())
     }
 
+    /// Defines `name` as `expr`, already parsed from `expr_text` (a reader that parsed the
+    /// text to check it hands the tree over rather than having it parsed again).
+    pub fn define_parsed(
+        &mut self,
+        name: &str,
+        expr: Expr,
+        expr_text: &str,
+    ) -> Result<(), ParamError> {
+        self.check_new_name(name)?;
+        self.insert(name, expr, expr_text.trim().to_string());
+        Ok(())
+    }
+
     /// Defines `name` as a number.
     pub fn define_value(&mut self, name: &str, value: f64) -> Result<(), ParamError> {
         self.check_new_name(name)?;
@@ -244,9 +257,10 @@ impl ParamSet {
         if self.contains(name) {
             return Err(ParamError::Duplicate { name: name.into() });
         }
-        match parse(name) {
-            Ok(Expr::Sym(s)) if s == name && s != "pi" => Ok(()),
-            _ => Err(ParamError::InvalidName { name: name.into() }),
+        if is_symbol_name(name) {
+            Ok(())
+        } else {
+            Err(ParamError::InvalidName { name: name.into() })
         }
     }
 

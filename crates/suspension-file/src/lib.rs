@@ -160,6 +160,9 @@ pub struct Suspension {
     damping: BTreeMap<String, DampingSpec>,
     /// `damping` parsed when the file was read (which checks it): the defaults take it.
     parsed_damping: BTreeMap<String, ParsedDamping>,
+    /// The file's own parameters, with their units and domains, as checked when it was read
+    /// ([`Model::parameters`] adds the built-in ones to a copy).
+    file_parameters: ParamSet,
     generator: Option<Generator>,
     cache: DefaultsCache,
 }
@@ -255,7 +258,7 @@ impl Suspension {
             || format!("suspension file {}", source.name),
             |s| s.value.clone(),
         );
-        check_parameters(&spec)?;
+        let file_parameters = file_parameters(&spec)?;
         let damping = damping::damping(&spec)?;
         let mut parsed_damping = BTreeMap::new();
         for (tag, d) in &damping {
@@ -274,6 +277,7 @@ impl Suspension {
             spec,
             damping,
             parsed_damping,
+            file_parameters,
             generator: None,
             cache: DefaultsCache::new(),
         })
@@ -378,7 +382,9 @@ fn read_spec(source: &Arc<Source>, root: Node, library: &dyn Library) -> Result<
 
 /// Defines the file's parameters and resolves them, reporting a problem at the parameter it
 /// concerns.
-fn check_parameters(spec: &Spec) -> Result<(), FileError> {
+/// The file's parameters as a set (each expression as its reader parsed it), with their units
+/// and domains, checked: each resolves, without cycles, inside its domain.
+fn file_parameters(spec: &Spec) -> Result<ParamSet, FileError> {
     let mut set = ParamSet::new();
     let at_param = |name: &str| spec.parameters.iter().find(|p| p.name == name);
     let fail = |name: &str, e: ParamError| match at_param(name) {
@@ -386,8 +392,12 @@ fn check_parameters(spec: &Spec) -> Result<(), FileError> {
         None => FileError::file("parameters", e.to_string()),
     };
     for p in &spec.parameters {
-        set.define(&p.name, &p.value.text)
+        set.define_parsed(&p.name, p.value.expr.clone(), &p.value.text)
             .map_err(|e| p.at.error(e.to_string()))?;
+        if !p.unit.is_empty() {
+            set.set_unit(&p.name, unit_of(&p.unit))
+                .map_err(|e| p.at.error(e.to_string()))?;
+        }
         // a default outside its own declared domain is the file's error, at its line
         if let Some(domain) = &p.domain {
             set.set_domain(&p.name, domain.value)
@@ -395,7 +405,7 @@ fn check_parameters(spec: &Spec) -> Result<(), FileError> {
         }
     }
     match set.resolve() {
-        Ok(_) => Ok(()),
+        Ok(_) => Ok(set),
         Err(e) => Err(match &e {
             ParamError::Cycle { chain } => fail(&chain[0], e.clone()),
             ParamError::Undefined { used_in, .. } => fail(used_in, e.clone()),
@@ -542,16 +552,7 @@ impl Model for Suspension {
     }
 
     fn parameters(&self) -> Result<ParamSet, ParamError> {
-        let mut set = ParamSet::new();
-        for p in &self.spec.parameters {
-            set.define(&p.name, &p.value.text)?;
-            if !p.unit.is_empty() {
-                set.set_unit(&p.name, unit_of(&p.unit))?;
-            }
-            if let Some(domain) = &p.domain {
-                set.set_domain(&p.name, domain.value)?;
-            }
-        }
+        let mut set = self.file_parameters.clone();
         if let Some(g) = &self.generator {
             set.define_value(g.parameter, g.default as f64)?;
             set.set_unit(g.parameter, "")?;
