@@ -278,7 +278,7 @@ impl<'a> Parser<'a> {
                 self.advance();
                 if self.eat('(') {
                     self.call(&token)
-                } else if Func::from_name(&token.text).is_some() {
+                } else if Func::from_name(token.text).is_some() {
                     Err(self.error_here(format!("expected '(' after function '{}'", token.text)))
                 } else {
                     Ok((Expr::Sym(token.text.to_string()), 1))
@@ -299,7 +299,7 @@ impl<'a> Parser<'a> {
 
     /// Parses the arguments of a call; the name and `(` are already consumed.
     fn call(&mut self, name: &Token<'a>) -> Parsed {
-        let func = Func::from_name(&name.text).ok_or_else(|| ExprError::UnknownFunction {
+        let func = Func::from_name(name.text).ok_or_else(|| ExprError::UnknownFunction {
             name: name.text.to_string(),
             column: name.col,
             input: self.src.to_string(),
