@@ -42,7 +42,7 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parent.parent
 DEFAULT_VENV = REPO / "benches" / ".venv-gwinc"
 GWINC_VERSION = "0.6.2"
-# The band of `pendkit bench --noise` (crates/pendkit/src/lib.rs, `bench`): log-spaced,
+# The band of `pendkit bench --noise` (crates/interface/pendkit/src/lib.rs, `bench`): log-spaced,
 # 0.1 to 100 Hz, end points included. pygwinc gets exactly the same grid.
 BAND_HZ = (0.1, 100.0)
 

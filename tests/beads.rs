@@ -6,9 +6,9 @@
 
 use nalgebra::{DMatrix, DVector, Vector3};
 use pendkit::run_stage;
-use pendkit_energy::{EndDirection, Stage, System, WireEnd, WireSection, WireTags};
 use pendkit_model::beads::{BeadJoints, BeadedFibre, add_beaded_fibre};
 use pendkit_model::{BodySpec, FibreProfile, SystemBuilder};
+use pendkit_system::{EndDirection, Stage, System, WireEnd, WireSection, WireTags};
 use pendkit_tests::stiff_string_f1;
 
 const TWO_PI: f64 = 2.0 * std::f64::consts::PI;
@@ -278,7 +278,7 @@ fn clamped_beads_on_a_tapered_fibre_converge_to_its_continuum() {
 }
 
 /// Stage 1A (torsion before bending) on slanted beaded fibres. Before the stage left out
-/// the joint rotations it does not hold (crates/assembly/src/redundant.rs), a slanted
+/// the joint rotations it does not hold (crates/mechanics/assembly/src/redundant.rs), a slanted
 /// fibre's clamped joints made the float block singular and stage 1A stopped with
 /// "float 'rollf1b5' has no stiffness holding it"; on a vertical fibre those rotations are
 /// exact zeros and left out as idle. Checked against that vertical path (a second method):

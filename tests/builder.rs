@@ -6,10 +6,10 @@
 use nalgebra::{Matrix3, Vector3};
 use pendkit::run_stage;
 use pendkit_dynamics::lab_motion;
-use pendkit_energy::{
+use pendkit_model::{BodySpec, SystemBuilder};
+use pendkit_system::{
     EndDirection, ExtraPhase, Stage, System, Wire, WireEnd, WireSection, WireTags,
 };
-use pendkit_model::{BodySpec, SystemBuilder};
 
 const G: f64 = 9.81;
 const TWO_PI: f64 = 2.0 * std::f64::consts::PI;
@@ -125,7 +125,7 @@ fn constrained_body_on_an_inclined_track() {
                 .mass(m),
         )
         .unwrap();
-    let end = |body| pendkit_energy::SpringEnd {
+    let end = |body| pendkit_system::SpringEnd {
         body,
         point: Vector3::zeros(),
         angles: [0.0; 3],

@@ -213,7 +213,7 @@ fn the_chain_is_its_generators_file() {
         let _ = std::fs::remove_dir_all(&dir);
         // six coordinates per body and six of the support (driven)
         assert_eq!(bundled.coords.len(), 6 * (n + 1));
-        let names = |s: &pendkit::energy::System| {
+        let names = |s: &pendkit::system::System| {
             s.coords.iter().map(|c| c.name.clone()).collect::<Vec<_>>()
         };
         assert_eq!(names(&bundled), names(&written));

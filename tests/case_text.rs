@@ -104,6 +104,6 @@ fn every_settable_field_survives_the_case_file_writer() {
     explicit.damping.insert("w1_bending".into(), in_full);
     let (explicit_system, _) = build_with(&*quad.model, &explicit).unwrap();
     let loss =
-        |system: &pendkit::energy::System| system.damping.get("w1_bending").unwrap().at(10.0);
+        |system: &pendkit::system::System| system.damping.get("w1_bending").unwrap().at(10.0);
     assert_eq!(loss(&read_system), loss(&explicit_system));
 }

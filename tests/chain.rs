@@ -13,7 +13,7 @@
 
 use nalgebra::{DMatrix, SymmetricEigen};
 use pendkit::run_stage;
-use pendkit_energy::Stage;
+use pendkit_system::Stage;
 use pendkit_tests::{TWO_PI, assert_rel, block, run, two_dof_frequencies};
 
 const REL: f64 = 1e-10;

@@ -10,11 +10,11 @@
 
 use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
 use num_dual::Dual64;
-use pendkit_energy::{
-    EndDirection, PluginElement, Real, SpringEnd, System, Wire, WireEnd, WireSection, WireTags,
-};
 use pendkit_model::{BodySpec, SystemBuilder};
 use pendkit_rotations::Constant;
+use pendkit_system::{
+    EndDirection, PluginElement, Real, SpringEnd, System, Wire, WireEnd, WireSection, WireTags,
+};
 
 const G: f64 = 9.81;
 

@@ -3,7 +3,8 @@
 
 use pendkit::Case;
 use pendkit_assembly::{EquilibriumOptions, solve_equilibrium};
-use pendkit_energy::{Reference, System, registry};
+use pendkit_energy::{Reference, registry};
+use pendkit_system::System;
 
 fn system(model: &str) -> System {
     Case::model(model).unwrap().build().unwrap().0
@@ -45,7 +46,7 @@ fn rigid_body_converges_from_a_tilted_start_to_the_nominal_geometry() {
     let eq = solve_equilibrium(&s, &EquilibriumOptions::default()).unwrap();
     // forces vanish (weight 392 N; residual below 1e-11 of it, rounding of a few ulps)
     for (i, f) in net_forces(&s, &eq.coords).iter().enumerate() {
-        if s.coords[i].kind != pendkit_energy::CoordKind::Parameter {
+        if s.coords[i].kind != pendkit_system::CoordKind::Parameter {
             assert!(f.abs() < 1e-8, "{}: {f}", s.coords[i].name);
         }
     }

@@ -3,8 +3,8 @@
 use nalgebra::Vector3;
 use pendkit::{Case, run_stage};
 use pendkit_assembly::{AssemblyError, EquilibriumOptions, solve_equilibrium};
-use pendkit_energy::{EndDirection, Stage, Wire, WireEnd, WireSection, WireTags};
 use pendkit_model::{BodySpec, SystemBuilder};
+use pendkit_system::{EndDirection, Stage, Wire, WireEnd, WireSection, WireTags};
 
 /// The one-line message of building `model` with `sets`.
 fn build_error(model: &str, sets: &[&str]) -> String {

@@ -16,10 +16,8 @@
 //! Hessians change by one ulp, whichever path computes them, so that much is added.
 
 use nalgebra::Vector3;
-use pendkit::energy::{
-    Element, EndDirection, OffHessian, Reference, SharedBodies, Stage, System, Term, Wire, WireEnd,
-    WireSection, WireTags, registry,
-};
+use pendkit::energy::{Element, OffHessian, Reference, SharedBodies, Term, registry};
+use pendkit::system::{EndDirection, Stage, System, Wire, WireEnd, WireSection, WireTags};
 use pendkit_assembly::{
     AssemblyOptions, DerivativePath, EquilibriumOptions, assemble_at_with, assemble_with,
     mass_matrix,
@@ -227,7 +225,7 @@ fn perturbed(system: &System, x: &[f64], rng: &mut Random, length: f64, angle: f
     x.iter()
         .zip(&system.coords)
         .map(|(&v, c)| {
-            if c.kind == pendkit::energy::CoordKind::Parameter {
+            if c.kind == pendkit::system::CoordKind::Parameter {
                 return v;
             }
             let angular = ["yaw", "pitch", "roll"]

@@ -15,8 +15,8 @@ use faer::c64;
 use nalgebra::{DMatrix, DVector};
 use pendkit::StageResult;
 use pendkit_dynamics::{Input, Output, Solver, Sweep};
-use pendkit_energy::Stage;
 use pendkit_noise::{NoiseOptions, thermal_noise_with};
+use pendkit_system::Stage;
 use pendkit_tests::run;
 
 /// Frequencies (Hz) off every resonance of the models below.

@@ -5,7 +5,7 @@
 use nalgebra::{DMatrix, DVector};
 use pendkit::dynamics::{DynamicsError, Input, Output, normal_modes};
 use pendkit::{Case, StageResult, run_stage};
-use pendkit_energy::Stage;
+use pendkit_system::Stage;
 
 fn quad() -> StageResult {
     let (system, _) = Case::model("quad").unwrap().build().unwrap();
@@ -254,10 +254,10 @@ fn assembly_of_a_hand_built_system_with_out_of_range_ids_is_an_error() {
     ));
     // an output reading a coordinate that does not exist
     let mut bad = system.clone();
-    bad.outputs.push(pendkit_energy::NamedSignal {
+    bad.outputs.push(pendkit_system::NamedSignal {
         name: "ghost".into(),
         force: false,
-        terms: vec![(1.0, pendkit_energy::SignalTerm::Coordinate(99))],
+        terms: vec![(1.0, pendkit_system::SignalTerm::Coordinate(99))],
     });
     assert!(is_index(
         solve_equilibrium(&bad, &Default::default()).unwrap_err()
@@ -498,7 +498,7 @@ fn tradeoff_comparisons_of_answers_that_do_not_fit_are_errors_naming_the_argumen
 #[test]
 fn a_beaded_fibre_with_more_beads_than_the_limit_is_an_error_not_an_overflow() {
     use pendkit::model::beads::{BeadJoints, BeadedFibre, MAX_BEADS, add_beaded_fibre, beads_mass};
-    use pendkit_energy::{EndDirection, WireEnd, WireSection, WireTags};
+    use pendkit_system::{EndDirection, WireEnd, WireSection, WireTags};
     let section: WireSection = WireSection::round(1e-4, 2e11, 8e10, 7800.0);
     let end = |body| WireEnd {
         body,

@@ -13,7 +13,7 @@
 use nalgebra::DMatrix;
 use pendkit::StageResult;
 use pendkit_dynamics::{EntryRounding, Mode, StiffnessRounding, TermRounding, eliminate_floats};
-use pendkit_energy::Stage;
+use pendkit_system::Stage;
 use pendkit_tests::{TWO_PI, run};
 
 /// ω² ascending and M-normalised vectors (columns) of the whole pencil (K, M), by

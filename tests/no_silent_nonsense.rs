@@ -6,7 +6,7 @@
 //! that breaks one.
 
 use pendkit::{Case, Error, StageResult, log_grid, run_stage};
-use pendkit_energy::Stage;
+use pendkit_system::Stage;
 use proptest::prelude::*;
 
 /// Builds and runs `case`, then checks every number a successful run gives: modes, and

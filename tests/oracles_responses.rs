@@ -9,10 +9,10 @@
 
 use nalgebra::{DVector, Matrix6, Vector3, Vector6};
 use pendkit_dynamics::StageModel;
-use pendkit_energy::{Damping, SpringEnd, Stage};
 use pendkit_model::{BodySpec, DampingSpec, SystemBuilder};
 use pendkit_noise::BOLTZMANN;
 use pendkit_params::ParamSet;
+use pendkit_system::{Damping, SpringEnd, Stage};
 use pendkit_tests::{TWO_PI, assert_printed, assert_rel, run, tf};
 
 type C = (f64, f64);

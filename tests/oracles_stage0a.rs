@@ -9,7 +9,7 @@
 //! tighter than the 1e-7.
 
 use pendkit_dynamics::eliminate_floats;
-use pendkit_energy::Stage;
+use pendkit_system::Stage;
 use pendkit_tests::{TWO_PI, assert_printed, assert_rel, hz, labelled, run, two_dof_frequencies};
 
 const G: f64 = 9.81;

@@ -13,7 +13,7 @@
 
 use pendkit::StageResult;
 use pendkit_assembly::{EquilibriumOptions, solve_equilibrium};
-use pendkit_energy::Stage;
+use pendkit_system::Stage;
 use pendkit_tests::{TWO_PI, assert_printed, assert_rel, hz, labelled, run, two_dof_frequencies};
 
 const G: f64 = 9.81;
@@ -246,11 +246,11 @@ fn wire_terms_early_rescue_a_model_unstable_without_them() {
             .unwrap()
             .build()
             .unwrap();
-        system.extra_terms.push(pendkit_energy::ExtraTerm {
+        system.extra_terms.push(pendkit_system::ExtraTerm {
             name: "torque".into(),
             energy: format!("-{tau}*pitch1").parse().unwrap(),
             tag: "torque".into(),
-            phase: pendkit_energy::ExtraPhase::BeforeEquilibrium,
+            phase: pendkit_system::ExtraPhase::BeforeEquilibrium,
         });
         system
     };
@@ -295,13 +295,13 @@ fn without_tension_the_fibres_are_cantilevers() {
 /// A 40 kg point mass on one fibre of length L clamped at the top (direction `top`) and
 /// hinged at the mass, with the given section, at stage 2.
 fn one_fibre(
-    section: pendkit_energy::WireSection,
-    top: pendkit_energy::EndDirection,
+    section: pendkit_system::WireSection,
+    top: pendkit_system::EndDirection,
     early: bool,
 ) -> pendkit::StageResult {
     use nalgebra::Vector3;
-    use pendkit_energy::{EarlyWireTerms, EndDirection, Wire, WireEnd, WireTags};
     use pendkit_model::{BodySpec, SystemBuilder};
+    use pendkit_system::{EarlyWireTerms, EndDirection, Wire, WireEnd, WireTags};
     let mut b = SystemBuilder::new(G);
     b.support_parameters().unwrap();
     let support = b.body(BodySpec::new("support").pose_suffix("00")).unwrap();
@@ -347,8 +347,8 @@ fn one_fibre(
     pendkit::run_stage(b.build().unwrap(), Stage::S2).unwrap()
 }
 
-fn silica() -> pendkit_energy::WireSection {
-    pendkit_energy::WireSection::round(R, E, E / 2.34, 2200.0)
+fn silica() -> pendkit_system::WireSection {
+    pendkit_system::WireSection::round(R, E, E / 2.34, 2200.0)
 }
 
 #[test]
@@ -359,7 +359,7 @@ fn oblong_section_bends_with_each_principal_moment() {
     section.moment_1 *= 4.0;
     section.moment_2 /= 4.0;
     section.principal_axis = nalgebra::Vector3::x();
-    let r = one_fibre(section, pendkit_energy::EndDirection::Auto, false);
+    let r = one_fibre(section, pendkit_system::EndDirection::Auto, false);
     let t = 40.0 * G;
     for (label, ei) in [("x1", 4.0 * ei()), ("y1", ei() / 4.0)] {
         assert_rel(
@@ -372,7 +372,7 @@ fn oblong_section_bends_with_each_principal_moment() {
 
 #[test]
 fn explicit_clamp_direction() {
-    use pendkit_energy::EndDirection;
+    use pendkit_system::EndDirection;
     let t = 40.0 * G;
     // the natural direction given explicitly is the auto clamp: identical results
     let auto = one_fibre(silica(), EndDirection::Auto, false);

@@ -25,7 +25,7 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use pendkit_energy::Stage;
+use pendkit_system::Stage;
 use pendkit_tests::run;
 
 const FREQS: [f64; 9] = [20.0, 25.0, 30.0, 40.0, 50.0, 60.0, 70.0, 85.0, 100.0];

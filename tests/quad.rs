@@ -1,7 +1,7 @@
 //! The aLIGO quad against physics (issue 5): nominal equilibrium, block structure,
 //! transfer-function limits, agreement between variants, and violin modes.
 
-use pendkit_energy::Stage;
+use pendkit_system::Stage;
 use pendkit_tests::{
     TWO_PI, assert_blocks, assert_nominal_equilibrium, assert_rel, assert_support_limits,
     deviation, full_blade_tips, lowest, max_relative_difference, run, stiff_string_f1, tf,

@@ -6,7 +6,7 @@
 
 use pendkit::Case;
 use pendkit::noise::ThermalNoise;
-use pendkit_energy::Stage;
+use pendkit_system::Stage;
 use pendkit_tests::run;
 
 const FREQS: [f64; 4] = [10.0, 20.0, 50.0, 100.0];

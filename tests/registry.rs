@@ -1,7 +1,9 @@
 //! The link-time registry holds exactly the expected element kinds, each at its stage.
 //! A missing kind here means a crate was dropped by the linker (inventory issue #50).
 
-use pendkit_energy::{Stage, registry};
+use pendkit_energy::registry;
+
+use pendkit_system::Stage;
 
 // Link through the facade, as the command line does.
 use pendkit as _;

@@ -4,8 +4,9 @@
 
 use pendkit::Error;
 use pendkit_energy::{
-    Element, EnergyError, Reference, Stage, Term, check_registrations, register_element,
+    Element, EnergyError, Reference, Term, check_registrations, register_element,
 };
+use pendkit_system::Stage;
 
 /// An element that claims the core's "gravity" kind name.
 struct ShadowGravity;

@@ -8,7 +8,7 @@ use std::f64::consts::PI;
 use nalgebra::DMatrix;
 use pendkit::dynamics::Verdict;
 use pendkit::{Case, StageResult, run_stage};
-use pendkit_energy::Stage;
+use pendkit_system::Stage;
 
 fn run(model: &str, sets: &[&str], stage: Stage) -> StageResult {
     let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
@@ -328,14 +328,18 @@ fn summed_stiffness(r: &StageResult) -> DMatrix<f64> {
 /// join at or before the stage, the case's extra terms and constraints). Step h = 1e-6
 /// (m or rad): truncation h² times third derivatives, rounding ε |force| / h.
 fn finite_difference_stiffness(r: &StageResult) -> DMatrix<f64> {
-    use pendkit_energy::{ExtraPhase, Reference, constraint_terms, extra_terms, registry};
+    use pendkit_energy::{Reference, constraint_terms, extra_terms, registry};
+    use pendkit_system::ExtraPhase;
     let system = &r.system;
     let x0 = r.assembled.equilibrium.coords.clone();
     let stage = r.assembled.stage;
     let reference = Reference::new(system, &x0);
     let mut terms = Vec::new();
     for kind in registry() {
-        if system.element_stage(kind).is_some_and(|s| s <= stage) {
+        if system
+            .element_stage(kind.kind(), kind.stage())
+            .is_some_and(|s| s <= stage)
+        {
             terms.extend(kind.terms(&reference).expect("terms"));
         }
     }
@@ -827,7 +831,7 @@ fn sweep_points() -> Vec<(&'static str, Vec<String>, Stage, bool)> {
 /// refused), or the disagreements.
 fn check_system(
     label: &str,
-    system: pendkit_energy::System,
+    system: pendkit_system::System,
     stage: Stage,
 ) -> Result<(String, Option<StageResult>), String> {
     let r = match run_stage(system, stage) {

@@ -9,7 +9,7 @@
 //! the pattern leaves out must be exactly zero in every part.
 
 use nalgebra::DMatrix;
-use pendkit_energy::Stage;
+use pendkit_system::Stage;
 use pendkit_tests::run;
 
 /// Models covering floats (xtra-lite blade tips), 6-DOF blade bodies, lateral compliance,

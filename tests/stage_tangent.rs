@@ -462,7 +462,7 @@ fn wrong_sizes_are_errors_naming_what_and_where() {
 }
 
 /// The equilibrium of `system` at stage 2, as dual numbers with no derivative.
-fn stage_2_at_rest(system: &pendkit_energy::System) -> Vec<num_dual::Dual64> {
+fn stage_2_at_rest(system: &pendkit_system::System) -> Vec<num_dual::Dual64> {
     let a = assemble_with(system, Stage::S2, &AssemblyOptions::default(), None)
         .unwrap_or_else(|e| panic!("assemble: {e}"));
     a.equilibrium
@@ -481,7 +481,7 @@ fn tangent_terms_to_stage_2(
     for kind in pendkit_energy::registry() {
         if reference
             .system
-            .element_stage(kind)
+            .element_stage(kind.kind(), kind.stage())
             .is_some_and(|s| s <= Stage::S2)
         {
             terms.extend(
@@ -500,7 +500,7 @@ fn dual_terms_at_rest(
     case: &Case,
     name: &str,
 ) -> (
-    pendkit_energy::System<num_dual::Dual64>,
+    pendkit_system::System<num_dual::Dual64>,
     Vec<num_dual::Dual64>,
     Vec<pendkit_energy::TangentTerm>,
 ) {
@@ -619,7 +619,10 @@ fn terms_built_on_another_builds_local_frames_are_the_same_terms() {
         let shared = SharedBodies::with_frames(given.iter().cloned());
         let mut seeded = Vec::new();
         for kind in pendkit_energy::registry() {
-            if dual.element_stage(kind).is_some_and(|s| s <= Stage::S2) {
+            if dual
+                .element_stage(kind.kind(), kind.stage())
+                .is_some_and(|s| s <= Stage::S2)
+            {
                 seeded.extend(kind.tangent_terms(&reference, &shared).unwrap().unwrap());
             }
         }

@@ -5,7 +5,7 @@
 //! The reference values are computed here from the model's design inputs (the numbers of
 //! its parameter table, repeated below), not from the model's own derived quantities.
 
-use pendkit_energy::Stage;
+use pendkit_system::Stage;
 use pendkit_tests::{
     assert_blocks, assert_nominal_equilibrium, assert_rel, assert_support_limits, deviation,
     full_blade_tips, lowest, max_relative_difference, run, tf,

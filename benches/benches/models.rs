@@ -10,7 +10,7 @@ use std::time::Duration;
 use criterion::{Criterion, criterion_group, criterion_main};
 use pendkit::{Case, run_stage};
 use pendkit_assembly::solve_equilibrium;
-use pendkit_energy::Stage;
+use pendkit_system::Stage;
 
 fn models(c: &mut Criterion) {
     for model in pendkit::catalogue::models() {

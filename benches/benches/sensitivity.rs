@@ -13,7 +13,7 @@ use criterion::{Criterion, criterion_group, criterion_main};
 use pendkit::sensitivity::SensitivityRequest;
 use pendkit::sensitivity::sensitivities;
 use pendkit::{Case, run_stage};
-use pendkit_energy::Stage;
+use pendkit_system::Stage;
 
 fn sensitivity(c: &mut Criterion) {
     let mut group = c.benchmark_group("sensitivity");

@@ -11,7 +11,7 @@ use std::time::Duration;
 use criterion::measurement::WallTime;
 use criterion::{BatchSize, BenchmarkGroup, Criterion, criterion_group, criterion_main};
 use pendkit::{Case, run_stage};
-use pendkit_energy::Stage;
+use pendkit_system::Stage;
 
 /// `stage/<name>/<stage>` for each of `stages`.
 fn bench_stages(group: &mut BenchmarkGroup<WallTime>, name: &str, case: &Case, stages: &[Stage]) {

@@ -12,8 +12,8 @@ use std::time::Duration;
 use criterion::{Criterion, criterion_group, criterion_main};
 use pendkit::{Case, StageResult, log_grid, run_stage};
 use pendkit_dynamics::{Input, Output, eliminate_floats, normal_modes};
-use pendkit_energy::Stage;
 use pendkit_noise::NoiseOptions;
+use pendkit_system::Stage;
 
 /// Support input of every transfer function: longitudinal displacement of the suspension
 /// point.

@@ -7,7 +7,7 @@ pygwinc counts them), runs both budgets, and prints the suspension term and the 
 strain noise of each side by side; ``--plot FILE`` draws pendkit's budget with pygwinc's
 plotting.
 
-Needs pygwinc (``pip install gwinc``) and pendkit (``pip install ./crates/python``):
+Needs pygwinc (``pip install gwinc``) and pendkit (``pip install ./crates/interface/python``):
 
     python examples/python/gwinc_budget.py [--points 1000] [--plot budget.png]
 """

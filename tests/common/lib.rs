@@ -2,7 +2,7 @@
 //! and tolerance assertions that say what they compared.
 
 use pendkit::{Case, StageResult, run_stage};
-use pendkit_energy::Stage;
+use pendkit_system::Stage;
 
 /// Runs a bundled model (with `NAME=EXPR` overrides) at `stage`.
 pub fn run(model: &str, sets: &[&str], stage: Stage) -> StageResult {

@@ -11,7 +11,7 @@
 
 use std::time::Instant;
 
-use pendkit::energy::Stage;
+use pendkit::system::Stage;
 use pendkit::{Case, StageResult, run_stage};
 use pendkit_tests::stiff_string_f1;
 

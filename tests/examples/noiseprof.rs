@@ -6,7 +6,7 @@ fn main() {
     let reps: usize = args.get(2).and_then(|s| s.parse().ok()).unwrap_or(200);
     let case = pendkit::Case::model(model).unwrap();
     let (system, _) = case.build().unwrap();
-    let r = pendkit::run_stage(system, pendkit::energy::Stage::S2).unwrap();
+    let r = pendkit::run_stage(system, pendkit::system::Stage::S2).unwrap();
     let freqs = pendkit::log_grid(0.1, 100.0, 1000).unwrap();
     let mut best = [f64::INFINITY; 3];
     for _ in 0..reps {

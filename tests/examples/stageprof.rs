@@ -1,6 +1,6 @@
 //! Profiling driver: runs one model's stage `reps` times (for callgrind or timing), and
 //! prints the decoupled blocks of K_eff and M.
-use pendkit::energy::Stage;
+use pendkit::system::Stage;
 use std::time::Instant;
 fn main() {
     let args: Vec<String> = std::env::args().collect();

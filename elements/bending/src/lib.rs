@@ -29,12 +29,13 @@ use std::sync::Arc;
 use nalgebra::Vector3;
 use num_dual::Dual64;
 use pendkit_energy::{
-    Attached, Derivatives, Element, EndDirection, EnergyError, JetPoint, LocalFrames, PartOff,
-    Reference, SharedBodies, SharedPotential, Stage, TangentSharedPotential, TangentTerm, Term,
-    Wire, add_jacobian, hyper_dual_over_frames,
+    Attached, Derivatives, Element, EnergyError, JetPoint, LocalFrames, PartOff, Reference,
+    SharedBodies, SharedPotential, TangentSharedPotential, TangentTerm, Term, add_jacobian,
+    hyper_dual_over_frames,
 };
 use pendkit_geometry::{Frame, FrameMap};
 use pendkit_rotations::{Constant, Lift, Real, any_moves, c, dot};
+use pendkit_system::{EndDirection, Stage, Wire};
 
 /// Index of the bending strain energy U_b among a beam's energy parts.
 pub const BENDING_PART: usize = 0;

@@ -5,7 +5,8 @@
 
 use num_dual::Dual64;
 use pendkit_element_bending::{EXTRA_STRETCH_PART, beam_tangent_terms, beam_terms};
-use pendkit_energy::{Element, EnergyError, Reference, SharedBodies, Stage, TangentTerm, Term};
+use pendkit_energy::{Element, EnergyError, Reference, SharedBodies, TangentTerm, Term};
+use pendkit_system::Stage;
 
 /// The wire-extra-stretch element kind (stage 2): part [`EXTRA_STRETCH_PART`] of each
 /// wire's beam, shared with the bending kind (so one evaluation gives both).

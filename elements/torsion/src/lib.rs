@@ -12,13 +12,13 @@ use nalgebra::{Matrix3, Vector3};
 use num_dual::Dual64;
 use pendkit_energy::{
     Derivatives, Element, EnergyError, JetPoint, LocalFrames, OffForm, Potential, Reference,
-    SharedBodies, Stage, TangentPotential, TangentTerm, TensionOff, Term, Wire,
-    hyper_dual_over_frames,
+    SharedBodies, TangentPotential, TangentTerm, TensionOff, Term, hyper_dual_over_frames,
 };
 use pendkit_geometry::{Frame, FrameMap};
 use pendkit_rotations::{
     Constant, Lift, Real, any_moves, dot, mul_tr_const, small_rotation, tr_mul, tr_mul_vec, vee,
 };
+use pendkit_system::{Stage, Wire};
 
 /// Twist energy of one wire (constants `f64`, or `Dual64` for the parameter derivatives).
 #[derive(Clone, Debug)]

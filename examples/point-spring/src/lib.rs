@@ -6,9 +6,10 @@
 //! (any `use pendkit_example_point_spring as _;`) registers the kind.
 
 use nalgebra::Vector3;
-use pendkit_energy::{Element, EnergyError, LocalFrames, Potential, Reference, Stage, Term};
+use pendkit_energy::{Element, EnergyError, LocalFrames, Potential, Reference, Term};
 use pendkit_geometry::FrameMap;
 use pendkit_rotations::Real;
+use pendkit_system::Stage;
 
 /// ½ k |(p1 − p0) − d_ref|² for one instance.
 #[derive(Clone, Debug)]

@@ -3,7 +3,8 @@
 //! adds k to the horizontal and vertical stiffness.
 
 use nalgebra::Vector3;
-use pendkit::energy::{PluginElement, Stage, registry};
+use pendkit::energy::registry;
+use pendkit::system::{PluginElement, Stage};
 use pendkit_example_point_spring as _;
 
 #[test]

@@ -5,11 +5,11 @@
 use std::collections::BTreeMap;
 use std::sync::{Arc, LazyLock, OnceLock};
 
-use pendkit_energy::System;
 use pendkit_model::{BuildError, DampingSpec, DefaultsCache, Model, ParameterInfo, ParsedDamping};
 use pendkit_params::{ParamError, ParamSet, Resolved};
 use pendkit_suspension::generate::{MAX_CHAIN_STAGES, chain};
 use pendkit_suspension::{BundledFile, FileError, Generator, Library, Suspension};
+use pendkit_system::System;
 
 /// A bundled file: its name (what `extends` says) and the file (its path in the repository,
 /// its text and its packed tree).

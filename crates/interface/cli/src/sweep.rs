@@ -1,0 +1,524 @@
+//! `pendkit sweep`: modes, thermal noise or a transfer function over a grid of parameter
+//! values, as CSV against the swept values, with the modes tracked from step to step by
+//! the overlap of their shapes (so a mode keeps its number and label through a crossing).
+
+use std::fmt::Write as _;
+use std::path::PathBuf;
+
+use nalgebra::DMatrix;
+use pendkit::describe::unit_slug;
+use pendkit::stage::ModeSelection;
+use pendkit_plot::{Axis, BodePlot, BodeSeries, Figure, LinePlot, Scale, Series};
+
+use crate::common::{GridArgs, ModelArgs, Run, check_plot_path, split_pair};
+use crate::error::CliError;
+use crate::format::{csv, fixed};
+use crate::progress::Progress;
+
+/// Arguments of `pendkit sweep`.
+#[derive(clap::Args)]
+#[command(group(clap::ArgGroup::new("result").required(true).args(["modes", "noise", "tf"])))]
+pub struct Args {
+    #[command(flatten)]
+    args: ModelArgs,
+    /// A parameter and its values: NAME=START:STOP:N (N evenly spaced values, ends
+    /// included), or NAME=START:STOP:N:log (log-spaced). Repeatable: every combination,
+    /// the last --vary changing fastest; at most 100000 steps in all.
+    #[arg(long = "vary", required = true, value_name = "NAME=START:STOP:N")]
+    vary: Vec<String>,
+    /// The normal modes at every step, tracked by shape.
+    #[arg(long)]
+    modes: bool,
+    /// The thermal noise (ASD) of this output at every step.
+    #[arg(long, value_name = "OUTPUT")]
+    noise: Option<String>,
+    /// The transfer function INPUT:OUTPUT at every step (e.g. x00:x3, force:x3:x3).
+    #[arg(long, value_name = "IN:OUT")]
+    tf: Option<String>,
+    #[command(flatten)]
+    grid: GridArgs,
+    /// Write a figure (.svg or .png): tracked mode frequencies against the swept value
+    /// (one --vary), or the noise or transfer function of every step.
+    #[arg(long, value_name = "FILE")]
+    plot: Option<PathBuf>,
+}
+
+/// One swept parameter.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Vary {
+    /// Parameter name.
+    pub name: String,
+    /// Its values.
+    pub values: Vec<f64>,
+}
+
+/// Most steps of a sweep, all `--vary` combined: each step is a whole run (build,
+/// equilibrium, modes), so more is a mistake, not a calculation.
+pub const MAX_STEPS: usize = 100_000;
+
+/// Parses `NAME=START:STOP:N[:log]` (1 ≤ N ≤ [`MAX_STEPS`]).
+pub fn parse_vary(text: &str) -> Result<Vary, CliError> {
+    let bad = |why: &str| {
+        CliError::usage(format!(
+            "--vary '{text}': {why} (expected NAME=START:STOP:N or NAME=START:STOP:N:log)"
+        ))
+    };
+    let (name, range) = text.split_once('=').ok_or_else(|| bad("no '='"))?;
+    let parts: Vec<&str> = range.split(':').map(str::trim).collect();
+    let log = match parts.len() {
+        3 => false,
+        4 if parts[3] == "log" => true,
+        _ => return Err(bad("wrong number of fields")),
+    };
+    let number = |t: &str, what: &str| -> Result<f64, CliError> {
+        crate::common::number(t).map_err(|e| bad(&format!("{what}: {e}")))
+    };
+    let (start, stop) = (number(parts[0], "START")?, number(parts[1], "STOP")?);
+    let n: usize = parts[2]
+        .parse()
+        .ok()
+        .filter(|&n| (1..=MAX_STEPS).contains(&n))
+        .ok_or_else(|| {
+            bad(&format!(
+                "N '{}' is not a whole number from 1 to {MAX_STEPS}",
+                parts[2]
+            ))
+        })?;
+    if log && !(start > 0.0 && stop > 0.0) {
+        return Err(bad("log spacing needs START and STOP > 0"));
+    }
+    let values = (0..n)
+        .map(|k| {
+            let t = if n == 1 {
+                0.0
+            } else {
+                k as f64 / (n - 1) as f64
+            };
+            if n > 1 && k + 1 == n {
+                // the last value exactly STOP (no rounding); one value is START
+                stop
+            } else if log {
+                (start.ln() + (stop.ln() - start.ln()) * t).exp()
+            } else {
+                start + (stop - start) * t
+            }
+        })
+        .collect();
+    let name = name.trim();
+    if name.is_empty() {
+        return Err(bad("no parameter name"));
+    }
+    Ok(Vary {
+        name: name.to_string(),
+        values,
+    })
+}
+
+/// The grid points (one value per swept parameter), the last parameter changing fastest.
+fn grid(varies: &[Vary]) -> Vec<Vec<usize>> {
+    let mut points = vec![Vec::new()];
+    for v in varies {
+        points = points
+            .into_iter()
+            .flat_map(|p| {
+                (0..v.values.len()).map(move |k| {
+                    let mut q = p.clone();
+                    q.push(k);
+                    q
+                })
+            })
+            .collect();
+    }
+    points
+}
+
+/// The point a grid point's modes are matched to: one step back along the last parameter
+/// that is not at its first value (so neighbours always differ by one step of one
+/// parameter). `None` for the first point.
+fn predecessor(points: &[Vec<usize>], point: &[usize]) -> Option<usize> {
+    let d = point.iter().rposition(|&k| k > 0)?;
+    let mut previous = point.to_vec();
+    previous[d] -= 1;
+    points.iter().position(|p| *p == previous)
+}
+
+/// The modes of one step, for tracking.
+struct StepModes {
+    frequencies: Vec<f64>,
+    labels: Vec<String>,
+    families: Vec<String>,
+    /// Mass-normalised shapes, one column per mode.
+    shapes: DMatrix<f64>,
+    mass: DMatrix<f64>,
+}
+
+impl StepModes {
+    fn of(run: &Run) -> StepModes {
+        let modes = &run.result.modes.modes;
+        let n = run.result.modes.coordinates.len();
+        StepModes {
+            frequencies: modes.iter().map(|m| m.hz).collect(),
+            labels: modes.iter().map(|m| run.coord(&m.label)).collect(),
+            families: modes.iter().map(|m| run.result.mode_family(m)).collect(),
+            shapes: DMatrix::from_fn(n, modes.len(), |i, j| {
+                modes[j].vector.get(i).copied().unwrap_or(0.0)
+            }),
+            mass: run.result.assembled.mass.clone(),
+        }
+    }
+}
+
+/// Matches the modes of `new` to those of `old` by the overlap of their shapes in the mean
+/// mass metric, |u_iᵀ M̄ v_j| / sqrt(u_iᵀ M̄ u_i · v_jᵀ M̄ v_j) with M̄ = (M_old + M_new)/2
+/// (1 for the same shape, 0 for shapes that share no kinetic energy): pairs are taken in
+/// order of decreasing overlap. Returns, for each mode of `new`, the mode of `old` it
+/// continues and their overlap.
+pub fn match_modes(
+    old_shapes: &DMatrix<f64>,
+    old_mass: &DMatrix<f64>,
+    new_shapes: &DMatrix<f64>,
+    new_mass: &DMatrix<f64>,
+) -> Result<Vec<(usize, f64)>, pendkit::Error> {
+    Ok(
+        pendkit::fit::pair_modes_by_overlap(old_shapes, old_mass, new_shapes, new_mass)?
+            .into_iter()
+            .enumerate()
+            .map(|(j, m)| m.unwrap_or((j, 0.0)))
+            .collect(),
+    )
+}
+
+/// The unit the model declares for parameter `name` (empty if none).
+fn parameter_unit(run: &Run, name: &str) -> String {
+    run.provenance()
+        .ok()
+        .and_then(|p| p.parameters.into_iter().find(|q| q.name == name))
+        .and_then(|q| q.unit)
+        .unwrap_or_default()
+}
+
+/// A header column for a swept parameter: its name and unit.
+fn parameter_column(run: &Run, name: &str) -> String {
+    let unit = parameter_unit(run, name);
+    if unit.is_empty() {
+        name.to_string()
+    } else {
+        format!("{name}_{}", unit_slug(&unit))
+    }
+}
+
+/// Runs the command and returns what it prints.
+pub fn run(a: Args) -> Result<String, CliError> {
+    check_plot_path(&a.plot)?;
+    let varies: Vec<Vary> = a
+        .vary
+        .iter()
+        .map(|t| parse_vary(t))
+        .collect::<Result<_, _>>()?;
+    let steps = varies
+        .iter()
+        .try_fold(1usize, |n, v| n.checked_mul(v.values.len()))
+        .filter(|&n| n <= MAX_STEPS);
+    if steps.is_none() {
+        return Err(CliError::usage(format!(
+            "--vary: {} combinations in all; at most {MAX_STEPS} steps",
+            varies
+                .iter()
+                .map(|v| v.values.len().to_string())
+                .collect::<Vec<_>>()
+                .join(" x ")
+        )));
+    }
+    // a parameter swept twice, or swept and also set, would take only the last value
+    // given while the table's columns claim the others
+    for (k, v) in varies.iter().enumerate() {
+        if varies[..k].iter().any(|w| w.name == v.name) {
+            return Err(CliError::usage(format!(
+                "--vary: '{}' is swept twice: sweep each parameter once",
+                v.name
+            )));
+        }
+        let set_name = |s: &String| s.split_once('=').map(|(n, _)| n.trim().to_string());
+        if a.args.sets.iter().filter_map(set_name).any(|n| n == v.name) {
+            return Err(CliError::usage(format!(
+                "--vary: '{}' is swept and also given by --set: the sweep would replace the --set",
+                v.name
+            )));
+        }
+    }
+    if a.modes && a.plot.is_some() && varies.len() != 1 {
+        return Err(CliError::usage(
+            "--plot with --modes draws frequencies against one swept parameter: give one --vary",
+        ));
+    }
+    let tf = a.tf.as_deref().map(split_pair).transpose()?;
+    let lossy = a.noise.is_some() || tf.is_some();
+    if lossy && a.args.stage == Some(pendkit::system::Stage::S0A) {
+        return Err(pendkit::Error::StageTooEarly.into());
+    }
+    let freqs = if lossy {
+        a.grid.frequencies()?
+    } else {
+        Vec::new()
+    };
+    let points = grid(&varies);
+    let progress = Progress::new(
+        Some(points.len() as u64),
+        format!(
+            "sweep {}",
+            varies
+                .iter()
+                .map(|v| v.name.as_str())
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+    );
+    let mut out = String::new();
+    let mut header_written = false;
+    // per step: tracked mode ids in the order of that step's modes
+    let mut steps: Vec<StepModes> = Vec::new();
+    let mut ids: Vec<Vec<usize>> = Vec::new();
+    // for the figures: (series name, x or f, y or response)
+    let mut mode_series: Vec<(String, Vec<f64>, Vec<f64>)> = Vec::new();
+    let mut curves: Vec<(String, Vec<(f64, f64)>)> = Vec::new();
+    let mut unit = String::new();
+    let mut x_unit = String::new();
+    for point in &points {
+        let mut sets = a.args.sets.clone();
+        let values: Vec<f64> = point
+            .iter()
+            .zip(&varies)
+            .map(|(&k, v)| v.values[k])
+            .collect();
+        for (v, value) in varies.iter().zip(&values) {
+            sets.push(format!("{}={value:e}", v.name));
+        }
+        let run = a.args.run_with(ModeSelection::All, &sets, false)?;
+        run.check_stable(a.args.allow_unstable)?;
+        let step_name = varies
+            .iter()
+            .zip(&values)
+            .map(|(v, x)| format!("{}={}", v.name, fixed_or_sci(*x)))
+            .collect::<Vec<_>>()
+            .join(", ");
+        if !header_written {
+            let columns: Vec<String> = varies
+                .iter()
+                .map(|v| parameter_column(&run, &v.name))
+                .collect();
+            out.push_str(&columns.join(","));
+            x_unit = parameter_unit(&run, &varies[0].name);
+            if a.modes {
+                out.push_str(",mode,label,family,frequency_hz,dominant,overlap\n");
+            } else if let Some(output) = &a.noise {
+                unit = format!("{}/√Hz", run.result.output_unit(output).unwrap_or_default());
+                let _ = writeln!(out, ",f_hz,asd_{}", unit_slug(&unit));
+            } else if let Some((input, output)) = &tf {
+                unit = run.result.transfer_unit(input, output).unwrap_or_default();
+                let slug = unit_slug(&unit);
+                let _ = writeln!(out, ",f_hz,re_{slug},im_{slug}");
+            }
+            header_written = true;
+        }
+        let prefix: String = values.iter().map(|x| csv(*x) + ",").collect();
+        if a.modes {
+            let modes = StepModes::of(&run);
+            let (step_ids, overlaps) = match predecessor(&points, point) {
+                None => (
+                    (0..modes.frequencies.len()).collect::<Vec<_>>(),
+                    vec![1.0; modes.frequencies.len()],
+                ),
+                Some(q) => {
+                    let old = &steps[q];
+                    if old.shapes.nrows() != modes.shapes.nrows()
+                        || old.shapes.ncols() != modes.shapes.ncols()
+                    {
+                        return Err(CliError::usage(format!(
+                            "sweep: the model's variables change at {step_name}; modes can only be tracked over a fixed set of variables"
+                        )));
+                    }
+                    let matched = match_modes(&old.shapes, &old.mass, &modes.shapes, &modes.mass)?;
+                    (
+                        matched.iter().map(|&(i, _)| ids[q][i]).collect(),
+                        matched.iter().map(|&(_, o)| o).collect(),
+                    )
+                }
+            };
+            let first = steps.first().unwrap_or(&modes);
+            let mut rows: Vec<(usize, usize)> = step_ids
+                .iter()
+                .copied()
+                .enumerate()
+                .map(|(j, id)| (id, j))
+                .collect();
+            rows.sort();
+            for (id, j) in rows {
+                let _ = writeln!(
+                    out,
+                    "{prefix}{},{},{},{},{},{}",
+                    id + 1,
+                    first.labels[id],
+                    first.families[id],
+                    csv(modes.frequencies[j]),
+                    modes.labels[j],
+                    fixed(overlaps[j], 6, 0)
+                );
+                if varies.len() == 1 {
+                    if mode_series.len() <= id {
+                        mode_series.resize(id + 1, (String::new(), Vec::new(), Vec::new()));
+                    }
+                    let series = &mut mode_series[id];
+                    series.0 = format!("{} {} ({})", id + 1, first.labels[id], first.families[id]);
+                    series.1.push(values[0]);
+                    series.2.push(modes.frequencies[j]);
+                }
+            }
+            steps.push(modes);
+            ids.push(step_ids);
+        } else {
+            let response: Vec<(f64, f64)> = if let Some(output) = &a.noise {
+                let noise = run.result.noise(output, &freqs)?;
+                noise.asd().into_iter().map(|x| (x, 0.0)).collect()
+            } else if let Some((input, output)) = &tf {
+                run.result
+                    .transfer(input, output, &freqs)?
+                    .into_iter()
+                    .map(|z| (z.re, z.im))
+                    .collect()
+            } else {
+                Vec::new()
+            };
+            for (f, (re, im)) in freqs.iter().zip(&response) {
+                if a.noise.is_some() {
+                    let _ = writeln!(out, "{prefix}{},{}", csv(*f), csv(*re));
+                } else {
+                    let _ = writeln!(out, "{prefix}{},{},{}", csv(*f), csv(*re), csv(*im));
+                }
+            }
+            curves.push((step_name, response));
+        }
+        progress.step();
+    }
+    drop(progress);
+    if let Some(path) = &a.plot {
+        if a.modes {
+            let v = &varies[0];
+            let mut plot = LinePlot::new(
+                format!("Modes against {}", v.name),
+                Axis::new(v.name.clone(), x_unit, Scale::Linear),
+                Axis::new("frequency", "Hz", Scale::Log),
+            );
+            plot.markers = v.values.len() <= 30;
+            for (name, x, y) in mode_series {
+                plot.series.push(Series::new(name, x, y));
+            }
+            plot.render(path)?;
+        } else if a.noise.is_some() {
+            let mut plot = LinePlot::new(
+                format!(
+                    "Thermal noise of {}",
+                    a.noise.as_deref().unwrap_or_default()
+                ),
+                Axis::new("frequency", "Hz", Scale::Log),
+                Axis::new("ASD", unit.clone(), Scale::Log),
+            );
+            for (name, values) in curves {
+                plot.series.push(Series::new(
+                    name,
+                    freqs.clone(),
+                    values.into_iter().map(|(x, _)| x).collect(),
+                ));
+            }
+            plot.render(path)?;
+        } else if let Some((input, output)) = &tf {
+            let mut plot = BodePlot::new(
+                format!("{output}/{input} over the sweep"),
+                format!("|{output}/{input}|"),
+                unit.clone(),
+            );
+            for (name, values) in curves {
+                plot.series
+                    .push(BodeSeries::new(name, freqs.clone(), values));
+            }
+            plot.render(path)?;
+        }
+    }
+    Ok(out)
+}
+
+/// A swept value for a legend: a few significant digits.
+fn fixed_or_sci(x: f64) -> String {
+    if x != 0.0 && (x.abs() < 1e-3 || x.abs() >= 1e5) {
+        crate::format::sci(x, 3, 0)
+    } else {
+        format!("{}", (x * 1e6).round() / 1e6)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn vary_ranges_and_errors() {
+        let v = parse_vary("m3=10:20:3").unwrap();
+        assert_eq!((v.name.as_str(), v.values), ("m3", vec![10.0, 15.0, 20.0]));
+        let v = parse_vary("r=1e-4:1e-2:3:log").unwrap();
+        assert!((v.values[1] - 1e-3).abs() < 1e-15 && v.values[2] == 1e-2);
+        assert_eq!(parse_vary("x=2:3:1").unwrap().values, vec![2.0]);
+        for bad in [
+            "m3",
+            "m3=1:2",
+            "m3=1:2:0",
+            "m3=a:2:3",
+            "m3=1:inf:3",
+            "m3=0:1:3:log",
+            "=1:2:3",
+        ] {
+            let e = parse_vary(bad).unwrap_err().to_string();
+            assert!(e.contains(bad) && !e.contains('\n'), "{e}");
+        }
+    }
+
+    #[test]
+    fn grid_neighbours_differ_by_one_step_of_one_parameter() {
+        let varies = [
+            Vary {
+                name: "a".into(),
+                values: vec![1.0, 2.0, 3.0],
+            },
+            Vary {
+                name: "b".into(),
+                values: vec![1.0, 2.0],
+            },
+        ];
+        let points = grid(&varies);
+        assert_eq!(points.len(), 6);
+        assert_eq!(points[1], vec![0, 1]);
+        for (p, point) in points.iter().enumerate().skip(1) {
+            let q = predecessor(&points, point).unwrap();
+            assert!(q < p);
+            let steps: usize = point
+                .iter()
+                .zip(&points[q])
+                .map(|(a, b)| a.abs_diff(*b))
+                .sum();
+            assert_eq!(steps, 1, "{point:?} from {:?}", points[q]);
+        }
+        assert_eq!(predecessor(&points, &points[0]), None);
+    }
+
+    #[test]
+    fn matching_follows_shapes_not_order() {
+        // two modes that swap order: the shapes (columns) are the same up to sign, listed
+        // the other way round; the mass metric is diagonal and different at the two steps
+        let old = DMatrix::from_row_slice(2, 2, &[1.0, 0.0, 0.0, 0.5]);
+        let new = DMatrix::from_row_slice(2, 2, &[0.0, 0.9, -0.4, 0.0]);
+        let m_old = DMatrix::from_row_slice(2, 2, &[1.0, 0.0, 0.0, 4.0]);
+        let m_new = DMatrix::from_row_slice(2, 2, &[1.2, 0.0, 0.0, 5.0]);
+        let matched = match_modes(&old, &m_old, &new, &m_new).unwrap();
+        assert_eq!(matched[0].0, 1);
+        assert_eq!(matched[1].0, 0);
+        assert!((matched[0].1 - 1.0).abs() < 1e-15 && (matched[1].1 - 1.0).abs() < 1e-15);
+    }
+}

@@ -1,0 +1,1532 @@
+//! Fitting a model to measured mode frequencies (and optionally |TF| points): which model
+//! mode each measurement is (by label and shape, then tracked by shape overlap), a
+//! Levenberg–Marquardt fit of chosen parameters weighted by the stated uncertainties, the
+//! covariance of the result, and the parameter combinations the data cannot determine.
+//!
+//! # Measured modes file
+//!
+//! CSV, one mode a line: `label,hz,sigma_hz[,shape]`. Blank lines and lines starting with
+//! `#` are skipped; a first line starting with `label` is a header.
+//! - `label`: the model mode it is, as `pendkit modes` prints it: its label (the dominant
+//!   coordinate, e.g. `pitch2`) or its family (`L`, `T`, `V`, `Y`, `P`, `R`, ...), in the
+//!   model's names or a naming scheme's (`L2_P`).
+//! - `hz`: the measured frequency (Hz, positive); `sigma_hz`: its standard uncertainty
+//!   (Hz, positive, and not below the rounding of `hz`: 2.2·10⁻¹⁶ of it).
+//! - `shape` (optional): more coordinates the mode mostly moves, joined by `+`
+//!   (`yaw1+yaw3`); needed with a family label.
+//!
+//! Each measurement is matched to the model mode (at the start values) with the largest
+//! share of kinetic energy in its label's and shape's coordinates less the distance in log
+//! frequency |ln(f_model/f_measured)|, not by order (modes that move the same coordinates go
+//! to the nearest frequencies), and each model mode is matched once ([`MatchedModes::by_label`]). From then on each matched mode is
+//! followed by the overlap of its shape ([`MatchedModes::follow`]), so that modes that cross
+//! in frequency keep their identity.
+//!
+//! # Measured transfer-function file
+//!
+//! CSV `freq_hz,abs,sigma_abs` (|TF| in the unit of the transfer function, e.g. m/m, and
+//! its standard uncertainty, not below the rounding of `abs`), with the input and output
+//! named in two comment lines before the data, each once: `# input = x00` and
+//! `# output = x3` (any name `pendkit tf` takes).
+//!
+//! # The fit
+//!
+//! Residuals are (model − measured)/σ. The free parameters are stepped in units of their
+//! start values (|p₀|, or 1 for a parameter that starts at 0), so that a kilogram and a
+//! micrometre weigh alike. Each step is a damped, truncated-SVD Gauss–Newton step
+//! (Levenberg's damping in the scaled parameters): directions of the weighted Jacobian
+//! whose singular value is below [`FitOptions::undetermined_below`] times the largest are
+//! not stepped in, and are reported as undetermined combinations. Uncertainties are the
+//! square roots of the diagonal of the covariance (JᵀWJ)⁺ on the determined directions,
+//! *not* scaled by χ²/dof: they are what the stated σ imply; the reduced χ² says whether
+//! the σ and the model agree with the scatter.
+//!
+//! # The Jacobian
+//!
+//! The modes' rows are the exact sensitivities by default ([`exact_mode_jacobian`]: the
+//! implicit function theorem through the equilibrium and Hellmann–Feynman through the
+//! eigenproblem, [`crate::sensitivity::sensitivities`]), one stage solution and no step per iteration;
+//! [`JacobianMethod::Differences`] takes central differences of the re-solved model
+//! instead ([`mode_jacobian`], two solutions per free parameter, the modes followed by
+//! shape at each step). The |TF| points' rows come with the exact Jacobian from the same
+//! sensitivities (the stage's matrices differenced, everything after them exact: a point
+//! on a sharp resonance gets its true derivative), with `Differences` from central
+//! differences of |H| (which, on a resonance whose width the step moves the peak by a
+//! fraction of, are far off: −62 367 against −127 602 m/m per kg for the quad's |x3/x00|
+//! at its x3 mode and m3, with the relative step 10⁻⁴).
+
+use std::path::{Path, PathBuf};
+
+use nalgebra::{DMatrix, DVector};
+use pendkit_system::Stage;
+
+use crate::{Case, Error, StageResult, run_stage};
+
+/// What can go wrong reading measurements or fitting; each message is one line.
+#[derive(Debug, thiserror::Error)]
+pub enum FitError {
+    /// A line of a measurements file that is not valid.
+    #[error("{}:{line}: {message}", .path.display())]
+    Line {
+        /// The file.
+        path: PathBuf,
+        /// Its line (from 1).
+        line: usize,
+        /// What is wrong.
+        message: String,
+    },
+    /// A measurements file that cannot be read, or says nothing.
+    #[error("{}: {message}", .path.display())]
+    File {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong.
+        message: String,
+    },
+    /// A free parameter the model does not have, or listed twice.
+    #[error("free parameter '{name}': {message}")]
+    Parameter {
+        /// The parameter.
+        name: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// Fewer measurements than free parameters plus one.
+    #[error(
+        "{measurements} measurements for {free} free parameters: need at least one more measurement than free parameters"
+    )]
+    TooFewMeasurements {
+        /// Measurements (modes and TF points).
+        measurements: usize,
+        /// Free parameters.
+        free: usize,
+    },
+    /// A measured mode that no model mode matches, or that two measurements claim.
+    #[error("{}:{line}: {message}", .path.display())]
+    Unmatched {
+        /// The measurements file.
+        path: PathBuf,
+        /// The measurement's line.
+        line: usize,
+        /// What is wrong, with the model's modes.
+        message: String,
+    },
+    /// The model cannot be solved at the start values.
+    #[error("the model at the start values: {0}")]
+    Start(Box<Error>),
+    /// The fit did not converge.
+    #[error(
+        "the fit did not converge in {iterations} iterations (chi^2 = {chi_squared:.6e}, last values: {values}; damping {damping:.1e})"
+    )]
+    NotConverged {
+        /// Iterations made.
+        iterations: usize,
+        /// χ² at the last accepted values.
+        chi_squared: f64,
+        /// The last accepted values, `name=value` joined by spaces.
+        values: String,
+        /// Levenberg damping reached.
+        damping: f64,
+    },
+    /// A model value that came out NaN or infinite.
+    #[error("{0} is not finite")]
+    NotFinite(String),
+}
+
+/// One measured mode.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct MeasuredMode {
+    /// The model mode it is: a mode label (dominant coordinate) or family.
+    pub label: String,
+    /// Measured frequency (Hz).
+    pub hz: f64,
+    /// Its standard uncertainty (Hz).
+    pub sigma_hz: f64,
+    /// Coordinates the mode mostly moves (may be empty).
+    pub shape: Vec<String>,
+    /// Line in the file (from 1), for messages.
+    pub line: usize,
+}
+
+/// Measured modes and where they come from.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MeasuredModes {
+    /// The file (names the errors).
+    pub path: PathBuf,
+    /// The modes, in file order.
+    pub modes: Vec<MeasuredMode>,
+}
+
+/// One measured point of |TF|.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct TfPoint {
+    /// Frequency (Hz).
+    pub freq_hz: f64,
+    /// Measured |TF| (the transfer function's unit).
+    pub abs: f64,
+    /// Its standard uncertainty (same unit).
+    pub sigma_abs: f64,
+    /// Its line in the file (from 1; names the errors).
+    #[serde(skip)]
+    pub line: usize,
+}
+
+/// A measured transfer-function magnitude.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MeasuredTf {
+    /// The file (names the errors).
+    pub path: PathBuf,
+    /// Input name (as `pendkit tf` takes it).
+    pub input: String,
+    /// Output name.
+    pub output: String,
+    /// The points, in file order.
+    pub points: Vec<TfPoint>,
+}
+
+/// The data lines of a CSV measurements file: (line number, fields), comments and blank
+/// lines skipped, a header starting with `header` skipped.
+fn data_lines<'a>(text: &'a str, header: &str) -> Vec<(usize, Vec<&'a str>)> {
+    let mut lines = Vec::new();
+    for (k, raw) in text.lines().enumerate() {
+        let line = raw.trim();
+        if line.is_empty() || line.starts_with('#') {
+            continue;
+        }
+        if lines.is_empty() && line.starts_with(header) {
+            continue;
+        }
+        lines.push((k + 1, line.split(',').map(str::trim).collect()));
+    }
+    lines
+}
+
+/// A field that must be a positive finite number.
+fn positive(field: &str, what: &str) -> Result<f64, String> {
+    use pendkit_expr::NumberError;
+    let x = pendkit_expr::number_literal(field).map_err(|e| match e {
+        NumberError::NotANumber(_) => format!("{what} '{field}' is not a number"),
+        NumberError::NotFinite(_) => {
+            format!("{what} must be positive and finite, got {field}")
+        }
+        // a literal an f64 cannot hold, named as such (1e-400 is not 0)
+        too_small_or_large => format!("{what}: {too_small_or_large}"),
+    })?;
+    if x > 0.0 {
+        Ok(x)
+    } else {
+        Err(format!("{what} must be positive and finite, got {field}"))
+    }
+}
+
+/// A standard uncertainty: positive, finite, and not below the rounding of the value it
+/// belongs to (a smaller one asks the fit to resolve differences an `f64` cannot hold, and
+/// its weight 1/σ² can overflow).
+fn uncertainty(field: &str, what: &str, value: f64, value_name: &str) -> Result<f64, String> {
+    let sigma = positive(field, what)?;
+    if sigma < value * f64::EPSILON {
+        return Err(format!(
+            "{what} = {field} is below the rounding of {value_name} = {} (relative {:.1e}, \
+             an f64 resolves {:.1e})",
+            pendkit_expr::number_text(value),
+            sigma / value,
+            f64::EPSILON
+        ));
+    }
+    Ok(sigma)
+}
+
+/// An error at a line of the file at `path`.
+fn line_error(path: &Path) -> impl Fn(usize, String) -> FitError + '_ {
+    move |line, message| FitError::Line {
+        path: path.to_path_buf(),
+        line,
+        message,
+    }
+}
+
+fn read_text(path: &Path) -> Result<String, FitError> {
+    std::fs::read_to_string(path).map_err(|e| FitError::File {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    })
+}
+
+impl MeasuredModes {
+    /// Reads a measured modes file (see the [module documentation](self)).
+    pub fn read(path: &Path) -> Result<MeasuredModes, FitError> {
+        MeasuredModes::parse(path, &read_text(path)?)
+    }
+
+    /// Parses the text of a measured modes file read from `path`.
+    pub fn parse(path: &Path, text: &str) -> Result<MeasuredModes, FitError> {
+        let modes = data_lines(text, "label")
+            .into_iter()
+            .map(|(line, fields)| MeasuredMode::from_fields(path, line, &fields))
+            .collect::<Result<Vec<_>, _>>()?;
+        MeasuredModes::new(path, modes)
+    }
+
+    /// Measured modes given as rows of fields `label, hz, sigma_hz[, shape]` (as a
+    /// program holds them, not as text: no comments or header; row k is named line k + 1
+    /// of `path` in the errors), checked as a file's lines are.
+    pub fn from_rows<S: AsRef<str>>(
+        path: &Path,
+        rows: &[Vec<S>],
+    ) -> Result<MeasuredModes, FitError> {
+        let modes = rows
+            .iter()
+            .enumerate()
+            .map(|(k, row)| {
+                let fields: Vec<&str> = row.iter().map(|f| f.as_ref().trim()).collect();
+                MeasuredMode::from_fields(path, k + 1, &fields)
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        MeasuredModes::new(path, modes)
+    }
+
+    fn new(path: &Path, modes: Vec<MeasuredMode>) -> Result<MeasuredModes, FitError> {
+        if modes.is_empty() {
+            return Err(FitError::File {
+                path: path.to_path_buf(),
+                message: "no measured modes (expected lines label,hz,sigma_hz[,shape])".into(),
+            });
+        }
+        Ok(MeasuredModes {
+            path: path.to_path_buf(),
+            modes,
+        })
+    }
+}
+
+impl MeasuredMode {
+    /// One measured mode from its fields `label, hz, sigma_hz[, shape]` at `line` of `path`.
+    fn from_fields(path: &Path, line: usize, fields: &[&str]) -> Result<MeasuredMode, FitError> {
+        let at = |message| FitError::Line {
+            path: path.to_path_buf(),
+            line,
+            message,
+        };
+        if !(3..=4).contains(&fields.len()) {
+            return Err(at(format!(
+                "expected label,hz,sigma_hz[,shape], got {} fields",
+                fields.len()
+            )));
+        }
+        let label = fields[0];
+        if label.is_empty() {
+            return Err(at("empty label".into()));
+        }
+        let hz = positive(fields[1], "hz").map_err(at)?;
+        let sigma_hz = uncertainty(fields[2], "sigma_hz", hz, "hz").map_err(at)?;
+        let shape: Vec<String> = match fields.get(3) {
+            Some(s) if !s.is_empty() => s.split('+').map(|c| c.trim().to_string()).collect(),
+            _ => Vec::new(),
+        };
+        if shape.iter().any(String::is_empty) {
+            return Err(at(
+                "shape: coordinates joined by '+' (e.g. yaw1+yaw3)".into()
+            ));
+        }
+        Ok(MeasuredMode {
+            label: label.to_string(),
+            hz,
+            sigma_hz,
+            shape,
+            line,
+        })
+    }
+}
+
+impl MeasuredTf {
+    /// Reads a measured transfer-function file (see the [module documentation](self)).
+    pub fn read(path: &Path) -> Result<MeasuredTf, FitError> {
+        MeasuredTf::parse(path, &read_text(path)?)
+    }
+
+    /// Parses the text of a measured transfer-function file read from `path`.
+    pub fn parse(path: &Path, text: &str) -> Result<MeasuredTf, FitError> {
+        let at = line_error(path);
+        let data = data_lines(text, "freq_hz");
+        let first_data = data.first().map(|(line, _)| *line);
+        // (value, line) of the `# input = ...` and `# output = ...` lines: each once, before
+        // the data (a second one, or one among the points, is not silently obeyed)
+        let mut input: Option<(String, usize)> = None;
+        let mut output: Option<(String, usize)> = None;
+        for (k, raw) in text.lines().enumerate() {
+            let line = k + 1;
+            let directive = raw.trim().strip_prefix('#').map(str::trim);
+            let Some((key, value)) = directive.and_then(|d| d.split_once('=')) else {
+                continue;
+            };
+            let key = key.trim();
+            let slot = match key {
+                "input" => &mut input,
+                "output" => &mut output,
+                _ => continue,
+            };
+            if let Some((_, first)) = slot {
+                return Err(at(
+                    line,
+                    format!("a second '# {key} = NAME' line (the first is line {first})"),
+                ));
+            }
+            if let Some(data) = first_data.filter(|&data| line > data) {
+                return Err(at(
+                    line,
+                    format!(
+                        "'# {key} = NAME' after the data (line {data}): it goes before the points"
+                    ),
+                ));
+            }
+            let value = value.trim();
+            if value.is_empty() {
+                return Err(at(line, format!("'# {key} =' names no {key}")));
+            }
+            *slot = Some((value.to_string(), line));
+        }
+        let mut points = Vec::new();
+        for (line, fields) in data {
+            if fields.len() != 3 {
+                return Err(at(
+                    line,
+                    format!(
+                        "expected freq_hz,abs,sigma_abs, got {} fields",
+                        fields.len()
+                    ),
+                ));
+            }
+            let abs = positive(fields[1], "abs").map_err(|m| at(line, m))?;
+            points.push(TfPoint {
+                freq_hz: positive(fields[0], "freq_hz").map_err(|m| at(line, m))?,
+                abs,
+                sigma_abs: uncertainty(fields[2], "sigma_abs", abs, "abs")
+                    .map_err(|m| at(line, m))?,
+                line,
+            });
+        }
+        let missing = |what: &str| FitError::File {
+            path: path.to_path_buf(),
+            message: format!("no '# {what} = NAME' line before the data"),
+        };
+        let (input, _) = input.ok_or_else(|| missing("input"))?;
+        let (output, _) = output.ok_or_else(|| missing("output"))?;
+        if points.is_empty() {
+            return Err(FitError::File {
+                path: path.to_path_buf(),
+                message: "no points (expected lines freq_hz,abs,sigma_abs)".into(),
+            });
+        }
+        Ok(MeasuredTf {
+            path: path.to_path_buf(),
+            input,
+            output,
+            points,
+        })
+    }
+}
+
+/// How [`fit`] runs.
+#[derive(Clone, Debug)]
+pub struct FitOptions {
+    /// The stage whose modes are fitted.
+    pub stage: Stage,
+    /// Most Levenberg–Marquardt iterations (Jacobians).
+    pub max_iterations: usize,
+    /// A direction of the weighted, scaled Jacobian whose singular value is below this
+    /// fraction of the largest is undetermined: not stepped in, and reported. 1e-6: the
+    /// data then constrain it a million times less than the best-determined combination,
+    /// and the Jacobian is good to about 1e-8 relative (central differences; the exact one
+    /// to rounding), so that no direction falls below by numerical noise alone.
+    pub undetermined_below: f64,
+    /// Step of the central differences, relative to each parameter's scale (|p|, or 1 for
+    /// p = 0): 1e-4 balances truncation (~1e-8 relative) against the eigenvalues' own
+    /// rounding divided by the step.
+    pub relative_step: f64,
+    /// How the Jacobian is computed (see [`JacobianMethod`]).
+    pub jacobian: JacobianMethod,
+}
+
+/// How the fit differentiates the model's mode frequencies (and |TF| points) with respect
+/// to the free parameters.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum JacobianMethod {
+    /// The exact mode sensitivities, and the |TF| rows from the same request
+    /// ([`exact_jacobian`]).
+    #[default]
+    Exact,
+    /// Central differences of the re-solved model ([`mode_jacobian`], and of |H|).
+    Differences,
+}
+
+impl std::str::FromStr for JacobianMethod {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "exact" => Ok(JacobianMethod::Exact),
+            "differences" => Ok(JacobianMethod::Differences),
+            _ => Err(format!(
+                "'{s}' is not a Jacobian method (exact or differences)"
+            )),
+        }
+    }
+}
+
+impl Default for FitOptions {
+    fn default() -> Self {
+        FitOptions {
+            stage: Stage::S2,
+            max_iterations: 50,
+            undetermined_below: 1e-6,
+            relative_step: 1e-4,
+            jacobian: JacobianMethod::Exact,
+        }
+    }
+}
+
+/// Least kinetic-energy share a mode must have in a measurement's coordinates to be its
+/// match: below it, the measurement names a motion no mode left makes.
+const MIN_SHARE: f64 = 0.1;
+
+/// A measured mode's identity in the model: which mode it is, and its shape to follow it
+/// from one solution to the next.
+#[derive(Clone, Debug)]
+pub struct MatchedModes {
+    /// For each measured mode, its mode's index in the model's mode list.
+    pub indices: Vec<usize>,
+    /// For each measured mode, its model frequency (Hz).
+    pub hz: Vec<f64>,
+    /// For each measured mode, its model mode's label.
+    pub labels: Vec<String>,
+    /// Mode shapes (mass-normalised, over the variables), one column per measured mode.
+    pub shapes: DMatrix<f64>,
+    /// The mass matrix of the solution the shapes come from.
+    pub mass: DMatrix<f64>,
+    /// Each mode's overlap with the one it continues (1 at the first match).
+    pub overlaps: Vec<f64>,
+}
+
+/// Pairs the modes with shapes `new_shapes` (columns, in mass metric `new_mass`) with those
+/// of `old_shapes` (`old_mass`) by their overlap in the mean mass metric,
+/// |u_iᵀ M̄ v_j| / sqrt(u_iᵀ M̄ u_i · v_jᵀ M̄ v_j), M̄ = (M_old + M_new)/2 (1 for the same
+/// shape, 0 for shapes that share no kinetic energy): pairs are taken in order of
+/// decreasing overlap. Returns, for each new mode, the old mode it continues and their
+/// overlap, or `None` when every old mode is taken. Shapes and masses over different
+/// numbers of coordinates are an error naming the argument.
+pub fn pair_modes_by_overlap(
+    old_shapes: &DMatrix<f64>,
+    old_mass: &DMatrix<f64>,
+    new_shapes: &DMatrix<f64>,
+    new_mass: &DMatrix<f64>,
+) -> Result<Vec<Option<(usize, f64)>>, Error> {
+    // every matrix over the old shapes' coordinates (their rows)
+    let n = old_shapes.nrows();
+    let square = |m: &DMatrix<f64>| m.shape() == (n, n);
+    for (argument, fits, given) in [
+        ("old_mass", square(old_mass), old_mass.shape()),
+        ("new_mass", square(new_mass), new_mass.shape()),
+        (
+            "new_shapes (rows)",
+            new_shapes.nrows() == n,
+            new_shapes.shape(),
+        ),
+    ] {
+        if !fits {
+            return Err(Error::Argument {
+                function: "pair_modes_by_overlap",
+                argument,
+                expected: format!("over old_shapes' {n} coordinates"),
+                given: format!("{} x {}", given.0, given.1),
+            });
+        }
+    }
+    let mean = (old_mass + new_mass) * 0.5;
+    let cross = old_shapes.transpose() * &mean * new_shapes;
+    let norm = |u: &DMatrix<f64>| -> Vec<f64> {
+        (0..u.ncols())
+            .map(|j| {
+                let c = u.column(j);
+                (c.transpose() * &mean * c)[(0, 0)].abs().sqrt()
+            })
+            .collect()
+    };
+    let (old_norm, new_norm) = (norm(old_shapes), norm(new_shapes));
+    let mut pairs: Vec<(usize, usize, f64)> = Vec::with_capacity(cross.len());
+    for i in 0..cross.nrows() {
+        for j in 0..cross.ncols() {
+            let scale = old_norm[i] * new_norm[j];
+            let overlap = if scale > 0.0 {
+                cross[(i, j)].abs() / scale
+            } else {
+                0.0
+            };
+            pairs.push((i, j, overlap));
+        }
+    }
+    pairs.sort_by(|a, b| b.2.total_cmp(&a.2).then(a.0.cmp(&b.0)).then(a.1.cmp(&b.1)));
+    let mut taken_old = vec![false; cross.nrows()];
+    let mut matched = vec![None; cross.ncols()];
+    for (i, j, overlap) in pairs {
+        if !taken_old[i] && matched[j].is_none() {
+            taken_old[i] = true;
+            matched[j] = Some((i, overlap));
+        }
+    }
+    Ok(matched)
+}
+
+/// The shapes of all modes of `result`, one column each.
+fn all_shapes(result: &StageResult) -> DMatrix<f64> {
+    let modes = &result.modes.modes;
+    let n = result.modes.coordinates.len();
+    DMatrix::from_fn(n, modes.len(), |i, j| {
+        modes[j].vector.get(i).copied().unwrap_or(0.0)
+    })
+}
+
+impl MatchedModes {
+    fn from_indices(result: &StageResult, indices: Vec<usize>, overlaps: Vec<f64>) -> Self {
+        let modes = &result.modes.modes;
+        let n = result.modes.coordinates.len();
+        MatchedModes {
+            hz: indices.iter().map(|&k| modes[k].hz).collect(),
+            labels: indices.iter().map(|&k| modes[k].label.clone()).collect(),
+            shapes: DMatrix::from_fn(n, indices.len(), |i, j| {
+                modes[indices[j]].vector.get(i).copied().unwrap_or(0.0)
+            }),
+            mass: result.assembled.mass.clone(),
+            indices,
+            overlaps,
+        }
+    }
+
+    /// The first match: each measured mode to the model mode with the largest share of
+    /// kinetic energy in the coordinates its label and shape name (or, for a family label,
+    /// the mode of that family with the largest share in its shape's coordinates), taken in
+    /// order of decreasing share less distance in log frequency (so that modes moving the
+    /// same coordinates go to the nearest frequencies), each model mode at most once. A
+    /// share below 10 % is no match.
+    pub fn by_label(result: &StageResult, measured: &MeasuredModes) -> Result<Self, FitError> {
+        let modes = &result.modes.modes;
+        let coordinates = &result.modes.coordinates;
+        let families: Vec<String> = modes.iter().map(|m| result.mode_family(m)).collect();
+        let catalogue = || {
+            modes
+                .iter()
+                .zip(&families)
+                .map(|(m, f)| format!("{} {} {:.4} Hz", m.label, f, m.hz))
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        let is_family = |label: &str| families.iter().any(|f| f == label);
+        // every (measurement, candidate mode) pair with the mode's kinetic-energy share in
+        // the measurement's coordinates (its label's and its shape's) and its distance in
+        // log frequency
+        let mut pairs: Vec<(usize, usize, f64, f64)> = Vec::new();
+        for (row, mm) in measured.modes.iter().enumerate() {
+            let unmatched = |message: String| FitError::Unmatched {
+                path: measured.path.clone(),
+                line: mm.line,
+                message,
+            };
+            let label = result.unalias(&mm.label);
+            let family = is_family(&label) && !coordinates.contains(&label);
+            let mut names: Vec<&str> = mm.shape.iter().map(String::as_str).collect();
+            if !family {
+                names.push(&mm.label);
+            }
+            if names.is_empty() {
+                return Err(unmatched(format!(
+                    "label '{}' is a mode family: give the shape column (the coordinates the mode mostly moves, joined by '+')",
+                    mm.label
+                )));
+            }
+            let mut columns = Vec::with_capacity(names.len());
+            for c in names {
+                let native = result.unalias(c);
+                match coordinates.iter().position(|x| *x == native) {
+                    Some(k) => columns.push(k),
+                    None => {
+                        return Err(unmatched(format!(
+                            "'{c}' is neither a variable of the model nor a mode family (variables: {}; modes: {})",
+                            coordinates.join(" "),
+                            catalogue()
+                        )));
+                    }
+                }
+            }
+            columns.dedup();
+            for k in (0..modes.len()).filter(|&k| !family || families[k] == label) {
+                let share: f64 = columns
+                    .iter()
+                    .map(|&c| modes[k].energy_fractions.get(c).copied().unwrap_or(0.0))
+                    .sum();
+                let distance = (modes[k].hz.abs() / mm.hz).ln().abs();
+                pairs.push((row, k, share, distance));
+            }
+        }
+        // best scores first: the share less the distance in log frequency (a mode e times
+        // off in frequency needs a share larger by 1), so that modes moving the same
+        // coordinates (in phase, out of phase) go to the nearest frequencies
+        pairs.sort_by(|a, b| {
+            (b.2 - b.3)
+                .total_cmp(&(a.2 - a.3))
+                .then(a.0.cmp(&b.0))
+                .then(a.1.cmp(&b.1))
+        });
+        let mut chosen: Vec<Option<(usize, f64)>> = vec![None; measured.modes.len()];
+        for &(row, k, share, _) in &pairs {
+            if chosen[row].is_none() && !chosen.iter().flatten().any(|(taken, _)| *taken == k) {
+                chosen[row] = Some((k, share));
+            }
+        }
+        let mut indices: Vec<usize> = Vec::with_capacity(measured.modes.len());
+        for (row, mm) in measured.modes.iter().enumerate() {
+            match chosen[row] {
+                Some((k, share)) if share >= MIN_SHARE => indices.push(k),
+                found => {
+                    return Err(FitError::Unmatched {
+                        path: measured.path.clone(),
+                        line: mm.line,
+                        message: format!(
+                            "no model mode left that moves {}{} (largest share {:.0} %, need {:.0} %; modes: {})",
+                            mm.label,
+                            if mm.shape.is_empty() {
+                                String::new()
+                            } else {
+                                format!(" / {}", mm.shape.join("+"))
+                            },
+                            100.0 * found.map_or(0.0, |f| f.1),
+                            100.0 * MIN_SHARE,
+                            catalogue()
+                        ),
+                    });
+                }
+            }
+        }
+        let overlaps = vec![1.0; indices.len()];
+        Ok(MatchedModes::from_indices(result, indices, overlaps))
+    }
+
+    /// The same modes in a new solution `result`: each followed by the overlap of its shape
+    /// with this match's (so that modes that cross in frequency keep their identity). A
+    /// `result` over other coordinates than this match's is an error.
+    pub fn follow(&self, result: &StageResult) -> Result<MatchedModes, Error> {
+        if self.shapes.ncols() != self.indices.len() {
+            return Err(Error::Argument {
+                function: "MatchedModes::follow",
+                argument: "self.shapes (columns)",
+                expected: format!("one per matched mode ({})", self.indices.len()),
+                given: self.shapes.ncols().to_string(),
+            });
+        }
+        let pairs = pair_modes_by_overlap(
+            &self.shapes,
+            &self.mass,
+            &all_shapes(result),
+            &result.assembled.mass,
+        )?;
+        let mut indices = vec![0; self.indices.len()];
+        let mut overlaps = vec![0.0; self.indices.len()];
+        for (new, pair) in pairs.iter().enumerate() {
+            if let Some((old, overlap)) = *pair {
+                indices[old] = new;
+                overlaps[old] = overlap;
+            }
+        }
+        Ok(MatchedModes::from_indices(result, indices, overlaps))
+    }
+}
+
+/// `case` with the free parameters set to `values`, solved at `stage`.
+fn solve(case: &Case, free: &[String], values: &[f64], stage: Stage) -> Result<StageResult, Error> {
+    let (system, _) = case.clone().with_sets(&sets(free, values))?.build()?;
+    run_stage(system, stage)
+}
+
+/// `name=value` overrides; a value's `Display` is the shortest text that reads back to the
+/// same f64.
+fn sets(free: &[String], values: &[f64]) -> Vec<String> {
+    free.iter()
+        .zip(values)
+        .map(|(name, value)| format!("{name}={value}"))
+        .collect()
+}
+
+/// Each free parameter's step scale: |value|, or 1 for a parameter at 0.
+fn scales(values: &[f64]) -> Vec<f64> {
+    values
+        .iter()
+        .map(|v| if *v != 0.0 { v.abs() } else { 1.0 })
+        .collect()
+}
+
+/// The frequencies (Hz) of the `matched` modes of `case` with the free parameters at
+/// `values` (the solution `matched` comes from), and their derivatives with respect to
+/// each free parameter (Hz per unit of the parameter; one row per matched mode, one column
+/// per free parameter): central differences of the re-solved model with steps
+/// `relative_step` × |value|, the modes followed by shape at each step.
+///
+/// The fit's Jacobian with [`JacobianMethod::Differences`] ([`exact_mode_jacobian`] is
+/// the default). `values` must hold one value per free parameter and `relative_step` be
+/// finite and positive.
+pub fn mode_jacobian(
+    case: &Case,
+    stage: Stage,
+    free: &[String],
+    values: &[f64],
+    matched: &MatchedModes,
+    relative_step: f64,
+) -> Result<(Vec<f64>, DMatrix<f64>), Error> {
+    let argument = |argument, expected: String, given: String| Error::Argument {
+        function: "mode_jacobian",
+        argument,
+        expected,
+        given,
+    };
+    if values.len() != free.len() {
+        let expected = format!("one value per free parameter ({})", free.len());
+        return Err(argument("values", expected, values.len().to_string()));
+    }
+    if !(relative_step.is_finite() && relative_step > 0.0) {
+        let expected = "finite and positive".to_string();
+        return Err(argument(
+            "relative_step",
+            expected,
+            relative_step.to_string(),
+        ));
+    }
+    let jacobian = central_differences(case, stage, free, values, relative_step, |result| {
+        Ok(matched.follow(result)?.hz)
+    })?;
+    Ok((matched.hz.clone(), jacobian))
+}
+
+/// [`mode_jacobian`] by the exact sensitivities ([`crate::sensitivity::sensitivities`]) instead of
+/// differences: the frequencies of the `matched` modes of `case` with the free parameters
+/// at `values` (the solution `matched` comes from), and d(frequency)/d(parameter) (Hz per
+/// unit of the parameter; one row per matched mode, one column per free parameter), with
+/// no step. A parameter the exact route is closed to has its stage matrices differenced
+/// there (see [`crate::sensitivity::sensitivities`]), still without following any mode. Modes within a
+/// cluster of equal frequencies get the eigenvalues of the cluster's derivative in
+/// ascending order, as their frequencies are ordered.
+pub fn exact_mode_jacobian(
+    case: &Case,
+    stage: Stage,
+    free: &[String],
+    values: &[f64],
+    matched: &MatchedModes,
+) -> Result<(Vec<f64>, DMatrix<f64>), Error> {
+    let at = (values, matched);
+    let (modes, _) = exact_rows("exact_mode_jacobian", case, stage, free, at, None)?;
+    Ok((matched.hz.clone(), modes))
+}
+
+/// The fit's whole Jacobian with [`JacobianMethod::Exact`]: the rows of
+/// [`exact_mode_jacobian`], and with `tf` d|H|/dp at its points' frequencies (one row per
+/// point, |H|'s unit per unit of the parameter) from the same request: the stage's
+/// matrices differenced and everything after them exact (see [`crate::sensitivity::sensitivities`]),
+/// so that a point on a sharp resonance gets its true derivative, which a difference of
+/// |H| itself misses when the step moves the peak by a fraction of its width.
+pub fn exact_jacobian(
+    case: &Case,
+    stage: Stage,
+    free: &[String],
+    values: &[f64],
+    matched: &MatchedModes,
+    tf: Option<&MeasuredTf>,
+) -> Result<(DMatrix<f64>, Option<DMatrix<f64>>), Error> {
+    exact_rows("exact_jacobian", case, stage, free, (values, matched), tf)
+}
+
+/// [`exact_jacobian`], its errors naming `function` (the public function called).
+fn exact_rows(
+    function: &'static str,
+    case: &Case,
+    stage: Stage,
+    free: &[String],
+    (values, matched): (&[f64], &MatchedModes),
+    tf: Option<&MeasuredTf>,
+) -> Result<(DMatrix<f64>, Option<DMatrix<f64>>), Error> {
+    let freqs: Vec<f64> =
+        tf.map_or_else(Vec::new, |t| t.points.iter().map(|p| p.freq_hz).collect());
+    if values.len() != free.len() {
+        return Err(Error::Argument {
+            function,
+            argument: "values",
+            expected: format!("one value per free parameter ({})", free.len()),
+            given: values.len().to_string(),
+        });
+    }
+    let at = case.clone().with_sets(&sets(free, values))?;
+    let request = crate::sensitivity::SensitivityRequest {
+        parameters: Some(free.to_vec()),
+        tf: tf.map(|t| (t.input.clone(), t.output.clone())),
+        freqs,
+        ..crate::sensitivity::SensitivityRequest::modes(stage)
+    };
+    let sensitivities = crate::sensitivity::sensitivities(&at, &request).map_err(|e| match e {
+        // a count or a switch among the free parameters, a neutral mode: said as the fit's
+        Error::Sensitivity(why) => Error::Sensitivity(format!("the fit's exact Jacobian: {why}")),
+        e => e,
+    })?;
+    // the same build and stage as the solution `matched` comes from, so the same modes in
+    // the same order, to the last bit
+    let mut rows = Vec::with_capacity(matched.indices.len());
+    for (&index, &hz) in matched.indices.iter().zip(&matched.hz) {
+        match (
+            sensitivities.modes_hz.get(index),
+            sensitivities.dfdp.get(index),
+        ) {
+            (Some(&f), Some(row)) if f == hz && row.len() == free.len() => rows.push(row),
+            _ => {
+                return Err(Error::Argument {
+                    function,
+                    argument: "matched",
+                    expected: "modes of the solution at `values`".into(),
+                    given: format!("mode {} at {hz} Hz", index + 1),
+                });
+            }
+        }
+    }
+    let modes = DMatrix::from_fn(rows.len(), free.len(), |i, p| rows[i][p]);
+    let tf_rows = match (&sensitivities.tf_abs, tf) {
+        (Some((_, d)), Some(_)) => Some(DMatrix::from_fn(d.len(), free.len(), |i, p| {
+            d[i].get(p).copied().unwrap_or(f64::NAN)
+        })),
+        _ => None,
+    };
+    Ok((modes, tf_rows))
+}
+
+/// The derivatives of `quantities` (of a solution) with respect to each free parameter at
+/// `values`: central differences with steps `relative_step` × the parameter's scale, one
+/// row per quantity, one column per parameter.
+fn central_differences(
+    case: &Case,
+    stage: Stage,
+    free: &[String],
+    values: &[f64],
+    relative_step: f64,
+    quantities: impl Fn(&StageResult) -> Result<Vec<f64>, Error>,
+) -> Result<DMatrix<f64>, Error> {
+    let scale = scales(values);
+    let mut columns = Vec::with_capacity(free.len());
+    for p in 0..free.len() {
+        let h = relative_step * scale[p];
+        let at = |sign: f64| -> Result<Vec<f64>, Error> {
+            let mut shifted = values.to_vec();
+            shifted[p] += sign * h;
+            quantities(&solve(case, free, &shifted, stage)?)
+        };
+        let (up, down) = (at(1.0)?, at(-1.0)?);
+        columns.push(
+            up.iter()
+                .zip(&down)
+                .map(|(u, d)| (u - d) / (2.0 * h))
+                .collect::<Vec<f64>>(),
+        );
+    }
+    let rows = columns.first().map_or(0, Vec::len);
+    Ok(DMatrix::from_fn(rows, free.len(), |i, p| {
+        columns[p].get(i).copied().unwrap_or(0.0)
+    }))
+}
+
+/// |TF| (the transfer function's unit) of `result` at the measured points' frequencies.
+fn tf_values(result: &StageResult, tf: &MeasuredTf, freqs: &[f64]) -> Result<Vec<f64>, Error> {
+    Ok(result
+        .transfer(&tf.input, &tf.output, freqs)?
+        .iter()
+        .map(|z| z.norm())
+        .collect())
+}
+
+/// A fitted parameter.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct FittedParameter {
+    /// Name.
+    pub name: String,
+    /// Unit, where the model declares one.
+    pub unit: Option<String>,
+    /// Start value (its unit).
+    pub start: f64,
+    /// Fitted value (its unit); the start value when undetermined.
+    pub value: f64,
+    /// Standard uncertainty (its unit), from the covariance on the determined directions;
+    /// `None` when the data do not determine the parameter.
+    pub uncertainty: Option<f64>,
+}
+
+/// A measured mode against the fitted model.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct ModeResidual {
+    /// The measurement's label.
+    pub label: String,
+    /// The model mode's number (from 1, ascending frequency, as `pendkit modes` numbers it).
+    pub mode: usize,
+    /// The model mode's label (dominant coordinate).
+    pub model_label: String,
+    /// Measured frequency (Hz).
+    pub measured_hz: f64,
+    /// Its uncertainty (Hz).
+    pub sigma_hz: f64,
+    /// Fitted model frequency (Hz).
+    pub model_hz: f64,
+    /// (measured − model)/σ.
+    pub normalized: f64,
+}
+
+/// A measured |TF| point against the fitted model.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct TfResidual {
+    /// Frequency (Hz).
+    pub freq_hz: f64,
+    /// Measured |TF|.
+    pub measured: f64,
+    /// Its uncertainty.
+    pub sigma: f64,
+    /// Fitted model |TF|.
+    pub model: f64,
+    /// (measured − model)/σ.
+    pub normalized: f64,
+}
+
+/// A combination of parameters the data cannot determine: a right singular vector of the
+/// weighted Jacobian in relative units (changing each parameter p by `coefficient` × |p|
+/// changes no fitted quantity to first order, relative to the best-determined direction,
+/// by more than `relative_singular_value`).
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct Undetermined {
+    /// Singular value over the largest.
+    pub relative_singular_value: f64,
+    /// (parameter, coefficient) of the unit vector, largest first, coefficients below 1e-3
+    /// left out.
+    pub combination: Vec<(String, f64)>,
+}
+
+/// The result of a fit.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct FitResult {
+    /// The free parameters, fitted.
+    pub parameters: Vec<FittedParameter>,
+    /// Correlation coefficients between the parameters (`None` where one is undetermined).
+    pub correlation: Vec<Vec<Option<f64>>>,
+    /// The measured modes against the fitted model.
+    pub modes: Vec<ModeResidual>,
+    /// The measured |TF| points against the fitted model (empty without one).
+    pub tf: Vec<TfResidual>,
+    /// χ² = Σ ((measured − model)/σ)².
+    pub chi_squared: f64,
+    /// Degrees of freedom: measurements minus determined directions.
+    pub dof: usize,
+    /// χ²/dof (`None` when dof = 0). The uncertainties are not scaled by it.
+    pub reduced_chi_squared: Option<f64>,
+    /// Singular values of the weighted Jacobian in relative parameter units, largest first.
+    pub singular_values: Vec<f64>,
+    /// The combinations the data cannot determine.
+    pub undetermined: Vec<Undetermined>,
+    /// Levenberg–Marquardt iterations (Jacobians computed).
+    pub iterations: usize,
+    /// Model solutions made (an exact Jacobian counts as one, plus four per free parameter
+    /// for its |TF| rows).
+    pub solves: usize,
+    /// How the Jacobian was computed.
+    pub jacobian: JacobianMethod,
+}
+
+impl FitResult {
+    /// The fitted values as `name=value` overrides (as `--set` takes them).
+    pub fn sets(&self) -> Vec<String> {
+        self.parameters
+            .iter()
+            .map(|p| format!("{}={}", p.name, p.value))
+            .collect()
+    }
+
+    /// A case file (see [`Case::from_file`]) of model `model` (a bundled name or a
+    /// suspension file's path) with `case`'s overrides and the fitted values.
+    pub fn case_file(&self, model: &str, case: &Case) -> String {
+        let fitted = |name: &str| self.parameters.iter().find(|p| p.name == name);
+        let mut overrides = case.overrides.clone();
+        overrides
+            .parameters
+            .retain(|(name, _)| fitted(name).is_none());
+        // `{:e}`: every digit of the f64, whatever the magnitude
+        overrides.parameters.extend(
+            self.parameters
+                .iter()
+                .map(|p| (p.name.clone(), format!("{:e}", p.value))),
+        );
+        let note = |name: &str| {
+            fitted(name).map(|p| match p.uncertainty {
+                Some(u) => format!("+- {u:.3e}"),
+                None => "undetermined: start value".to_string(),
+            })
+        };
+        let header = format!(
+            "# written by pendkit fit {}: {} free parameters, chi^2/dof = {}\n",
+            crate::VERSION,
+            self.parameters.len(),
+            self.reduced_chi_squared.map_or_else(
+                || "- (no degrees of freedom)".to_string(),
+                |r| format!("{r:.4}")
+            ),
+        );
+        header
+            + &overrides.case_file(
+                model,
+                &format!("{} fitted to measured modes", case.name),
+                &note,
+            )
+    }
+}
+
+/// The residual vector r = (model − measured)/σ over the modes, then the |TF| points.
+fn residuals(
+    model_hz: &[f64],
+    measured: &MeasuredModes,
+    tf: Option<&MeasuredTf>,
+    tf_model: &[f64],
+) -> DVector<f64> {
+    let modes = measured
+        .modes
+        .iter()
+        .zip(model_hz)
+        .map(|(m, f)| (f - m.hz) / m.sigma_hz);
+    let points = tf
+        .into_iter()
+        .flat_map(|t| t.points.iter())
+        .zip(tf_model)
+        .map(|(p, model)| (model - p.abs) / p.sigma_abs);
+    DVector::from_iterator(measured.modes.len() + tf_model.len(), modes.chain(points))
+}
+
+/// The error for the `i`-th weighted residual `r` (modes first, then |TF| points), which is
+/// not finite or too large to square.
+fn residual_error(measured: &MeasuredModes, tf: Option<&MeasuredTf>, i: usize, r: f64) -> FitError {
+    let point = tf.and_then(|t| {
+        let p = t.points.get(i.checked_sub(measured.modes.len())?)?;
+        Some((&t.path, p.line, "sigma_abs"))
+    });
+    let mode = measured
+        .modes
+        .get(i)
+        .map(|m| (&measured.path, m.line, "sigma_hz"));
+    // residuals() makes one per mode, then one per point: one of the two is there
+    let Some((path, line, what)) = mode.or(point) else {
+        return FitError::NotFinite(format!("residual {i}"));
+    };
+    let message = if r.is_finite() {
+        format!(
+            "the weighted residual (model - measured)/{what} = {r:.3e} is too large to square: \
+             {what} is far below the model's distance from the measurement"
+        )
+    } else {
+        format!("the model's value for this measurement is not finite ({r})")
+    };
+    FitError::Line {
+        path: path.clone(),
+        line,
+        message,
+    }
+}
+
+/// What is fitted to what: the measurements, the free parameters, their start values,
+/// scales and units, and how the Jacobian was computed.
+struct Problem<'a> {
+    measured: &'a MeasuredModes,
+    tf: Option<&'a MeasuredTf>,
+    free: &'a [String],
+    start: Vec<f64>,
+    scale: Vec<f64>,
+    units: Vec<Option<String>>,
+    jacobian: JacobianMethod,
+}
+
+/// One point of the fit: the solution, its matched modes and residuals.
+struct State {
+    values: Vec<f64>,
+    matched: MatchedModes,
+    tf_model: Vec<f64>,
+    r: DVector<f64>,
+    chi_squared: f64,
+}
+
+/// Fits the free parameters of `case` to the measured modes (and |TF| points), starting
+/// from the case's values: see the [module documentation](self).
+pub fn fit(
+    case: &Case,
+    measured: &MeasuredModes,
+    tf: Option<&MeasuredTf>,
+    free: &[String],
+    options: &FitOptions,
+) -> Result<FitResult, Error> {
+    // the free parameters: known, read, listed once
+    if free.is_empty() {
+        return Err(FitError::Parameter {
+            name: String::new(),
+            message: "no free parameters (--free p1,p2,...)".into(),
+        }
+        .into());
+    }
+    let (_, resolved) = case.build()?;
+    let read = case.parameters_read(&resolved)?;
+    let mut start = Vec::with_capacity(free.len());
+    for (k, name) in free.iter().enumerate() {
+        if free[..k].contains(name) {
+            return Err(FitError::Parameter {
+                name: name.clone(),
+                message: "listed twice".into(),
+            }
+            .into());
+        }
+        let value = resolved.get(name).map_err(|_| FitError::Parameter {
+            name: name.clone(),
+            message: format!(
+                "not a parameter of model '{}' (see pendkit params)",
+                case.model.name()
+            ),
+        })?;
+        if !read.contains(name) {
+            return Err(FitError::Parameter {
+                name: name.clone(),
+                message: "read by nothing in the model".into(),
+            }
+            .into());
+        }
+        if !value.is_finite() {
+            return Err(FitError::NotFinite(format!("start value of '{name}'")).into());
+        }
+        start.push(value);
+    }
+    let n_data = measured.modes.len() + tf.map_or(0, |t| t.points.len());
+    if n_data <= free.len() {
+        return Err(FitError::TooFewMeasurements {
+            measurements: n_data,
+            free: free.len(),
+        }
+        .into());
+    }
+    let stage = options.stage;
+    let tf_freqs: Vec<f64> =
+        tf.map_or_else(Vec::new, |t| t.points.iter().map(|p| p.freq_hz).collect());
+    let evaluate =
+        |values: &[f64], matched: &MatchedModes, result: &StageResult| -> Result<State, Error> {
+            let tf_model = match tf {
+                Some(t) => tf_values(result, t, &tf_freqs)?,
+                None => Vec::new(),
+            };
+            let r = residuals(&matched.hz, measured, tf, &tf_model);
+            // a residual that is not finite, or whose square overflows χ², names its line
+            if let Some(i) = r.iter().position(|x| !(x * x).is_finite()) {
+                return Err(residual_error(measured, tf, i, r[i]).into());
+            }
+            Ok(State {
+                values: values.to_vec(),
+                matched: matched.clone(),
+                tf_model,
+                chi_squared: r.norm_squared(),
+                r,
+            })
+        };
+
+    let first = solve(case, free, &start, stage).map_err(|e| FitError::Start(Box::new(e)))?;
+    first
+        .check_stable()
+        .map_err(|e| FitError::Start(Box::new(e)))?;
+    let matched = MatchedModes::by_label(&first, measured)?;
+    let mut state = evaluate(&start, &matched, &first)?;
+    let mut solves = 1;
+    let scale = scales(&start);
+    let defaults = pendkit_model::Defaults::of(&*case.model)?;
+    let units: Vec<Option<String>> = free
+        .iter()
+        .map(|name| defaults.params.unit(name).map(str::to_string))
+        .collect();
+    let sigma: Vec<f64> = measured
+        .modes
+        .iter()
+        .map(|m| m.sigma_hz)
+        .chain(tf.iter().flat_map(|t| t.points.iter().map(|p| p.sigma_abs)))
+        .collect();
+    let mut damping: Option<f64> = None;
+    let mut iterations = 0;
+    loop {
+        // the weighted Jacobian in relative parameter units: rows / σ, columns × scale
+        let jacobian = match options.jacobian {
+            JacobianMethod::Exact => {
+                // one stage solution, and the |TF| rows' four rebuilds of the stage per
+                // parameter (the matrices' stencil)
+                let (modes, tf_rows) =
+                    exact_jacobian(case, stage, free, &state.values, &state.matched, tf)?;
+                solves += 1 + tf.map_or(0, |_| 4 * free.len());
+                match tf_rows {
+                    Some(t) => stack(&modes, &t),
+                    None => modes,
+                }
+            }
+            JacobianMethod::Differences => {
+                let (_, modes) = mode_jacobian(
+                    case,
+                    stage,
+                    free,
+                    &state.values,
+                    &state.matched,
+                    options.relative_step,
+                )?;
+                solves += 2 * free.len();
+                match tf {
+                    Some(t) => {
+                        let rows = central_differences(
+                            case,
+                            stage,
+                            free,
+                            &state.values,
+                            options.relative_step,
+                            |result| tf_values(result, t, &tf_freqs),
+                        )?;
+                        solves += 2 * free.len();
+                        stack(&modes, &rows)
+                    }
+                    None => modes,
+                }
+            }
+        };
+        iterations += 1;
+        let weighted = DMatrix::from_fn(n_data, free.len(), |i, p| {
+            jacobian[(i, p)] / sigma[i] * scale[p]
+        });
+        if weighted.iter().any(|x| !x.is_finite()) {
+            return Err(FitError::NotFinite("the Jacobian".into()).into());
+        }
+        let svd = weighted.clone().svd(true, true);
+        let (Some(u), Some(v_t)) = (svd.u.as_ref(), svd.v_t.as_ref()) else {
+            return Err(FitError::NotFinite("the SVD of the Jacobian".into()).into());
+        };
+        let s = &svd.singular_values;
+        let s_max = s.iter().copied().fold(0.0, f64::max);
+        let determined: Vec<usize> = (0..s.len())
+            .filter(|&i| s_max > 0.0 && s[i] > options.undetermined_below * s_max)
+            .collect();
+        let c: Vec<f64> = determined
+            .iter()
+            .map(|&i| u.column(i).dot(&state.r))
+            .collect();
+        // what a full Gauss–Newton step would still gain in χ²; at the minimum, zero
+        let gain: f64 = c.iter().map(|x| x * x).sum();
+        let converged = gain <= 1e-9 * state.chi_squared.max(1.0);
+        if converged || iterations > options.max_iterations {
+            if !converged {
+                return Err(FitError::NotConverged {
+                    iterations: iterations - 1,
+                    chi_squared: state.chi_squared,
+                    values: sets(free, &state.values).join(" "),
+                    damping: damping.unwrap_or(0.0),
+                }
+                .into());
+            }
+            let problem = Problem {
+                measured,
+                tf,
+                free,
+                start,
+                scale,
+                units,
+                jacobian: options.jacobian,
+            };
+            return Ok(finish(
+                &problem,
+                &state,
+                &svd,
+                &determined,
+                (iterations, solves),
+            ));
+        }
+        let mut lambda = damping.unwrap_or(1e-3 * s_max * s_max);
+        let mut accepted = false;
+        for _ in 0..30 {
+            let mut delta = DVector::zeros(free.len());
+            for (&i, ci) in determined.iter().zip(&c) {
+                delta -= v_t.row(i).transpose() * (s[i] * ci / (s[i] * s[i] + lambda));
+            }
+            let trial: Vec<f64> = state
+                .values
+                .iter()
+                .zip(delta.iter().zip(&scale))
+                .map(|(x, (d, sc))| x + d * sc)
+                .collect();
+            solves += 1;
+            let candidate = solve(case, free, &trial, stage).and_then(|result| {
+                result.check_stable()?;
+                let matched = state.matched.follow(&result)?;
+                evaluate(&trial, &matched, &result)
+            });
+            match candidate {
+                Ok(next) if next.chi_squared < state.chi_squared => {
+                    state = next;
+                    lambda /= 10.0;
+                    accepted = true;
+                    break;
+                }
+                // worse, or the model cannot be solved there: a shorter step
+                _ => lambda = (lambda * 10.0).max(1e-12 * s_max * s_max),
+            }
+        }
+        damping = Some(lambda);
+        if !accepted {
+            return Err(FitError::NotConverged {
+                iterations,
+                chi_squared: state.chi_squared,
+                values: sets(free, &state.values).join(" "),
+                damping: lambda,
+            }
+            .into());
+        }
+    }
+}
+
+/// `a` above `b`.
+fn stack(a: &DMatrix<f64>, b: &DMatrix<f64>) -> DMatrix<f64> {
+    DMatrix::from_fn(a.nrows() + b.nrows(), a.ncols(), |i, j| {
+        if i < a.nrows() {
+            a[(i, j)]
+        } else {
+            b[(i - a.nrows(), j)]
+        }
+    })
+}
+
+/// Below this squared weight on the undetermined directions a parameter counts as
+/// determined (its component there is numerical noise of the Jacobian).
+const UNDETERMINED_WEIGHT: f64 = 1e-6;
+
+/// The result at the converged `state`, whose Jacobian's SVD is `svd` with `determined`
+/// directions; `counts` = (iterations, solves).
+fn finish(
+    problem: &Problem,
+    state: &State,
+    svd: &nalgebra::SVD<f64, nalgebra::Dyn, nalgebra::Dyn>,
+    determined: &[usize],
+    counts: (usize, usize),
+) -> FitResult {
+    let Problem {
+        measured,
+        tf,
+        free,
+        start,
+        scale,
+        units,
+        jacobian,
+    } = problem;
+    let (iterations, solves) = counts;
+    let n = free.len();
+    let s = &svd.singular_values;
+    let s_max = s.iter().copied().fold(0.0, f64::max);
+    let v_t = svd.v_t.clone().unwrap_or_else(|| DMatrix::identity(n, n));
+    let undetermined_dirs: Vec<usize> = (0..s.len()).filter(|i| !determined.contains(i)).collect();
+    // covariance in relative units on the determined directions, then in the parameters'
+    let mut cov = DMatrix::zeros(n, n);
+    for &i in determined {
+        let v = v_t.row(i).transpose();
+        cov += &v * v.transpose() / (s[i] * s[i]);
+    }
+    let cov = DMatrix::from_fn(n, n, |a, b| cov[(a, b)] * scale[a] * scale[b]);
+    let is_determined: Vec<bool> = (0..n)
+        .map(|p| {
+            undetermined_dirs
+                .iter()
+                .map(|&i| v_t[(i, p)] * v_t[(i, p)])
+                .sum::<f64>()
+                < UNDETERMINED_WEIGHT
+        })
+        .collect();
+    let parameters = (0..n)
+        .map(|p| FittedParameter {
+            name: free[p].clone(),
+            unit: units[p].clone(),
+            start: start[p],
+            value: state.values[p],
+            uncertainty: is_determined[p].then(|| cov[(p, p)].sqrt()),
+        })
+        .collect();
+    let correlation = (0..n)
+        .map(|a| {
+            (0..n)
+                .map(|b| {
+                    (is_determined[a] && is_determined[b])
+                        .then(|| cov[(a, b)] / (cov[(a, a)] * cov[(b, b)]).sqrt())
+                        .filter(|x| x.is_finite())
+                })
+                .collect()
+        })
+        .collect();
+    let modes = measured
+        .modes
+        .iter()
+        .zip(&state.matched.indices)
+        .zip(&state.matched.hz)
+        .zip(&state.matched.labels)
+        .map(|(((m, &k), &f), model_label)| ModeResidual {
+            label: m.label.clone(),
+            mode: k + 1,
+            model_label: model_label.clone(),
+            measured_hz: m.hz,
+            sigma_hz: m.sigma_hz,
+            model_hz: f,
+            normalized: (m.hz - f) / m.sigma_hz,
+        })
+        .collect();
+    let tf = tf.map_or_else(Vec::new, |t| {
+        t.points
+            .iter()
+            .zip(&state.tf_model)
+            .map(|(p, &model)| TfResidual {
+                freq_hz: p.freq_hz,
+                measured: p.abs,
+                sigma: p.sigma_abs,
+                model,
+                normalized: (p.abs - model) / p.sigma_abs,
+            })
+            .collect()
+    });
+    let undetermined = undetermined_dirs
+        .iter()
+        .map(|&i| {
+            let mut combination: Vec<(String, f64)> = (0..n)
+                .map(|p| (free[p].clone(), v_t[(i, p)]))
+                .filter(|(_, c)| c.abs() >= 1e-3)
+                .collect();
+            combination.sort_by(|a, b| b.1.abs().total_cmp(&a.1.abs()));
+            // a sign convention: the largest coefficient positive
+            if combination.first().is_some_and(|(_, c)| *c < 0.0) {
+                for (_, c) in &mut combination {
+                    *c = -*c;
+                }
+            }
+            Undetermined {
+                relative_singular_value: if s_max > 0.0 { s[i] / s_max } else { 0.0 },
+                combination,
+            }
+        })
+        .collect();
+    let n_data = state.r.len();
+    let dof = n_data.saturating_sub(determined.len());
+    let mut singular_values: Vec<f64> = s.iter().copied().collect();
+    singular_values.sort_by(|a, b| b.total_cmp(a));
+    FitResult {
+        parameters,
+        correlation,
+        modes,
+        tf,
+        chi_squared: state.chi_squared,
+        dof,
+        reduced_chi_squared: (dof > 0).then(|| state.chi_squared / dof as f64),
+        singular_values,
+        undetermined,
+        iterations,
+        solves,
+        jacobian: *jacobian,
+    }
+}

@@ -1,0 +1,1783 @@
+//! Sensitivities: the derivatives of a stage's mode frequencies, and of |transfer function|
+//! and thermal-noise ASD at given frequencies, with respect to the model's parameters
+//! (`pendkit sensitivity`).
+//!
+//! # Method, and what is exact
+//!
+//! **The exact route** (mode sensitivities; [`Sensitivities::exact`] says which parameters
+//! took it). The build runs with the parameter a dual number, so every mass, inertia,
+//! point, section constant, stiffness and unstretched length carries its exact derivative:
+//! one build for each chunk of [`pendkit_params::TANGENT_CHUNK`] parameters, a vector dual
+//! number with one direction per parameter ([`pendkit_model::build_tangent_chunk`], about
+//! the cost of two `f64` builds), split into one model per parameter; the element terms are
+//! built from that model with `Dual64` constants ([`pendkit_energy::TangentTerm`]); the
+//! equilibrium's motion is δq = dq*/dp = −K⁻¹ ∂g/∂p by the implicit function theorem (∂g/∂p
+//! the dual part of the balanced terms' gradient at the fixed equilibrium, K factorised
+//! once per request); dK/dp is the total derivative along the moving equilibrium (third
+//! derivatives of the energies along δq included), and likewise dM/dp
+//! ([`pendkit_assembly::stage_tangent`]). Only what the modes need is differentiated: the
+//! second derivatives along w = (v, −Q⁻¹C_QX v), the mode v lifted to the floats (then
+//! wᵀ dK w = vᵀ dK_eff v), for each mode and each pair within a cluster, split by the chain
+//! rule into the terms whose constants move with p at the fixed equilibrium and the
+//! equilibrium's motion through coefficients computed once per request
+//! ([`pendkit_assembly::Projection`]; the nominal stage is computed beside the parameters'
+//! dual builds, [`pendkit_assembly::side_by_side`]). The coefficients are computed after the
+//! columns, only along the coordinates some column's dq*/dp moves beyond its rounding
+//! bound ([`pendkit_assembly::Projection::motion_along`]): a symmetric suspension's lateral
+//! coordinates, which no parameter moves, cost nothing. No step, no difference. A parameter nothing reads,
+//! or only the damping's loss angles and the temperature read (no real multiplier, no
+//! switch), moves no mode: its derivatives are exactly 0, computed from nothing, and
+//! called exact. The route is closed (and the parameter goes the difference route below) for
+//! a parameter the dual build cannot follow (written into a pose's text, a count, a
+//! switch), one read only by what the build adds (the damping, the temperature, the
+//! "wire terms early" switch), a model with user-written terms or a kind
+//! without tangent terms, plug-in terms that join the equilibrium (built around the start
+//! position, whose derivative the model does not carry), a damping tag whose real
+//! multiplier at DC is not 1, and for transfer-function and noise sensitivities, which
+//! need the tension-off Hessians too (asked for with the modes, they are differenced
+//! while the modes still take the exact route).
+//!
+//! **The difference route** (and what it shares with the exact one):
+//!
+//! 0. **The model's numbers, exactly where the build allows.** The build runs with the
+//!    parameter a dual number (the chunk build above): the tangent of every
+//!    mass, inertia, point, section constant, stiffness and unstretched length. The model
+//!    at each step below is the nominal one moved along that tangent
+//!    ([`System::stepped`]), which has the same derivative at p₀ as the rebuilt one. A
+//!    parameter the dual build cannot follow (written into a pose's text, a count, a
+//!    switch) rebuilds the model at each step ([`Sensitivities::exact_build`]).
+//! 1. **The stage's matrices, by a difference.** For each parameter p (value p₀, step h),
+//!    the stage is built and re-solved at p₀ ± h and p₀ ± 2h: parameters,
+//!    equilibrium (so the equilibrium's motion dq*/dp is included), Hessians of the stage,
+//!    float elimination (K_eff = K_aa − K_af K_ff⁻¹ K_fa), mass matrix, damping. The
+//!    derivatives dK_eff/dp, dM/dp and dP(f)/dp (the complex master matrix with damping)
+//!    are the fourth-order central difference
+//!    (−X(p₀+2h) + 8X(p₀+h) − 8X(p₀−h) + X(p₀−2h)) / 12h, whose truncation error is
+//!    h⁴ X⁽⁵⁾/30: with h = 10⁻³|p₀| ([`RELATIVE_STEP`]) that is ~10⁻¹³ of X for a smooth
+//!    dependence on the scale of p₀, below the rounding of the matrices' entries
+//!    (~10⁻¹⁶ |X| / h ≈ 10⁻¹³ relative). A parameter whose value is 0 is stepped by
+//!    [`ZERO_STEP`] (in its own unit). dP(f)/dp is put together per frequency from the
+//!    differences of P's frequency-independent parts, P(f) = L + Σ_tag ε_tag(f) P_tag (L
+//!    the lossless part): ε dP_tag where a tag's multiplier does not move with p, the
+//!    difference of ε P_tag point by point where it does (a loss angle); so one parameter's
+//!    matrices are differenced once, not at every frequency, and a loss angle's derivative
+//!    does not carry the rounding of the other tags' imaginary parts.
+//! 2. **Everything after the matrices, exactly** (both routes). Mode frequencies: dω²/dp =
+//!    vᵀ(dK_eff/dp − ω² dM/dp)v with the mass-normalised mode v (Hellmann–Feynman); for a
+//!    cluster of (nearly) equal ω² the derivatives are the eigenvalues of that projected
+//!    matrix over the cluster, so degenerate modes get the right derivatives. Transfer
+//!    functions: dH = −cᵀA⁻¹(dA)A⁻¹b + (dc)ᵀA⁻¹b + cᵀA⁻¹(db), A = P(f) − ω²M over the
+//!    unknowns, with the input's and output's vectors (which follow the equilibrium's
+//!    geometry) differenced like the matrices. Thermal noise: PSD = 4k_BT/ω |Im R| with
+//!    R = oᵀA⁻¹o, dR = 2(do)ᵀz − zᵀ(dA)z, z = A⁻¹o; where damping tags have their own
+//!    temperatures, PSD = 4k_B/ω Σ_tag T_tag ε''_tag z̄ᵀP_tag z (the fluctuation–dissipation
+//!    theorem per tag, as the noise is computed), differentiated term by term with
+//!    dz = A⁻¹(do − dA z) and each tag's T_tag ε''_tag and P_tag differenced like the
+//!    matrices.
+//!
+//! Differencing the matrices, not the answers, keeps the results smooth where the answers
+//! are not: a |TF| near a high-Q resonance moves by many line widths when p moves by
+//! 10⁻³ p₀, but the matrices move by 10⁻³ of themselves. No mode has to be matched between
+//! the rebuilt models either.
+//!
+//! Work skipped exactly: a parameter the model's build does not read (directly or through
+//! the definitions of parameters it reads) changes nothing but the damping, so its stage
+//! matrices are the nominal ones with its damping; if moreover no real multiplier ε' and
+//! no switch reads it (a loss angle, the temperature), the modes' stiffness (the
+//! tension-on Hessian with each tag's ε'(0)) and mass do not move with it, so its mode
+//! sensitivities are exactly 0 and count as exact; a parameter read by nothing at all has
+//! zero sensitivities and costs nothing.
+
+use std::collections::BTreeSet;
+
+use nalgebra::{Complex, DMatrix, DVector};
+use num_dual::Dual64;
+use pendkit_assembly::{
+    Along, AssemblyOptions, Balance, Projection, assemble_with, in_parallel, in_parallel_with,
+    side_by_side,
+};
+use pendkit_dynamics::{
+    Input, Modes, Output, Stability, StageModel, eliminate_floats, validate::check_frequencies,
+};
+use pendkit_model::{Defaults, parameters_with};
+use pendkit_noise::BOLTZMANN;
+use pendkit_system::{Stage, System};
+
+use crate::{Case, Error, StageResult, run_stage};
+
+/// Step of a parameter for the difference of the stage's matrices, relative to its value.
+pub const RELATIVE_STEP: f64 = 1e-3;
+
+/// Step of a parameter whose value is exactly 0, in the parameter's own unit.
+pub const ZERO_STEP: f64 = 1e-6;
+
+/// Largest imbalance of the moved equilibrium per relative change of the parameter, as a
+/// fraction of the forces, that the exact route accepts
+/// ([`pendkit_assembly::StageTangent::residual`]).
+const EXACT_RESIDUAL: f64 = 1e-6;
+
+/// Relative gap of ω² below which modes are one cluster for their derivatives.
+const CLUSTER_GAP: f64 = 1e-8;
+
+/// What to differentiate, at which stage.
+#[derive(Clone, Debug)]
+pub struct SensitivityRequest {
+    /// The stage whose modes and responses are differentiated.
+    pub stage: Stage,
+    /// Whether to compute the mode frequencies' sensitivities.
+    pub modes: bool,
+    /// A transfer function (input, output; names as [`StageResult::transfer`] takes them)
+    /// whose |H| to differentiate at `freqs`.
+    pub tf: Option<(String, String)>,
+    /// A displacement output whose thermal-noise ASD to differentiate at `freqs`.
+    pub noise: Option<String>,
+    /// Frequencies (Hz) for `tf` and `noise`.
+    pub freqs: Vec<f64>,
+    /// The parameters to differentiate with respect to (`None`: every numeric parameter
+    /// of the case, in definition order).
+    pub parameters: Option<Vec<String>>,
+    /// Go on when the equilibrium is unstable (the warning is in
+    /// [`Sensitivities::warning`]); otherwise an unstable equilibrium is an error.
+    pub allow_unstable: bool,
+    /// Threads that compute the parameters' columns (0: as many as the machine has). The
+    /// results do not depend on it.
+    pub threads: usize,
+    /// Difference the stage's matrices for every parameter, even where the exact route is
+    /// open (to check one against the other, or to time them).
+    pub differences: bool,
+}
+
+impl SensitivityRequest {
+    /// Mode sensitivities at `stage` to every parameter, nothing else.
+    pub fn modes(stage: Stage) -> SensitivityRequest {
+        SensitivityRequest {
+            stage,
+            modes: true,
+            tf: None,
+            noise: None,
+            freqs: Vec::new(),
+            parameters: None,
+            allow_unstable: false,
+            threads: 0,
+            differences: false,
+        }
+    }
+}
+
+/// Derivatives of a stage's answers with respect to the parameters.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Sensitivities {
+    /// Parameter names (the columns).
+    pub parameters: Vec<String>,
+    /// Their values, in their units.
+    pub values: Vec<f64>,
+    /// Their units (empty when the model declares none).
+    pub units: Vec<String>,
+    /// The steps used for the differences of the stage's matrices, in the parameters'
+    /// units (0 for a parameter nothing reads).
+    pub steps: Vec<f64>,
+    /// Per parameter, whether the model's numbers were moved along their exact tangent (a
+    /// dual-number build, [`pendkit_model::build_tangent_chunk`]) rather than rebuilt at each
+    /// step (a parameter that reaches the model through a pose's text, a count or a
+    /// switch, or one only the damping reads).
+    pub exact_build: Vec<bool>,
+    /// Per parameter, whether its mode sensitivities are exact, with no difference anywhere
+    /// (`steps` then says what a difference would use): the stage's matrices
+    /// differentiated by dual numbers through the build, the terms and the equilibrium
+    /// (the implicit function theorem), or, for a parameter nothing reads or only the
+    /// damping's loss angles and the temperature read, exactly 0 (see the module's
+    /// documentation). Otherwise the
+    /// matrices are differenced. The |H| and noise sensitivities are always differenced
+    /// (this is false for every parameter of a request without the modes).
+    pub exact: Vec<bool>,
+    /// Mode frequencies (Hz), ascending in ω² (the rows of `dfdp`).
+    pub modes_hz: Vec<f64>,
+    /// Mode labels (dominant coordinate).
+    pub mode_labels: Vec<String>,
+    /// d(mode frequency)/d(parameter), `[mode][parameter]`, Hz per unit of the parameter
+    /// (empty when the modes were not asked for).
+    pub dfdp: Vec<Vec<f64>>,
+    /// |H| at the requested frequencies and d|H|/dp `[freq][parameter]` (|H|'s unit per
+    /// unit of the parameter).
+    pub tf_abs: Option<(Vec<f64>, Vec<Vec<f64>>)>,
+    /// Thermal-noise ASD (m/√Hz or rad/√Hz) at the requested frequencies and d(ASD)/dp
+    /// `[freq][parameter]`.
+    pub noise_asd: Option<(Vec<f64>, Vec<Vec<f64>>)>,
+    /// Parameters left out of the columns, with why: switches and counts the model
+    /// refuses to set to a value near theirs (only when every parameter was asked for; a
+    /// parameter named in the request is an error instead).
+    pub not_differentiable: Vec<(String, String)>,
+    /// The stability warning when the equilibrium is unstable and the request allowed it.
+    pub warning: Option<String>,
+}
+
+fn bad(message: impl Into<String>) -> Error {
+    Error::Sensitivity(message.into())
+}
+
+/// One rebuilt stage: its matrices and what the input and output vectors need.
+struct Point {
+    result: StageResult,
+    k_eff: DMatrix<f64>,
+}
+
+/// The stage's matrices for `system`: assembly, stage model and float elimination, without
+/// the modes (the returned result has none).
+fn stage_point(system: System, stage: Stage) -> Result<Point, Error> {
+    let assembled = assemble_with(&system, stage, &AssemblyOptions::default(), None)?;
+    let model = StageModel::new(&system, &assembled);
+    matrices_point(system, assembled, model)
+}
+
+fn matrices_point(
+    system: System,
+    assembled: pendkit_assembly::Assembled,
+    model: StageModel,
+) -> Result<Point, Error> {
+    model.check_damping_at_dc(&system.damping)?;
+    let k_eff = eliminate_floats(
+        &model.real_stiffness(&system.damping),
+        &assembled.layout,
+        &system,
+    )?
+    .k_eff;
+    let modes = Modes {
+        coordinates: model.variables.clone(),
+        modes: Vec::new(),
+    };
+    let stability = Stability::assess(&modes, Default::default(), model.sizes.1, Vec::new());
+    Ok(Point {
+        result: StageResult {
+            system,
+            assembled,
+            model,
+            modes,
+            stability,
+        },
+        k_eff,
+    })
+}
+
+/// Offsets (in steps) of the points of the fourth-order central difference, in the order
+/// [`difference`] takes them, with their weights (× 1/h).
+const STENCIL: [(f64, f64); 4] = [
+    (-2.0, 1.0 / 12.0),
+    (-1.0, -8.0 / 12.0),
+    (1.0, 8.0 / 12.0),
+    (2.0, -1.0 / 12.0),
+];
+
+/// The fourth-order central difference [8(X₊₁ − X₋₁) − (X₊₂ − X₋₂)] / 12h over the
+/// stencil's points (`points` holds one point per [`STENCIL`] entry). Written as
+/// differences of pairs, so that a quantity the parameter does not move gives exactly 0.
+fn difference<T>(points: &[Point], h: f64, x: impl Fn(&Point) -> T) -> T
+where
+    T: std::ops::Mul<f64, Output = T> + std::ops::Add<T, Output = T>,
+{
+    let inner = x(&points[2]) + x(&points[1]) * -1.0;
+    let outer = x(&points[3]) + x(&points[0]) * -1.0;
+    inner * (8.0 / (12.0 * h)) + outer * (-1.0 / (12.0 * h))
+}
+
+/// [`difference`] of vectors or matrices given one per stencil point.
+fn difference_of<M>(v: &[&M], h: f64) -> M
+where
+    for<'a> &'a M: std::ops::Sub<&'a M, Output = M>,
+    M: std::ops::Mul<f64, Output = M>
+        + std::ops::Sub<M, Output = M>
+        + std::ops::Div<f64, Output = M>,
+{
+    ((v[2] - v[1]) * 8.0 - (v[3] - v[0])) / (12.0 * h)
+}
+
+/// How each parameter enters the model.
+#[derive(Clone, Copy, PartialEq)]
+enum Reach {
+    /// Read by the build of the mechanical model (and perhaps the damping).
+    Mechanics,
+    /// Read only by the damping (and temperature).
+    DampingOnly,
+    /// Read by nothing: every sensitivity is exactly zero.
+    Nothing,
+}
+
+/// The input (none for noise) and output of one point, as the stage result parses them.
+struct Ports {
+    input: Option<Input>,
+    output: Output,
+}
+
+fn ports(point: &Point, tf: &(String, String)) -> Result<Ports, Error> {
+    Ok(Ports {
+        input: Some(point.result.input(&tf.0)?),
+        output: point.result.output(&tf.1)?,
+    })
+}
+
+fn noise_port(point: &Point, name: &str) -> Result<Ports, Error> {
+    match point.result.output(name)? {
+        Output::Displacement(v) => Ok(Ports {
+            input: None,
+            output: Output::Displacement(v),
+        }),
+        Output::SupportForce(_) => Err(Error::Name {
+            name: name.to_string(),
+            message: "thermal noise needs a displacement output".into(),
+        }),
+    }
+}
+
+type C = Complex<f64>;
+
+/// A vector padded with zeros to `n` entries.
+fn padded(v: &DVector<f64>, n: usize) -> DVector<f64> {
+    DVector::from_fn(n, |i, _| v.get(i).copied().unwrap_or(0.0))
+}
+
+/// The port vectors of one point as fixed-length real vectors (b, c): b over the unknowns
+/// (a force input) or the parameters (a displacement input; empty without an input), c
+/// over all master rows (a displacement output) or the parameters (a support force).
+fn port_vectors(ports: &Ports, sizes: (usize, usize, usize)) -> (DVector<f64>, DVector<f64>) {
+    let (nx, nq, ns) = sizes;
+    let b = match &ports.input {
+        Some(Input::Force(f)) => padded(f, nx + nq),
+        Some(Input::Displacement(s)) => padded(s, ns),
+        None => DVector::zeros(0),
+    };
+    let c = match &ports.output {
+        Output::Displacement(o) => padded(o, nx + nq + ns),
+        Output::SupportForce(o) => padded(o, ns),
+    };
+    (b, c)
+}
+
+fn same_kinds(a: &Ports, b: &Ports) -> bool {
+    let input = matches!(
+        (&a.input, &b.input),
+        (Some(Input::Force(_)), Some(Input::Force(_)))
+            | (Some(Input::Displacement(_)), Some(Input::Displacement(_)))
+            | (None, None)
+    );
+    let output = matches!(
+        (&a.output, &b.output),
+        (Output::Displacement(_), Output::Displacement(_))
+            | (Output::SupportForce(_), Output::SupportForce(_))
+    );
+    input && output
+}
+
+/// What every parameter's column reads: the request, the nominal stage and its modes, the
+/// nominal responses' factorisations.
+struct Shared<'a> {
+    case: &'a Case,
+    defaults: &'a Defaults,
+    request: &'a SensitivityRequest,
+    names: &'a [String],
+    values: &'a [f64],
+    reach: &'a [Reach],
+    /// Whether the damping's real multipliers ε'(f) depend on each parameter.
+    real_multiplier_reads: &'a [bool],
+    /// Whether each parameter is read only by what moves no mode (the damping's loss
+    /// angles, the temperature): its mode sensitivities are exactly 0.
+    modes_blind: &'a [bool],
+    base_point: &'a Point,
+    base_ports: Option<&'a Ports>,
+    nominal: &'a [Nominal],
+    /// The nominal modes' vectors, one column per mode.
+    vectors: &'a DMatrix<f64>,
+    clusters: &'a [Vec<usize>],
+    sizes: (usize, usize, usize),
+    responses: bool,
+    /// What the exact route shares between parameters; `None` when it is closed to all.
+    exact: Option<ExactRoute>,
+    /// Each parameter's model numbers along their exact tangent, where the build offers
+    /// one (else each step of its difference rebuilds the model).
+    tangents: &'a Tangents,
+}
+
+/// One parameter's derivatives (Hz, |H|'s unit, and the noise response per unit of the
+/// parameter), or why the model refuses to move it.
+struct Column {
+    /// The step of the difference (the parameter's unit).
+    step: f64,
+    /// Whether the model's numbers moved along their exact tangent.
+    exact_build: bool,
+    /// Whether the stage's matrices were differentiated exactly (no difference at all).
+    exact: bool,
+    /// Why the model refuses values near the parameter's (a switch or a count).
+    refused: Option<String>,
+    /// d(mode frequency)/dp, one per mode (empty when the modes were not asked for).
+    dfdp: Vec<f64>,
+    /// The exact route's projections still without the equilibrium's motion, which
+    /// [`finish_modes`] adds once the projection's coefficients are known (`dfdp` is then
+    /// filled).
+    pending: Option<Projections>,
+    /// dH/dp, one per frequency.
+    d_tf: Vec<C>,
+    /// d(noise PSD)/dp, one per frequency.
+    d_noise: Vec<f64>,
+}
+
+/// The dual builds of the parameters the mechanics read, where the model offers them: one
+/// per chunk of [`pendkit_params::TANGENT_CHUNK`] parameters (about the cost of two `f64`
+/// builds each), the chunks on `threads` threads; each parameter's model is taken from its
+/// chunk by its own column ([`Tangents::of`]), on the column's thread.
+struct Tangents {
+    chunks: Vec<Option<pendkit_model::TangentChunk>>,
+    /// Per parameter: its chunk and direction there.
+    at: Vec<Option<(usize, usize)>>,
+}
+
+impl Tangents {
+    fn build(
+        case: &Case,
+        names: &[String],
+        reach: &[Reach],
+        threads: usize,
+    ) -> Result<Self, Error> {
+        let mechanical: Vec<usize> = (0..names.len())
+            .filter(|&j| reach[j] == Reach::Mechanics)
+            .collect();
+        let groups: Vec<&[usize]> = mechanical.chunks(pendkit_params::TANGENT_CHUNK).collect();
+        // a model that offers no dual build leaves its parameters to rebuilds
+        let chunks = in_parallel(groups.len(), threads, |c| {
+            let chunk: Vec<&str> = groups[c].iter().map(|&j| names[j].as_str()).collect();
+            Ok::<_, Error>(
+                pendkit_model::build_tangent_chunk(&*case.model, &case.overrides, &chunk).ok(),
+            )
+        })?;
+        let mut at = vec![None; names.len()];
+        for (c, group) in groups.iter().enumerate() {
+            for (k, &j) in group.iter().enumerate() {
+                at[j] = Some((c, k));
+            }
+        }
+        Ok(Tangents { chunks, at })
+    }
+
+    /// Parameter `j`'s model with the exact derivatives of its numbers, if it has them,
+    /// written into `scratch` (a column's thread keeps one: the parameters of a chunk are
+    /// its columns in order, so most models are rewritten in place rather than copied).
+    fn of<'s>(
+        &self,
+        j: usize,
+        scratch: &'s mut pendkit_model::DirectionScratch,
+    ) -> Option<&'s System<Dual64>> {
+        let (c, k) = self.at[j]?;
+        self.chunks[c].as_ref()?.direction_in(k, scratch).ok()
+    }
+}
+
+/// Parameter `j`'s column: the stage rebuilt at the stencil's points and differenced, then
+/// the exact algebra of the module's documentation. `None` for a parameter nothing reads
+/// (every derivative exactly 0, nothing computed).
+fn column(
+    shared: &Shared,
+    j: usize,
+    scratch: &mut pendkit_model::DirectionScratch,
+) -> Result<Option<Column>, Error> {
+    let Shared {
+        case,
+        defaults,
+        request,
+        names,
+        values,
+        reach,
+        base_point,
+        base_ports,
+        nominal,
+        sizes,
+        responses,
+        ..
+    } = *shared;
+    if reach[j] == Reach::Nothing {
+        // nothing reads it: every derivative is exactly 0, with nothing computed (exact for
+        // the modes, as a loss angle's zero is, where the exact route was asked for)
+        return Ok(None);
+    }
+    let name = &names[j];
+    let modes = &base_point.result.modes.modes;
+    let nf = request.freqs.len();
+    let p0 = values[j];
+    let h = if p0 == 0.0 {
+        ZERO_STEP
+    } else {
+        RELATIVE_STEP * p0.abs()
+    };
+    // the model's numbers along their exact tangent, where the build offers one (else each
+    // step rebuilds the model)
+    let tangent = shared.tangents.of(j, scratch);
+    let mut out = Column {
+        step: h,
+        exact_build: tangent.is_some(),
+        exact: false,
+        refused: None,
+        dfdp: vec![0.0; if request.modes { modes.len() } else { 0 }],
+        pending: None,
+        d_tf: vec![C::new(0.0, 0.0); nf],
+        d_noise: vec![0.0; nf],
+    };
+    // the modes by the exact route where it is open (the responses, if asked for, are
+    // differenced below whatever the modes took)
+    if request.modes && !request.differences {
+        if shared.modes_blind[j] {
+            // a parameter only the damping's loss angles and the temperature read: the
+            // modes' stiffness (the tension-on Hessian, each tag's times its ε'(0)) and the
+            // mass do not move with it, so every mode's derivative is exactly 0, with
+            // nothing computed
+            out.exact = true;
+        } else if let Some(dual) = tangent
+            && let Some(projections) = exact_projections(shared, j, p0, h, dual)?
+        {
+            // the stage's matrices differentiated by the implicit function theorem (the
+            // equilibrium's motion added by finish_modes)
+            out.pending = Some(projections);
+            out.exact = true;
+        }
+        if out.exact && !responses {
+            return Ok(Some(out));
+        }
+    }
+    let mut points = Vec::with_capacity(STENCIL.len());
+    for &(k, _) in &STENCIL {
+        let value = p0 + k * h;
+        let overrides = overridden(case, name, value);
+        let built = match tangent {
+            Some(dual) => stepped(dual, k * h, defaults, &overrides),
+            None => pendkit_model::build_with(&*case.model, &overrides).map(|(system, _)| system),
+        }
+        .map_err(Error::from);
+        let system = match built {
+            Ok(system) => system,
+            // a switch or a count: the model refuses any value near it
+            Err(Error::Build(e)) => {
+                let why = format!("the model refuses {name} = {value:e} ({e})");
+                if request.parameters.is_some() {
+                    return Err(bad(format!("'{name}' has no derivative: {why}")));
+                }
+                out.refused = Some(why);
+                return Ok(Some(out));
+            }
+            Err(e) => return Err(e),
+        };
+        points.push(match reach[j] {
+            Reach::Mechanics => stage_point(system, request.stage)?,
+            _ => matrices_point(
+                system,
+                base_point.result.assembled.clone(),
+                base_point.result.model.clone(),
+            )?,
+        });
+    }
+    for p in &points {
+        if p.result.model.sizes != sizes {
+            return Err(bad(format!(
+                "changing '{name}' changes the model's coordinates: no derivative"
+            )));
+        }
+    }
+    if request.modes && !out.exact {
+        let dk = difference(&points, h, |p| p.k_eff.clone());
+        let dm = difference(&points, h, |p| p.result.assembled.mass.clone());
+        let vectors = shared.vectors;
+        let vk = vectors.transpose() * &dk * vectors;
+        let vm = vectors.transpose() * &dm * vectors;
+        out.dfdp = mode_derivatives(shared, &vk, &vm)?;
+    }
+    if responses {
+        let tf_ports: Vec<Ports> = match &request.tf {
+            Some(tf) => points
+                .iter()
+                .map(|p| ports(p, tf))
+                .collect::<Result<_, _>>()?,
+            None => Vec::new(),
+        };
+        let noise_ports: Vec<Ports> = match &request.noise {
+            Some(name) => points
+                .iter()
+                .map(|p| noise_port(p, name))
+                .collect::<Result<_, _>>()?,
+            None => Vec::new(),
+        };
+        if let Some(b) = base_ports
+            && tf_ports.iter().any(|p| !same_kinds(p, b))
+        {
+            return Err(bad(format!(
+                "changing '{name}' changes the kind of the transfer function's input or output"
+            )));
+        }
+        let tf_vectors: Vec<(DVector<f64>, DVector<f64>)> =
+            tf_ports.iter().map(|p| port_vectors(p, sizes)).collect();
+        let noise_vectors: Vec<DVector<f64>> = noise_ports
+            .iter()
+            .map(|p| port_vectors(p, sizes).1)
+            .collect();
+        let db = (tf_vectors.len() == STENCIL.len())
+            .then(|| difference_of(&tf_vectors.iter().map(|v| &v.0).collect::<Vec<_>>(), h));
+        let dc = (tf_vectors.len() == STENCIL.len())
+            .then(|| difference_of(&tf_vectors.iter().map(|v| &v.1).collect::<Vec<_>>(), h));
+        let d_o = (noise_vectors.len() == STENCIL.len())
+            .then(|| difference_of(&noise_vectors.iter().collect::<Vec<_>>(), h));
+        // the frequency-independent parts' derivatives once, dA(f) from them per frequency
+        let master = MasterDerivative::new(&points, h, name)?;
+        for (i, &f) in request.freqs.iter().enumerate() {
+            let da = master.at(&points, f)?;
+            let nominal = &nominal[i];
+            if let (Some(db), Some(dc)) = (&db, &dc) {
+                out.d_tf[i] = nominal.d_transfer(&da, db, dc, sizes)?;
+            }
+            if let (Some(d_o), Some(noise)) = (&d_o, &nominal.noise) {
+                out.d_noise[i] = noise.d_psd(&points, (h, f), (&da, d_o), &master, &nominal.lu)?;
+            }
+        }
+    }
+    Ok(Some(out))
+}
+
+/// The case's overrides with `name = value` last (the nominal build has checked that every
+/// override is read; this one is, or it would have no derivative).
+fn overridden(case: &Case, name: &str, value: f64) -> pendkit_model::Overrides {
+    let mut overrides = case.overrides.clone();
+    overrides
+        .parameters
+        .push((name.to_string(), format!("{value:e}")));
+    overrides
+}
+
+/// The modes' projections Vᵀ(dK_eff/dp)V (without the equilibrium's motion) and
+/// Vᵀ(dM/dp)V, and dq*/dp (full coordinate vector), from [`exact_projections`].
+struct Projections {
+    stiffness: DMatrix<f64>,
+    mass: DMatrix<f64>,
+    equilibrium: Vec<f64>,
+    /// The rounding bound of each entry of `equilibrium`.
+    equilibrium_rounding: Vec<f64>,
+}
+
+/// The modes' projections Vᵀ(dK_eff/dp)V and Vᵀ(dM/dp)V, exactly (docs/exact-sensitivities.md,
+/// step 4): the equilibrium's motion by the implicit function theorem and the stage's
+/// stiffness and mass differentiated along it ([`pendkit_assembly::stage_tangent`]) from
+/// the model `dual` built with the parameter seeded. The float elimination's derivative
+/// projected on a mode v is that of the full stiffness on w = (v, −X v) (X = Q⁻¹ C_QX):
+/// vᵀ dK_eff v' = wᵀ dK w', so only the modes' directions (and the pairs within a cluster
+/// of equal ω²) are differentiated. `None` where the route is closed: a kind without
+/// tangent terms, user-written terms, or a damping tag whose real multiplier at DC is not
+/// 1 at the nominal value and, where a real multiplier depends on p, at p₀ ± h.
+fn exact_projections(
+    shared: &Shared,
+    j: usize,
+    p0: f64,
+    h: f64,
+    dual: &System<num_dual::Dual64>,
+) -> Result<Option<Projections>, Error> {
+    let Some(exact) = &shared.exact else {
+        return Ok(None);
+    };
+    let name = &shared.names[j];
+    let base = &shared.base_point.result;
+    // the real stiffness is the tension-on Hessian only while every ε'(0) is 1: true at the
+    // nominal value (the route is open), so checked near it where an ε' depends on p
+    let near = if shared.real_multiplier_reads[j] {
+        &[-1.0, 1.0][..]
+    } else {
+        &[]
+    };
+    for &k in near {
+        let overrides = overridden(shared.case, name, p0 + k * h);
+        let Ok(system) = stepped(dual, k * h, shared.defaults, &overrides) else {
+            return Ok(None);
+        };
+        if base
+            .model
+            .by_tag
+            .iter()
+            .any(|(tag, _)| system.damping.at(tag, 0.0).0 != 1.0)
+        {
+            return Ok(None);
+        }
+    }
+    let assembled = &base.assembled;
+    let Some(tangent) = pendkit_assembly::stage_tangent(
+        dual,
+        shared.request.stage,
+        &assembled.equilibrium.coords,
+        &assembled.layout,
+        &exact.balance,
+        Along::Projected(&exact.projection),
+    )?
+    else {
+        return Ok(None);
+    };
+    // the implicit function theorem's own check: the equilibrium moved along dq*/dp is
+    // balanced to rounding (a relative change of p unbalances the forces by ≲ 1e-12 of
+    // their size in every test; a parameter of value 0 is taken on the scale of its unit);
+    // a model where it is not gets the difference route rather than a wrong number
+    let p_scale = if p0 == 0.0 { 1.0 } else { p0.abs() };
+    let imbalance = tangent.residual * p_scale;
+    if imbalance.is_nan() || imbalance > EXACT_RESIDUAL * tangent.forces {
+        return Ok(None);
+    }
+    let vectors = shared.vectors;
+    Ok(Some(Projections {
+        mass: vectors.transpose() * &tangent.mass * vectors,
+        stiffness: tangent.stiffness,
+        equilibrium: tangent.equilibrium,
+        equilibrium_rounding: tangent.equilibrium_rounding,
+    }))
+}
+
+/// The exact columns' mode derivatives: the coefficients of the equilibrium's motion along
+/// the coordinates some column's dq*/dp moves beyond rounding (the lateral ones of a
+/// symmetric suspension move no further: their coefficients are not computed), each
+/// column's projection with the motion added, then [`mode_derivatives`].
+fn finish_modes(shared: &Shared, columns: &mut [Option<Column>]) -> Result<(), Error> {
+    let pending: Vec<&Projections> = columns
+        .iter()
+        .flatten()
+        .filter_map(|c| c.pending.as_ref())
+        .collect();
+    let Some(first) = pending.first() else {
+        return Ok(());
+    };
+    let mut moved = vec![false; first.equilibrium.len()];
+    for p in &pending {
+        for (i, m) in moved.iter_mut().enumerate() {
+            *m |= pendkit_assembly::moves_beyond_rounding(
+                p.equilibrium[i],
+                p.equilibrium_rounding[i],
+            );
+        }
+    }
+    // a column took the exact route only where the route is open, and then the
+    // coefficients exist: stage_tangent and Projection::motion refuse the same models
+    let lost = || bad("the exact route lost the equilibrium's motion: no derivative");
+    let route = shared.exact.as_ref().ok_or_else(lost)?;
+    let motion = route
+        .projection
+        .motion_along(
+            &shared.base_point.result.system,
+            &route.balance,
+            shared.request.threads,
+            &moved,
+        )?
+        .ok_or_else(lost)?;
+    for column in columns.iter_mut().flatten() {
+        let Some(mut pending) = column.pending.take() else {
+            continue;
+        };
+        route.projection.add_motion(
+            &motion,
+            &mut pending.stiffness,
+            &pending.equilibrium,
+            &pending.equilibrium_rounding,
+        )?;
+        column.dfdp = mode_derivatives(shared, &pending.stiffness, &pending.mass)?;
+    }
+    Ok(())
+}
+
+/// What the exact route shares between parameters: the equilibrium's factorised stiffness,
+/// and the stiffness's projection on the modes lifted to the floats (full coordinate
+/// vectors) for every mode and every pair of modes whose cross derivative a cluster needs.
+struct ExactRoute {
+    balance: Balance,
+    projection: Projection,
+}
+
+impl ExactRoute {
+    /// `None` when the route is closed to every parameter: a damping tag whose real
+    /// multiplier at DC is not 1 (so the real stiffness the modes use is not the
+    /// tension-on Hessian), a model with terms without parameter derivatives (found by
+    /// each column's [`pendkit_assembly::stage_tangent`]), or a singular float block.
+    fn new(
+        base: &StageResult,
+        stage: Stage,
+        real: &DMatrix<f64>,
+        vectors: &DMatrix<f64>,
+        clusters: &[Vec<usize>],
+    ) -> Result<Option<ExactRoute>, Error> {
+        let damping = &base.system.damping;
+        if base
+            .model
+            .by_tag
+            .iter()
+            .any(|(tag, _)| damping.at(tag, 0.0).0 != 1.0)
+        {
+            return Ok(None);
+        }
+        let layout = &base.assembled.layout;
+        let (nx, nq, _) = base.model.sizes;
+        let q = real.view((nx, nx), (nq, nq)).into_owned();
+        let c_qx = real.view((nx, 0), (nq, nx)).into_owned();
+        let float_map = if nq == 0 {
+            DMatrix::zeros(0, nx)
+        } else {
+            match q.lu().solve(&c_qx) {
+                Some(x) => x,
+                None => return Ok(None),
+            }
+        };
+        let Some(balance) = Balance::new(&base.system, &base.assembled.equilibrium.coords)? else {
+            return Ok(None);
+        };
+        let lifted = -(&float_map * vectors);
+        let mut directions = DMatrix::zeros(base.system.coords.len(), vectors.ncols());
+        for (row, &g) in layout.variables.iter().enumerate() {
+            directions.row_mut(g).copy_from(&vectors.row(row));
+        }
+        for (row, &g) in layout.floats.iter().enumerate() {
+            directions.row_mut(g).copy_from(&lifted.row(row));
+        }
+        let pairs: Vec<(usize, usize)> = clusters
+            .iter()
+            .flat_map(|c| {
+                c.iter()
+                    .enumerate()
+                    .flat_map(move |(i, &a)| c[i..].iter().map(move |&b| (a, b)))
+            })
+            .collect();
+        // without the equilibrium's motion, whose coefficients are computed beside the
+        // parameters' columns
+        let projection = Projection::at_rest(
+            &base.system,
+            stage,
+            &base.assembled.equilibrium.coords,
+            &balance,
+            (&directions, &pairs),
+        )?;
+        Ok(Some(ExactRoute {
+            balance,
+            projection,
+        }))
+    }
+}
+
+/// d(mode frequency)/dp (Hz per unit of the parameter) of every mode from the modes'
+/// projections vk = Vᵀ(dK_eff/dp)V and vm = Vᵀ(dM/dp)V (mass-normalised modes V; only the
+/// entries within a cluster are read): dω² = vᵀ(dK_eff − ω² dM)v, or over a cluster of
+/// (nearly) equal ω² the eigenvalues of that matrix projected on the cluster.
+fn mode_derivatives(
+    shared: &Shared,
+    vk: &DMatrix<f64>,
+    vm: &DMatrix<f64>,
+) -> Result<Vec<f64>, Error> {
+    let modes = &shared.base_point.result.modes.modes;
+    let mut dfdp = vec![0.0; modes.len()];
+    for cluster in shared.clusters {
+        let w2: f64 =
+            cluster.iter().map(|&k| modes[k].omega_squared).sum::<f64>() / cluster.len() as f64;
+        let entry = |ka: usize, kb: usize| vk[(ka, kb)] - w2 * vm[(ka, kb)];
+        let (alone, cluster_eigenvalues);
+        let d: &[f64] = if let [k] = cluster[..] {
+            // a mode alone (nearly every one): the matrix is its one entry
+            alone = [entry(k, k)];
+            &alone
+        } else {
+            let g = DMatrix::from_fn(cluster.len(), cluster.len(), |a, b| {
+                entry(cluster[a], cluster[b])
+            });
+            let g = (&g + g.transpose()) * 0.5;
+            let mut d: Vec<f64> = g.symmetric_eigenvalues().iter().copied().collect();
+            d.sort_by(f64::total_cmp);
+            cluster_eigenvalues = d;
+            &cluster_eigenvalues
+        };
+        for (&k, &dw2) in cluster.iter().zip(d) {
+            let mode = &modes[k];
+            if mode.omega_squared == 0.0 {
+                return Err(bad(format!(
+                    "mode {} ({}) is neutral (ω² = 0): its frequency has no derivative",
+                    k + 1,
+                    mode.label
+                )));
+            }
+            dfdp[k] = dw2 / (4.0 * std::f64::consts::PI * mode.omega_squared.abs().sqrt());
+        }
+    }
+    Ok(dfdp)
+}
+
+/// The model moved by `step` along its exact tangent `dual` (the mechanical numbers to
+/// first order, which is all a central difference sees of them), with what the build adds
+/// (damping, temperature, switches) evaluated at the overridden parameters.
+fn stepped(
+    dual: &System<num_dual::Dual64>,
+    step: f64,
+    defaults: &Defaults,
+    overrides: &pendkit_model::Overrides,
+) -> Result<System, pendkit_model::BuildError> {
+    let (_, resolved) = parameters_with(defaults, overrides)?;
+    pendkit_model::attach_to_build(dual.stepped(step), defaults, overrides, &resolved)
+}
+
+/// The entries of `v` whose `keep` is true.
+fn kept<T>(v: Vec<T>, keep: &[bool]) -> Vec<T> {
+    v.into_iter()
+        .zip(keep)
+        .filter_map(|(x, &k)| k.then_some(x))
+        .collect()
+}
+
+/// A = P(f) − ω² M over every master row (mass in the variables' block), complex dense.
+fn dynamic_matrix(point: &Point, f_hz: f64) -> DMatrix<C> {
+    let model = &point.result.model;
+    let (re, im) = model.master(&point.result.system.damping, f_hz);
+    let w2 = (2.0 * std::f64::consts::PI * f_hz).powi(2);
+    let nx = model.sizes.0;
+    DMatrix::from_fn(re.nrows(), re.ncols(), |i, j| {
+        let m = if i < nx && j < nx {
+            model.mass[(i, j)]
+        } else {
+            0.0
+        };
+        C::new(re[(i, j)] - w2 * m, im[(i, j)])
+    })
+}
+
+/// One frequency-independent part of A (the lossless part, or a damping tag's P_tag) at
+/// the stencil's points: its values on each point's pattern, its derivative, and (made
+/// when first needed, for a multiplier that moves with the parameter) its dense value at
+/// each point.
+struct Part<'a> {
+    at: Vec<(&'a StageModel, &'a [f64])>,
+    /// dense dPart/dp; `None` where the part is the same at every point (an exact 0)
+    derivative: Option<DMatrix<f64>>,
+    dense: std::cell::OnceCell<Vec<DMatrix<f64>>>,
+}
+
+impl<'a> Part<'a> {
+    /// The part whose values on each point's pattern `values` gives, differenced on the
+    /// pattern where every point has the same one (the usual case: then a part the
+    /// parameter does not move costs one comparison).
+    fn new(
+        points: &'a [Point],
+        h: f64,
+        values: impl Fn(&'a StageModel) -> &'a [f64],
+    ) -> Result<Part<'a>, Error> {
+        let at: Vec<(&StageModel, &[f64])> = points
+            .iter()
+            .map(|p| (&p.result.model, values(&p.result.model)))
+            .collect();
+        let (first, first_values) = at[0];
+        let same_pattern = at.iter().all(|(m, _)| m.pattern == first.pattern);
+        let derivative = if same_pattern && at.iter().all(|(_, v)| *v == first_values) {
+            None
+        } else if same_pattern {
+            let on_pattern: Vec<DVector<f64>> = at
+                .iter()
+                .map(|(_, v)| DVector::from_column_slice(v))
+                .collect();
+            let d = difference_of(&on_pattern.iter().collect::<Vec<_>>(), h);
+            Some(first.dense(d.as_slice())?)
+        } else {
+            let dense: Vec<DMatrix<f64>> = at
+                .iter()
+                .map(|(m, v)| m.dense(v))
+                .collect::<Result<_, _>>()?;
+            Some(difference_of(&dense.iter().collect::<Vec<_>>(), h))
+        };
+        Ok(Part {
+            at,
+            derivative,
+            dense: std::cell::OnceCell::new(),
+        })
+    }
+
+    /// The part's dense value at each point.
+    fn dense(&self) -> Result<&[DMatrix<f64>], Error> {
+        if let Some(d) = self.dense.get() {
+            return Ok(d);
+        }
+        let d: Vec<DMatrix<f64>> = self
+            .at
+            .iter()
+            .map(|(m, v)| m.dense(v))
+            .collect::<Result<_, _>>()?;
+        Ok(self.dense.get_or_init(|| d))
+    }
+
+    /// Adds this part's d(ε P)/dp for one real or imaginary part of its multiplier, given
+    /// that part of ε at each point, to `target`: ε dP where ε is the same at every point
+    /// (nothing where the part does not move either: an exact 0), else
+    /// Σ_k (weight_k / h) ε_k P_k over the stencil's points.
+    fn add_to(&self, target: &mut DMatrix<f64>, eps: &[f64], h: f64) -> Result<(), Error> {
+        if eps.iter().all(|&e| e == eps[0]) {
+            if let Some(d) = &self.derivative
+                && eps[0] != 0.0
+            {
+                let e = eps[0];
+                target.zip_apply(d, |t, x| *t += e * x);
+            }
+            return Ok(());
+        }
+        for (m, (&e, &(_, weight))) in self.dense()?.iter().zip(eps.iter().zip(&STENCIL)) {
+            let c = weight / h * e;
+            target.zip_apply(m, |t, x| *t += c * x);
+        }
+        Ok(())
+    }
+}
+
+/// dA(f)/dp of one parameter from the stencil's points, put together per frequency from
+/// the differences of A's frequency-independent parts, A(f) = L + Σ_tag ε_tag(f) P_tag −
+/// ω² M (L the lossless part, P_tag each damping tag's tension-off part, M the mass in the
+/// variables' block): the parts are differenced once per parameter, not four master
+/// matrices rebuilt per frequency.
+struct MasterDerivative<'a> {
+    /// The lossless part.
+    lossless: Part<'a>,
+    /// dM/dp over the variables.
+    mass: DMatrix<f64>,
+    /// Per damping tag (the stage's order): its name and its part.
+    tags: Vec<(&'a str, Part<'a>)>,
+    /// The step of the difference.
+    h: f64,
+}
+
+impl<'a> MasterDerivative<'a> {
+    fn new(points: &'a [Point], h: f64, parameter: &str) -> Result<Self, Error> {
+        fn by_tag(p: &Point) -> Vec<&str> {
+            p.result
+                .model
+                .by_tag
+                .iter()
+                .map(|(t, _)| t.as_str())
+                .collect()
+        }
+        let names = by_tag(&points[0]);
+        if points.iter().any(|p| by_tag(p) != names) {
+            return Err(bad(format!(
+                "changing '{parameter}' changes which damping tags dissipate: no derivative"
+            )));
+        }
+        let tags = names
+            .iter()
+            .enumerate()
+            .map(|(t, &name)| Ok((name, Part::new(points, h, move |m| &m.by_tag[t].1)?)))
+            .collect::<Result<_, Error>>()?;
+        let masses: Vec<&DMatrix<f64>> = points.iter().map(|p| &p.result.model.mass).collect();
+        Ok(MasterDerivative {
+            lossless: Part::new(points, h, |m| &m.lossless)?,
+            mass: difference_of(&masses, h),
+            tags,
+            h,
+        })
+    }
+
+    /// dA(f_hz)/dp over every master row.
+    fn at(&self, points: &[Point], f_hz: f64) -> Result<DMatrix<C>, Error> {
+        let n = points[0].result.model.pattern.dim();
+        let mut re = DMatrix::zeros(n, n);
+        let mut im = DMatrix::zeros(n, n);
+        // the lossless part's multiplier is 1 at every point
+        self.lossless.add_to(&mut re, &[1.0; 4], self.h)?;
+        for (tag, part) in &self.tags {
+            let eps: Vec<(f64, f64)> = points
+                .iter()
+                .map(|p| p.result.system.damping.at(tag, f_hz))
+                .collect();
+            let real: Vec<f64> = eps.iter().map(|e| e.0).collect();
+            let imag: Vec<f64> = eps.iter().map(|e| e.1).collect();
+            part.add_to(&mut re, &real, self.h)?;
+            part.add_to(&mut im, &imag, self.h)?;
+        }
+        let w2 = (2.0 * std::f64::consts::PI * f_hz).powi(2);
+        let nx = self.mass.nrows();
+        re.view_mut((0, 0), (nx, nx))
+            .zip_apply(&self.mass, |r, m| *r -= w2 * m);
+        Ok(re.zip_map(&im, C::new))
+    }
+
+    /// dP_tag/dp over the first `u` master rows (the unknowns) of the tag named `tag`:
+    /// `Some(None)` when it is exactly 0, `None` when the points have no such tag.
+    fn tag(&self, tag: &str, u: usize) -> Option<Option<nalgebra::DMatrixView<'_, f64>>> {
+        self.tags
+            .iter()
+            .find(|(name, _)| *name == tag)
+            .map(|(_, part)| part.derivative.as_ref().map(|d| d.view((0, 0), (u, u))))
+    }
+}
+
+/// Which parameters what reads, from the case's own builds.
+struct ParameterReads {
+    reach: Vec<Reach>,
+    /// Whether the damping's real multipliers ε'(f) depend on each parameter.
+    real_multiplier_reads: Vec<bool>,
+    /// Whether each parameter is read only by what moves no mode.
+    modes_blind: Vec<bool>,
+}
+
+impl ParameterReads {
+    /// The reads of the parameters `names` of `case`, whose build resolved `resolved`, the
+    /// model's own build (without the damping) reading `mechanical_reads` directly.
+    fn new(
+        case: &Case,
+        defaults: &Defaults,
+        resolved: &pendkit_params::Resolved,
+        mechanical_reads: &[String],
+        names: &[String],
+    ) -> Result<Self, Error> {
+        // which parameters the mechanical build reads (with the definitions they follow), and
+        // which anything reads at all
+        let read_all = case.parameters_read(resolved)?;
+        let read_mechanics = case.parameters_behind(mechanical_reads.iter().cloned())?;
+        // the parameters the damping's real multipliers ε' depend on: only those can move ε'(0)
+        // away from 1 (the exact route's condition)
+        let real_reads = case.parameters_behind(pendkit_model::damping_real_symbols(
+            defaults,
+            &case.overrides,
+        ))?;
+        let real_multiplier_reads: Vec<bool> =
+            names.iter().map(|n| real_reads.contains(n)).collect();
+        // what the build adds that can move the modes: the real multipliers, and the switch
+        // that puts wire terms into the equilibrium; a parameter only the rest of the damping
+        // (loss angles, their temperatures) and the temperature read moves no mode
+        let switch_reads = case.parameters_behind([pendkit_model::WIRE_TERMS_EARLY.to_string()])?;
+        let reach: Vec<Reach> = names
+            .iter()
+            .map(|n| {
+                if read_mechanics.contains(n) {
+                    Reach::Mechanics
+                } else if read_all.contains(n) {
+                    Reach::DampingOnly
+                } else {
+                    Reach::Nothing
+                }
+            })
+            .collect();
+        let modes_blind: Vec<bool> = (0..names.len())
+            .map(|j| {
+                reach[j] == Reach::DampingOnly
+                    && !real_multiplier_reads[j]
+                    && !switch_reads.contains(&names[j])
+            })
+            .collect();
+        Ok(ParameterReads {
+            reach,
+            real_multiplier_reads,
+            modes_blind,
+        })
+    }
+}
+
+/// The nominal stage, and what every parameter's column shares from it.
+struct NominalStage {
+    point: Point,
+    /// The stability warning, where the request allows an unstable equilibrium.
+    warning: Option<String>,
+    /// The transfer function's ports and the noise output's, where asked for.
+    ports: Option<Ports>,
+    noise: Option<Ports>,
+    /// The modes' vectors, one column per mode.
+    vectors: DMatrix<f64>,
+    clusters: Vec<Vec<usize>>,
+    exact: Option<ExactRoute>,
+}
+
+impl NominalStage {
+    /// `system`'s stage as `request` asks for it.
+    fn new(system: System, request: &SensitivityRequest) -> Result<Self, Error> {
+        let base = run_stage(system, request.stage)?;
+        let warning = base.require_stable(request.allow_unstable)?;
+        let base_real = base.model.real_stiffness(&base.system.damping);
+        let base_k = eliminate_floats(&base_real, &base.assembled.layout, &base.system)?.k_eff;
+        let base_point = Point {
+            k_eff: base_k,
+            result: base,
+        };
+        let sizes = base_point.result.model.sizes;
+        let nx = sizes.0;
+
+        let base_ports = match &request.tf {
+            Some(tf) => Some(ports(&base_point, tf)?),
+            None => None,
+        };
+        let base_noise = match &request.noise {
+            Some(name) => Some(noise_port(&base_point, name)?),
+            None => None,
+        };
+
+        let modes = &base_point.result.modes.modes;
+        let vectors = DMatrix::from_fn(nx, modes.len(), |i, k| {
+            modes[k].vector.get(i).copied().unwrap_or(0.0)
+        });
+        let clusters = mode_clusters(modes);
+        let exact_route = if request.modes && !request.differences {
+            ExactRoute::new(
+                &base_point.result,
+                request.stage,
+                &base_real,
+                &vectors,
+                &clusters,
+            )?
+        } else {
+            None
+        };
+        Ok(NominalStage {
+            point: base_point,
+            warning,
+            ports: base_ports,
+            noise: base_noise,
+            vectors,
+            clusters,
+            exact: exact_route,
+        })
+    }
+}
+
+/// Sensitivities of `case` at the request's stage. See the module's documentation for the
+/// method and its accuracy.
+pub fn sensitivities(case: &Case, request: &SensitivityRequest) -> Result<Sensitivities, Error> {
+    let responses = request.tf.is_some() || request.noise.is_some();
+    if responses {
+        if request.stage == Stage::S0A {
+            return Err(Error::StageTooEarly);
+        }
+        if request.freqs.is_empty() {
+            return Err(bad(
+                "transfer-function and noise sensitivities need at least one frequency",
+            ));
+        }
+        check_frequencies(&request.freqs)?;
+    } else if !request.freqs.is_empty() {
+        return Err(bad(
+            "frequencies given without a transfer function or noise output to differentiate",
+        ));
+    }
+    if !request.modes && !responses {
+        return Err(bad(
+            "nothing to differentiate: ask for the modes, a transfer function or noise",
+        ));
+    }
+
+    let (system, resolved, mechanical_reads) = case.build_with_mechanical_reads()?;
+    let defaults = Defaults::of(&*case.model)?;
+    let all: Vec<(String, f64)> = resolved.iter().map(|(n, v)| (n.to_string(), v)).collect();
+    let names: Vec<String> = match &request.parameters {
+        None => all.iter().map(|(n, _)| n.clone()).collect(),
+        Some(list) => {
+            if list.is_empty() {
+                return Err(bad("an empty list of parameters"));
+            }
+            let mut seen = BTreeSet::new();
+            for name in list {
+                if !all.iter().any(|(n, _)| n == name) {
+                    return Err(Error::Name {
+                        name: name.clone(),
+                        message: format!(
+                            "not a numeric parameter of model '{}' (parameters: {})",
+                            case.model.name(),
+                            all.iter()
+                                .map(|(n, _)| n.as_str())
+                                .collect::<Vec<_>>()
+                                .join(" ")
+                        ),
+                    });
+                }
+                if !seen.insert(name.as_str()) {
+                    return Err(Error::Name {
+                        name: name.clone(),
+                        message: "listed twice".into(),
+                    });
+                }
+            }
+            list.clone()
+        }
+    };
+    let values: Vec<f64> = names
+        .iter()
+        .map(|n| all.iter().find(|(m, _)| m == n).map_or(0.0, |(_, v)| *v))
+        .collect();
+    let units: Vec<String> = names
+        .iter()
+        .map(|n| defaults.params.unit(n).unwrap_or_default().to_string())
+        .collect();
+
+    // the nominal stage (and what the exact route shares) beside which parameters what
+    // reads and the parameters' dual builds: neither needs the other
+    let (nominal_stage, reads) = side_by_side(
+        request.threads,
+        || NominalStage::new(system, request),
+        || -> Result<_, Error> {
+            let reads = ParameterReads::new(case, &defaults, &resolved, &mechanical_reads, &names)?;
+            let tangents = Tangents::build(case, &names, &reads.reach, request.threads)?;
+            Ok((reads, tangents))
+        },
+    );
+    // a failing read comes first, as it would in order: the stage needs nothing read
+    let (
+        ParameterReads {
+            reach,
+            real_multiplier_reads,
+            modes_blind,
+        },
+        tangents,
+    ) = reads?;
+    let NominalStage {
+        point: base_point,
+        warning,
+        ports: base_ports,
+        noise: base_noise,
+        vectors,
+        clusters,
+        exact: exact_route,
+    } = nominal_stage?;
+    let sizes = base_point.result.model.sizes;
+    let modes = &base_point.result.modes.modes;
+    let modes_hz: Vec<f64> = modes.iter().map(|m| m.hz).collect();
+    let mode_labels: Vec<String> = modes.iter().map(|m| m.label.clone()).collect();
+
+    let np = names.len();
+    let nf = request.freqs.len();
+    let mut dfdp = vec![vec![0.0; np]; if request.modes { modes.len() } else { 0 }];
+    // per frequency, per parameter: d of the TF and of the noise response R
+    let mut d_tf: Vec<Vec<C>> = vec![vec![C::new(0.0, 0.0); np]; nf];
+    let mut d_noise: Vec<Vec<f64>> = vec![vec![0.0; np]; nf];
+    let mut steps = vec![0.0; np];
+    let mut exact_build = vec![false; np];
+    let mut exact = vec![false; np];
+    let mut refused: Vec<Option<String>> = vec![None; np];
+
+    // the nominal responses' factorisations, once per frequency
+    let nominal: Vec<Nominal> = if responses {
+        request
+            .freqs
+            .iter()
+            .map(|&f| {
+                Nominal::new(
+                    &base_point,
+                    f,
+                    base_ports.as_ref(),
+                    base_noise.as_ref(),
+                    sizes,
+                )
+            })
+            .collect::<Result<_, _>>()?
+    } else {
+        Vec::new()
+    };
+
+    let shared = Shared {
+        case,
+        defaults: &defaults,
+        request,
+        names: &names,
+        values: &values,
+        reach: &reach,
+        real_multiplier_reads: &real_multiplier_reads,
+        modes_blind: &modes_blind,
+        base_point: &base_point,
+        base_ports: base_ports.as_ref(),
+        nominal: &nominal,
+        vectors: &vectors,
+        clusters: &clusters,
+        sizes,
+        responses,
+        exact: exact_route,
+        tangents: &tangents,
+    };
+    // the columns, then the coefficients of the equilibrium's motion along the coordinates
+    // their dq*/dp move (finish_modes)
+    let mut columns = in_parallel_with(
+        np,
+        request.threads,
+        pendkit_model::DirectionScratch::default,
+        |scratch, j| column(&shared, j, scratch),
+    )?;
+    finish_modes(&shared, &mut columns)?;
+    for (j, col) in columns.into_iter().enumerate() {
+        let Some(col) = col else {
+            exact[j] = request.modes && !request.differences;
+            continue;
+        };
+        steps[j] = col.step;
+        exact_build[j] = col.exact_build;
+        exact[j] = col.exact;
+        if col.refused.is_some() {
+            refused[j] = col.refused;
+            continue;
+        }
+        for (row, d) in dfdp.iter_mut().zip(col.dfdp) {
+            row[j] = d;
+        }
+        for (row, d) in d_tf.iter_mut().zip(col.d_tf) {
+            row[j] = d;
+        }
+        for (row, d) in d_noise.iter_mut().zip(col.d_noise) {
+            row[j] = d;
+        }
+    }
+
+    let tf_abs = match &request.tf {
+        Some(_) => {
+            let mut abs = Vec::with_capacity(nf);
+            let mut d = Vec::with_capacity(nf);
+            for (i, n) in nominal.iter().enumerate() {
+                let h = n.tf;
+                let a = h.norm();
+                if a == 0.0 {
+                    // |H| has a corner at 0: no derivative (the input does not reach the
+                    // output at this frequency)
+                    return Err(bad(format!(
+                        "|H| is exactly 0 at {} Hz (the input does not reach the output): \
+                         it has no derivative there",
+                        request.freqs[i]
+                    )));
+                }
+                if !a.is_finite() {
+                    return Err(Error::NotFinite {
+                        what: "|H|".into(),
+                        f_hz: request.freqs[i],
+                    });
+                }
+                abs.push(a);
+                d.push(
+                    d_tf[i]
+                        .iter()
+                        .map(|dh| (h.conj() * dh).re / a)
+                        .collect::<Vec<f64>>(),
+                );
+            }
+            Some((abs, d))
+        }
+        None => None,
+    };
+    let noise_asd = match &request.noise {
+        Some(_) => {
+            let mut asd = Vec::with_capacity(nf);
+            let mut d = Vec::with_capacity(nf);
+            for (i, n) in nominal.iter().enumerate() {
+                let f = request.freqs[i];
+                let a = n.noise.as_ref().map_or(f64::NAN, NoiseNominal::psd).sqrt();
+                if a == 0.0 {
+                    // √PSD has no derivative at 0
+                    return Err(bad(format!(
+                        "the thermal-noise ASD is exactly 0 at {f} Hz (nothing on the output's \
+                         path dissipates): it has no derivative there"
+                    )));
+                }
+                if !a.is_finite() {
+                    return Err(Error::NotFinite {
+                        what: "the thermal-noise ASD".into(),
+                        f_hz: f,
+                    });
+                }
+                asd.push(a);
+                d.push(d_noise[i].iter().map(|dpsd| dpsd / (2.0 * a)).collect());
+            }
+            Some((asd, d))
+        }
+        None => None,
+    };
+
+    // the parameters the model refuses to move lose their columns
+    let keep: Vec<bool> = refused.iter().map(Option::is_none).collect();
+    let not_differentiable: Vec<(String, String)> = names
+        .iter()
+        .zip(&refused)
+        .filter_map(|(n, r)| r.as_ref().map(|r| (n.clone(), r.clone())))
+        .collect();
+    let tf_abs = tf_abs.map(|(a, d)| (a, d.into_iter().map(|r| kept(r, &keep)).collect()));
+    let noise_asd = noise_asd.map(|(a, d)| (a, d.into_iter().map(|r| kept(r, &keep)).collect()));
+    let dfdp: Vec<Vec<f64>> = dfdp.into_iter().map(|r| kept(r, &keep)).collect();
+    let names = kept(names, &keep);
+    let units = kept(units, &keep);
+    let out = Sensitivities {
+        not_differentiable,
+        parameters: names,
+        values: kept(values, &keep),
+        units,
+        steps: kept(steps, &keep),
+        exact_build: kept(exact_build, &keep),
+        exact: kept(exact, &keep),
+        modes_hz,
+        mode_labels,
+        dfdp,
+        tf_abs,
+        noise_asd,
+        warning,
+    };
+    let finite = out.dfdp.iter().flatten().all(|x| x.is_finite())
+        && [&out.tf_abs, &out.noise_asd]
+            .iter()
+            .filter_map(|x| x.as_ref())
+            .all(|(v, d)| v.iter().chain(d.iter().flatten()).all(|x| x.is_finite()));
+    if !finite {
+        return Err(bad("a sensitivity came out NaN or infinite"));
+    }
+    Ok(out)
+}
+
+/// Modes grouped into clusters of (nearly) equal ω², each ascending.
+fn mode_clusters(modes: &[pendkit_dynamics::Mode]) -> Vec<Vec<usize>> {
+    let mut clusters: Vec<Vec<usize>> = Vec::new();
+    for (k, m) in modes.iter().enumerate() {
+        let joins = clusters.last().and_then(|c| c.last()).is_some_and(|&l| {
+            let prev = &modes[l];
+            let gap = (m.omega_squared - prev.omega_squared).abs();
+            let scale = m.omega_squared.abs().max(prev.omega_squared.abs());
+            gap <= CLUSTER_GAP * scale + m.omega_squared_error + prev.omega_squared_error
+        });
+        match clusters.last_mut() {
+            Some(c) if joins => c.push(k),
+            _ => clusters.push(vec![k]),
+        }
+    }
+    clusters
+}
+
+/// The nominal model's responses at one frequency, with the factorisation of A over the
+/// unknowns that every parameter's derivative reuses.
+struct Nominal {
+    a: DMatrix<C>,
+    lu: nalgebra::LU<C, nalgebra::Dyn, nalgebra::Dyn>,
+    /// The nominal ports' vectors (b, c), whether the input is a force and whether the
+    /// output is a support force, when a transfer function is asked for.
+    tf_vectors: Option<(DVector<f64>, DVector<f64>, bool, bool)>,
+    /// w = [z; s]: the response over every master row to the input.
+    w: DVector<C>,
+    tf: C,
+    /// The thermal noise of the noise output, when asked for.
+    noise: Option<NoiseNominal>,
+}
+
+/// What the noise's derivative needs at one frequency: the response z = A⁻¹o over the
+/// unknowns to a unit force along the output o, and the dissipation it meets.
+struct NoiseNominal {
+    z: DVector<C>,
+    /// R = oᵀz: with one temperature T, PSD = 4 k_B T/ω |Im R|.
+    response: C,
+    /// 4 k_B/ω (J/K per rad/s).
+    scale: f64,
+    /// The model's temperature T (K).
+    temperature: f64,
+    /// Per damping tag when some tag has its own temperature (else empty): the
+    /// fluctuation–dissipation theorem per tag, PSD = 4 k_B/ω Σ T_tag ε''_tag z̄ᵀ P_tag z.
+    tags: Vec<TagNoise>,
+}
+
+/// One damping tag's part of the noise: its name, T_tag ε''_tag (K), P_tag z (P_tag its
+/// tension-off stiffness over the unknowns), and z̄ᵀ P_tag z.
+struct TagNoise {
+    name: String,
+    weight: f64,
+    p_z: DVector<C>,
+    energy: f64,
+}
+
+/// z̄ᵀ P z for a real symmetric P: zᵣᵀ P zᵣ + zᵢᵀ P zᵢ.
+fn real_energy<S>(p: &nalgebra::Matrix<f64, nalgebra::Dyn, nalgebra::Dyn, S>, z: &DVector<C>) -> f64
+where
+    S: nalgebra::Storage<f64, nalgebra::Dyn, nalgebra::Dyn>,
+{
+    let (re, im) = (z.map(|x| x.re), z.map(|x| x.im));
+    re.dot(&(p * &re)) + im.dot(&(p * &im))
+}
+
+/// A tag's T_tag ε''_tag(f) (K) at one point: its own temperature, else the model's.
+fn tag_weight(point: &Point, tag: &str, f_hz: f64) -> f64 {
+    let system = &point.result.system;
+    let t = system
+        .damping
+        .temperature(tag)
+        .unwrap_or(system.temperature);
+    t * system.damping.at(tag, f_hz).1
+}
+
+/// Each damping tag's tension-off stiffness P_tag over the `u` unknowns at one point, in
+/// the stage's tag order (name order).
+fn tag_stiffnesses(point: &Point, u: usize) -> Result<Vec<(String, DMatrix<f64>)>, Error> {
+    let model = &point.result.model;
+    model
+        .by_tag
+        .iter()
+        .map(|(name, values)| {
+            let dense = model.dense(values)?;
+            Ok((name.clone(), dense.view((0, 0), (u, u)).into_owned()))
+        })
+        .collect()
+}
+
+impl NoiseNominal {
+    fn psd(&self) -> f64 {
+        if self.tags.is_empty() {
+            self.scale * self.temperature * self.response.im.abs()
+        } else {
+            self.scale * self.tags.iter().map(|t| t.weight * t.energy).sum::<f64>()
+        }
+    }
+
+    /// d(PSD)/dp at `f_hz` from the stencil's `points` (step `h`), the derivatives of A
+    /// and of the output vector, the parameter's `master` derivative (for each tag's
+    /// dP_tag), and A's factors `lu`. One temperature: dPSD = 4k_B/ω (dT |Im R| +
+    /// T sign(Im R) Im dR), dR = 2(do)ᵀz − zᵀ(dA)z. Per tag: dPSD = 4k_B/ω Σ
+    /// [d(T_tag ε''_tag) E_tag + T_tag ε''_tag (z̄ᵀ dP_tag z + 2 Re z̄ᵀ P_tag dz)],
+    /// dz = A⁻¹(do − dA z), every d a difference over the points like the matrices.
+    fn d_psd(
+        &self,
+        points: &[Point],
+        (h, f_hz): (f64, f64),
+        (da, d_o): (&DMatrix<C>, &DVector<f64>),
+        master: &MasterDerivative<'_>,
+        lu: &nalgebra::LU<C, nalgebra::Dyn, nalgebra::Dyn>,
+    ) -> Result<f64, Error> {
+        let u = self.z.len();
+        let z = &self.z;
+        let d_o = complex(&d_o.rows(0, u).into_owned());
+        let da = da.view((0, 0), (u, u));
+        if self.tags.is_empty() {
+            let d_t = difference(points, h, |p| p.result.system.temperature);
+            let dr = (d_o.transpose() * z)[(0, 0)] * 2.0 - (z.transpose() * (da * z))[(0, 0)];
+            let im = self.response.im;
+            return Ok(self.scale * (d_t * im.abs() + self.temperature * im.signum() * dr.im));
+        }
+        let dz = lu
+            .solve(&(&d_o - da * z))
+            .ok_or_else(|| bad("the dynamic stiffness is singular"))?;
+        let mut sum = 0.0;
+        for tag in &self.tags {
+            // the nominal's tags are the points' (MasterDerivative::new checked them)
+            let dp = master.tag(&tag.name, u).ok_or_else(|| {
+                bad(format!(
+                    "damping tag '{}' dissipates at the nominal value only: no derivative",
+                    tag.name
+                ))
+            })?;
+            let d_weight = difference(points, h, |p| tag_weight(p, &tag.name, f_hz));
+            let d_stiffness = dp.map_or(0.0, |dp| real_energy(&dp, z));
+            let d_energy = d_stiffness + 2.0 * dz.dotc(&tag.p_z).re;
+            sum += d_weight * tag.energy + tag.weight * d_energy;
+        }
+        Ok(self.scale * sum)
+    }
+}
+
+fn complex(v: &DVector<f64>) -> DVector<C> {
+    v.map(|x| C::new(x, 0.0))
+}
+
+impl Nominal {
+    fn new(
+        point: &Point,
+        f_hz: f64,
+        tf: Option<&Ports>,
+        noise: Option<&Ports>,
+        sizes: (usize, usize, usize),
+    ) -> Result<Nominal, Error> {
+        let (nx, nq, ns) = sizes;
+        let u = nx + nq;
+        // the multipliers `pendkit tf` and `noise` refuse (a negative loss, a non-finite
+        // value) are refused here too, not differentiated
+        point
+            .result
+            .model
+            .check_damping_at(&point.result.system.damping, f_hz)?;
+        let a = dynamic_matrix(point, f_hz);
+        let lu = a.view((0, 0), (u, u)).into_owned().lu();
+        let singular = || Error::Dynamics(pendkit_dynamics::DynamicsError::Singular { f_hz });
+        let solve = |rhs: &DVector<C>| lu.solve(rhs).ok_or_else(singular);
+        let mut w = DVector::zeros(u + ns);
+        let mut tf_value = C::new(0.0, 0.0);
+        let mut tf_vectors = None;
+        if let Some(ports) = tf {
+            let (b, c) = port_vectors(ports, sizes);
+            let force_in = matches!(ports.input, Some(Input::Force(_)));
+            let force_out = matches!(ports.output, Output::SupportForce(_));
+            let rhs = if force_in {
+                complex(&b)
+            } else {
+                -(a.view((0, u), (u, ns)) * complex(&b))
+            };
+            let z = solve(&rhs)?;
+            w.rows_mut(0, u).copy_from(&z);
+            if !force_in {
+                w.rows_mut(u, ns).copy_from(&complex(&b));
+            }
+            tf_value = if force_out {
+                -(complex(&c).transpose() * (a.view((u, 0), (ns, u + ns)) * &w))[(0, 0)]
+            } else {
+                (complex(&c).transpose() * &w)[(0, 0)]
+            };
+            tf_vectors = Some((b, c, force_in, force_out));
+        }
+        let noise = match noise {
+            Some(ports) => {
+                let o = complex(&port_vectors(ports, sizes).1.rows(0, u).into_owned());
+                let z = solve(&o)?;
+                let response = (o.transpose() * &z)[(0, 0)];
+                let damping = &point.result.system.damping;
+                let by_tag = &point.result.model.by_tag;
+                // per tag only where some tag has its own temperature: otherwise the
+                // one-temperature form, as the noise itself is computed
+                let tags = if by_tag.iter().any(|(t, _)| damping.temperature(t).is_some()) {
+                    tag_stiffnesses(point, u)?
+                        .into_iter()
+                        .map(|(name, stiffness)| TagNoise {
+                            weight: tag_weight(point, &name, f_hz),
+                            p_z: stiffness.map(|x| C::new(x, 0.0)) * &z,
+                            energy: real_energy(&stiffness, &z),
+                            name,
+                        })
+                        .collect()
+                } else {
+                    Vec::new()
+                };
+                Some(NoiseNominal {
+                    z,
+                    response,
+                    scale: 4.0 * BOLTZMANN / (2.0 * std::f64::consts::PI * f_hz),
+                    temperature: point.result.system.temperature,
+                    tags,
+                })
+            }
+            None => None,
+        };
+        Ok(Nominal {
+            a,
+            lu,
+            tf_vectors,
+            w,
+            tf: tf_value,
+            noise,
+        })
+    }
+
+    /// dH for the derivative `da` of A and `db`, `dc` of the port vectors.
+    fn d_transfer(
+        &self,
+        da: &DMatrix<C>,
+        db: &DVector<f64>,
+        dc: &DVector<f64>,
+        sizes: (usize, usize, usize),
+    ) -> Result<C, Error> {
+        let (nx, nq, ns) = sizes;
+        let u = nx + nq;
+        let Some((_, c, force_in, force_out)) = &self.tf_vectors else {
+            return Ok(C::new(0.0, 0.0));
+        };
+        // d rhs − dA_uu z (and for a displacement input, −dA_us s − A_us ds)
+        let mut rhs = -(da.view((0, 0), (u, u + ns)) * &self.w);
+        let mut dw = DVector::zeros(u + ns);
+        if *force_in {
+            rhs += complex(db);
+        } else {
+            rhs -= self.a.view((0, u), (u, ns)) * complex(db);
+            dw.rows_mut(u, ns).copy_from(&complex(db));
+        }
+        let dz = self
+            .lu
+            .solve(&rhs)
+            .ok_or_else(|| bad("the dynamic stiffness is singular"))?;
+        dw.rows_mut(0, u).copy_from(&dz);
+        let c = complex(c);
+        Ok(if *force_out {
+            let a_s = self.a.view((u, 0), (ns, u + ns));
+            let da_s = da.view((u, 0), (ns, u + ns));
+            -((complex(dc).transpose() * (a_s * &self.w))[(0, 0)]
+                + (c.transpose() * (da_s * &self.w))[(0, 0)]
+                + (c.transpose() * (a_s * &dw))[(0, 0)])
+        } else {
+            (complex(dc).transpose() * &self.w)[(0, 0)] + (c.transpose() * &dw)[(0, 0)]
+        })
+    }
+}

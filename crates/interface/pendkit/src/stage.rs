@@ -1,0 +1,626 @@
+//! One stage of a case, run: the equilibrium, stiffness, mass and modes of a model at a
+//! calculation stage ([`run_stage`], [`run_stage_with`]), and what a [`StageResult`] answers
+//! (transfer functions, thermal noise, state space, named points and signals), with the
+//! provenance of its numbers and the timing of its phases ([`bench()`]).
+
+use nalgebra::{DVector, Vector3};
+use pendkit_assembly::{Assembled, assemble_with, timed};
+use pendkit_dynamics::{
+    DynamicsError, TermRounding, eliminate_floats, float_directions, inverted_bodies,
+    normal_modes_with_rounding,
+};
+use pendkit_noise::thermal_noise_with;
+use pendkit_system::{NamedSignal, SignalTerm};
+
+use pendkit_assembly::{AssemblyOptions, PhaseTimes, PointWeights};
+use pendkit_dynamics::{Input, Modes, Output, Solver, Stability, StageModel};
+use pendkit_noise::{NoiseOptions, ThermalNoise};
+use pendkit_system::{Stage, System};
+
+use pendkit_params::Resolved;
+
+use crate::{Case, Error, VERSION};
+
+pub use crate::bench::{BenchPhase, BenchReport, MAX_REPEAT, bench};
+pub use crate::state_space::NamedStateSpace;
+
+/// One parameter of a case as resolved for a run.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct ParameterValue {
+    /// Name.
+    pub name: String,
+    /// Resolved value, in its unit.
+    pub value: f64,
+    /// Unit, where the model declares one (empty for a pure number).
+    pub unit: Option<String>,
+    /// The definition as written: the model's default, or the case's override.
+    pub definition: String,
+    /// Whether the case (or a `--set`) overrides the model's default.
+    pub overridden: bool,
+}
+
+/// Where a result comes from: the model, the case and every resolved parameter.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct Provenance {
+    /// Model name.
+    pub model: String,
+    /// Case name (the model name, or the case file's stem).
+    pub case: String,
+    /// The case's description, if it has one.
+    pub description: Option<String>,
+    /// The numeric parameters in definition order.
+    pub parameters: Vec<ParameterValue>,
+    /// pendkit's version.
+    pub version: String,
+}
+
+impl Case {
+    /// The provenance of a build of this case that resolved to `resolved`: each parameter
+    /// with its value, its unit where the model declares one, and its definition.
+    pub fn provenance(&self, resolved: &Resolved) -> Result<Provenance, Error> {
+        let defaults = pendkit_model::Defaults::of(&*self.model)?;
+        let parameters = resolved
+            .iter()
+            .map(|(name, value)| {
+                let overridden = self
+                    .overrides
+                    .parameters
+                    .iter()
+                    .rev()
+                    .find(|(n, _)| n == name);
+                ParameterValue {
+                    name: name.to_string(),
+                    value,
+                    unit: defaults.params.unit(name).map(str::to_string),
+                    definition: match overridden {
+                        Some((_, text)) => text.clone(),
+                        None => defaults
+                            .params
+                            .get(name)
+                            .map(|d| d.source.clone())
+                            .unwrap_or_default(),
+                    },
+                    overridden: overridden.is_some(),
+                }
+            })
+            .collect();
+        Ok(Provenance {
+            model: self.model.name().to_string(),
+            case: self.name.clone(),
+            description: self.description.clone(),
+            parameters,
+            version: VERSION.to_string(),
+        })
+    }
+}
+
+/// The result of running one stage of a model.
+pub struct StageResult {
+    /// The numeric model.
+    pub system: System,
+    /// Equilibrium and per-term matrices.
+    pub assembled: Assembled,
+    /// The stage's frequency-independent matrices for responses and noise.
+    pub model: StageModel,
+    /// Normal modes (possibly with unstable ones: see `stability`). Each carries its
+    /// estimated error ([`pendkit_dynamics::Mode::omega_squared_error`]).
+    pub modes: Modes,
+    /// The stability verdict of the equilibrium: growing modes, floats without a stable
+    /// position, bodies upside down. [`StageResult::check_stable`] turns it into an error.
+    pub stability: Stability,
+}
+
+/// Which normal modes a stage run computes.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub enum ModeSelection {
+    /// Every mode, by the dense eigensolver block by block.
+    #[default]
+    All,
+    /// The modes below this frequency (Hz): by the dense eigensolver up to
+    /// [`DENSE_MODES_LIMIT`] variables, by shift-invert Lanczos on the sparse factorisation
+    /// above ([`StageModel::modes_below`]).
+    Below(f64),
+}
+
+/// Largest number of variables for which [`ModeSelection::Below`] uses the dense
+/// eigensolver (a few ms at this size); larger models use shift-invert.
+pub const DENSE_MODES_LIMIT: usize = 200;
+
+/// Equilibrium, stiffness, mass and modes of `system` at `stage`. The modes use the real
+/// stiffness at f = 0 (each tag's ε'(0); 1 unless a model says otherwise).
+pub fn run_stage(system: System, stage: Stage) -> Result<StageResult, Error> {
+    run_stage_with(system, stage, &RunOptions::default(), None)
+}
+
+/// How [`run_stage_with`] runs a stage: assembly options (equilibrium controls, derivative
+/// path) and which modes to compute.
+#[derive(Clone, Debug, Default)]
+pub struct RunOptions {
+    /// Equilibrium controls and derivative path.
+    pub assembly: AssemblyOptions,
+    /// All modes, or those below a frequency.
+    pub modes: ModeSelection,
+}
+
+/// [`run_stage`] with options, recording the time of each phase into `times` when given:
+/// the assembly's (`terms`, `equilibrium`, `hessian:<kind>`, `mass`), then `stage-model`
+/// (the stage's matrices by tag), `rounding` (each term's share of the stiffness rounding,
+/// for the modes' accuracy), `floats` (their elimination), `modes` and `stability` (the
+/// float block's and the bodies' checks for the verdict).
+pub fn run_stage_with(
+    system: System,
+    stage: Stage,
+    options: &RunOptions,
+    mut times: Option<&mut PhaseTimes>,
+) -> Result<StageResult, Error> {
+    if let ModeSelection::Below(hz) = options.modes
+        && !(hz > 0.0 && hz.is_finite())
+    {
+        return Err(DynamicsError::BelowFrequency(hz).into());
+    }
+    pendkit_energy::check_registrations()?;
+    let assembled = assemble_with(&system, stage, &options.assembly, times.as_deref_mut())?;
+    let model = timed(&mut times, "stage-model", 1, || {
+        StageModel::new(&system, &assembled)
+    });
+    model.check_damping_at_dc(&system.damping)?;
+    let rounding = timed(&mut times, "rounding", 1, || {
+        TermRounding::new(&model, &assembled, &system.damping)
+    });
+    let modes = match options.modes {
+        ModeSelection::Below(hz) if model.sizes.0 > DENSE_MODES_LIMIT => {
+            let below = timed(&mut times, "modes", 1, || {
+                model.modes_below_with_rounding(&system.damping, hz, &rounding)
+            });
+            match below {
+                Ok(modes) => modes,
+                // the shift-invert iteration could not resolve every mode below the bound
+                // (a growing mode beyond its shift's resolution, a shift on an eigenvalue):
+                // the dense solve, slower but complete, decides instead
+                Err(DynamicsError::Solver(_)) => {
+                    dense_modes(&model, &assembled, &system, &rounding, Some(hz), &mut times)?
+                }
+                Err(e) => return Err(e.into()),
+            }
+        }
+        ModeSelection::Below(hz) => {
+            dense_modes(&model, &assembled, &system, &rounding, Some(hz), &mut times)?
+        }
+        ModeSelection::All => {
+            dense_modes(&model, &assembled, &system, &rounding, None, &mut times)?
+        }
+    };
+    // after the modes, so that a model the modes refuse outright (a massless body, whose
+    // wires then carry no tension) is refused for that
+    pendkit_dynamics::validate::check_wire_stretch(&system, &assembled.equilibrium.coords)?;
+    let stability = timed(&mut times, "stability", 1, || {
+        let floats = float_directions(&model, &system.damping, Some(&rounding))?;
+        let inverted = inverted_bodies(&system, &assembled.equilibrium.coords);
+        Ok::<_, Error>(Stability::assess(&modes, floats, model.sizes.1, inverted))
+    })?;
+    Ok(StageResult {
+        system,
+        assembled,
+        model,
+        modes,
+        stability,
+    })
+}
+
+/// The stage's modes by the dense eigensolver block by block (those below `below` Hz when
+/// given, every growing mode among them), recording the `floats` and `modes` phases.
+fn dense_modes(
+    model: &StageModel,
+    assembled: &Assembled,
+    system: &System,
+    rounding: &TermRounding,
+    below: Option<f64>,
+    times: &mut Option<&mut PhaseTimes>,
+) -> Result<Modes, Error> {
+    let reduced = timed(times, "floats", 1, || {
+        eliminate_floats(
+            &model.real_stiffness(&system.damping),
+            &assembled.layout,
+            system,
+        )
+    })?;
+    let mut modes = timed(times, "modes", 1, || {
+        normal_modes_with_rounding(&reduced.k_eff, &assembled.mass, &model.variables, rounding)
+    })?;
+    if let Some(hz) = below {
+        modes.modes.retain(|m| m.hz < hz);
+    }
+    Ok(modes)
+}
+
+impl StageResult {
+    /// One line saying what grows, as an error, unless the equilibrium is stable (or
+    /// neutral). Every calculation that answers with a linearised model checks this first.
+    pub fn check_stable(&self) -> Result<(), Error> {
+        Ok(self.stability.check()?)
+    }
+
+    /// The check every command answering with a linearised model (transfer functions,
+    /// noise, state space, ...) makes before it answers: `Ok(None)` when nothing grows;
+    /// when something does, the error, or with `allow_unstable` `Ok(Some(warning))`, the
+    /// one line to show the user before going on (control design needs unstable plants).
+    /// A neutral verdict that rests on a float stiffness rounding cannot sign (nothing
+    /// shown to grow) goes on, with the verdict as the line to show.
+    pub fn require_stable(&self, allow_unstable: bool) -> Result<Option<String>, Error> {
+        match (self.check_stable(), allow_unstable) {
+            (Ok(()), _) if !self.stability.neutral_floats.is_empty() => {
+                Ok(Some(self.stability.to_string()))
+            }
+            (Ok(()), _) => Ok(None),
+            (Err(e), true) => Ok(Some(format!("{e} (going on: --allow-unstable)"))),
+            (Err(e), false) => Err(e),
+        }
+    }
+}
+
+impl StageResult {
+    /// A point on a body and a direction, written `<body>@x,y,z/dx,dy,dz` (m, body
+    /// coordinates; direction in lab axes, normalised): how far the point moves along the
+    /// direction per unit of every unknown and parameter (the linearised geometry at
+    /// equilibrium). The same weights are the generalised force of a unit force there.
+    fn point_weights(&self, spec: &str) -> Option<Result<PointWeights, Error>> {
+        let (body, rest) = spec.split_once('@')?;
+        Some((|| {
+            let bad = |why: &str| Error::Name {
+                name: spec.to_string(),
+                message: format!("expected <body>@x,y,z/dx,dy,dz ({why})"),
+            };
+            let (point, dir) = rest
+                .split_once('/')
+                .ok_or_else(|| bad("no '/' before the direction"))?;
+            let nums = |t: &str, what: &str| -> Result<Vector3<f64>, Error> {
+                let v: Vec<f64> = t
+                    .split(',')
+                    .map(pendkit_expr::number_literal)
+                    .collect::<Result<_, _>>()
+                    .map_err(|e| bad(&format!("the {what} is not three numbers: {e}")))?;
+                if v.len() == 3 {
+                    Ok(Vector3::new(v[0], v[1], v[2]))
+                } else {
+                    Err(bad(&format!("the {what} must be three finite numbers")))
+                }
+            };
+            let (p, d) = (nums(point, "point")?, nums(dir, "direction")?);
+            // scaled by its largest component first: a tiny or huge (finite) direction
+            // would otherwise underflow or overflow in its norm
+            let largest = d.amax();
+            if largest == 0.0 {
+                return Err(bad("the direction is zero"));
+            }
+            let d = d / largest;
+            let b = self.system.body(body).ok_or_else(|| Error::Name {
+                name: spec.to_string(),
+                message: format!(
+                    "unknown body '{body}' (bodies: {})",
+                    self.system
+                        .bodies
+                        .iter()
+                        .map(|b| b.name.as_str())
+                        .collect::<Vec<_>>()
+                        .join(" ")
+                ),
+            })?;
+            self.assembled
+                .point_weights(&self.system, b, &p, &d)
+                .ok_or_else(|| bad("its motion is not finite at the equilibrium"))
+        })())
+    }
+
+    /// The vector of a model's named input or output (`[inputs]`/`[outputs]` of a
+    /// suspension file), laid out as the built-in forms are:
+    ///
+    /// - a displacement output: over the variables, floats and parameters (a point's whole
+    ///   motion, as `<body>@x,y,z/dx,dy,dz`: through the variables, the floats that pose
+    ///   its body, and the support);
+    /// - a force input: over the variables and floats (a force on a float-posed body such
+    ///   as a blade tip reaches the variables through the float elimination);
+    /// - a displacement input or a support-force output: over the parameters; a point there
+    ///   must be one the support alone moves (driven as `support@x,y,z/dx,dy,dz` is).
+    fn named_vector(&self, signal: &NamedSignal, input: bool) -> Result<DVector<f64>, Error> {
+        let m = &self.model;
+        let (nx, nq, ns) = m.sizes;
+        let on_parameters = input != signal.force;
+        let n = match (on_parameters, input) {
+            (true, _) => ns,
+            (false, true) => nx + nq,
+            (false, false) => nx + nq + ns,
+        };
+        let bad = |message: String| Error::Name {
+            name: signal.name.clone(),
+            message,
+        };
+        let mut v = DVector::zeros(n);
+        for (coefficient, term) in &signal.terms {
+            match term {
+                SignalTerm::Coordinate(c) => {
+                    let coordinate = self
+                        .system
+                        .coords
+                        .get(*c)
+                        .map(|c| c.name.as_str())
+                        .unwrap_or_default();
+                    let position = |names: &[String]| names.iter().position(|n| n == coordinate);
+                    let k = if on_parameters {
+                        position(&m.parameters)
+                    } else {
+                        // variables first, then floats, then (outputs) the parameters
+                        position(&m.variables)
+                            .or_else(|| position(&m.floats).map(|k| nx + k))
+                            .or_else(|| position(&m.parameters).map(|k| nx + nq + k))
+                            .filter(|&k| k < n)
+                    };
+                    let k = k.ok_or_else(|| {
+                        bad(format!(
+                            "combines '{coordinate}', which this stage does not keep as a {}",
+                            if on_parameters {
+                                "parameter"
+                            } else if input {
+                                "variable or float"
+                            } else {
+                                "variable, float or parameter"
+                            }
+                        ))
+                    })?;
+                    v[k] += coefficient;
+                }
+                SignalTerm::Point {
+                    body,
+                    point,
+                    direction,
+                } => {
+                    let w = self
+                        .assembled
+                        .point_weights(&self.system, *body, point, direction)
+                        .ok_or_else(|| {
+                            bad("a point whose motion is not finite at the equilibrium".into())
+                        })?;
+                    if !on_parameters {
+                        v.rows_mut(0, nx + nq).axpy(*coefficient, &w.unknowns, 1.0);
+                        if n == nx + nq + ns {
+                            v.rows_mut(nx + nq, ns)
+                                .axpy(*coefficient, &w.parameters, 1.0);
+                        }
+                    } else if signal.force {
+                        return Err(bad(
+                            "a point cannot carry the support force: name the support's coordinates".into(),
+                        ));
+                    } else {
+                        // a driven point: the smallest change of the parameters that moves
+                        // it by one unit along the direction, as support@x,y,z/dx,dy,dz
+                        let norm2 = w.parameters.norm_squared();
+                        if w.unknowns.iter().any(|&x| x != 0.0)
+                            || norm2.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater)
+                        {
+                            return Err(bad(
+                                "a displacement input must be a point that only the support moves"
+                                    .into(),
+                            ));
+                        }
+                        v.axpy(*coefficient / norm2, &w.parameters, 1.0);
+                    }
+                }
+            }
+        }
+        Ok(v)
+    }
+
+    fn unit(n: usize, k: usize) -> DVector<f64> {
+        let mut v = DVector::zeros(n);
+        v[k] = 1.0;
+        v
+    }
+
+    fn names_error(&self, name: &str, what: &str, valid: &[String]) -> Error {
+        Error::Name {
+            name: name.to_string(),
+            message: format!("not {what} (valid: {})", valid.join(" ")),
+        }
+    }
+
+    /// Parses an input: a named input the model declares, a parameter (support
+    /// displacement, e.g. `x00`), a point on a body the support alone moves
+    /// (`support@x,y,z/dx,dy,dz`: the smallest change of the parameters, metres and radians
+    /// alike, that moves the point by one unit along the direction), `force:<variable>` or
+    /// `force:<body>@x,y,z/dx,dy,dz` (a force at a point, also on a body a float poses, such
+    /// as a blade tip). Names of a scheme the model declares are accepted too (`GND_L`,
+    /// `force:L3_P`).
+    pub fn input(&self, name: &str) -> Result<Input, Error> {
+        if let Some(signal) = self.system.inputs.iter().find(|s| s.name == name) {
+            let v = self.named_vector(signal, true)?;
+            return Ok(if signal.force {
+                Input::Force(v)
+            } else {
+                Input::Displacement(v)
+            });
+        }
+        let name = &self.unalias(name);
+        let m = &self.model;
+        let err = |message: &str| Error::Name {
+            name: name.to_string(),
+            message: message.to_string(),
+        };
+        if let Some(target) = name.strip_prefix("force:") {
+            if let Some(w) = self.point_weights(target) {
+                let w = w?;
+                if w.unknowns.iter().all(|&x| x == 0.0) {
+                    return Err(err(if w.parameters.iter().any(|&x| x != 0.0) {
+                        "a force on a point the support alone moves does nothing (the support is driven): use the point as a displacement input"
+                    } else {
+                        "the point does not move with any coordinate"
+                    }));
+                }
+                return Ok(Input::Force(w.unknowns));
+            }
+            return match m.variables.iter().position(|v| v == target) {
+                Some(k) => Ok(Input::Force(Self::unit(m.variables.len(), k))),
+                None => Err(self.names_error(target, "a variable to push on", &m.variables)),
+            };
+        }
+        if let Some(w) = self.point_weights(name) {
+            let w = w?;
+            if w.unknowns.iter().any(|&x| x != 0.0) {
+                return Err(err(
+                    "a displacement input must be a point that only the support moves: push on a moving body with force:<body>@x,y,z/dx,dy,dz",
+                ));
+            }
+            let norm2 = w.parameters.norm_squared();
+            if norm2.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
+                return Err(err("the point does not move with any parameter"));
+            }
+            return Ok(Input::Displacement(w.parameters / norm2));
+        }
+        match m.parameters.iter().position(|v| v == name) {
+            Some(k) => Ok(Input::Displacement(Self::unit(m.parameters.len(), k))),
+            None => Err(self.names_error(
+                name,
+                "a parameter to drive (or <support body>@x,y,z/dx,dy,dz, force:<variable>, force:<body>@x,y,z/dx,dy,dz)",
+                &m.parameters,
+            )),
+        }
+    }
+
+    /// Parses an output: a named output the model declares, a variable,
+    /// `<body>@x,y,z/dx,dy,dz` (the point's whole motion: through the variables, the floats
+    /// that pose its body and the support), or `force:<parameter>` (the force on the
+    /// support). Names of a scheme the model declares are accepted too (`L3_L`,
+    /// `L3@0,0,0/1,0,0`).
+    pub fn output(&self, name: &str) -> Result<Output, Error> {
+        if let Some(signal) = self.system.outputs.iter().find(|s| s.name == name) {
+            let v = self.named_vector(signal, false)?;
+            return Ok(if signal.force {
+                Output::SupportForce(v)
+            } else {
+                Output::Displacement(v)
+            });
+        }
+        let name = &self.unalias(name);
+        let m = &self.model;
+        if let Some(target) = name.strip_prefix("force:") {
+            return match m.parameters.iter().position(|v| v == target) {
+                Some(k) => Ok(Output::SupportForce(Self::unit(m.parameters.len(), k))),
+                None => Err(self.names_error(target, "a parameter", &m.parameters)),
+            };
+        }
+        if let Some(w) = self.point_weights(name) {
+            let w = w?;
+            let all: Vec<f64> = w
+                .unknowns
+                .iter()
+                .chain(w.parameters.iter())
+                .copied()
+                .collect();
+            return Ok(Output::Displacement(DVector::from_vec(all)));
+        }
+        match m.variables.iter().position(|v| v == name) {
+            Some(k) => Ok(Output::Displacement(Self::unit(m.variables.len(), k))),
+            None => Err(self.names_error(
+                name,
+                "a variable (or <body>@x,y,z/dx,dy,dz, force:<parameter>)",
+                &m.variables,
+            )),
+        }
+    }
+}
+
+/// Every value finite, or an error naming the first frequency where one is not.
+fn check_finite<'a>(
+    what: &str,
+    freqs: &[f64],
+    values: impl IntoIterator<Item = &'a f64>,
+    per_frequency: usize,
+) -> Result<(), Error> {
+    let per = per_frequency.max(1);
+    match values.into_iter().position(|v| !v.is_finite()) {
+        None => Ok(()),
+        Some(k) => Err(Error::NotFinite {
+            what: what.to_string(),
+            f_hz: freqs.get(k / per).copied().unwrap_or(f64::NAN),
+        }),
+    }
+}
+
+impl StageResult {
+    /// Transfer function from the named input to the named output (see
+    /// [`StageResult::input`], [`StageResult::output`]) at `freqs` (Hz), with the model's
+    /// damping, solved over the blocks they couple to.
+    pub fn transfer(
+        &self,
+        input: &str,
+        output: &str,
+        freqs: &[f64],
+    ) -> Result<Vec<faer::c64>, Error> {
+        self.transfer_with(input, output, freqs, Solver::Restricted)
+    }
+
+    /// [`StageResult::transfer`] solved as `solver` says (restricted, full, or the dense
+    /// reference).
+    pub fn transfer_with(
+        &self,
+        input: &str,
+        output: &str,
+        freqs: &[f64],
+        solver: Solver,
+    ) -> Result<Vec<faer::c64>, Error> {
+        let (i, o) = (self.input(input)?, self.output(output)?);
+        let h = self
+            .model
+            .transfer_with(&self.system.damping, &i, &o, freqs, solver)?;
+        check_finite(
+            &format!("transfer function {output}/{input}"),
+            freqs,
+            h.iter().flat_map(|z| [&z.re, &z.im]),
+            2,
+        )?;
+        Ok(h)
+    }
+
+    /// Thermal noise (PSD, m²/Hz or rad²/Hz) of the named displacement output at `freqs`
+    /// (Hz), at the model's temperature, with its breakdown by damping tag.
+    pub fn noise(&self, output: &str, freqs: &[f64]) -> Result<ThermalNoise, Error> {
+        self.noise_with(output, freqs, &NoiseOptions::default())
+    }
+
+    /// [`StageResult::noise`] solved and broken down as `options` says (per term too, full
+    /// or restricted solve).
+    pub fn noise_with(
+        &self,
+        output: &str,
+        freqs: &[f64],
+        options: &NoiseOptions,
+    ) -> Result<ThermalNoise, Error> {
+        match self.output(output)? {
+            Output::Displacement(v) => {
+                let noise = thermal_noise_with(
+                    &self.model,
+                    &self.system.damping,
+                    &v,
+                    self.system.temperature,
+                    freqs,
+                    options,
+                )
+                .map_err(|e| match e {
+                    DynamicsError::NoLoss { lossless, .. } => DynamicsError::NoLoss {
+                        output: format!("'{output}'"),
+                        lossless,
+                    },
+                    other => other,
+                })?;
+                let what = format!("thermal noise of {output}");
+                check_finite(&what, freqs, &noise.total, 1)?;
+                for (_, series) in &noise.tags {
+                    check_finite(&what, freqs, series, 1)?;
+                }
+                Ok(noise)
+            }
+            Output::SupportForce(_) => Err(Error::Name {
+                name: output.to_string(),
+                message: "thermal noise needs a displacement output".into(),
+            }),
+        }
+    }
+}
