@@ -686,6 +686,11 @@ fn verdicts_agree_with_an_independent_dense_solve_across_the_bundled_models() {
     assert!(bad.is_empty(), "{} wrong:\n{}", bad.len(), bad.join("\n"));
 }
 
+#[expect(
+    clippy::too_many_lines,
+    reason = "a table of the sweep's points, one loop per model and parameter region with its \
+              finite-difference flag; a point is added or found by reading down the one list"
+)]
 fn sweep_points() -> Vec<(&'static str, Vec<String>, Stage, bool)> {
     let mut p = Vec::new();
     let s = |v: &[&str]| v.iter().map(|x| x.to_string()).collect::<Vec<_>>();

@@ -452,6 +452,12 @@ impl crate::FrameMap {
 }
 
 /// Derivatives of one pose (relative to its parent) over the frame's k coordinates.
+#[expect(
+    clippy::too_many_lines,
+    reason = "the general-pose path of every frame jet (the linear one is split off): the entries' \
+              values, gradients and Hessians fill the `EntryScratch` buffers that the chain rule \
+              through the angles then reads in place, so the hot loop borrows the scratch once"
+)]
 fn pose_derivs(
     shape: &PoseShape,
     x: &[f64],

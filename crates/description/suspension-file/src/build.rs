@@ -695,36 +695,7 @@ impl<'s, 'c, S: BuildScalar> Interpreter<'s, 'c, S> {
         if let Some(p) = parent {
             spec = spec.on(p);
         }
-        let mass = match &body.mass {
-            Some(m) => ctx.eval(m)?,
-            None => S::from(0.0),
-        };
-        spec = spec.mass(mass);
-        match &body.inertia {
-            None => {}
-            Some(Inertia::Diagonal(d)) => {
-                let v = ctx.vec3(d)?;
-                spec = spec.inertia_diag(v.x, v.y, v.z);
-            }
-            Some(Inertia::Tensor(_, rows)) => {
-                let mut m = Matrix3::from_element(S::from(0.0));
-                for (i, row) in rows.iter().enumerate() {
-                    for (j, ex) in row.iter().enumerate() {
-                        m[(i, j)] = ctx.eval(ex)?;
-                    }
-                }
-                spec = spec.inertia(m);
-            }
-        }
-        if let Some(c) = &body.centre_of_mass {
-            spec = spec.centre_of_mass(ctx.vec3(c)?);
-        }
-        if let Some(shape) = &body.shape {
-            spec = spec.shape(evaluate_shape(ctx, shape)?);
-        }
-        if let Some(family) = &body.mode_family {
-            spec = spec.mode_family(&family.value);
-        }
+        let (spec, mass) = mass_properties(ctx, body, spec)?;
         let id = self.b.body(spec).map_err(placed(&body.at))?;
         self.bodies.push((id, nominal, mass));
         Ok(())
@@ -884,46 +855,9 @@ impl<'s, 'c, S: BuildScalar> Interpreter<'s, 'c, S> {
                 .map_err(|e| invalid(&set.at, e.message))?;
             let tips = blades.as_ref().map(|b| &b.tips);
             let per_tip = uppers.len();
-            match tips {
-                Some(tips) if tips.len() * per_tip != lowers.len() => {
-                    return Err(invalid(
-                        &set.lower.at,
-                        format!(
-                            "{} lower ends for {} blade tips carrying {per_tip} wire(s) each",
-                            lowers.len(),
-                            tips.len()
-                        ),
-                    ));
-                }
-                None if per_tip != lowers.len() => {
-                    return Err(invalid(
-                        &set.lower.at,
-                        format!("{} lower ends for {per_tip} upper ends", lowers.len()),
-                    ));
-                }
-                _ => {}
-            }
+            check_lower_count(set, tips, per_tip, lowers.len())?;
             let names_first = names.first().cloned();
-            let length = ctx.eval(&set.length)?;
-            if length.re() <= 0.0 {
-                // named after the set's first wire, and said plainly when it is zero
-                let first = names
-                    .first()
-                    .map_or(String::new(), |n| format!("wire '{n}': "));
-                let zero = if length.re() == 0.0 {
-                    " (a zero-length wire)"
-                } else {
-                    ""
-                };
-                return Err(invalid(
-                    &set.length.at,
-                    format!(
-                        "{first}`{}` = {} m must be positive{zero}",
-                        set.length.text,
-                        number_text(length.re())
-                    ),
-                ));
-            }
+            let length = wire_length(ctx, set, &names)?;
             let mut wires = Vec::with_capacity(lowers.len());
             for (w, (lower, name)) in lowers.iter().zip(names).enumerate() {
                 let (tip, point) = match tips {
@@ -1328,16 +1262,7 @@ impl<'s, 'c, S: BuildScalar> Interpreter<'s, 'c, S> {
             BladeForm::XtraLite | BladeForm::Lateral | BladeForm::Lite => {
                 let x_expr = if blades.form == BladeForm::Lateral {
                     b.float(&x, 0.0).map_err(placed(at))?;
-                    stiffness[0] = match (&f.lateral_stiffness, &f.lateral_ratio) {
-                        (Some(k), _) => ctx.eval(k)?,
-                        (None, Some(r)) => ctx.eval(r)? * kc,
-                        (None, None) => {
-                            return Err(invalid(
-                                at,
-                                "the lateral form needs `lateral_stiffness` (N/m) or `lateral_ratio`",
-                            ));
-                        }
-                    };
+                    stiffness[0] = lateral_stiffness(ctx, f, kc, at)?;
                     format!("{} + {x}", value(tip_at.x))
                 } else {
                     value(tip_at.x)
@@ -1672,6 +1597,126 @@ fn known_bodies(spec: &Spec) -> String {
         .map(|b| b.name.as_str())
         .collect::<Vec<_>>()
         .join(", ")
+}
+
+/// The lateral blade form's sideways stiffness (N/m): `lateral_stiffness`, or
+/// `lateral_ratio` times the vertical stiffness `kc`.
+fn lateral_stiffness<S: BuildScalar>(
+    ctx: &Ctx<S>,
+    f: &BladeFields,
+    kc: S,
+    at: &At,
+) -> Result<S, BuildError> {
+    Ok(match (&f.lateral_stiffness, &f.lateral_ratio) {
+        (Some(k), _) => ctx.eval(k)?,
+        (None, Some(r)) => ctx.eval(r)? * kc,
+        (None, None) => {
+            return Err(invalid(
+                at,
+                "the lateral form needs `lateral_stiffness` (N/m) or `lateral_ratio`",
+            ));
+        }
+    })
+}
+
+/// `spec` with what `body` says besides where it is: its mass, inertia and centre of mass,
+/// the shape it is drawn as and its mode family. Returns the spec and the mass.
+fn mass_properties<S: BuildScalar>(
+    ctx: &Ctx<S>,
+    body: &BodyFile,
+    mut spec: BodySpec<S>,
+) -> Result<(BodySpec<S>, S), BuildError> {
+    let mass = match &body.mass {
+        Some(m) => ctx.eval(m)?,
+        None => S::from(0.0),
+    };
+    spec = spec.mass(mass);
+    match &body.inertia {
+        None => {}
+        Some(Inertia::Diagonal(d)) => {
+            let v = ctx.vec3(d)?;
+            spec = spec.inertia_diag(v.x, v.y, v.z);
+        }
+        Some(Inertia::Tensor(_, rows)) => {
+            let mut m = Matrix3::from_element(S::from(0.0));
+            for (i, row) in rows.iter().enumerate() {
+                for (j, ex) in row.iter().enumerate() {
+                    m[(i, j)] = ctx.eval(ex)?;
+                }
+            }
+            spec = spec.inertia(m);
+        }
+    }
+    if let Some(c) = &body.centre_of_mass {
+        spec = spec.centre_of_mass(ctx.vec3(c)?);
+    }
+    if let Some(shape) = &body.shape {
+        spec = spec.shape(evaluate_shape(ctx, shape)?);
+    }
+    if let Some(family) = &body.mode_family {
+        spec = spec.mode_family(&family.value);
+    }
+    Ok((spec, mass))
+}
+
+/// Checks that wire set `set` has a lower end for each of its `per_tip` upper ends on each
+/// blade tip (or, without blades, for each upper end): `lowers` of them.
+fn check_lower_count<S: Real>(
+    set: &WireSet,
+    tips: Option<&Vec<Vector3<S>>>,
+    per_tip: usize,
+    lowers: usize,
+) -> Result<(), BuildError> {
+    match tips {
+        Some(tips) if tips.len() * per_tip != lowers => {
+            return Err(invalid(
+                &set.lower.at,
+                format!(
+                    "{} lower ends for {} blade tips carrying {per_tip} wire(s) each",
+                    lowers,
+                    tips.len()
+                ),
+            ));
+        }
+        None if per_tip != lowers => {
+            return Err(invalid(
+                &set.lower.at,
+                format!("{} lower ends for {per_tip} upper ends", lowers),
+            ));
+        }
+        _ => {}
+    }
+    Ok(())
+}
+
+/// The unstretched length (m) of the wires of `set` (named `names`), which must be
+/// positive.
+fn wire_length<S: BuildScalar>(
+    ctx: &Ctx<S>,
+    set: &WireSet,
+    names: &[String],
+) -> Result<S, BuildError> {
+    let length = ctx.eval(&set.length)?;
+    if length.re() <= 0.0 {
+        // named after the set's first wire, and said plainly when it is zero
+        let first = names
+            .first()
+            .map_or(String::new(), |n| format!("wire '{n}': "));
+        let zero = if length.re() == 0.0 {
+            " (a zero-length wire)"
+        } else {
+            ""
+        };
+        return Err(invalid(
+            &set.length.at,
+            format!(
+                "{first}`{}` = {} m must be positive{zero}",
+                set.length.text,
+                number_text(length.re())
+            ),
+        ));
+    }
+    Ok(length)
 }
 
 /// Evaluates and checks a shape.

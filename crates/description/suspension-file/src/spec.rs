@@ -790,7 +790,64 @@ fn vector3(f: &mut Fields, key: &'static str) -> Result<Option<Located<Vec<Ex>>>
 
 fn body(name: String, node: &Node, at: At) -> Result<BodyFile, FileError> {
     let mut f = Fields::of(node, at.clone())?;
-    let dof = match f.strings("dof")? {
+    let dof = body_dof(&mut f)?;
+    let inertia = match f.node("inertia") {
+        None => None,
+        Some((node, at)) => Some(match &node.value {
+            Value::Array(rows) if rows.iter().all(|r| matches!(r.value, Value::Array(_))) => {
+                if rows.len() != 3 {
+                    return Err(at.error(format!("expected 3 rows, got {}", rows.len())));
+                }
+                let rows = rows
+                    .iter()
+                    .enumerate()
+                    .map(|(i, r)| {
+                        let row_at = At {
+                            origin: r.origin.clone(),
+                            path: format!("{}[{i}]", at.path),
+                        };
+                        expr_array(r, row_at, Some(3)).map(|l| l.value)
+                    })
+                    .collect::<Result<_, _>>()?;
+                Inertia::Tensor(at, rows)
+            }
+            _ => Inertia::Diagonal(expr_array(node, at, Some(3))?),
+        }),
+    };
+    let shape = body_shape(&mut f)?;
+    let b = BodyFile {
+        name,
+        at: at.clone(),
+        coordinates: f.string("coordinates")?,
+        driven: f.bool("driven")?.is_some_and(|b| b.value),
+        dof,
+        pose: f.exprs("pose", Some(6))?,
+        parent: f.string("parent")?,
+        position: vector3(&mut f, "position")?,
+        mass: f.expr("mass")?,
+        inertia,
+        centre_of_mass: vector3(&mut f, "centre_of_mass")?,
+        shape,
+        mode_family: f.string("mode_family")?,
+    };
+    f.planned("temperature", "a temperature per body")?;
+    f.finish()?;
+    // a body with neither rides on another by a rigid link (checked by the build)
+    if let (Some(c), Some(_)) = (&b.coordinates, &b.pose) {
+        return Err(c.at.error("give `coordinates` or `pose`, not both"));
+    }
+    if let (Some(p), None) = (&b.parent, &b.pose) {
+        return Err(p.at.error("`parent` goes with `pose`"));
+    }
+    if let (Some(d), None) = (&b.dof, &b.coordinates) {
+        return Err(d.at.error("`dof` goes with `coordinates`"));
+    }
+    Ok(b)
+}
+
+/// A body's `dof`: the axes (indices into [`AXES`]) its coordinates move along, ascending.
+fn body_dof(f: &mut Fields) -> Result<Option<Located<Vec<usize>>>, FileError> {
+    Ok(match f.strings("dof")? {
         None => None,
         Some(list) => {
             // "xyz" is short for ["x", "y", "z"]
@@ -817,31 +874,12 @@ fn body(name: String, node: &Node, at: At) -> Result<BodyFile, FileError> {
                 at: list.at,
             })
         }
-    };
-    let inertia = match f.node("inertia") {
-        None => None,
-        Some((node, at)) => Some(match &node.value {
-            Value::Array(rows) if rows.iter().all(|r| matches!(r.value, Value::Array(_))) => {
-                if rows.len() != 3 {
-                    return Err(at.error(format!("expected 3 rows, got {}", rows.len())));
-                }
-                let rows = rows
-                    .iter()
-                    .enumerate()
-                    .map(|(i, r)| {
-                        let row_at = At {
-                            origin: r.origin.clone(),
-                            path: format!("{}[{i}]", at.path),
-                        };
-                        expr_array(r, row_at, Some(3)).map(|l| l.value)
-                    })
-                    .collect::<Result<_, _>>()?;
-                Inertia::Tensor(at, rows)
-            }
-            _ => Inertia::Diagonal(expr_array(node, at, Some(3))?),
-        }),
-    };
-    let shape = match f.table("shape")? {
+    })
+}
+
+/// A body's `shape` table: a box or a cylinder, as it is drawn.
+fn body_shape(f: &mut Fields) -> Result<Option<ShapeFile>, FileError> {
+    Ok(match f.table("shape")? {
         None => None,
         Some(mut s) => {
             let kind = s
@@ -878,35 +916,7 @@ fn body(name: String, node: &Node, at: At) -> Result<BodyFile, FileError> {
             s.finish()?;
             Some(shape)
         }
-    };
-    let b = BodyFile {
-        name,
-        at: at.clone(),
-        coordinates: f.string("coordinates")?,
-        driven: f.bool("driven")?.is_some_and(|b| b.value),
-        dof,
-        pose: f.exprs("pose", Some(6))?,
-        parent: f.string("parent")?,
-        position: vector3(&mut f, "position")?,
-        mass: f.expr("mass")?,
-        inertia,
-        centre_of_mass: vector3(&mut f, "centre_of_mass")?,
-        shape,
-        mode_family: f.string("mode_family")?,
-    };
-    f.planned("temperature", "a temperature per body")?;
-    f.finish()?;
-    // a body with neither rides on another by a rigid link (checked by the build)
-    if let (Some(c), Some(_)) = (&b.coordinates, &b.pose) {
-        return Err(c.at.error("give `coordinates` or `pose`, not both"));
-    }
-    if let (Some(p), None) = (&b.parent, &b.pose) {
-        return Err(p.at.error("`parent` goes with `pose`"));
-    }
-    if let (Some(d), None) = (&b.dof, &b.coordinates) {
-        return Err(d.at.error("`dof` goes with `coordinates`"));
-    }
-    Ok(b)
+    })
 }
 
 fn points(node: &Node, at: At) -> Result<Points, FileError> {

@@ -195,6 +195,11 @@ fn line_of(text: &str, key: &str) -> usize {
 }
 
 #[test]
+#[expect(
+    clippy::too_many_lines,
+    reason = "a table: each loss-physics field made impossible in turn, with the file line, \
+              field path and reason its error must name, checked by the one loop below it"
+)]
 fn loss_physics_fields_build_and_bad_values_name_file_line_and_field() {
     let good = lossy(
         "profile = { neck_length = 0.02, neck_radius = 0.5e-3 }\nsurface_loss = true\ntemperature = 120\ndilution = 50",

@@ -174,6 +174,14 @@ fn table(case: &Case, stage: Stage, r: &FitResult, tf: Option<&MeasuredTf>) -> S
             p.unit.as_deref().unwrap_or("-")
         );
     }
+    correlation_table(&mut out, r);
+    residual_tables(&mut out, r);
+    determination(&mut out, r);
+    out
+}
+
+/// The correlation matrix of the fitted parameters, names (cut to 8 characters) across the top.
+fn correlation_table(out: &mut String, r: &FitResult) {
     let _ = writeln!(out, "\ncorrelation");
     let _ = write!(out, "{:<16}", "");
     for p in &r.parameters {
@@ -191,6 +199,11 @@ fn table(case: &Case, stage: Stage, r: &FitResult, tf: Option<&MeasuredTf>) -> S
         }
         out.push('\n');
     }
+}
+
+/// Each measured mode against the model's, and each |TF| point (when fitted) against the
+/// model's, with the normalized residual (m − f)/σ.
+fn residual_tables(out: &mut String, r: &FitResult) {
     let _ = writeln!(
         out,
         "\n{:<10} {:>4}  {:<10} {:>12} {:>10} {:>12} {:>9}",
@@ -227,6 +240,11 @@ fn table(case: &Case, stage: Stage, r: &FitResult, tf: Option<&MeasuredTf>) -> S
             );
         }
     }
+}
+
+/// Whether every parameter is determined (the singular values' range), or the
+/// combinations that are not.
+fn determination(out: &mut String, r: &FitResult) {
     if r.undetermined.is_empty() {
         let _ = writeln!(
             out,
@@ -253,7 +271,6 @@ fn table(case: &Case, stage: Stage, r: &FitResult, tf: Option<&MeasuredTf>) -> S
             );
         }
     }
-    out
 }
 
 /// At most `n` characters of `s`.

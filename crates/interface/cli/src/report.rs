@@ -231,6 +231,17 @@ fn model_section(page: &mut Page, run: &Run) -> Result<(), CliError> {
         })
         .collect();
     page.table(&["name", "value", "unit", "definition"], &rows);
+    bodies_table(page, run);
+    stages_tables(page, run);
+    damping_table(page, run);
+    page.end_section();
+    Ok(())
+}
+
+/// The bodies with mass: mass, principal inertias, centre at equilibrium, and the shape
+/// they are drawn as.
+fn bodies_table(page: &mut Page, run: &Run) {
+    let r = &run.result;
     let _ = writeln!(page.html, "<h3>Bodies</h3>");
     let rows: Vec<Vec<String>> = r
         .system
@@ -289,6 +300,11 @@ fn model_section(page: &mut Page, run: &Run) -> Result<(), CliError> {
         ],
         &rows,
     );
+}
+
+/// What each stage adds (and which this report computed), and every registered element
+/// kind with the stage it joins at.
+fn stages_tables(page: &mut Page, run: &Run) {
     let _ = writeln!(page.html, "<h3>Stages and element kinds</h3>");
     let stage_rows: Vec<Vec<String>> = [
         (
@@ -334,6 +350,11 @@ fn model_section(page: &mut Page, run: &Run) -> Result<(), CliError> {
         })
         .collect();
     page.table(&["element kind", "joins at", "crate", "what"], &kinds);
+}
+
+/// Each damping tag's multiplier at 1 Hz and 10 Hz.
+fn damping_table(page: &mut Page, run: &Run) {
+    let r = &run.result;
     let _ = writeln!(page.html, "<h3>Damping</h3>");
     let tags: Vec<Vec<String>> = r
         .system
@@ -353,8 +374,6 @@ fn model_section(page: &mut Page, run: &Run) -> Result<(), CliError> {
         &["damping tag", "multiplier at 1 Hz", "multiplier at 10 Hz"],
         &tags,
     );
-    page.end_section();
-    Ok(())
 }
 
 fn equilibrium_section(page: &mut Page, run: &Run) {
@@ -530,9 +549,23 @@ fn transfer_section(
             },
         ));
     }
+    bode_figures(page, run, freqs, &responses)?;
+    magnitude_table(page, freqs, &responses);
+    page.end_section();
+    Ok(())
+}
+
+/// The Bode plots of `responses` (input kind, response), one per input kind and unit;
+/// the responses that are zero at every frequency listed instead.
+fn bode_figures(
+    page: &mut Page,
+    run: &Run,
+    freqs: &[f64],
+    responses: &[(String, Response)],
+) -> Result<(), CliError> {
     // one Bode plot per input kind and unit
     let mut groups: Vec<(String, String)> = Vec::new();
-    for (kind, resp) in &responses {
+    for (kind, resp) in responses {
         if !groups.contains(&(kind.clone(), resp.unit.clone())) {
             groups.push((kind.clone(), resp.unit.clone()));
         }
@@ -572,6 +605,11 @@ fn transfer_section(
         let plot = plotting::bode(&title, freqs, &list)?;
         page.figure(&plot, &title)?;
     }
+    Ok(())
+}
+
+/// |H| of each of `responses` at the grid frequencies nearest 1, 10 and 100 Hz.
+fn magnitude_table(page: &mut Page, freqs: &[f64], responses: &[(String, Response)]) {
     // magnitudes at a few frequencies of the grid
     let picks: Vec<usize> = [1.0, 10.0, 100.0]
         .iter()
@@ -601,8 +639,6 @@ fn transfer_section(
         .collect();
     let header: Vec<&str> = header.iter().map(String::as_str).collect();
     page.table(&header, &rows);
-    page.end_section();
-    Ok(())
 }
 
 fn noise_section(page: &mut Page, run: &Run, freqs: &[f64], compute: bool) -> Result<(), CliError> {

@@ -3,7 +3,7 @@
 //! the overlap of their shapes (so a mode keeps its number and label through a crossing).
 
 use std::fmt::Write as _;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use nalgebra::DMatrix;
 use pendkit::describe::unit_slug;
@@ -215,6 +215,223 @@ pub fn run(a: Args) -> Result<String, CliError> {
         .iter()
         .map(|t| parse_vary(t))
         .collect::<Result<_, _>>()?;
+    check_varies(&a, &varies)?;
+    let tf = a.tf.as_deref().map(split_pair).transpose()?;
+    let lossy = a.noise.is_some() || tf.is_some();
+    if lossy && a.args.stage == Some(pendkit::system::Stage::S0A) {
+        return Err(pendkit::Error::StageTooEarly.into());
+    }
+    let freqs = if lossy {
+        a.grid.frequencies()?
+    } else {
+        Vec::new()
+    };
+    let points = grid(&varies);
+    let progress = Progress::new(
+        Some(points.len() as u64),
+        format!(
+            "sweep {}",
+            varies
+                .iter()
+                .map(|v| v.name.as_str())
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+    );
+    let mut out = String::new();
+    let mut header_written = false;
+    // per step: tracked mode ids in the order of that step's modes
+    let mut steps: Vec<StepModes> = Vec::new();
+    let mut ids: Vec<Vec<usize>> = Vec::new();
+    // for the figures: (series name, x or f, y or response)
+    let mut mode_series: Vec<(String, Vec<f64>, Vec<f64>)> = Vec::new();
+    let mut curves: Vec<(String, Vec<(f64, f64)>)> = Vec::new();
+    let mut unit = String::new();
+    let mut x_unit = String::new();
+    for point in &points {
+        let (values, run, step_name) = step_run(&a, &varies, point)?;
+        if !header_written {
+            (x_unit, unit) = write_header(&mut out, &a, &varies, &run, tf.as_ref());
+            header_written = true;
+        }
+        let prefix: String = values.iter().map(|x| csv(*x) + ",").collect();
+        if a.modes {
+            let modes = StepModes::of(&run);
+            let (step_ids, overlaps) = track(&points, point, &steps, &ids, &modes, &step_name)?;
+            let first = steps.first().unwrap_or(&modes);
+            let mut rows: Vec<(usize, usize)> = step_ids
+                .iter()
+                .copied()
+                .enumerate()
+                .map(|(j, id)| (id, j))
+                .collect();
+            rows.sort();
+            for (id, j) in rows {
+                let _ = writeln!(
+                    out,
+                    "{prefix}{},{},{},{},{},{}",
+                    id + 1,
+                    first.labels[id],
+                    first.families[id],
+                    csv(modes.frequencies[j]),
+                    modes.labels[j],
+                    fixed(overlaps[j], 6, 0)
+                );
+                if varies.len() == 1 {
+                    extend_series(&mut mode_series, id, first, values[0], modes.frequencies[j]);
+                }
+            }
+            steps.push(modes);
+            ids.push(step_ids);
+        } else {
+            let response = step_response(&a, &run, tf.as_ref(), &freqs)?;
+            write_response_rows(&mut out, &prefix, &freqs, &response, a.noise.is_some());
+            curves.push((step_name, response));
+        }
+        progress.step();
+    }
+    drop(progress);
+    if let Some(path) = &a.plot {
+        if a.modes {
+            plot_modes(path, &varies[0], x_unit, mode_series)?;
+        } else if a.noise.is_some() {
+            plot_noise(
+                path,
+                a.noise.as_deref().unwrap_or_default(),
+                unit,
+                &freqs,
+                curves,
+            )?;
+        } else if let Some((input, output)) = &tf {
+            plot_transfer(path, input, output, unit, &freqs, curves)?;
+        }
+    }
+    Ok(out)
+}
+
+/// The run at one grid point `point`: the swept values set after the --set ones, the
+/// equilibrium checked stable. Returns the swept values, the run and the step's name.
+fn step_run(
+    a: &Args,
+    varies: &[Vary],
+    point: &[usize],
+) -> Result<(Vec<f64>, Run, String), CliError> {
+    let mut sets = a.args.sets.clone();
+    let values: Vec<f64> = point
+        .iter()
+        .zip(varies)
+        .map(|(&k, v)| v.values[k])
+        .collect();
+    for (v, value) in varies.iter().zip(&values) {
+        sets.push(format!("{}={value:e}", v.name));
+    }
+    let run = a.args.run_with(ModeSelection::All, &sets, false)?;
+    run.check_stable(a.args.allow_unstable)?;
+    let step_name = varies
+        .iter()
+        .zip(&values)
+        .map(|(v, x)| format!("{}={}", v.name, fixed_or_sci(*x)))
+        .collect::<Vec<_>>()
+        .join(", ");
+    Ok((values, run, step_name))
+}
+
+/// Adds mode `id`'s frequency `hz` at swept value `x` to its series of the mode figure,
+/// named after the mode at the first step (`first`).
+fn extend_series(
+    mode_series: &mut Vec<(String, Vec<f64>, Vec<f64>)>,
+    id: usize,
+    first: &StepModes,
+    x: f64,
+    hz: f64,
+) {
+    if mode_series.len() <= id {
+        mode_series.resize(id + 1, (String::new(), Vec::new(), Vec::new()));
+    }
+    let series = &mut mode_series[id];
+    series.0 = format!("{} {} ({})", id + 1, first.labels[id], first.families[id]);
+    series.1.push(x);
+    series.2.push(hz);
+}
+
+/// One CSV row per frequency after the step's `prefix`: the ASD alone (`asd`), else the
+/// real and imaginary parts.
+fn write_response_rows(
+    out: &mut String,
+    prefix: &str,
+    freqs: &[f64],
+    response: &[(f64, f64)],
+    asd: bool,
+) {
+    for (f, (re, im)) in freqs.iter().zip(response) {
+        if asd {
+            let _ = writeln!(out, "{prefix}{},{}", csv(*f), csv(*re));
+        } else {
+            let _ = writeln!(out, "{prefix}{},{},{}", csv(*f), csv(*re), csv(*im));
+        }
+    }
+}
+
+/// The tracked id of each of `modes` (the step `point`, named `step_name`) and its overlap
+/// with the mode it continues: in the step's own order where a line of the grid starts,
+/// else matched by shape to the modes of the step before it (`steps`, their ids `ids`).
+fn track(
+    points: &[Vec<usize>],
+    point: &[usize],
+    steps: &[StepModes],
+    ids: &[Vec<usize>],
+    modes: &StepModes,
+    step_name: &str,
+) -> Result<(Vec<usize>, Vec<f64>), CliError> {
+    Ok(match predecessor(points, point) {
+        None => (
+            (0..modes.frequencies.len()).collect::<Vec<_>>(),
+            vec![1.0; modes.frequencies.len()],
+        ),
+        Some(q) => {
+            let old = &steps[q];
+            if old.shapes.nrows() != modes.shapes.nrows()
+                || old.shapes.ncols() != modes.shapes.ncols()
+            {
+                return Err(CliError::usage(format!(
+                    "sweep: the model's variables change at {step_name}; modes can only be tracked over a fixed set of variables"
+                )));
+            }
+            let matched = match_modes(&old.shapes, &old.mass, &modes.shapes, &modes.mass)?;
+            (
+                matched.iter().map(|&(i, _)| ids[q][i]).collect(),
+                matched.iter().map(|&(_, o)| o).collect(),
+            )
+        }
+    })
+}
+
+/// What the sweep is for at one step, at every frequency: the noise ASD (with 0 beside it)
+/// or the transfer function (real, imaginary), or nothing when sweeping modes.
+fn step_response(
+    a: &Args,
+    run: &Run,
+    tf: Option<&(String, String)>,
+    freqs: &[f64],
+) -> Result<Vec<(f64, f64)>, CliError> {
+    Ok(if let Some(output) = &a.noise {
+        let noise = run.result.noise(output, freqs)?;
+        noise.asd().into_iter().map(|x| (x, 0.0)).collect()
+    } else if let Some((input, output)) = tf {
+        run.result
+            .transfer(input, output, freqs)?
+            .into_iter()
+            .map(|z| (z.re, z.im))
+            .collect()
+    } else {
+        Vec::new()
+    })
+}
+
+/// Refuses a sweep the table could not state truthfully: more than [`MAX_STEPS`] steps, a
+/// parameter swept twice or swept and also set, or a mode plot over more than one
+/// parameter.
+fn check_varies(a: &Args, varies: &[Vary]) -> Result<(), CliError> {
     let steps = varies
         .iter()
         .try_fold(1usize, |n, v| n.checked_mul(v.values.len()))
@@ -251,199 +468,105 @@ pub fn run(a: Args) -> Result<String, CliError> {
             "--plot with --modes draws frequencies against one swept parameter: give one --vary",
         ));
     }
-    let tf = a.tf.as_deref().map(split_pair).transpose()?;
-    let lossy = a.noise.is_some() || tf.is_some();
-    if lossy && a.args.stage == Some(pendkit::system::Stage::S0A) {
-        return Err(pendkit::Error::StageTooEarly.into());
-    }
-    let freqs = if lossy {
-        a.grid.frequencies()?
-    } else {
-        Vec::new()
-    };
-    let points = grid(&varies);
-    let progress = Progress::new(
-        Some(points.len() as u64),
-        format!(
-            "sweep {}",
-            varies
-                .iter()
-                .map(|v| v.name.as_str())
-                .collect::<Vec<_>>()
-                .join(", ")
-        ),
-    );
-    let mut out = String::new();
-    let mut header_written = false;
-    // per step: tracked mode ids in the order of that step's modes
-    let mut steps: Vec<StepModes> = Vec::new();
-    let mut ids: Vec<Vec<usize>> = Vec::new();
-    // for the figures: (series name, x or f, y or response)
-    let mut mode_series: Vec<(String, Vec<f64>, Vec<f64>)> = Vec::new();
-    let mut curves: Vec<(String, Vec<(f64, f64)>)> = Vec::new();
+    Ok(())
+}
+
+/// Writes the CSV header: a column per swept parameter (with its unit), then the columns
+/// of what is swept for. Returns the first swept parameter's unit and the unit of the noise
+/// or transfer function (empty for modes), for the figure's axes.
+fn write_header(
+    out: &mut String,
+    a: &Args,
+    varies: &[Vary],
+    run: &Run,
+    tf: Option<&(String, String)>,
+) -> (String, String) {
     let mut unit = String::new();
-    let mut x_unit = String::new();
-    for point in &points {
-        let mut sets = a.args.sets.clone();
-        let values: Vec<f64> = point
-            .iter()
-            .zip(&varies)
-            .map(|(&k, v)| v.values[k])
-            .collect();
-        for (v, value) in varies.iter().zip(&values) {
-            sets.push(format!("{}={value:e}", v.name));
-        }
-        let run = a.args.run_with(ModeSelection::All, &sets, false)?;
-        run.check_stable(a.args.allow_unstable)?;
-        let step_name = varies
-            .iter()
-            .zip(&values)
-            .map(|(v, x)| format!("{}={}", v.name, fixed_or_sci(*x)))
-            .collect::<Vec<_>>()
-            .join(", ");
-        if !header_written {
-            let columns: Vec<String> = varies
-                .iter()
-                .map(|v| parameter_column(&run, &v.name))
-                .collect();
-            out.push_str(&columns.join(","));
-            x_unit = parameter_unit(&run, &varies[0].name);
-            if a.modes {
-                out.push_str(",mode,label,family,frequency_hz,dominant,overlap\n");
-            } else if let Some(output) = &a.noise {
-                unit = format!("{}/√Hz", run.result.output_unit(output).unwrap_or_default());
-                let _ = writeln!(out, ",f_hz,asd_{}", unit_slug(&unit));
-            } else if let Some((input, output)) = &tf {
-                unit = run.result.transfer_unit(input, output).unwrap_or_default();
-                let slug = unit_slug(&unit);
-                let _ = writeln!(out, ",f_hz,re_{slug},im_{slug}");
-            }
-            header_written = true;
-        }
-        let prefix: String = values.iter().map(|x| csv(*x) + ",").collect();
-        if a.modes {
-            let modes = StepModes::of(&run);
-            let (step_ids, overlaps) = match predecessor(&points, point) {
-                None => (
-                    (0..modes.frequencies.len()).collect::<Vec<_>>(),
-                    vec![1.0; modes.frequencies.len()],
-                ),
-                Some(q) => {
-                    let old = &steps[q];
-                    if old.shapes.nrows() != modes.shapes.nrows()
-                        || old.shapes.ncols() != modes.shapes.ncols()
-                    {
-                        return Err(CliError::usage(format!(
-                            "sweep: the model's variables change at {step_name}; modes can only be tracked over a fixed set of variables"
-                        )));
-                    }
-                    let matched = match_modes(&old.shapes, &old.mass, &modes.shapes, &modes.mass)?;
-                    (
-                        matched.iter().map(|&(i, _)| ids[q][i]).collect(),
-                        matched.iter().map(|&(_, o)| o).collect(),
-                    )
-                }
-            };
-            let first = steps.first().unwrap_or(&modes);
-            let mut rows: Vec<(usize, usize)> = step_ids
-                .iter()
-                .copied()
-                .enumerate()
-                .map(|(j, id)| (id, j))
-                .collect();
-            rows.sort();
-            for (id, j) in rows {
-                let _ = writeln!(
-                    out,
-                    "{prefix}{},{},{},{},{},{}",
-                    id + 1,
-                    first.labels[id],
-                    first.families[id],
-                    csv(modes.frequencies[j]),
-                    modes.labels[j],
-                    fixed(overlaps[j], 6, 0)
-                );
-                if varies.len() == 1 {
-                    if mode_series.len() <= id {
-                        mode_series.resize(id + 1, (String::new(), Vec::new(), Vec::new()));
-                    }
-                    let series = &mut mode_series[id];
-                    series.0 = format!("{} {} ({})", id + 1, first.labels[id], first.families[id]);
-                    series.1.push(values[0]);
-                    series.2.push(modes.frequencies[j]);
-                }
-            }
-            steps.push(modes);
-            ids.push(step_ids);
-        } else {
-            let response: Vec<(f64, f64)> = if let Some(output) = &a.noise {
-                let noise = run.result.noise(output, &freqs)?;
-                noise.asd().into_iter().map(|x| (x, 0.0)).collect()
-            } else if let Some((input, output)) = &tf {
-                run.result
-                    .transfer(input, output, &freqs)?
-                    .into_iter()
-                    .map(|z| (z.re, z.im))
-                    .collect()
-            } else {
-                Vec::new()
-            };
-            for (f, (re, im)) in freqs.iter().zip(&response) {
-                if a.noise.is_some() {
-                    let _ = writeln!(out, "{prefix}{},{}", csv(*f), csv(*re));
-                } else {
-                    let _ = writeln!(out, "{prefix}{},{},{}", csv(*f), csv(*re), csv(*im));
-                }
-            }
-            curves.push((step_name, response));
-        }
-        progress.step();
+    let columns: Vec<String> = varies
+        .iter()
+        .map(|v| parameter_column(run, &v.name))
+        .collect();
+    out.push_str(&columns.join(","));
+    let x_unit = parameter_unit(run, &varies[0].name);
+    if a.modes {
+        out.push_str(",mode,label,family,frequency_hz,dominant,overlap\n");
+    } else if let Some(output) = &a.noise {
+        unit = format!("{}/√Hz", run.result.output_unit(output).unwrap_or_default());
+        let _ = writeln!(out, ",f_hz,asd_{}", unit_slug(&unit));
+    } else if let Some((input, output)) = tf {
+        unit = run.result.transfer_unit(input, output).unwrap_or_default();
+        let slug = unit_slug(&unit);
+        let _ = writeln!(out, ",f_hz,re_{slug},im_{slug}");
     }
-    drop(progress);
-    if let Some(path) = &a.plot {
-        if a.modes {
-            let v = &varies[0];
-            let mut plot = LinePlot::new(
-                format!("Modes against {}", v.name),
-                Axis::new(v.name.clone(), x_unit, Scale::Linear),
-                Axis::new("frequency", "Hz", Scale::Log),
-            );
-            plot.markers = v.values.len() <= 30;
-            for (name, x, y) in mode_series {
-                plot.series.push(Series::new(name, x, y));
-            }
-            plot.render(path)?;
-        } else if a.noise.is_some() {
-            let mut plot = LinePlot::new(
-                format!(
-                    "Thermal noise of {}",
-                    a.noise.as_deref().unwrap_or_default()
-                ),
-                Axis::new("frequency", "Hz", Scale::Log),
-                Axis::new("ASD", unit.clone(), Scale::Log),
-            );
-            for (name, values) in curves {
-                plot.series.push(Series::new(
-                    name,
-                    freqs.clone(),
-                    values.into_iter().map(|(x, _)| x).collect(),
-                ));
-            }
-            plot.render(path)?;
-        } else if let Some((input, output)) = &tf {
-            let mut plot = BodePlot::new(
-                format!("{output}/{input} over the sweep"),
-                format!("|{output}/{input}|"),
-                unit.clone(),
-            );
-            for (name, values) in curves {
-                plot.series
-                    .push(BodeSeries::new(name, freqs.clone(), values));
-            }
-            plot.render(path)?;
-        }
+    (x_unit, unit)
+}
+
+/// The tracked mode frequencies against the one swept parameter `v` (in `x_unit`), one
+/// series (name, values, frequencies) per mode.
+fn plot_modes(
+    path: &Path,
+    v: &Vary,
+    x_unit: String,
+    mode_series: Vec<(String, Vec<f64>, Vec<f64>)>,
+) -> Result<(), CliError> {
+    let mut plot = LinePlot::new(
+        format!("Modes against {}", v.name),
+        Axis::new(v.name.clone(), x_unit, Scale::Linear),
+        Axis::new("frequency", "Hz", Scale::Log),
+    );
+    plot.markers = v.values.len() <= 30;
+    for (name, x, y) in mode_series {
+        plot.series.push(Series::new(name, x, y));
     }
-    Ok(out)
+    plot.render(path)?;
+    Ok(())
+}
+
+/// The ASD of `output` (in `unit`) at every step, one curve per step.
+fn plot_noise(
+    path: &Path,
+    output: &str,
+    unit: String,
+    freqs: &[f64],
+    curves: Vec<(String, Vec<(f64, f64)>)>,
+) -> Result<(), CliError> {
+    let mut plot = LinePlot::new(
+        format!("Thermal noise of {output}"),
+        Axis::new("frequency", "Hz", Scale::Log),
+        Axis::new("ASD", unit, Scale::Log),
+    );
+    for (name, values) in curves {
+        plot.series.push(Series::new(
+            name,
+            freqs.to_vec(),
+            values.into_iter().map(|(x, _)| x).collect(),
+        ));
+    }
+    plot.render(path)?;
+    Ok(())
+}
+
+/// The transfer function `input` to `output` (in `unit`) at every step, one Bode curve per
+/// step.
+fn plot_transfer(
+    path: &Path,
+    input: &str,
+    output: &str,
+    unit: String,
+    freqs: &[f64],
+    curves: Vec<(String, Vec<(f64, f64)>)>,
+) -> Result<(), CliError> {
+    let mut plot = BodePlot::new(
+        format!("{output}/{input} over the sweep"),
+        format!("|{output}/{input}|"),
+        unit,
+    );
+    for (name, values) in curves {
+        plot.series
+            .push(BodeSeries::new(name, freqs.to_vec(), values));
+    }
+    plot.render(path)?;
+    Ok(())
 }
 
 /// A swept value for a legend: a few significant digits.

@@ -1163,44 +1163,7 @@ pub fn fit(
     free: &[String],
     options: &FitOptions,
 ) -> Result<FitResult, Error> {
-    // the free parameters: known, read, listed once
-    if free.is_empty() {
-        return Err(FitError::Parameter {
-            name: String::new(),
-            message: "no free parameters (--free p1,p2,...)".into(),
-        }
-        .into());
-    }
-    let (_, resolved) = case.build()?;
-    let read = case.parameters_read(&resolved)?;
-    let mut start = Vec::with_capacity(free.len());
-    for (k, name) in free.iter().enumerate() {
-        if free[..k].contains(name) {
-            return Err(FitError::Parameter {
-                name: name.clone(),
-                message: "listed twice".into(),
-            }
-            .into());
-        }
-        let value = resolved.get(name).map_err(|_| FitError::Parameter {
-            name: name.clone(),
-            message: format!(
-                "not a parameter of model '{}' (see pendkit params)",
-                case.model.name()
-            ),
-        })?;
-        if !read.contains(name) {
-            return Err(FitError::Parameter {
-                name: name.clone(),
-                message: "read by nothing in the model".into(),
-            }
-            .into());
-        }
-        if !value.is_finite() {
-            return Err(FitError::NotFinite(format!("start value of '{name}'")).into());
-        }
-        start.push(value);
-    }
+    let start = start_values(case, free)?;
     let n_data = measured.modes.len() + tf.map_or(0, |t| t.points.len());
     if n_data <= free.len() {
         return Err(FitError::TooFewMeasurements {
@@ -1212,25 +1175,9 @@ pub fn fit(
     let stage = options.stage;
     let tf_freqs: Vec<f64> =
         tf.map_or_else(Vec::new, |t| t.points.iter().map(|p| p.freq_hz).collect());
-    let evaluate =
-        |values: &[f64], matched: &MatchedModes, result: &StageResult| -> Result<State, Error> {
-            let tf_model = match tf {
-                Some(t) => tf_values(result, t, &tf_freqs)?,
-                None => Vec::new(),
-            };
-            let r = residuals(&matched.hz, measured, tf, &tf_model);
-            // a residual that is not finite, or whose square overflows χ², names its line
-            if let Some(i) = r.iter().position(|x| !(x * x).is_finite()) {
-                return Err(residual_error(measured, tf, i, r[i]).into());
-            }
-            Ok(State {
-                values: values.to_vec(),
-                matched: matched.clone(),
-                tf_model,
-                chi_squared: r.norm_squared(),
-                r,
-            })
-        };
+    let evaluate = |values: &[f64], matched: &MatchedModes, result: &StageResult| {
+        state_at(measured, tf, &tf_freqs, values, matched, result)
+    };
 
     let first = solve(case, free, &start, stage).map_err(|e| FitError::Start(Box::new(e)))?;
     first
@@ -1240,92 +1187,33 @@ pub fn fit(
     let mut state = evaluate(&start, &matched, &first)?;
     let mut solves = 1;
     let scale = scales(&start);
-    let defaults = pendkit_model::Defaults::of(&*case.model)?;
-    let units: Vec<Option<String>> = free
-        .iter()
-        .map(|name| defaults.params.unit(name).map(str::to_string))
-        .collect();
-    let sigma: Vec<f64> = measured
-        .modes
-        .iter()
-        .map(|m| m.sigma_hz)
-        .chain(tf.iter().flat_map(|t| t.points.iter().map(|p| p.sigma_abs)))
-        .collect();
+    let units = parameter_units(case, free)?;
+    let sigma = sigmas(measured, tf);
     let mut damping: Option<f64> = None;
     let mut iterations = 0;
     loop {
         // the weighted Jacobian in relative parameter units: rows / σ, columns × scale
-        let jacobian = match options.jacobian {
-            JacobianMethod::Exact => {
-                // one stage solution, and the |TF| rows' four rebuilds of the stage per
-                // parameter (the matrices' stencil)
-                let (modes, tf_rows) =
-                    exact_jacobian(case, stage, free, &state.values, &state.matched, tf)?;
-                solves += 1 + tf.map_or(0, |_| 4 * free.len());
-                match tf_rows {
-                    Some(t) => stack(&modes, &t),
-                    None => modes,
-                }
-            }
-            JacobianMethod::Differences => {
-                let (_, modes) = mode_jacobian(
-                    case,
-                    stage,
-                    free,
-                    &state.values,
-                    &state.matched,
-                    options.relative_step,
-                )?;
-                solves += 2 * free.len();
-                match tf {
-                    Some(t) => {
-                        let rows = central_differences(
-                            case,
-                            stage,
-                            free,
-                            &state.values,
-                            options.relative_step,
-                            |result| tf_values(result, t, &tf_freqs),
-                        )?;
-                        solves += 2 * free.len();
-                        stack(&modes, &rows)
-                    }
-                    None => modes,
-                }
-            }
-        };
+        let (jacobian, jacobian_solves) = jacobian(case, options, free, &state, tf, &tf_freqs)?;
+        solves += jacobian_solves;
         iterations += 1;
-        let weighted = DMatrix::from_fn(n_data, free.len(), |i, p| {
-            jacobian[(i, p)] / sigma[i] * scale[p]
-        });
-        if weighted.iter().any(|x| !x.is_finite()) {
-            return Err(FitError::NotFinite("the Jacobian".into()).into());
-        }
-        let svd = weighted.clone().svd(true, true);
+        let svd = weighted_svd(&jacobian, &sigma, &scale, n_data, free.len())?;
         let (Some(u), Some(v_t)) = (svd.u.as_ref(), svd.v_t.as_ref()) else {
             return Err(FitError::NotFinite("the SVD of the Jacobian".into()).into());
         };
         let s = &svd.singular_values;
-        let s_max = s.iter().copied().fold(0.0, f64::max);
-        let determined: Vec<usize> = (0..s.len())
-            .filter(|&i| s_max > 0.0 && s[i] > options.undetermined_below * s_max)
-            .collect();
-        let c: Vec<f64> = determined
-            .iter()
-            .map(|&i| u.column(i).dot(&state.r))
-            .collect();
+        let (s_max, determined, c) =
+            determined_directions(u, s, &state.r, options.undetermined_below);
         // what a full Gauss–Newton step would still gain in χ²; at the minimum, zero
         let gain: f64 = c.iter().map(|x| x * x).sum();
         let converged = gain <= 1e-9 * state.chi_squared.max(1.0);
         if converged || iterations > options.max_iterations {
             if !converged {
-                return Err(FitError::NotConverged {
-                    iterations: iterations - 1,
-                    chi_squared: state.chi_squared,
-                    values: sets(free, &state.values).join(" "),
-                    damping: damping.unwrap_or(0.0),
-                }
-                .into());
+                return Err(not_converged(
+                    free,
+                    &state,
+                    iterations - 1,
+                    damping.unwrap_or(0.0),
+                ));
             }
             let problem = Problem {
                 measured,
@@ -1376,15 +1264,202 @@ pub fn fit(
         }
         damping = Some(lambda);
         if !accepted {
-            return Err(FitError::NotConverged {
-                iterations,
-                chi_squared: state.chi_squared,
-                values: sets(free, &state.values).join(" "),
-                damping: lambda,
+            return Err(not_converged(free, &state, iterations, lambda));
+        }
+    }
+}
+
+/// The start values of the `free` parameters of `case`: each a parameter of its model, read
+/// by it, listed once and finite.
+fn start_values(case: &Case, free: &[String]) -> Result<Vec<f64>, Error> {
+    // the free parameters: known, read, listed once
+    if free.is_empty() {
+        return Err(FitError::Parameter {
+            name: String::new(),
+            message: "no free parameters (--free p1,p2,...)".into(),
+        }
+        .into());
+    }
+    let (_, resolved) = case.build()?;
+    let read = case.parameters_read(&resolved)?;
+    let mut start = Vec::with_capacity(free.len());
+    for (k, name) in free.iter().enumerate() {
+        if free[..k].contains(name) {
+            return Err(FitError::Parameter {
+                name: name.clone(),
+                message: "listed twice".into(),
             }
             .into());
         }
+        let value = resolved.get(name).map_err(|_| FitError::Parameter {
+            name: name.clone(),
+            message: format!(
+                "not a parameter of model '{}' (see pendkit params)",
+                case.model.name()
+            ),
+        })?;
+        if !read.contains(name) {
+            return Err(FitError::Parameter {
+                name: name.clone(),
+                message: "read by nothing in the model".into(),
+            }
+            .into());
+        }
+        if !value.is_finite() {
+            return Err(FitError::NotFinite(format!("start value of '{name}'")).into());
+        }
+        start.push(value);
     }
+    Ok(start)
+}
+
+/// The fit's state at `values`: the solution `result`'s |TF| at `tf_freqs` (when `tf` is
+/// fitted) and the weighted residuals of its matched modes and |TF| points.
+fn state_at(
+    measured: &MeasuredModes,
+    tf: Option<&MeasuredTf>,
+    tf_freqs: &[f64],
+    values: &[f64],
+    matched: &MatchedModes,
+    result: &StageResult,
+) -> Result<State, Error> {
+    let tf_model = match tf {
+        Some(t) => tf_values(result, t, tf_freqs)?,
+        None => Vec::new(),
+    };
+    let r = residuals(&matched.hz, measured, tf, &tf_model);
+    // a residual that is not finite, or whose square overflows χ², names its line
+    if let Some(i) = r.iter().position(|x| !(x * x).is_finite()) {
+        return Err(residual_error(measured, tf, i, r[i]).into());
+    }
+    Ok(State {
+        values: values.to_vec(),
+        matched: matched.clone(),
+        tf_model,
+        chi_squared: r.norm_squared(),
+        r,
+    })
+}
+
+/// The Jacobian of the modes (and |TF| points) over the free parameters at `state`, by the
+/// method `options` name; with the number of stage solutions it took.
+fn jacobian(
+    case: &Case,
+    options: &FitOptions,
+    free: &[String],
+    state: &State,
+    tf: Option<&MeasuredTf>,
+    tf_freqs: &[f64],
+) -> Result<(DMatrix<f64>, usize), Error> {
+    let stage = options.stage;
+    let mut solves = 0;
+    let jacobian = match options.jacobian {
+        JacobianMethod::Exact => {
+            // one stage solution, and the |TF| rows' four rebuilds of the stage per
+            // parameter (the matrices' stencil)
+            let (modes, tf_rows) =
+                exact_jacobian(case, stage, free, &state.values, &state.matched, tf)?;
+            solves += 1 + tf.map_or(0, |_| 4 * free.len());
+            match tf_rows {
+                Some(t) => stack(&modes, &t),
+                None => modes,
+            }
+        }
+        JacobianMethod::Differences => {
+            let (_, modes) = mode_jacobian(
+                case,
+                stage,
+                free,
+                &state.values,
+                &state.matched,
+                options.relative_step,
+            )?;
+            solves += 2 * free.len();
+            match tf {
+                Some(t) => {
+                    let rows = central_differences(
+                        case,
+                        stage,
+                        free,
+                        &state.values,
+                        options.relative_step,
+                        |result| tf_values(result, t, tf_freqs),
+                    )?;
+                    solves += 2 * free.len();
+                    stack(&modes, &rows)
+                }
+                None => modes,
+            }
+        }
+    };
+    Ok((jacobian, solves))
+}
+
+/// The unit each of the `free` parameters of `case`'s model declares.
+fn parameter_units(case: &Case, free: &[String]) -> Result<Vec<Option<String>>, Error> {
+    let defaults = pendkit_model::Defaults::of(&*case.model)?;
+    let units: Vec<Option<String>> = free
+        .iter()
+        .map(|name| defaults.params.unit(name).map(str::to_string))
+        .collect();
+    Ok(units)
+}
+
+/// The σ of every measurement, in the order of the residuals: the modes, then the |TF|
+/// points.
+fn sigmas(measured: &MeasuredModes, tf: Option<&MeasuredTf>) -> Vec<f64> {
+    measured
+        .modes
+        .iter()
+        .map(|m| m.sigma_hz)
+        .chain(tf.iter().flat_map(|t| t.points.iter().map(|p| p.sigma_abs)))
+        .collect()
+}
+
+/// The SVD of the `n_data` × `n_free` Jacobian weighted to relative parameter units: rows
+/// / σ, columns × scale.
+fn weighted_svd(
+    jacobian: &DMatrix<f64>,
+    sigma: &[f64],
+    scale: &[f64],
+    n_data: usize,
+    n_free: usize,
+) -> Result<nalgebra::SVD<f64, nalgebra::Dyn, nalgebra::Dyn>, Error> {
+    let weighted = DMatrix::from_fn(n_data, n_free, |i, p| {
+        jacobian[(i, p)] / sigma[i] * scale[p]
+    });
+    if weighted.iter().any(|x| !x.is_finite()) {
+        return Err(FitError::NotFinite("the Jacobian".into()).into());
+    }
+    Ok(weighted.clone().svd(true, true))
+}
+
+/// The largest singular value in `s`, the directions the data determine (singular values
+/// above `undetermined_below` of the largest) and the residual `r`'s component along each
+/// (columns of `u`).
+fn determined_directions(
+    u: &DMatrix<f64>,
+    s: &DVector<f64>,
+    r: &DVector<f64>,
+    undetermined_below: f64,
+) -> (f64, Vec<usize>, Vec<f64>) {
+    let s_max = s.iter().copied().fold(0.0, f64::max);
+    let determined: Vec<usize> = (0..s.len())
+        .filter(|&i| s_max > 0.0 && s[i] > undetermined_below * s_max)
+        .collect();
+    let c: Vec<f64> = determined.iter().map(|&i| u.column(i).dot(r)).collect();
+    (s_max, determined, c)
+}
+
+/// The fit stopped without converging after `iterations`, at `state` with damping `damping`.
+fn not_converged(free: &[String], state: &State, iterations: usize, damping: f64) -> Error {
+    FitError::NotConverged {
+        iterations,
+        chi_squared: state.chi_squared,
+        values: sets(free, &state.values).join(" "),
+        damping,
+    }
+    .into()
 }
 
 /// `a` above `b`.
@@ -1395,6 +1470,43 @@ fn stack(a: &DMatrix<f64>, b: &DMatrix<f64>) -> DMatrix<f64> {
         } else {
             b[(i - a.nrows(), j)]
         }
+    })
+}
+
+/// Each measured mode against the model's mode matched to it at `state`.
+fn mode_residuals(measured: &MeasuredModes, state: &State) -> Vec<ModeResidual> {
+    measured
+        .modes
+        .iter()
+        .zip(&state.matched.indices)
+        .zip(&state.matched.hz)
+        .zip(&state.matched.labels)
+        .map(|(((m, &k), &f), model_label)| ModeResidual {
+            label: m.label.clone(),
+            mode: k + 1,
+            model_label: model_label.clone(),
+            measured_hz: m.hz,
+            sigma_hz: m.sigma_hz,
+            model_hz: f,
+            normalized: (m.hz - f) / m.sigma_hz,
+        })
+        .collect()
+}
+
+/// Each measured |TF| point (when `tf` is fitted) against the model's at `state`.
+fn tf_residuals(tf: Option<&MeasuredTf>, state: &State) -> Vec<TfResidual> {
+    tf.map_or_else(Vec::new, |t| {
+        t.points
+            .iter()
+            .zip(&state.tf_model)
+            .map(|(p, &model)| TfResidual {
+                freq_hz: p.freq_hz,
+                measured: p.abs,
+                sigma: p.sigma_abs,
+                model,
+                normalized: (p.abs - model) / p.sigma_abs,
+            })
+            .collect()
     })
 }
 
@@ -1462,35 +1574,8 @@ fn finish(
                 .collect()
         })
         .collect();
-    let modes = measured
-        .modes
-        .iter()
-        .zip(&state.matched.indices)
-        .zip(&state.matched.hz)
-        .zip(&state.matched.labels)
-        .map(|(((m, &k), &f), model_label)| ModeResidual {
-            label: m.label.clone(),
-            mode: k + 1,
-            model_label: model_label.clone(),
-            measured_hz: m.hz,
-            sigma_hz: m.sigma_hz,
-            model_hz: f,
-            normalized: (m.hz - f) / m.sigma_hz,
-        })
-        .collect();
-    let tf = tf.map_or_else(Vec::new, |t| {
-        t.points
-            .iter()
-            .zip(&state.tf_model)
-            .map(|(p, &model)| TfResidual {
-                freq_hz: p.freq_hz,
-                measured: p.abs,
-                sigma: p.sigma_abs,
-                model,
-                normalized: (p.abs - model) / p.sigma_abs,
-            })
-            .collect()
-    });
+    let modes = mode_residuals(measured, state);
+    let tf = tf_residuals(*tf, state);
     let undetermined = undetermined_dirs
         .iter()
         .map(|&i| {

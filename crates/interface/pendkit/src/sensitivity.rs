@@ -471,6 +471,10 @@ impl Tangents {
 /// Parameter `j`'s column: the stage rebuilt at the stencil's points and differenced, then
 /// the exact algebra of the module's documentation. `None` for a parameter nothing reads
 /// (every derivative exactly 0, nothing computed).
+#[expect(
+    clippy::too_many_lines,
+    reason = "one parameter's column: the stencil's rebuilt stages and the exact algebra read the same differenced matrices"
+)]
 fn column(
     shared: &Shared,
     j: usize,
@@ -1227,6 +1231,10 @@ impl NominalStage {
 
 /// Sensitivities of `case` at the request's stage. See the module's documentation for the
 /// method and its accuracy.
+#[expect(
+    clippy::too_many_lines,
+    reason = "the request's steps in order: nominal stage, parameter columns in parallel, then the modes', responses' and noise's tables from them"
+)]
 pub fn sensitivities(case: &Case, request: &SensitivityRequest) -> Result<Sensitivities, Error> {
     let responses = request.tf.is_some() || request.noise.is_some();
     if responses {

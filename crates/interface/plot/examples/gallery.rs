@@ -6,7 +6,7 @@
 //! geometry); they are not pendkit results.
 
 use std::f64::consts::PI;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use pendkit_plot::{
     Axis, BodePlot, BodeSeries, BodyAxis, BodyOutline, Contribution, Figure, LinePlot, ModeChart,
@@ -56,6 +56,17 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     std::fs::create_dir_all(&dir)?;
     let f = logspace(0.1, 100.0, 600);
 
+    bode_figure(&dir, &f)?;
+    noise_figure(&dir, &f)?;
+    modes_figure(&dir)?;
+    mode_shape_figure(&dir)?;
+    tradeoff_figure(&dir)?;
+    sweep_figure(&dir)?;
+    Ok(())
+}
+
+/// A Bode plot: one pendulum stage against four, on `f`.
+fn bode_figure(dir: &Path, f: &[f64]) -> Result<(), PlotError> {
     let mut bode = BodePlot::new("Support to test mass (synthetic)", "|x3/x00|", "m/m");
     let one: Vec<_> = f.iter().map(|&f| stage(f, 0.7, 1e-2)).collect();
     let four: Vec<_> = f
@@ -67,11 +78,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         })
         .collect();
     bode.series
-        .push(BodeSeries::new("one stage", f.clone(), one));
+        .push(BodeSeries::new("one stage", f.to_vec(), one));
     bode.series
-        .push(BodeSeries::new("four stages", f.clone(), four));
-    save(&bode, &dir, "bode")?;
+        .push(BodeSeries::new("four stages", f.to_vec(), four));
+    save(&bode, dir, "bode")?;
+    Ok(())
+}
 
+/// A noise budget: six damping tags' shares and their total, on `f`.
+fn noise_figure(dir: &Path, f: &[f64]) -> Result<(), PlotError> {
     let tags = [
         ("fibre_stretch", 1.0e-19, 4.0),
         ("fibre_bending", 3.0e-19, 2.0),
@@ -106,12 +121,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         "Test-mass thermal noise (synthetic)",
         "displacement ASD",
         "m/√Hz",
-        f.clone(),
+        f.to_vec(),
         Contribution::new("total", total),
     );
     budget.contributions = parts;
-    save(&budget, &dir, "noise")?;
+    save(&budget, dir, "noise")?;
+    Ok(())
+}
 
+/// A mode chart: four modes per degree of freedom, violin modes and one growing mode.
+fn modes_figure(dir: &Path) -> Result<(), PlotError> {
     let mut modes: Vec<ModeMarker> = [
         (0.43, "L"),
         (0.99, "L"),
@@ -153,10 +172,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     });
     save(
         &ModeChart::new("Modes by degree of freedom (synthetic)", modes),
-        &dir,
+        dir,
         "modes",
     )?;
+    Ok(())
+}
 
+/// A mode shape: a quad-like chain of four bodies, displaced, and the wires between them.
+fn mode_shape_figure(dir: &Path) -> Result<(), PlotError> {
     let mut shape = ModeShapePlot::new("Mode 9: 1.0 Hz, P (synthetic quad-like geometry)");
     let stages = [
         (
@@ -223,8 +246,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
         previous = Some(([0.0, 0.0, z], translation, pitch));
     }
-    save(&shape, &dir, "mode_shape")?;
+    save(&shape, dir, "mode_shape")?;
+    Ok(())
+}
 
+/// A trade-off chart: run time against error for a ladder of variants.
+fn tradeoff_figure(dir: &Path) -> Result<(), PlotError> {
     let variants = [
         ("stage 0A", 0.0009, 0.2),
         ("stage 1A", 0.0012, 0.03),
@@ -243,8 +270,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .collect();
     let mut tradeoff = TradeoffChart::new("Speed against accuracy (synthetic)", points);
     tradeoff.tolerance = Some(1e-3);
-    save(&tradeoff, &dir, "tradeoff")?;
+    save(&tradeoff, dir, "tradeoff")?;
+    Ok(())
+}
 
+/// A parameter sweep: two frequencies against fibre radius.
+fn sweep_figure(dir: &Path) -> Result<(), PlotError> {
     let radius: Vec<f64> = (0..30).map(|i| 0.1e-3 + 0.02e-3 * i as f64).collect();
     let mut sweep = LinePlot::new(
         "Violin and bounce frequencies against fibre radius (synthetic)",
@@ -262,6 +293,6 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         radius.clone(),
         radius.iter().map(|r| 9.0 * (r / 0.2e-3)).collect(),
     ));
-    save(&sweep, &dir, "sweep")?;
+    save(&sweep, dir, "sweep")?;
     Ok(())
 }

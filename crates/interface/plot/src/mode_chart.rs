@@ -121,6 +121,23 @@ impl ModeChart {
         }
         rows
     }
+
+    /// The legend: the stable marker, and the unstable one when any mode is unstable.
+    fn legend_entries(&self) -> Vec<LegendEntry> {
+        let mut entries = vec![LegendEntry {
+            label: "mode (label: frequency, Hz)".to_string(),
+            stroke: None,
+            marker: Some(stable_marker(0)),
+        }];
+        if self.modes.iter().any(|m| m.unstable) {
+            entries.push(LegendEntry {
+                label: "unstable mode, at its growth rate (Hz)".to_string(),
+                stroke: None,
+                marker: Some(UNSTABLE),
+            });
+        }
+        entries
+    }
 }
 
 const UNSTABLE: MarkerStyle = MarkerStyle {
@@ -173,18 +190,7 @@ impl Figure for ModeChart {
             (Scale::Log, Scale::Linear),
         );
 
-        let mut entries = vec![LegendEntry {
-            label: "mode (label: frequency, Hz)".to_string(),
-            stroke: None,
-            marker: Some(stable_marker(0)),
-        }];
-        if self.modes.iter().any(|m| m.unstable) {
-            entries.push(LegendEntry {
-                label: "unstable mode, at its growth rate (Hz)".to_string(),
-                stroke: None,
-                marker: Some(UNSTABLE),
-            });
-        }
+        let entries = self.legend_entries();
         let note = (zero_count > 0).then(|| {
             let s = if zero_count == 1 { "" } else { "s" };
             format!("{zero_count} mode{s} at 0 Hz not shown (log axis)")

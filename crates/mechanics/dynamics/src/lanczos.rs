@@ -205,6 +205,12 @@ impl StageModel {
 
     /// [`StageModel::modes_below`] with the rounding of the stiffness given by `rounding`
     /// (each mode's estimated error, and which modes are neutral).
+    #[expect(
+        clippy::too_many_lines,
+        reason = "one shift-invert block Lanczos run: the inertia counts, the factorised operator and \
+                  the basis Q, W, MQ are the shared state of the loop that grows the basis and runs \
+                  Rayleigh–Ritz, read in the order the algorithm takes its steps"
+    )]
     pub fn modes_below_with_rounding(
         &self,
         damping: &Damping,

@@ -572,6 +572,12 @@ impl AbsWeights {
 
 impl TermRounding {
     /// The rounding of `assembled`'s terms on `model` (the stage built from it).
+    #[expect(
+        clippy::too_many_lines,
+        reason = "one linear-time pass over the terms and then their rows: the flat per-term arrays \
+                  (scales, locals, first_local) built first are the index the row-by-row sums read, \
+                  and each slot must receive its terms in term order"
+    )]
     pub fn new(model: &StageModel, assembled: &Assembled, damping: &Damping) -> Self {
         let unknowns = model.unknowns();
         let mut stored = AbsWeights::on(&model.pattern);

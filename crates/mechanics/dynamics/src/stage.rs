@@ -173,6 +173,12 @@ impl StageModel {
     /// each row's local Hessian rows are added through a column-to-slot map of that row
     /// (no search per entry). Each slot still receives its terms in term order, the order of
     /// a dense scatter, so the sums are the same numbers a dense assembly gives.
+    #[expect(
+        clippy::too_many_lines,
+        reason = "the linear-time assembly described above: the flat term positions, the candidate \
+                  pattern and the column-to-slot map are built once and shared by the scatter that \
+                  follows, whose term-order sums make the numbers a dense assembly gives"
+    )]
     pub fn new(system: &System, assembled: &Assembled) -> Self {
         const NONE: usize = usize::MAX;
         let layout = &assembled.layout;

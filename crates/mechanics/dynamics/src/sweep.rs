@@ -378,6 +378,13 @@ impl<'m> Sweep<'m> {
 }
 
 impl Fast {
+    #[expect(
+        clippy::too_many_lines,
+        reason = "lowers the stage's parts into the fast engine once per sweep: the factor's index map \
+                  and the four cases of a stored slot (unknowns, input force, support force, input to \
+                  output) sit in one match, so each slot visibly lands in exactly one of matrix, rhs, \
+                  out or direct"
+    )]
     fn new(
         model: &StageModel,
         unknowns: &[usize],

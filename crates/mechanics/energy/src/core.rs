@@ -425,6 +425,12 @@ impl SpringEnergy {
     /// frames' jets by the product rule, its second derivatives pair by pair, and
     /// H = ∇Δᵀ K ∇Δ + Σ_m (K Δ + f)_m ∇²Δ_m; the tension-off spring (no preload) differs only
     /// in the weights K Δ of the curvature sum, so it comes from the same pass.
+    #[expect(
+        clippy::too_many_lines,
+        reason = "one fused pass on the hot path: the first derivatives (dA, dd, dr, dM, ∇Δ, K∇Δ) \
+                  live in slices split from `out.scratch` that the gradient and the pair-by-pair \
+                  Hessian loops read in place; pieces would pass a dozen borrowed slices between them"
+    )]
     fn jets(&self, at: &JetPoint, out: &mut Derivatives) -> bool {
         let [f0, f1] = at.frames else {
             return false;

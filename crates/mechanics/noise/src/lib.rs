@@ -159,6 +159,10 @@ impl Forms {
 /// Thermal noise as [`thermal_noise`], solved and broken down as `options` says. `v` may
 /// also be a displacement output over the variables, floats and parameters (a point's
 /// whole motion): the parameters' part is left out, the support does not fluctuate.
+#[expect(
+    clippy::too_many_lines,
+    reason = "one frequency loop whose solve, per-tag split and per-term split share the factorisation and the solved vector of each frequency"
+)]
 pub fn thermal_noise_with(
     model: &StageModel,
     damping: &Damping,
