@@ -486,3 +486,136 @@ impl Element for WireBending {
 }
 
 pendkit_energy::register_element!(WireBending);
+
+#[cfg(test)]
+mod tests {
+    //! The element's stiffness against the tensioned-beam closed form (docs/physics.md §1,
+    //! docs/reference-values.md §9): a round fibre clamped at both ends hangs along z from a
+    //! fixed support to a free body; pitching that body about the wire's end turns the end's
+    //! clamp by the pitch relative to the unchanged chord, so the beam stores
+    //! U = (EI/2l) s_ii(u) θ² and its bending part U_b = EI ∂U/∂EI = (EI/2l)[s_ii − (u/2) s_ii'] θ²,
+    //! and the term's pitch–pitch Hessian entry is (EI/l)[s_ii − (u/2) s_ii'](u). The
+    //! reference is the textbook cosh/sinh form with an exact (dual-number) derivative,
+    //! evaluated here; the element uses `beam.rs`'s overflow-free rewriting.
+    //!
+    //! Tolerance 1e-10 relative: at u = 10 the textbook form loses nothing to cancellation,
+    //! `beam.rs` agrees with it to 1e-12 (its own tests), and the Hessian at the reference is
+    //! exact (the coefficient form in ∇θ, no differencing).
+    use super::*;
+    use nalgebra::Matrix3;
+    use num_dual::DualNum;
+    use pendkit_energy::OffHessian;
+    use pendkit_expr::{Slot, parse};
+    use pendkit_geometry::PoseMap;
+    use pendkit_system::{Body, CoordKind, Coordinate, System, WireEnd, WireSection, WireTags};
+
+    const RADIUS: f64 = 2e-4;
+    const YOUNG: f64 = 7.2e10;
+    const LENGTH: f64 = 0.6;
+    /// EI (N m²) of the round section: E π r⁴/4 (the REF fibre of docs/reference-values.md §0,
+    /// 9.0477868e-5 N m²).
+    const EI: f64 = YOUNG * std::f64::consts::PI * RADIUS * RADIUS * RADIUS * RADIUS / 4.0;
+    /// The tension that makes u = l √(T/EI) = 10, a row of docs/reference-values.md §9.
+    const TENSION: f64 = 100.0 * EI / (LENGTH * LENGTH);
+
+    /// A fixed support (six parameters) and a free body whose origin hangs `LENGTH` below
+    /// it on one round fibre, clamped (auto) at both ends, from the support's origin to the
+    /// body's origin, at tension `TENSION`.
+    fn hanging_fibre() -> (System, Vec<f64>) {
+        let names: Vec<String> = ["s", "b"]
+            .iter()
+            .flat_map(|b| ["x", "y", "z", "yaw", "pitch", "roll"].map(|c| format!("{c}{b}")))
+            .collect();
+        let coords = names
+            .iter()
+            .enumerate()
+            .map(|(i, n)| Coordinate {
+                name: n.clone(),
+                kind: if i < 6 {
+                    CoordKind::Parameter
+                } else {
+                    CoordKind::Variable
+                },
+                start: 0.0,
+                pinned: false,
+            })
+            .collect();
+        let slot = |s: &str| names.iter().position(|n| n == s).map(Slot::Var);
+        let body = |k: usize, name: &str, mass: f64| Body {
+            name: name.into(),
+            frame: FrameMap::root(PoseMap {
+                entries: std::array::from_fn(|m| {
+                    parse(&names[6 * k + m]).unwrap().compile(&slot).unwrap()
+                }),
+            }),
+            mass,
+            inertia: Matrix3::identity(),
+            centre_of_mass: Vector3::zeros(),
+            shape: None,
+            pose_coords: std::array::from_fn(|m| Some(6 * k + m)),
+            mode_family: None,
+        };
+        let end = |body| WireEnd {
+            body,
+            point: Vector3::zeros(),
+            direction: EndDirection::Auto,
+        };
+        let wire = Wire::from_tension(
+            "fibre",
+            [end(0), end(1)],
+            WireSection::round(RADIUS, YOUNG, YOUNG / 2.34, 2200.0),
+            LENGTH,
+            TENSION,
+            WireTags {
+                stretch: "s".into(),
+                bending: "b".into(),
+                torsion: "t".into(),
+            },
+        );
+        let system = System {
+            coords,
+            bodies: vec![body(0, "support", 0.0), body(1, "mass", 10.0)],
+            wires: vec![wire],
+            gravity: 9.81,
+            ..System::default()
+        };
+        let mut x = vec![0.0; 12];
+        x[6 + 2] = -LENGTH;
+        (system, x)
+    }
+
+    /// s_ii(u) and ds_ii/du from the textbook form u (u coth u − 1)/(u − 2 tanh(u/2))
+    /// (docs/reference-values.md §9), differentiated exactly by a dual number: independent
+    /// of `beam.rs`, which evaluates it in e^(−u) and by series.
+    fn textbook_s_ii(u: f64) -> (f64, f64) {
+        let u = Dual64::from(u).derivative();
+        let s = u * (u * u.cosh() / u.sinh() - 1.0) / (u - (u / 2.0).tanh() * 2.0);
+        (s.re, s.eps)
+    }
+
+    #[test]
+    fn pitch_stiffness_is_the_bending_part_of_the_clamped_beam() {
+        let (system, x) = hanging_fibre();
+        let terms = WireBending.terms(&Reference::new(&system, &x)).unwrap();
+        assert_eq!(terms.len(), 1);
+        let term = &terms[0];
+        let n = term.coords.len();
+        let pitch = term.coords.iter().position(|&g| g == 6 + 4).unwrap();
+        let u = LENGTH * (TENSION / EI).sqrt();
+        let (s_ii, ds_ii) = textbook_s_ii(u);
+        // the printed row of docs/reference-values.md §9 (u = 10), to its digits: the
+        // reference formula is the one the oracle file means
+        assert!((s_ii - 11.24974).abs() < 5e-6, "s_ii(10) = {s_ii}");
+        let expected = EI / LENGTH * (s_ii - u / 2.0 * ds_ii);
+        for fast in [true, false] {
+            let (on, off) = term.hessians(&x, fast).unwrap();
+            let k = on[pitch * n + pitch];
+            assert!(
+                (k - expected).abs() <= 1e-10 * expected,
+                "fast {fast}: {k} vs (EI/l)(s_ii - u s_ii'/2) = {expected}"
+            );
+            // bending strain energy is all lossy: the same with the tension off
+            assert_eq!(off, OffHessian::Same, "fast {fast}");
+        }
+    }
+}

@@ -244,3 +244,148 @@ fn torsion_energy<S: Constant>(
 }
 
 pendkit_energy::register_element!(WireTorsion);
+
+#[cfg(test)]
+mod tests {
+    //! The element's stiffness against the closed form of a round fibre (docs/physics.md §1,
+    //! docs/reference-values.md §4): κ = (G J + T J/A)/l with J = π r⁴/2 and J/A = r²/2, and
+    //! G J/l with the tension off. The wire hangs along z from a fixed support to a free
+    //! body; yawing that body about its attachment point twists the wire by exactly the yaw,
+    //! so the term's yaw–yaw Hessian entry is κ. The reference is evaluated here from the
+    //! inputs, not from the element's own section constants.
+    //!
+    //! Tolerance 1e-12 relative: both sides are a few products of the same inputs, and the
+    //! Hessian at the reference is exact (κ ∇Δθ ∇Δθᵀ, ∇Δθ = 1 along the yaw), so only
+    //! rounding (~1e-15) separates them.
+
+    use super::*;
+    use nalgebra::Matrix3;
+    use pendkit_energy::OffHessian;
+    use pendkit_expr::{Slot, parse};
+    use pendkit_geometry::PoseMap;
+    use pendkit_system::{
+        Body, CoordKind, Coordinate, EndDirection, System, WireEnd, WireSection, WireTags,
+    };
+
+    const RADIUS: f64 = 2e-4;
+    const YOUNG: f64 = 7.2e10;
+    const SHEAR: f64 = 3.1e10;
+    const LENGTH: f64 = 0.6;
+    const TENSION: f64 = 98.1;
+
+    /// A fixed support (six parameters) and a free body whose origin hangs `LENGTH` below
+    /// it on one round fibre from the support's origin to the body's origin.
+    fn hanging_fibre() -> (System, Vec<f64>) {
+        let names: Vec<String> = ["s", "b"]
+            .iter()
+            .flat_map(|b| ["x", "y", "z", "yaw", "pitch", "roll"].map(|c| format!("{c}{b}")))
+            .collect();
+        let coords = names
+            .iter()
+            .enumerate()
+            .map(|(i, n)| Coordinate {
+                name: n.clone(),
+                kind: if i < 6 {
+                    CoordKind::Parameter
+                } else {
+                    CoordKind::Variable
+                },
+                start: 0.0,
+                pinned: false,
+            })
+            .collect();
+        let slot = |s: &str| names.iter().position(|n| n == s).map(Slot::Var);
+        let body = |k: usize, name: &str, mass: f64| Body {
+            name: name.into(),
+            frame: FrameMap::root(PoseMap {
+                entries: std::array::from_fn(|m| {
+                    parse(&names[6 * k + m]).unwrap().compile(&slot).unwrap()
+                }),
+            }),
+            mass,
+            inertia: Matrix3::identity(),
+            centre_of_mass: Vector3::zeros(),
+            shape: None,
+            pose_coords: std::array::from_fn(|m| Some(6 * k + m)),
+            mode_family: None,
+        };
+        let end = |body| WireEnd {
+            body,
+            point: Vector3::zeros(),
+            direction: EndDirection::Auto,
+        };
+        let wire = Wire::from_tension(
+            "fibre",
+            [end(0), end(1)],
+            WireSection::round(RADIUS, YOUNG, SHEAR, 2200.0),
+            LENGTH,
+            TENSION,
+            WireTags {
+                stretch: "s".into(),
+                bending: "b".into(),
+                torsion: "t".into(),
+            },
+        );
+        let system = System {
+            coords,
+            bodies: vec![body(0, "support", 0.0), body(1, "mass", 10.0)],
+            wires: vec![wire],
+            gravity: 9.81,
+            ..System::default()
+        };
+        let mut x = vec![0.0; 12];
+        x[6 + 2] = -LENGTH;
+        (system, x)
+    }
+
+    #[test]
+    fn twist_stiffness_is_the_round_fibre_closed_form() {
+        let (system, x) = hanging_fibre();
+        let terms = WireTorsion.terms(&Reference::new(&system, &x)).unwrap();
+        assert_eq!(terms.len(), 1);
+        let term = &terms[0];
+        let n = term.coords.len();
+        let yaw = term.coords.iter().position(|&g| g == 6 + 3).unwrap();
+        // closed forms from the inputs: J = π r⁴/2, A = π r²
+        let j = std::f64::consts::PI * RADIUS.powi(4) / 2.0;
+        let area = std::f64::consts::PI * RADIUS * RADIUS;
+        let unloaded = SHEAR * j / LENGTH;
+        let loaded = (SHEAR * j + TENSION * j / area) / LENGTH;
+        for fast in [true, false] {
+            let (on, off) = term.hessians(&x, fast).unwrap();
+            let k_on = on[yaw * n + yaw];
+            assert!(
+                (k_on - loaded).abs() <= 1e-12 * loaded,
+                "fast {fast}: {k_on} vs (GJ + TJ/A)/l = {loaded}"
+            );
+            let OffHessian::Matrix(off) = off else {
+                panic!("the tension-off torsion Hessian is its own matrix, not {off:?}");
+            };
+            let k_off = off[yaw * n + yaw];
+            assert!(
+                (k_off - unloaded).abs() <= 1e-12 * unloaded,
+                "fast {fast}: {k_off} vs GJ/l = {unloaded}"
+            );
+        }
+    }
+
+    #[test]
+    fn energy_of_a_small_twist_is_half_kappa_theta_squared() {
+        // E = ½ κ Δθ² with Δθ the yaw θ. The element measures the twist as the vee of the
+        // relative rotation, sin θ, so E = ½ κ sin²θ: at θ = 1e-4 rad that is θ²/3 ≈ 3e-9
+        // relative below ½κθ²; 1e-6 leaves margin and still catches a factor or a wrong κ.
+        let (system, x) = hanging_fibre();
+        let terms = WireTorsion.terms(&Reference::new(&system, &x)).unwrap();
+        let j = std::f64::consts::PI * RADIUS.powi(4) / 2.0;
+        let kappa = (SHEAR * j + TENSION * RADIUS * RADIUS / 2.0) / LENGTH;
+        let theta = 1e-4;
+        let mut twisted = x.clone();
+        twisted[6 + 3] = theta;
+        let energy = terms[0].energy(&twisted).unwrap();
+        let expected = 0.5 * kappa * theta * theta;
+        assert!(
+            (energy - expected).abs() <= 1e-6 * expected,
+            "{energy} vs ½κθ² = {expected}"
+        );
+    }
+}

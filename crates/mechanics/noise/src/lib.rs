@@ -317,3 +317,111 @@ pub fn thermal_noise_with(
         },
     })
 }
+
+#[cfg(test)]
+mod tests {
+    //! The noise of one lossy oscillator (a mass m = 1 kg on a spring k to ground, f0 = 1 Hz,
+    //! at T = 300 K) against the closed-form fluctuation–dissipation result
+    //! (docs/reference-values.md §6, docs/physics.md §3). With structural loss φ the
+    //! spring is k(1 + iφ) and
+    //!
+    //!   S_x(f) = 4 k_B T k φ / (ω [(k − m ω²)² + k² φ²]),  ω = 2π f,
+    //!
+    //! evaluated here from the inputs. The model goes through the same builder, equilibrium
+    //! and stage matrices as any other (`pendkit_assembly::assemble`, `StageModel::new`).
+    //!
+    //! Tolerance 1e-10 relative: the stage's matrices are exact (a linear spring), the
+    //! response is one 1×1 complex solve per frequency, so rounding (~1e-15) is all that
+    //! separates the two; 1e-10 is the same bound the workspace's oracle tests use.
+
+    use super::*;
+    use nalgebra::{Matrix6, Vector3, Vector6};
+    use pendkit_assembly::{EquilibriumOptions, assemble};
+    use pendkit_model::{BodySpec, DampingSpec, SystemBuilder};
+    use pendkit_params::ParamSet;
+    use pendkit_system::{SpringEnd, Stage};
+
+    const TWO_PI: f64 = 2.0 * std::f64::consts::PI;
+    const TEMPERATURE: f64 = 300.0;
+
+    /// A mass of 1 kg on a spring `k` (N/m) along x to ground, with `spec` on tag "spring".
+    fn oscillator(k: f64, spec: DampingSpec) -> (StageModel, Damping) {
+        let mut b = SystemBuilder::new(9.81);
+        b.parameter("s", 0.0).unwrap();
+        b.variable("x", 0.0).unwrap();
+        let ground = b
+            .body(BodySpec::new("ground").pose(["s", "0", "0", "0", "0", "0"]))
+            .unwrap();
+        let mass = b
+            .body(
+                BodySpec::new("mass")
+                    .pose(["x", "0", "0", "0", "0", "0"])
+                    .mass(1.0),
+            )
+            .unwrap();
+        let end = |body| SpringEnd {
+            body,
+            point: Vector3::zeros(),
+            angles: [0.0; 3],
+        };
+        let stiffness = Matrix6::from_diagonal(&Vector6::new(k, 0.0, 0.0, 0.0, 0.0, 0.0));
+        b.spring(
+            "spring",
+            [end(ground), end(mass)],
+            stiffness,
+            Vector6::zeros(),
+            "spring",
+        )
+        .unwrap();
+        let system = b.build().unwrap();
+        let assembled = assemble(&system, Stage::S0B, &EquilibriumOptions::default()).unwrap();
+        let model = StageModel::new(&system, &assembled);
+        let mut damping = Damping::default();
+        damping.set(
+            "spring",
+            spec.resolve("spring", &ParamSet::new().resolve().unwrap())
+                .unwrap(),
+        );
+        (model, damping)
+    }
+
+    /// S_x(f) of the structurally damped oscillator, m = 1 kg (docs/reference-values.md §6).
+    fn closed_form(k: f64, phi: f64, f: f64) -> f64 {
+        let w = TWO_PI * f;
+        4.0 * BOLTZMANN * TEMPERATURE * k * phi / (w * ((k - w * w).powi(2) + (k * phi).powi(2)))
+    }
+
+    #[test]
+    fn single_lossy_oscillator_is_the_fluctuation_dissipation_closed_form() {
+        let (k, phi) = (TWO_PI * TWO_PI, 1e-3);
+        let (model, damping) = oscillator(k, DampingSpec::structural("1e-3"));
+        // below, at and above the resonance
+        let freqs = [0.1, 1.0, 10.0];
+        let v = DVector::from_element(1, 1.0);
+        let noise = thermal_noise(&model, &damping, &v, TEMPERATURE, &freqs).unwrap();
+        for (f, s) in freqs.iter().zip(&noise.total) {
+            let expected = closed_form(k, phi, *f);
+            assert!(
+                (s - expected).abs() <= 1e-10 * expected,
+                "{f} Hz: {s} vs {expected}"
+            );
+        }
+        // one lossy tag and one lossy term: each carries the whole of it (to rounding)
+        assert_eq!(noise.tags.len(), 1);
+        assert_eq!(noise.by_term.len(), 1);
+        for (s, total) in noise.tags[0].1.iter().zip(&noise.total) {
+            assert!((s - total).abs() <= 1e-12 * total);
+        }
+    }
+
+    #[test]
+    fn noise_is_refused_without_loss_and_at_a_bad_temperature() {
+        // a model that dissipates nothing has no thermal noise: an error, not zeros; and the
+        // temperature must be positive
+        let (model, _) = oscillator(TWO_PI * TWO_PI, DampingSpec::structural("1e-3"));
+        let v = DVector::from_element(1, 1.0);
+        assert!(thermal_noise(&model, &Damping::default(), &v, TEMPERATURE, &[1.0]).is_err());
+        let (model, damping) = oscillator(TWO_PI * TWO_PI, DampingSpec::structural("1e-3"));
+        assert!(thermal_noise(&model, &damping, &v, 0.0, &[1.0]).is_err());
+    }
+}

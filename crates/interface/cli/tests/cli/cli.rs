@@ -1,6 +1,6 @@
 //! The command line as docs/cli.md specifies it.
 
-mod common;
+use crate::common;
 use common::pendkit;
 
 fn modes_json(args: &[&str]) -> serde_json::Value {
@@ -262,7 +262,7 @@ fn csv_rows(stdout: &str) -> Vec<Vec<f64>> {
 fn full_solves_print_what_the_restricted_ones_print() {
     // --full solves every unknown instead of the coupled blocks: the same numbers up to
     // rounding (checked at 1e-12 relative against the dense reference in
-    // tests/fast_responses.rs; here the command line wiring, at 1e-10 on printed digits)
+    // tests/sensitivities/fast_responses.rs; here the command line wiring, at 1e-10 on printed digits)
     for args in [
         &[
             "tf", "quad", "--input", "x00", "--output", "x3", "--points", "7", "--csv",

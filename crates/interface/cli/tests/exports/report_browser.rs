@@ -8,9 +8,9 @@
 //! messages, exceptions, log entries (failed loads, blocked requests) and network requests
 //! as structured events, measures the rendered layout (not just the markup) and takes the
 //! screenshot in the same session. The client is a plain websocket (tungstenite) on
-//! loopback, so nothing beyond the browser itself is needed. Without the browser the test
-//! fails, loudly; it skips (saying so on stderr) only when `PENDKIT_SKIP_BROWSER=1` asks
-//! for that explicitly.
+//! loopback, so nothing beyond the browser itself is needed. Opt-in: the checks run with
+//! `PENDKIT_TEST_BROWSER=1` (`.ci/run` sets it); otherwise each test says it was skipped, and
+//! passes. With the variable set and no browser the test fails, loudly.
 
 use std::io::{BufRead, BufReader};
 use std::net::TcpStream;
@@ -27,13 +27,13 @@ use tungstenite::{Message, WebSocket};
 /// each other down.
 static ONE_BROWSER: std::sync::Mutex<()> = std::sync::Mutex::new(());
 
-/// Whether the caller asked to skip the browser checks (`PENDKIT_SKIP_BROWSER=1`); says so.
-fn skipped() -> bool {
-    let skip = std::env::var("PENDKIT_SKIP_BROWSER").is_ok_and(|v| v == "1");
-    if skip {
-        eprintln!("PENDKIT_SKIP_BROWSER=1: the report's browser checks are SKIPPED");
-    }
-    skip
+/// Whether the browser checks run (`PENDKIT_TEST_BROWSER=1`); says so when they do not.
+fn skipped(test: &str) -> bool {
+    !crate::opted_in(
+        "PENDKIT_TEST_BROWSER",
+        &format!("exports::report_browser::{test}"),
+        "headless Chromium (`chromium`, or PENDKIT_CHROMIUM)",
+    )
 }
 
 /// How long one browser session may take in all.
@@ -72,7 +72,7 @@ impl Browser {
             .spawn()
             .unwrap_or_else(|e| {
                 panic!(
-                    "cannot start '{binary}' ({e}): the report test needs headless Chromium; install it with `apt-get install -y chromium` (.ci/run does), set PENDKIT_CHROMIUM to its path, or skip these checks explicitly with PENDKIT_SKIP_BROWSER=1"
+                    "cannot start '{binary}' ({e}): the report test needs headless Chromium; install it with `apt-get install -y chromium` (.ci/run does), set PENDKIT_CHROMIUM to its path, or leave PENDKIT_TEST_BROWSER unset to skip these checks"
                 )
             });
         // Chromium prints the browser's websocket address on stderr; keep draining stderr
@@ -347,7 +347,7 @@ fn write_report(dir: &Path) -> usize {
 
 #[test]
 fn the_quad_report_renders_in_chromium_without_errors() {
-    if skipped() {
+    if skipped("the_quad_report_renders_in_chromium_without_errors") {
         return;
     }
     let dir = out_dir();
@@ -419,7 +419,7 @@ fn the_quad_report_renders_in_chromium_without_errors() {
 
 #[test]
 fn the_browser_check_catches_errors_and_outside_requests() {
-    if skipped() {
+    if skipped("the_browser_check_catches_errors_and_outside_requests") {
         return;
     }
     // the same check on a page that logs an error, throws, and asks for a missing image:

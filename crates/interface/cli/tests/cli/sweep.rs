@@ -1,7 +1,7 @@
 //! `pendkit sweep`: modes tracked through a crossing keep their labels and follow their
 //! closed forms; noise and transfer-function sweeps print what the single commands print.
 
-mod common;
+use crate::common;
 use common::pendkit;
 
 /// CSV rows as fields.

@@ -77,6 +77,13 @@ fn json_export_carries_names_units_and_provenance() {
 
 #[test]
 fn npz_export_reads_in_numpy_with_the_same_fields() {
+    if !crate::opted_in(
+        "PENDKIT_TEST_PYTHON",
+        "exports::ss_exports::npz_export_reads_in_numpy_with_the_same_fields",
+        "python3 with numpy",
+    ) {
+        return;
+    }
     let path = export("quad-ss.npz");
     let script = r#"
 import sys

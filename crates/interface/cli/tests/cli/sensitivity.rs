@@ -1,7 +1,7 @@
 //! `pendkit sensitivity`: the JSON shape and its numbers against closed forms, the table's
 //! order, and one-line errors.
 
-mod common;
+use crate::common;
 
 use common::pendkit;
 

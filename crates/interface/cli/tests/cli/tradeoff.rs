@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use pendkit::system::Stage;
 use pendkit::{Case, NoiseOptions, Solver, StageResult, log_grid, run_stage};
 
-mod common;
+use crate::common;
 use common::pendkit;
 
 /// A fresh directory for one test's files.

@@ -14,8 +14,8 @@ fn first_block(text: &str, opening: &str) -> Vec<String> {
 
 #[test]
 fn the_readme_example_is_the_tested_crate_example() {
-    let readme = include_str!("../../../../README.md");
-    let lib = include_str!("../src/lib.rs");
+    let readme = include_str!("../../../../../README.md");
+    let lib = include_str!("../../src/lib.rs");
     let in_readme = first_block(readme, "```rust");
     // the crate documentation without its `//!` prefixes and hidden (`# `) lines
     let docs: String = lib
@@ -40,7 +40,7 @@ fn the_readme_example_is_the_tested_crate_example() {
 /// in its `pub use` lists.
 #[test]
 fn the_crate_root_has_at_most_thirty_names() {
-    let lib = include_str!("../src/lib.rs");
+    let lib = include_str!("../../src/lib.rs");
     let mut names = Vec::new();
     for line in lib.lines() {
         let Some(item) = line.strip_prefix("pub ") else {

@@ -26,7 +26,17 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use pendkit_system::Stage;
-use pendkit_tests::run;
+use pendkit_tests::{opted_in, run};
+
+/// Whether the pygwinc comparisons run (`PENDKIT_TEST_NETWORK=1`; they install gwinc from
+/// PyPI); says so when they do not.
+fn network_opted_in(test: &str) -> bool {
+    opted_in(
+        "PENDKIT_TEST_NETWORK",
+        &format!("external::pygwinc_quad_aligo::{test}"),
+        "python3 and network access to PyPI (pip install gwinc==0.6.2)",
+    )
+}
 
 const FREQS: [f64; 9] = [20.0, 25.0, 30.0, 40.0, 50.0, 60.0, 70.0, 85.0, 100.0];
 
@@ -103,6 +113,9 @@ const GIVEN_DILUTION: [&str; 3] = ["dilution_wn=87", "dilution_w1=80", "dilution
 
 #[test]
 fn thermal_noise_along_the_beam_matches_pygwinc() {
+    if !network_opted_in("thermal_noise_along_the_beam_matches_pygwinc") {
+        return;
+    }
     let reference = pygwinc(&[]);
     assert_eq!(reference["version"], "0.6.2");
     // the coupling angle: pygwinc's Infrastructure.Length / R_earth, quad-aligo's vh_theta
@@ -123,6 +136,9 @@ fn thermal_noise_along_the_beam_matches_pygwinc() {
 
 #[test]
 fn with_massless_fibres_and_given_dilution_the_two_codes_agree_closely() {
+    if !network_opted_in("with_massless_fibres_and_given_dilution_the_two_codes_agree_closely") {
+        return;
+    }
     // pygwinc with its fibres' continuum mass taken out (the effect pendkit's massless
     // effective fibre leaves out) and pendkit with pygwinc's given dilutions: what remains
     // is the 3-D coupling, series stretch and geometry of the upper stages, measured at
@@ -141,6 +157,9 @@ fn with_massless_fibres_and_given_dilution_the_two_codes_agree_closely() {
 
 #[test]
 fn resonances_match_pygwinc() {
+    if !network_opted_in("resonances_match_pygwinc") {
+        return;
+    }
     let reference = pygwinc(&[]);
     let modes = |sets: &[&str], family: &str| -> Vec<f64> {
         let r = run("quad-aligo", sets, Stage::S2);
@@ -196,6 +215,9 @@ fn parameter(sets: &[&str], name: &str) -> f64 {
 
 #[test]
 fn parameters_are_pygwincs_ifo_yaml() {
+    if !network_opted_in("parameters_are_pygwincs_ifo_yaml") {
+        return;
+    }
     // every number quad-aligo takes from aLIGO's ifo.yaml (masses, wire and fibre radii,
     // the fibres' profile, blade stiffnesses and thicknesses, materials, temperature, arm
     // length), read by pygwinc itself: the same decimal numbers, so equal to rounding
@@ -245,6 +267,9 @@ fn parameters_are_pygwincs_ifo_yaml() {
 
 #[test]
 fn beaded_fibres_converge_to_pygwincs_continuum_fibres() {
+    if !network_opted_in("beaded_fibres_converge_to_pygwincs_continuum_fibres") {
+        return;
+    }
     // pygwinc's fibres are continuum springs with mass, of the middle's section along their
     // whole length; with uniform fibres (the necks' radius set to the middle's in both
     // codes) those are the fibres quad-aligo's beads discretise, each segment the slice of

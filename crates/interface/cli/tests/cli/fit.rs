@@ -2,7 +2,7 @@
 //! parameter values (no noise), fitted from the nominal model; the written case file loads
 //! and reproduces the fitted modes.
 
-mod common;
+use crate::common;
 
 use common::pendkit;
 use serde_json::Value;

@@ -15,6 +15,13 @@ use pendkit::{Case, log_grid, run_stage};
 
 #[test]
 fn scipy_state_space_matches_pendkit_transfer_functions() {
+    if !crate::opted_in(
+        "PENDKIT_TEST_PYTHON",
+        "exports::ss_scipy::scipy_state_space_matches_pendkit_transfer_functions",
+        "python3 with scipy and numpy",
+    ) {
+        return;
+    }
     let mut sets: Vec<String> = ["wire_stretch", "wire_bending", "wire_torsion"]
         .iter()
         .flat_map(|t| {

@@ -1,7 +1,7 @@
 //! `pendkit modes` prints a mode's estimated accuracy when it is worse than 1e-6 relative
 //! (issue 11, item 4), and that estimate bounds the error it states.
 
-mod common;
+use crate::common;
 use common::pendkit;
 
 /// (frequency in Hz, stated relative accuracy) of every mode, from `pendkit modes --json`.

@@ -2,7 +2,7 @@
 //! each bad input gives exit status 1 and one line on stderr naming what and where, and
 //! never a table, a file or a non-finite number.
 
-mod common;
+use crate::common;
 use common::pendkit;
 
 /// Runs and expects a refusal: failure, nothing on stdout, one line on stderr containing

@@ -5,7 +5,7 @@
 
 use std::path::PathBuf;
 
-mod common;
+use crate::common;
 use common::pendkit;
 
 fn json(args: &[&str]) -> serde_json::Value {
@@ -82,7 +82,7 @@ fn the_worked_example_runs() {
 /// `pendkit chain-file N` writes a file that is the bundled chain with n_stages = N through
 /// the command line: equal mode frequencies (the bundled chain is the same generator's text,
 /// so they agree exactly; 1e-9 relative is the bound this test had when the bundled chain
-/// was an independent Rust model). The chain's physics is pinned by tests/chain.rs.
+/// was an independent Rust model). The chain's physics is pinned by tests/physics/chain.rs.
 #[test]
 fn chain_file_is_the_bundled_chain() {
     let (ok, text, stderr) = pendkit(&["chain-file", "3"]);

@@ -1,0 +1,12 @@
+//! What pendkit is given, one test program: bad input gives a clear error (never a panic
+//! or NaN with success, property tests included), the builder as a downstream tool uses it,
+//! case texts, and the bundled model files against the references they were written from.
+//! Each module is one group of tests (a file of its own), with what it checks in its own
+//! documentation.
+
+mod builder;
+mod bundled_files;
+mod case_text;
+mod errors;
+mod input_checks;
+mod no_silent_nonsense;
