@@ -403,6 +403,69 @@ impl StageModel {
         m
     }
 
+    /// The parts of the dynamic stiffness E(f) = P(f) − ω² M over every master row, each
+    /// as (multiplier, values on the pattern): the lossless part (1), every damping tag's
+    /// tension-off part (ε'_tag(f) + i ε''_tag(f), in `by_tag` order) and the mass (−ω²,
+    /// zero outside the variables' block). Their sum is the matrix the sweeps factorise;
+    /// [`StageModel::apply`] multiplies a vector by it without forming it.
+    pub fn dynamic_parts(&self, damping: &Damping, f_hz: f64) -> Vec<(c64, &[f64])> {
+        let w2 = (TWO_PI * f_hz).powi(2);
+        let mut parts = Vec::with_capacity(self.by_tag.len() + 2);
+        parts.push((c64::new(1.0, 0.0), self.lossless.as_slice()));
+        for (tag, values) in &self.by_tag {
+            let (re, im) = damping.at(tag, f_hz);
+            parts.push((c64::new(re, im), values.as_slice()));
+        }
+        parts.push((c64::new(-w2, 0.0), self.mass_on_pattern.as_slice()));
+        parts
+    }
+
+    /// Adds Σ_k m_k V_k w to `out` (both over every master row) for parts (m_k, V_k) given
+    /// as values on this model's pattern: E(f) w from [`StageModel::dynamic_parts`], or the
+    /// product with any other matrix on the pattern (a change of E with a parameter, one
+    /// tag's part), sparse, without forming the matrix. An error when a part, `w` or `out`
+    /// has another length.
+    pub fn apply(
+        &self,
+        parts: &[(c64, &[f64])],
+        w: &[c64],
+        out: &mut [c64],
+    ) -> Result<(), DynamicsError> {
+        let n = self.pattern.dim();
+        for (what, len) in [("apply: w", w.len()), ("apply: out", out.len())] {
+            if len != n {
+                return Err(DynamicsError::Length {
+                    what,
+                    expected: n,
+                    got: len,
+                });
+            }
+        }
+        for &(m, values) in parts {
+            if values.len() != self.pattern.len() {
+                return Err(DynamicsError::Length {
+                    what: "values on the pattern",
+                    expected: self.pattern.len(),
+                    got: values.len(),
+                });
+            }
+            if m == c64::new(0.0, 0.0) {
+                continue;
+            }
+            for (i, o) in out.iter_mut().enumerate() {
+                let slots = self.pattern.row_slots(i);
+                let mut sum = c64::new(0.0, 0.0);
+                for (&v, &j) in values[slots].iter().zip(self.pattern.row(i)) {
+                    if v != 0.0 {
+                        sum += w[j] * v;
+                    }
+                }
+                *o += m * sum;
+            }
+        }
+        Ok(())
+    }
+
     /// Real stiffness at f = 0 (ε' of each tag at DC), dense: the matrix the modes use.
     pub fn real_stiffness(&self, damping: &Damping) -> DMatrix<f64> {
         self.dense_on_pattern(&self.master_values(damping, 0.0).0)
