@@ -80,7 +80,7 @@
 //!    every cᵀA⁻¹(·) is an adjoint response y = A⁻¹c solved once per frequency with the
 //!    same factorisation ([`pendkit_dynamics::Sweep::solve_again`]), so a parameter costs
 //!    no solve, only products dA w on the stage's pattern
-//!    ([`pendkit_dynamics::StageModel::apply`]); the float map of the exact route is
+//!    ([`pendkit_dynamics::StageModel::multiply`]); the float map of the exact route is
 //!    [`pendkit_dynamics::FloatMap`], and the per-tag sum is the noise crate's
 //!    ([`pendkit_noise::TagSum`]).
 //!
@@ -633,14 +633,15 @@ fn column(
         let by_tag = &base_point.result.model.by_tag;
         for (i, &f) in request.freqs.iter().enumerate() {
             let nominal = &nominal[i];
+            let change = master.at(&points, f)?;
             if let (Some(tf), Some(db), Some(dc)) = (&nominal.tf, &db, &dc) {
                 dew.fill(C::new(0.0, 0.0));
-                master.apply(&points, f, &tf.w, &mut dew)?;
+                change.multiply(&tf.w, &mut dew)?;
                 out.d_tf[i] = nominal.d_transfer(tf, &dew, db, dc, sizes)?;
             }
             if let (Some(d_o), Some(noise)) = (&d_o, &nominal.noise) {
                 dew.fill(C::new(0.0, 0.0));
-                master.apply(&points, f, &noise.w, &mut dew)?;
+                change.multiply(&noise.w, &mut dew)?;
                 out.d_noise[i] = noise.d_psd(&points, (h, f), (&dew, d_o), &master, by_tag)?;
             }
         }
@@ -925,38 +926,109 @@ fn kept<T>(v: Vec<T>, keep: &[bool]) -> Vec<T> {
         .collect()
 }
 
+/// Adds the term m V to a list of parts for [`StageModel::sum_parts`], [`StageModel::multiply`], merged with the last one
+/// where that has the same values (a tag's real and imaginary multipliers: one pass).
+fn push_part<'a>(parts: &mut Vec<(C, &'a [f64])>, m: C, values: &'a [f64]) {
+    match parts.last_mut() {
+        Some((last, v)) if std::ptr::eq(*v, values) => *last += m,
+        _ => parts.push((m, values)),
+    }
+}
+
 /// One frequency-independent part of E(f) (the lossless part, a damping tag's P_tag, or the
 /// mass) at the stencil's points: its values on each point's pattern and its change with
 /// the parameter, multiplied into vectors on the pattern by the engine
-/// ([`StageModel::apply`]), never formed densely.
+/// ([`StageModel::sum_parts`], [`StageModel::multiply`]), never formed densely.
 struct Part<'a> {
-    at: Vec<(&'a StageModel, &'a [f64])>,
+    /// Per point: the model whose pattern its values are on (the common pattern's where
+    /// there is one, [`common_pattern`]) and the values there.
+    at: Vec<(&'a StageModel, std::borrow::Cow<'a, [f64]>)>,
     change: Change,
+}
+
+/// A pattern that holds every stencil point's: the point whose pattern it is, and per
+/// point the slot there of each of its own slots (`None` for a point with that very
+/// pattern, the usual case).
+struct CommonPattern {
+    base: usize,
+    maps: Vec<Option<Vec<usize>>>,
+}
+
+/// The [`CommonPattern`] of the points, if one point's pattern holds every other's (a
+/// parameter that moves an entry to or from an exact zero changes a pattern).
+fn common_pattern(points: &[Point]) -> Option<CommonPattern> {
+    let patterns: Vec<&pendkit_dynamics::Pattern> =
+        points.iter().map(|p| &p.result.model.pattern).collect();
+    (0..patterns.len()).find_map(|base| {
+        let target = patterns[base];
+        let maps = patterns
+            .iter()
+            .map(|&own| {
+                if own == target {
+                    return Some(None);
+                }
+                own.positions()
+                    .map(|(i, j)| target.slot(i, j))
+                    .collect::<Option<Vec<usize>>>()
+                    .map(Some)
+            })
+            .collect::<Option<Vec<_>>>()?;
+        Some(CommonPattern { base, maps })
+    })
 }
 
 /// How a [`Part`] moves with the parameter.
 enum Change {
     /// The same at every point: an exact 0.
     Zero,
-    /// The difference of its values on the pattern every point shares (the first's).
+    /// The difference of its values on the points' common pattern.
     OnPattern(Vec<f64>),
-    /// The points' patterns differ: the difference is taken of the products, point by point.
+    /// No point's pattern holds every other's: the difference is taken of the products,
+    /// point by point.
     ByPoint,
 }
 
 impl<'a> Part<'a> {
     /// The part whose values on each point's pattern `values` gives, differenced on the
-    /// pattern where every point has the same one (the usual case: then a part the
+    /// points' common pattern where they have one (the usual case: then a part the
     /// parameter does not move costs one comparison).
-    fn new(points: &'a [Point], h: f64, values: impl Fn(&'a StageModel) -> &'a [f64]) -> Self {
-        let at: Vec<(&StageModel, &[f64])> = points
+    fn new(
+        points: &'a [Point],
+        h: f64,
+        common: Option<&CommonPattern>,
+        values: impl Fn(&'a StageModel) -> &'a [f64],
+    ) -> Self {
+        use std::borrow::Cow;
+        let Some(common) = common else {
+            let at = points
+                .iter()
+                .map(|p| (&p.result.model, Cow::Borrowed(values(&p.result.model))))
+                .collect();
+            return Part {
+                at,
+                change: Change::ByPoint,
+            };
+        };
+        let base = &points[common.base].result.model;
+        let at: Vec<(&StageModel, Cow<[f64]>)> = points
             .iter()
-            .map(|p| (&p.result.model, values(&p.result.model)))
+            .zip(&common.maps)
+            .map(|(p, map)| {
+                let own = values(&p.result.model);
+                let on_base = match map {
+                    None => Cow::Borrowed(own),
+                    Some(map) => {
+                        let mut v = vec![0.0; base.pattern.len()];
+                        for (&slot, &x) in map.iter().zip(own) {
+                            v[slot] = x;
+                        }
+                        Cow::Owned(v)
+                    }
+                };
+                (base, on_base)
+            })
             .collect();
-        let (first, first_values) = at[0];
-        let change = if !at.iter().all(|(m, _)| m.pattern == first.pattern) {
-            Change::ByPoint
-        } else if at.iter().all(|(_, v)| *v == first_values) {
+        let change = if at.iter().all(|(_, v)| *v == at[0].1) {
             Change::Zero
         } else {
             let on_pattern: Vec<DVector<f64>> = at
@@ -969,27 +1041,39 @@ impl<'a> Part<'a> {
         Part { at, change }
     }
 
-    /// Adds d(ε P)/dp w to `out` (over every master row) for one real (`unit` 1) or
-    /// imaginary (`unit` i) part of the part's multiplier, given that part of ε at each
-    /// point: ε dP w where ε is the same at every point (nothing where the part does not
-    /// move either: an exact 0), else Σ_k (weight_k / h) ε_k P_k w over the stencil's points.
-    fn apply(&self, (eps, unit): (&[f64], C), h: f64, w: &[C], out: &mut [C]) -> Result<(), Error> {
+    /// Lists this part's d(ε P)/dp for one real (`unit` 1) or imaginary (`unit` i) part of
+    /// its multiplier, given that part of ε at each point: ε dP where ε is the same at every
+    /// point (nothing where the part does not move either: an exact 0), else Σ_k (weight_k /
+    /// h) ε_k P_k over the stencil's points. Terms on the first point's pattern go to
+    /// `shared` (one product for all of them), the others to `own` with their point's model.
+    fn collect<'s>(
+        &'s self,
+        (eps, unit): (&[f64], C),
+        h: f64,
+        shared: &mut Vec<(C, &'s [f64])>,
+        own: &mut Vec<(&'s StageModel, C, &'s [f64])>,
+    ) {
         if eps.iter().all(|&e| e == eps[0]) {
             let e = eps[0];
             match &self.change {
-                Change::Zero => return Ok(()),
-                _ if e == 0.0 => return Ok(()),
+                Change::Zero => return,
+                _ if e == 0.0 => return,
                 Change::OnPattern(d) => {
-                    self.at[0].0.apply(&[(unit * e, d)], w, out)?;
-                    return Ok(());
+                    push_part(shared, unit * e, d);
+                    return;
                 }
                 Change::ByPoint => {}
             }
         }
-        for (&(model, values), (&e, &(_, weight))) in self.at.iter().zip(eps.iter().zip(&STENCIL)) {
-            model.apply(&[(unit * (weight / h * e), values)], w, out)?;
+        let same_pattern = !matches!(self.change, Change::ByPoint);
+        for ((model, values), (&e, &(_, weight))) in self.at.iter().zip(eps.iter().zip(&STENCIL)) {
+            let m = unit * (weight / h * e);
+            if same_pattern {
+                push_part(shared, m, values);
+            } else {
+                own.push((model, m, values));
+            }
         }
-        Ok(())
     }
 
     /// z̄ᵀ (dP/dp) z over the unknowns (the noise crate's form,
@@ -1000,7 +1084,7 @@ impl<'a> Part<'a> {
             Change::OnPattern(d) => pendkit_noise::dissipation_form(self.at[0].0, d, z)?,
             Change::ByPoint => {
                 let mut sum = 0.0;
-                for (&(model, values), &(_, weight)) in self.at.iter().zip(&STENCIL) {
+                for ((model, values), &(_, weight)) in self.at.iter().zip(&STENCIL) {
                     sum += weight / h * pendkit_noise::dissipation_form(model, values, z)?;
                 }
                 sum
@@ -1022,6 +1106,8 @@ struct StageDerivative<'a> {
     tags: Vec<(&'a str, Part<'a>)>,
     /// The step of the difference.
     h: f64,
+    /// The model whose pattern the parts' changes are on.
+    base: &'a StageModel,
 }
 
 impl<'a> StageDerivative<'a> {
@@ -1040,24 +1126,32 @@ impl<'a> StageDerivative<'a> {
                 "changing '{parameter}' changes which damping tags dissipate: no derivative"
             )));
         }
+        let common = common_pattern(points);
+        let common = common.as_ref();
         let tags = names
             .iter()
             .enumerate()
-            .map(|(t, &name)| (name, Part::new(points, h, move |m| &m.by_tag[t].1)))
+            .map(|(t, &name)| (name, Part::new(points, h, common, move |m| &m.by_tag[t].1)))
             .collect();
         Ok(StageDerivative {
-            lossless: Part::new(points, h, |m| &m.lossless),
-            mass: Part::new(points, h, |m| &m.mass_on_pattern),
+            lossless: Part::new(points, h, common, |m| &m.lossless),
+            mass: Part::new(points, h, common, |m| &m.mass_on_pattern),
             tags,
             h,
+            base: &points[common.map_or(0, |c| c.base)].result.model,
         })
     }
 
-    /// Adds dE(f_hz)/dp w to `out`, both over every master row.
-    fn apply(&self, points: &[Point], f_hz: f64, w: &[C], out: &mut [C]) -> Result<(), Error> {
+    /// dE(f_hz)/dp: the parts on the shared pattern summed there once (they then multiply
+    /// the transfer function's and the noise's responses alike), any part whose points'
+    /// patterns differ kept point by point.
+    fn at<'s>(&'s self, points: &'s [Point], f_hz: f64) -> Result<ChangeAt<'s>, Error> {
         let (one, i) = (C::new(1.0, 0.0), C::new(0.0, 1.0));
+        let mut shared = Vec::with_capacity(2 * self.tags.len() + 2);
+        let mut own = Vec::new();
         // the lossless part's multiplier is 1 at every point
-        self.lossless.apply((&[1.0; 4], one), self.h, w, out)?;
+        self.lossless
+            .collect((&[1.0; 4], one), self.h, &mut shared, &mut own);
         for (tag, part) in &self.tags {
             let eps: Vec<(f64, f64)> = points
                 .iter()
@@ -1065,11 +1159,16 @@ impl<'a> StageDerivative<'a> {
                 .collect();
             let real: Vec<f64> = eps.iter().map(|e| e.0).collect();
             let imag: Vec<f64> = eps.iter().map(|e| e.1).collect();
-            part.apply((&real, one), self.h, w, out)?;
-            part.apply((&imag, i), self.h, w, out)?;
+            part.collect((&real, one), self.h, &mut shared, &mut own);
+            part.collect((&imag, i), self.h, &mut shared, &mut own);
         }
         let w2 = (2.0 * std::f64::consts::PI * f_hz).powi(2);
-        self.mass.apply((&[-w2; 4], one), self.h, w, out)
+        self.mass
+            .collect((&[-w2; 4], one), self.h, &mut shared, &mut own);
+        let model = self.base;
+        let mut values = vec![C::new(0.0, 0.0); model.pattern.len()];
+        model.sum_parts(&shared, &mut values)?;
+        Ok(ChangeAt { model, values, own })
     }
 
     /// The part of the tag named `tag`; `None` when the points have no such tag.
@@ -1078,6 +1177,27 @@ impl<'a> StageDerivative<'a> {
             .iter()
             .find(|(name, _)| *name == tag)
             .map(|(_, part)| part)
+    }
+}
+
+/// dE(f)/dp at one frequency ([`StageDerivative::at`]): values on the shared pattern, and
+/// the terms (model, multiplier, values) of any part whose points' patterns differ.
+struct ChangeAt<'s> {
+    model: &'s StageModel,
+    values: Vec<C>,
+    own: Vec<(&'s StageModel, C, &'s [f64])>,
+}
+
+impl ChangeAt<'_> {
+    /// Adds dE w to `out`, both over every master row.
+    fn multiply(&self, w: &[C], out: &mut [C]) -> Result<(), Error> {
+        self.model.multiply(&self.values, w, out)?;
+        for &(model, m, values) in &self.own {
+            let mut term = vec![C::new(0.0, 0.0); values.len()];
+            model.sum_parts(&[(m, values)], &mut term)?;
+            model.multiply(&term, w, out)?;
+        }
+        Ok(())
     }
 }
 
@@ -1508,9 +1628,10 @@ fn mode_clusters(modes: &[pendkit_dynamics::Mode]) -> Vec<Vec<usize>> {
 /// dE(f) w into the derivatives without a solve of its own (E(f) is complex symmetric, so
 /// cᵀE⁻¹r = (E⁻¹c)ᵀr).
 struct Nominal<'a> {
-    /// The nominal stage model and E(f)'s parts there ([`StageModel::dynamic_parts`]).
+    /// The nominal stage model and E(f) on its pattern ([`StageModel::dynamic_parts`]
+    /// summed by [`StageModel::sum_parts`]).
     model: &'a StageModel,
-    parts: Vec<(C, &'a [f64])>,
+    e: Vec<C>,
     /// The transfer function, when asked for.
     tf: Option<TfNominal>,
     /// The thermal noise of the noise output, when asked for.
@@ -1620,8 +1741,9 @@ impl<'a> Nominal<'a> {
         // the multipliers `pendkit tf` and `noise` refuse (a negative loss, a non-finite
         // value) are refused here too, not differentiated
         model.check_damping_at(damping, f_hz)?;
-        let parts = model.dynamic_parts(damping, f_hz);
         let zero = C::new(0.0, 0.0);
+        let mut e = vec![zero; model.pattern.len()];
+        model.sum_parts(&model.dynamic_parts(damping, f_hz), &mut e)?;
         let tf = match tf {
             Some(ports) => {
                 let input = ports
@@ -1641,14 +1763,14 @@ impl<'a> Nominal<'a> {
                     }
                 }
                 let mut e_w = vec![zero; n];
-                model.apply(&parts, &w, &mut e_w)?;
+                model.multiply(&e, &w, &mut e_w)?;
                 let mut adjoint: Vec<C> = if force_out {
                     let mut on_support = vec![zero; n];
                     for (x, &ck) in on_support[u..].iter_mut().zip(c.iter()) {
                         *x = C::new(ck, 0.0);
                     }
                     let mut e_c = vec![zero; n];
-                    model.apply(&parts, &on_support, &mut e_c)?;
+                    model.multiply(&e, &on_support, &mut e_c)?;
                     e_c[..u].iter().map(|x| -x).collect()
                 } else {
                     c.iter().take(u).map(|&x| C::new(x, 0.0)).collect()
@@ -1690,9 +1812,11 @@ impl<'a> Nominal<'a> {
                     let sum =
                         pendkit_noise::TagSum::new(model, damping, temperature, f_hz, &w[..u])?;
                     let mut adjoints = Vec::with_capacity(model.by_tag.len());
+                    let mut p = vec![zero; model.pattern.len()];
                     for (_, values) in &model.by_tag {
+                        model.sum_parts(&[(C::new(1.0, 0.0), values)], &mut p)?;
                         let mut p_w = vec![zero; n];
-                        model.apply(&[(C::new(1.0, 0.0), values)], &w, &mut p_w)?;
+                        model.multiply(&p, &w, &mut p_w)?;
                         let mut y: Vec<C> = p_w[..u].iter().map(|x| x.conj()).collect();
                         sweep.solve_again(&mut y)?;
                         adjoints.push(y);
@@ -1713,7 +1837,7 @@ impl<'a> Nominal<'a> {
         };
         Ok(Nominal {
             model,
-            parts,
+            e,
             tf,
             noise,
         })
@@ -1747,7 +1871,7 @@ impl<'a> Nominal<'a> {
                 *x = C::new(d, 0.0);
             }
             e_db = vec![zero; u + ns];
-            self.model.apply(&self.parts, &on_support, &mut e_db)?;
+            self.model.multiply(&self.e, &on_support, &mut e_db)?;
             for (r, x) in rhs.iter_mut().zip(&e_db) {
                 *r -= x;
             }
