@@ -631,9 +631,10 @@ fn column(
         let master = StageDerivative::new(&points, h, name)?;
         let mut dew = vec![C::new(0.0, 0.0); sizes.0 + sizes.1 + sizes.2];
         let by_tag = &base_point.result.model.by_tag;
+        let mut buffer = Vec::new();
         for (i, &f) in request.freqs.iter().enumerate() {
             let nominal = &nominal[i];
-            let change = master.at(&points, f)?;
+            let change = master.at(&points, f, std::mem::take(&mut buffer))?;
             if let (Some(tf), Some(db), Some(dc)) = (&nominal.tf, &db, &dc) {
                 dew.fill(C::new(0.0, 0.0));
                 change.multiply(&tf.w, &mut dew)?;
@@ -644,6 +645,7 @@ fn column(
                 change.multiply(&noise.w, &mut dew)?;
                 out.d_noise[i] = noise.d_psd(&points, (h, f), (&dew, d_o), &master, by_tag)?;
             }
+            buffer = change.values;
         }
     }
     Ok(Some(out))
@@ -1145,7 +1147,13 @@ impl<'a> StageDerivative<'a> {
     /// dE(f_hz)/dp: the parts on the shared pattern summed there once (they then multiply
     /// the transfer function's and the noise's responses alike), any part whose points'
     /// patterns differ kept point by point.
-    fn at<'s>(&'s self, points: &'s [Point], f_hz: f64) -> Result<ChangeAt<'s>, Error> {
+    /// `values` is a buffer to reuse (the last frequency's [`ChangeAt::values`]).
+    fn at<'s>(
+        &'s self,
+        points: &'s [Point],
+        f_hz: f64,
+        mut values: Vec<C>,
+    ) -> Result<ChangeAt<'s>, Error> {
         let (one, i) = (C::new(1.0, 0.0), C::new(0.0, 1.0));
         let mut shared = Vec::with_capacity(2 * self.tags.len() + 2);
         let mut own = Vec::new();
@@ -1153,12 +1161,11 @@ impl<'a> StageDerivative<'a> {
         self.lossless
             .collect((&[1.0; 4], one), self.h, &mut shared, &mut own);
         for (tag, part) in &self.tags {
-            let eps: Vec<(f64, f64)> = points
-                .iter()
-                .map(|p| p.result.system.damping.at(tag, f_hz))
-                .collect();
-            let real: Vec<f64> = eps.iter().map(|e| e.0).collect();
-            let imag: Vec<f64> = eps.iter().map(|e| e.1).collect();
+            // one multiplier per stencil point
+            let (mut real, mut imag) = ([0.0; STENCIL.len()], [0.0; STENCIL.len()]);
+            for ((r, m), p) in real.iter_mut().zip(&mut imag).zip(points) {
+                (*r, *m) = p.result.system.damping.at(tag, f_hz);
+            }
             part.collect((&real, one), self.h, &mut shared, &mut own);
             part.collect((&imag, i), self.h, &mut shared, &mut own);
         }
@@ -1166,7 +1173,7 @@ impl<'a> StageDerivative<'a> {
         self.mass
             .collect((&[-w2; 4], one), self.h, &mut shared, &mut own);
         let model = self.base;
-        let mut values = vec![C::new(0.0, 0.0); model.pattern.len()];
+        values.resize(model.pattern.len(), C::new(0.0, 0.0));
         model.sum_parts(&shared, &mut values)?;
         Ok(ChangeAt { model, values, own })
     }
