@@ -75,6 +75,15 @@
 //!    dz = A⁻¹(do − dA z) and each tag's T_tag ε''_tag and P_tag differenced like the
 //!    matrices.
 //!
+//!    The algebra is the engine's: the nominal responses are solved by
+//!    [`pendkit_dynamics::Sweep`] over every unknown, and since A is complex symmetric
+//!    every cᵀA⁻¹(·) is an adjoint response y = A⁻¹c solved once per frequency with the
+//!    same factorisation ([`pendkit_dynamics::Sweep::solve_again`]), so a parameter costs
+//!    no solve, only products dA w on the stage's pattern
+//!    ([`pendkit_dynamics::StageModel::multiply`]); the float map of the exact route is
+//!    [`pendkit_dynamics::FloatMap`], and the per-tag sum is the noise crate's
+//!    ([`pendkit_noise::TagSum`]).
+//!
 //! Differencing the matrices, not the answers, keeps the results smooth where the answers
 //! are not: a |TF| near a high-Q resonance moves by many line widths when p moves by
 //! 10⁻³ p₀, but the matrices move by 10⁻³ of themselves. No mode has to be matched between
@@ -90,17 +99,17 @@
 
 use std::collections::BTreeSet;
 
-use nalgebra::{Complex, DMatrix, DVector};
+use nalgebra::{DMatrix, DVector};
 use num_dual::Dual64;
 use pendkit_assembly::{
     Along, AssemblyOptions, Balance, Projection, assemble_with, in_parallel, in_parallel_with,
     side_by_side,
 };
 use pendkit_dynamics::{
-    Input, Modes, Output, Stability, StageModel, eliminate_floats, validate::check_frequencies,
+    FloatMap, Input, Modes, Output, Solver, Stability, StageModel, Sweep, eliminate_floats,
+    validate::check_frequencies,
 };
 use pendkit_model::{Defaults, parameters_with};
-use pendkit_noise::BOLTZMANN;
 use pendkit_system::{Stage, System};
 
 use crate::{Case, Error, StageResult, run_stage};
@@ -327,7 +336,7 @@ fn noise_port(point: &Point, name: &str) -> Result<Ports, Error> {
     }
 }
 
-type C = Complex<f64>;
+type C = faer::c64;
 
 /// A vector padded with zeros to `n` entries.
 fn padded(v: &DVector<f64>, n: usize) -> DVector<f64> {
@@ -382,7 +391,7 @@ struct Shared<'a> {
     modes_blind: &'a [bool],
     base_point: &'a Point,
     base_ports: Option<&'a Ports>,
-    nominal: &'a [Nominal],
+    nominal: &'a [Nominal<'a>],
     /// The nominal modes' vectors, one column per mode.
     vectors: &'a DMatrix<f64>,
     clusters: &'a [Vec<usize>],
@@ -622,17 +631,25 @@ fn column(
             .then(|| difference_of(&tf_vectors.iter().map(|v| &v.1).collect::<Vec<_>>(), h));
         let d_o = (noise_vectors.len() == STENCIL.len())
             .then(|| difference_of(&noise_vectors.iter().collect::<Vec<_>>(), h));
-        // the frequency-independent parts' derivatives once, dA(f) from them per frequency
-        let master = MasterDerivative::new(&points, h, name)?;
+        // the frequency-independent parts' derivatives once, dE(f) w from them per frequency
+        let master = StageDerivative::new(&points, h, name)?;
+        let mut dew = vec![C::new(0.0, 0.0); sizes.0 + sizes.1 + sizes.2];
+        let by_tag = &base_point.result.model.by_tag;
+        let mut buffer = Vec::new();
         for (i, &f) in request.freqs.iter().enumerate() {
-            let da = master.at(&points, f)?;
             let nominal = &nominal[i];
-            if let (Some(db), Some(dc)) = (&db, &dc) {
-                out.d_tf[i] = nominal.d_transfer(&da, db, dc, sizes)?;
+            let change = master.at(&points, f, std::mem::take(&mut buffer))?;
+            if let (Some(tf), Some(db), Some(dc)) = (&nominal.tf, &db, &dc) {
+                dew.fill(C::new(0.0, 0.0));
+                change.multiply(&tf.w, &mut dew)?;
+                out.d_tf[i] = nominal.d_transfer(tf, &dew, db, dc, sizes)?;
             }
             if let (Some(d_o), Some(noise)) = (&d_o, &nominal.noise) {
-                out.d_noise[i] = noise.d_psd(&points, (h, f), (&da, d_o), &master, &nominal.lu)?;
+                dew.fill(C::new(0.0, 0.0));
+                change.multiply(&noise.w, &mut dew)?;
+                out.d_noise[i] = noise.d_psd(&points, (h, f), (&dew, d_o), &master, by_tag)?;
             }
+            buffer = change.values;
         }
     }
     Ok(Some(out))
@@ -796,7 +813,6 @@ impl ExactRoute {
     fn new(
         base: &StageResult,
         stage: Stage,
-        real: &DMatrix<f64>,
         vectors: &DMatrix<f64>,
         clusters: &[Vec<usize>],
     ) -> Result<Option<ExactRoute>, Error> {
@@ -810,21 +826,15 @@ impl ExactRoute {
             return Ok(None);
         }
         let layout = &base.assembled.layout;
-        let (nx, nq, _) = base.model.sizes;
-        let q = real.view((nx, nx), (nq, nq)).into_owned();
-        let c_qx = real.view((nx, 0), (nq, nx)).into_owned();
-        let float_map = if nq == 0 {
-            DMatrix::zeros(0, nx)
-        } else {
-            match q.lu().solve(&c_qx) {
-                Some(x) => x,
-                None => return Ok(None),
-            }
-        };
+        // the floats' motion −Q⁻¹ C_QX v that follows the variables' v, from the engine
+        let float_map = FloatMap::new(&base.model, damping);
+        if float_map.is_singular() {
+            return Ok(None);
+        }
         let Some(balance) = Balance::new(&base.system, &base.assembled.equilibrium.coords)? else {
             return Ok(None);
         };
-        let lifted = -(&float_map * vectors);
+        let lifted = float_map.matrix() * vectors;
         let mut directions = DMatrix::zeros(base.system.coords.len(), vectors.ncols());
         for (row, &g) in layout.variables.iter().enumerate() {
             directions.row_mut(g).copy_from(&vectors.row(row));
@@ -922,123 +932,191 @@ fn kept<T>(v: Vec<T>, keep: &[bool]) -> Vec<T> {
         .collect()
 }
 
-/// A = P(f) − ω² M over every master row (mass in the variables' block), complex dense.
-fn dynamic_matrix(point: &Point, f_hz: f64) -> DMatrix<C> {
-    let model = &point.result.model;
-    let (re, im) = model.master(&point.result.system.damping, f_hz);
-    let w2 = (2.0 * std::f64::consts::PI * f_hz).powi(2);
-    let nx = model.sizes.0;
-    DMatrix::from_fn(re.nrows(), re.ncols(), |i, j| {
-        let m = if i < nx && j < nx {
-            model.mass[(i, j)]
-        } else {
-            0.0
-        };
-        C::new(re[(i, j)] - w2 * m, im[(i, j)])
+/// Adds the term m V to a list of parts for [`StageModel::sum_parts`], [`StageModel::multiply`], merged with the last one
+/// where that has the same values (a tag's real and imaginary multipliers: one pass).
+fn push_part<'a>(parts: &mut Vec<(C, &'a [f64])>, m: C, values: &'a [f64]) {
+    match parts.last_mut() {
+        Some((last, v)) if std::ptr::eq(*v, values) => *last += m,
+        _ => parts.push((m, values)),
+    }
+}
+
+/// One frequency-independent part of E(f) (the lossless part, a damping tag's P_tag, or the
+/// mass) at the stencil's points: its values on each point's pattern and its change with
+/// the parameter, multiplied into vectors on the pattern by the engine
+/// ([`StageModel::sum_parts`], [`StageModel::multiply`]), never formed densely.
+struct Part<'a> {
+    /// Per point: the model whose pattern its values are on (the common pattern's where
+    /// there is one, [`common_pattern`]) and the values there.
+    at: Vec<(&'a StageModel, std::borrow::Cow<'a, [f64]>)>,
+    change: Change,
+}
+
+/// A pattern that holds every stencil point's: the point whose pattern it is, and per
+/// point the slot there of each of its own slots (`None` for a point with that very
+/// pattern, the usual case).
+struct CommonPattern {
+    base: usize,
+    maps: Vec<Option<Vec<usize>>>,
+}
+
+/// The [`CommonPattern`] of the points, if one point's pattern holds every other's (a
+/// parameter that moves an entry to or from an exact zero changes a pattern).
+fn common_pattern(points: &[Point]) -> Option<CommonPattern> {
+    let patterns: Vec<&pendkit_dynamics::Pattern> =
+        points.iter().map(|p| &p.result.model.pattern).collect();
+    (0..patterns.len()).find_map(|base| {
+        let target = patterns[base];
+        let maps = patterns
+            .iter()
+            .map(|&own| {
+                if own == target {
+                    return Some(None);
+                }
+                own.positions()
+                    .map(|(i, j)| target.slot(i, j))
+                    .collect::<Option<Vec<usize>>>()
+                    .map(Some)
+            })
+            .collect::<Option<Vec<_>>>()?;
+        Some(CommonPattern { base, maps })
     })
 }
 
-/// One frequency-independent part of A (the lossless part, or a damping tag's P_tag) at
-/// the stencil's points: its values on each point's pattern, its derivative, and (made
-/// when first needed, for a multiplier that moves with the parameter) its dense value at
-/// each point.
-struct Part<'a> {
-    at: Vec<(&'a StageModel, &'a [f64])>,
-    /// dense dPart/dp; `None` where the part is the same at every point (an exact 0)
-    derivative: Option<DMatrix<f64>>,
-    dense: std::cell::OnceCell<Vec<DMatrix<f64>>>,
+/// How a [`Part`] moves with the parameter.
+enum Change {
+    /// The same at every point: an exact 0.
+    Zero,
+    /// The difference of its values on the points' common pattern.
+    OnPattern(Vec<f64>),
+    /// No point's pattern holds every other's: the difference is taken of the products,
+    /// point by point.
+    ByPoint,
 }
 
 impl<'a> Part<'a> {
     /// The part whose values on each point's pattern `values` gives, differenced on the
-    /// pattern where every point has the same one (the usual case: then a part the
+    /// points' common pattern where they have one (the usual case: then a part the
     /// parameter does not move costs one comparison).
     fn new(
         points: &'a [Point],
         h: f64,
+        common: Option<&CommonPattern>,
         values: impl Fn(&'a StageModel) -> &'a [f64],
-    ) -> Result<Part<'a>, Error> {
-        let at: Vec<(&StageModel, &[f64])> = points
+    ) -> Self {
+        use std::borrow::Cow;
+        let Some(common) = common else {
+            let at = points
+                .iter()
+                .map(|p| (&p.result.model, Cow::Borrowed(values(&p.result.model))))
+                .collect();
+            return Part {
+                at,
+                change: Change::ByPoint,
+            };
+        };
+        let base = &points[common.base].result.model;
+        let at: Vec<(&StageModel, Cow<[f64]>)> = points
             .iter()
-            .map(|p| (&p.result.model, values(&p.result.model)))
+            .zip(&common.maps)
+            .map(|(p, map)| {
+                let own = values(&p.result.model);
+                let on_base = match map {
+                    None => Cow::Borrowed(own),
+                    Some(map) => {
+                        let mut v = vec![0.0; base.pattern.len()];
+                        for (&slot, &x) in map.iter().zip(own) {
+                            v[slot] = x;
+                        }
+                        Cow::Owned(v)
+                    }
+                };
+                (base, on_base)
+            })
             .collect();
-        let (first, first_values) = at[0];
-        let same_pattern = at.iter().all(|(m, _)| m.pattern == first.pattern);
-        let derivative = if same_pattern && at.iter().all(|(_, v)| *v == first_values) {
-            None
-        } else if same_pattern {
+        let change = if at.iter().all(|(_, v)| *v == at[0].1) {
+            Change::Zero
+        } else {
             let on_pattern: Vec<DVector<f64>> = at
                 .iter()
                 .map(|(_, v)| DVector::from_column_slice(v))
                 .collect();
             let d = difference_of(&on_pattern.iter().collect::<Vec<_>>(), h);
-            Some(first.dense(d.as_slice())?)
-        } else {
-            let dense: Vec<DMatrix<f64>> = at
-                .iter()
-                .map(|(m, v)| m.dense(v))
-                .collect::<Result<_, _>>()?;
-            Some(difference_of(&dense.iter().collect::<Vec<_>>(), h))
+            Change::OnPattern(d.as_slice().to_vec())
         };
-        Ok(Part {
-            at,
-            derivative,
-            dense: std::cell::OnceCell::new(),
-        })
+        Part { at, change }
     }
 
-    /// The part's dense value at each point.
-    fn dense(&self) -> Result<&[DMatrix<f64>], Error> {
-        if let Some(d) = self.dense.get() {
-            return Ok(d);
-        }
-        let d: Vec<DMatrix<f64>> = self
-            .at
-            .iter()
-            .map(|(m, v)| m.dense(v))
-            .collect::<Result<_, _>>()?;
-        Ok(self.dense.get_or_init(|| d))
-    }
-
-    /// Adds this part's d(ε P)/dp for one real or imaginary part of its multiplier, given
-    /// that part of ε at each point, to `target`: ε dP where ε is the same at every point
-    /// (nothing where the part does not move either: an exact 0), else
-    /// Σ_k (weight_k / h) ε_k P_k over the stencil's points.
-    fn add_to(&self, target: &mut DMatrix<f64>, eps: &[f64], h: f64) -> Result<(), Error> {
+    /// Lists this part's d(ε P)/dp for one real (`unit` 1) or imaginary (`unit` i) part of
+    /// its multiplier, given that part of ε at each point: ε dP where ε is the same at every
+    /// point (nothing where the part does not move either: an exact 0), else Σ_k (weight_k /
+    /// h) ε_k P_k over the stencil's points. Terms on the first point's pattern go to
+    /// `shared` (one product for all of them), the others to `own` with their point's model.
+    fn collect<'s>(
+        &'s self,
+        (eps, unit): (&[f64], C),
+        h: f64,
+        shared: &mut Vec<(C, &'s [f64])>,
+        own: &mut Vec<(&'s StageModel, C, &'s [f64])>,
+    ) {
         if eps.iter().all(|&e| e == eps[0]) {
-            if let Some(d) = &self.derivative
-                && eps[0] != 0.0
-            {
-                let e = eps[0];
-                target.zip_apply(d, |t, x| *t += e * x);
+            let e = eps[0];
+            match &self.change {
+                Change::Zero => return,
+                _ if e == 0.0 => return,
+                Change::OnPattern(d) => {
+                    push_part(shared, unit * e, d);
+                    return;
+                }
+                Change::ByPoint => {}
             }
-            return Ok(());
         }
-        for (m, (&e, &(_, weight))) in self.dense()?.iter().zip(eps.iter().zip(&STENCIL)) {
-            let c = weight / h * e;
-            target.zip_apply(m, |t, x| *t += c * x);
+        let same_pattern = !matches!(self.change, Change::ByPoint);
+        for ((model, values), (&e, &(_, weight))) in self.at.iter().zip(eps.iter().zip(&STENCIL)) {
+            let m = unit * (weight / h * e);
+            if same_pattern {
+                push_part(shared, m, values);
+            } else {
+                own.push((model, m, values));
+            }
         }
-        Ok(())
+    }
+
+    /// z̄ᵀ (dP/dp) z over the unknowns (the noise crate's form,
+    /// [`pendkit_noise::dissipation_form`]), `z` over the unknowns.
+    fn energy(&self, h: f64, z: &[C]) -> Result<f64, Error> {
+        Ok(match &self.change {
+            Change::Zero => 0.0,
+            Change::OnPattern(d) => pendkit_noise::dissipation_form(self.at[0].0, d, z)?,
+            Change::ByPoint => {
+                let mut sum = 0.0;
+                for ((model, values), &(_, weight)) in self.at.iter().zip(&STENCIL) {
+                    sum += weight / h * pendkit_noise::dissipation_form(model, values, z)?;
+                }
+                sum
+            }
+        })
     }
 }
 
-/// dA(f)/dp of one parameter from the stencil's points, put together per frequency from
-/// the differences of A's frequency-independent parts, A(f) = L + Σ_tag ε_tag(f) P_tag −
-/// ω² M (L the lossless part, P_tag each damping tag's tension-off part, M the mass in the
-/// variables' block): the parts are differenced once per parameter, not four master
-/// matrices rebuilt per frequency.
-struct MasterDerivative<'a> {
+/// dE(f)/dp of one parameter from the stencil's points, E(f) = L + Σ_tag ε_tag(f) P_tag −
+/// ω² M (L the lossless part, P_tag each damping tag's tension-off part, M the mass), as
+/// the parts' changes on the stage's pattern: the parts are differenced once per
+/// parameter, and dE(f) w is put together per frequency by the engine's product.
+struct StageDerivative<'a> {
     /// The lossless part.
     lossless: Part<'a>,
-    /// dM/dp over the variables.
-    mass: DMatrix<f64>,
+    /// The mass on the pattern.
+    mass: Part<'a>,
     /// Per damping tag (the stage's order): its name and its part.
     tags: Vec<(&'a str, Part<'a>)>,
     /// The step of the difference.
     h: f64,
+    /// The model whose pattern the parts' changes are on.
+    base: &'a StageModel,
 }
 
-impl<'a> MasterDerivative<'a> {
+impl<'a> StageDerivative<'a> {
     fn new(points: &'a [Point], h: f64, parameter: &str) -> Result<Self, Error> {
         fn by_tag(p: &Point) -> Vec<&str> {
             p.result
@@ -1054,51 +1132,83 @@ impl<'a> MasterDerivative<'a> {
                 "changing '{parameter}' changes which damping tags dissipate: no derivative"
             )));
         }
+        let common = common_pattern(points);
+        let common = common.as_ref();
         let tags = names
             .iter()
             .enumerate()
-            .map(|(t, &name)| Ok((name, Part::new(points, h, move |m| &m.by_tag[t].1)?)))
-            .collect::<Result<_, Error>>()?;
-        let masses: Vec<&DMatrix<f64>> = points.iter().map(|p| &p.result.model.mass).collect();
-        Ok(MasterDerivative {
-            lossless: Part::new(points, h, |m| &m.lossless)?,
-            mass: difference_of(&masses, h),
+            .map(|(t, &name)| (name, Part::new(points, h, common, move |m| &m.by_tag[t].1)))
+            .collect();
+        Ok(StageDerivative {
+            lossless: Part::new(points, h, common, |m| &m.lossless),
+            mass: Part::new(points, h, common, |m| &m.mass_on_pattern),
             tags,
             h,
+            base: &points[common.map_or(0, |c| c.base)].result.model,
         })
     }
 
-    /// dA(f_hz)/dp over every master row.
-    fn at(&self, points: &[Point], f_hz: f64) -> Result<DMatrix<C>, Error> {
-        let n = points[0].result.model.pattern.dim();
-        let mut re = DMatrix::zeros(n, n);
-        let mut im = DMatrix::zeros(n, n);
+    /// dE(f_hz)/dp: the parts on the shared pattern summed there once (they then multiply
+    /// the transfer function's and the noise's responses alike), any part whose points'
+    /// patterns differ kept point by point.
+    /// `values` is a buffer to reuse (the last frequency's [`ChangeAt::values`]).
+    fn at<'s>(
+        &'s self,
+        points: &'s [Point],
+        f_hz: f64,
+        mut values: Vec<C>,
+    ) -> Result<ChangeAt<'s>, Error> {
+        let (one, i) = (C::new(1.0, 0.0), C::new(0.0, 1.0));
+        let mut shared = Vec::with_capacity(2 * self.tags.len() + 2);
+        let mut own = Vec::new();
         // the lossless part's multiplier is 1 at every point
-        self.lossless.add_to(&mut re, &[1.0; 4], self.h)?;
+        self.lossless
+            .collect((&[1.0; 4], one), self.h, &mut shared, &mut own);
         for (tag, part) in &self.tags {
-            let eps: Vec<(f64, f64)> = points
-                .iter()
-                .map(|p| p.result.system.damping.at(tag, f_hz))
-                .collect();
-            let real: Vec<f64> = eps.iter().map(|e| e.0).collect();
-            let imag: Vec<f64> = eps.iter().map(|e| e.1).collect();
-            part.add_to(&mut re, &real, self.h)?;
-            part.add_to(&mut im, &imag, self.h)?;
+            // one multiplier per stencil point
+            let (mut real, mut imag) = ([0.0; STENCIL.len()], [0.0; STENCIL.len()]);
+            for ((r, m), p) in real.iter_mut().zip(&mut imag).zip(points) {
+                (*r, *m) = p.result.system.damping.at(tag, f_hz);
+            }
+            part.collect((&real, one), self.h, &mut shared, &mut own);
+            part.collect((&imag, i), self.h, &mut shared, &mut own);
         }
         let w2 = (2.0 * std::f64::consts::PI * f_hz).powi(2);
-        let nx = self.mass.nrows();
-        re.view_mut((0, 0), (nx, nx))
-            .zip_apply(&self.mass, |r, m| *r -= w2 * m);
-        Ok(re.zip_map(&im, C::new))
+        self.mass
+            .collect((&[-w2; 4], one), self.h, &mut shared, &mut own);
+        let model = self.base;
+        values.resize(model.pattern.len(), C::new(0.0, 0.0));
+        model.sum_parts(&shared, &mut values)?;
+        Ok(ChangeAt { model, values, own })
     }
 
-    /// dP_tag/dp over the first `u` master rows (the unknowns) of the tag named `tag`:
-    /// `Some(None)` when it is exactly 0, `None` when the points have no such tag.
-    fn tag(&self, tag: &str, u: usize) -> Option<Option<nalgebra::DMatrixView<'_, f64>>> {
+    /// The part of the tag named `tag`; `None` when the points have no such tag.
+    fn tag(&self, tag: &str) -> Option<&Part<'a>> {
         self.tags
             .iter()
             .find(|(name, _)| *name == tag)
-            .map(|(_, part)| part.derivative.as_ref().map(|d| d.view((0, 0), (u, u))))
+            .map(|(_, part)| part)
+    }
+}
+
+/// dE(f)/dp at one frequency ([`StageDerivative::at`]): values on the shared pattern, and
+/// the terms (model, multiplier, values) of any part whose points' patterns differ.
+struct ChangeAt<'s> {
+    model: &'s StageModel,
+    values: Vec<C>,
+    own: Vec<(&'s StageModel, C, &'s [f64])>,
+}
+
+impl ChangeAt<'_> {
+    /// Adds dE w to `out`, both over every master row.
+    fn multiply(&self, w: &[C], out: &mut [C]) -> Result<(), Error> {
+        self.model.multiply(&self.values, w, out)?;
+        for &(model, m, values) in &self.own {
+            let mut term = vec![C::new(0.0, 0.0); values.len()];
+            model.sum_parts(&[(m, values)], &mut term)?;
+            model.multiply(&term, w, out)?;
+        }
+        Ok(())
     }
 }
 
@@ -1207,13 +1317,7 @@ impl NominalStage {
         });
         let clusters = mode_clusters(modes);
         let exact_route = if request.modes && !request.differences {
-            ExactRoute::new(
-                &base_point.result,
-                request.stage,
-                &base_real,
-                &vectors,
-                &clusters,
-            )?
+            ExactRoute::new(&base_point.result, request.stage, &vectors, &clusters)?
         } else {
             None
         };
@@ -1421,7 +1525,7 @@ pub fn sensitivities(case: &Case, request: &SensitivityRequest) -> Result<Sensit
             let mut abs = Vec::with_capacity(nf);
             let mut d = Vec::with_capacity(nf);
             for (i, n) in nominal.iter().enumerate() {
-                let h = n.tf;
+                let h = n.tf.as_ref().map_or(C::new(f64::NAN, 0.0), |t| t.value);
                 let a = h.norm();
                 if a == 0.0 {
                     // |H| has a corner at 0: no derivative (the input does not reach the
@@ -1534,258 +1638,299 @@ fn mode_clusters(modes: &[pendkit_dynamics::Mode]) -> Vec<Vec<usize>> {
     clusters
 }
 
-/// The nominal model's responses at one frequency, with the factorisation of A over the
-/// unknowns that every parameter's derivative reuses.
-struct Nominal {
-    a: DMatrix<C>,
-    lu: nalgebra::LU<C, nalgebra::Dyn, nalgebra::Dyn>,
-    /// The nominal ports' vectors (b, c), whether the input is a force and whether the
-    /// output is a support force, when a transfer function is asked for.
-    tf_vectors: Option<(DVector<f64>, DVector<f64>, bool, bool)>,
-    /// w = [z; s]: the response over every master row to the input.
-    w: DVector<C>,
-    tf: C,
+/// The nominal model's responses at one frequency, solved by the engine's sweep
+/// ([`Sweep`], every unknown), with the adjoint responses that turn each parameter's
+/// dE(f) w into the derivatives without a solve of its own (E(f) is complex symmetric, so
+/// cᵀE⁻¹r = (E⁻¹c)ᵀr).
+struct Nominal<'a> {
+    /// The nominal stage model and E(f) on its pattern ([`StageModel::dynamic_parts`]
+    /// summed by [`StageModel::sum_parts`]).
+    model: &'a StageModel,
+    e: Vec<C>,
+    /// The transfer function, when asked for.
+    tf: Option<TfNominal>,
     /// The thermal noise of the noise output, when asked for.
     noise: Option<NoiseNominal>,
 }
 
-/// What the noise's derivative needs at one frequency: the response z = A⁻¹o over the
+/// What the transfer function's derivative needs at one frequency.
+struct TfNominal {
+    /// H.
+    value: C,
+    /// The output's vector c over all master rows (a displacement output) or the
+    /// parameters (a support force).
+    c: DVector<f64>,
+    force_in: bool,
+    force_out: bool,
+    /// w = [z; s]: the response over every master row to the input (s its displacement,
+    /// 0 for a force).
+    w: Vec<C>,
+    /// E(f) w over every master row (the support force reads its parameters' rows).
+    e_w: Vec<C>,
+    /// y = E_uu⁻¹ g over the unknowns, g = ∂H/∂z (c over the unknowns for a displacement
+    /// output, −E_us c for a support force): dH ∋ yᵀ(d rhs − dE w).
+    adjoint: Vec<C>,
+}
+
+/// What the noise's derivative needs at one frequency: the response z = E⁻¹o over the
 /// unknowns to a unit force along the output o, and the dissipation it meets.
 struct NoiseNominal {
-    z: DVector<C>,
+    /// [z; 0] over every master row.
+    w: Vec<C>,
     /// R = oᵀz: with one temperature T, PSD = 4 k_B T/ω |Im R|.
     response: C,
-    /// 4 k_B/ω (J/K per rad/s).
+    /// 4 k_B/ω ([`pendkit_noise::fd_scale`]).
     scale: f64,
     /// The model's temperature T (K).
     temperature: f64,
-    /// Per damping tag when some tag has its own temperature (else empty): the
-    /// fluctuation–dissipation theorem per tag, PSD = 4 k_B/ω Σ T_tag ε''_tag z̄ᵀ P_tag z.
-    tags: Vec<TagNoise>,
-}
-
-/// One damping tag's part of the noise: its name, T_tag ε''_tag (K), P_tag z (P_tag its
-/// tension-off stiffness over the unknowns), and z̄ᵀ P_tag z.
-struct TagNoise {
-    name: String,
-    weight: f64,
-    p_z: DVector<C>,
-    energy: f64,
-}
-
-/// z̄ᵀ P z for a real symmetric P: zᵣᵀ P zᵣ + zᵢᵀ P zᵢ.
-fn real_energy<S>(p: &nalgebra::Matrix<f64, nalgebra::Dyn, nalgebra::Dyn, S>, z: &DVector<C>) -> f64
-where
-    S: nalgebra::Storage<f64, nalgebra::Dyn, nalgebra::Dyn>,
-{
-    let (re, im) = (z.map(|x| x.re), z.map(|x| x.im));
-    re.dot(&(p * &re)) + im.dot(&(p * &im))
-}
-
-/// A tag's T_tag ε''_tag(f) (K) at one point: its own temperature, else the model's.
-fn tag_weight(point: &Point, tag: &str, f_hz: f64) -> f64 {
-    let system = &point.result.system;
-    let t = system
-        .damping
-        .temperature(tag)
-        .unwrap_or(system.temperature);
-    t * system.damping.at(tag, f_hz).1
-}
-
-/// Each damping tag's tension-off stiffness P_tag over the `u` unknowns at one point, in
-/// the stage's tag order (name order).
-fn tag_stiffnesses(point: &Point, u: usize) -> Result<Vec<(String, DMatrix<f64>)>, Error> {
-    let model = &point.result.model;
-    model
-        .by_tag
-        .iter()
-        .map(|(name, values)| {
-            let dense = model.dense(values)?;
-            Ok((name.clone(), dense.view((0, 0), (u, u)).into_owned()))
-        })
-        .collect()
+    /// Where some damping tag has its own temperature: the fluctuation–dissipation sum
+    /// per tag (as the noise is computed), with each tag's adjoint E⁻¹ conj(P_tag z).
+    tags: Option<(pendkit_noise::TagSum, Vec<Vec<C>>)>,
 }
 
 impl NoiseNominal {
     fn psd(&self) -> f64 {
-        if self.tags.is_empty() {
-            self.scale * self.temperature * self.response.im.abs()
-        } else {
-            self.scale * self.tags.iter().map(|t| t.weight * t.energy).sum::<f64>()
+        match &self.tags {
+            None => self.scale * self.temperature * self.response.im.abs(),
+            Some((sum, _)) => sum.psd(),
         }
     }
 
-    /// d(PSD)/dp at `f_hz` from the stencil's `points` (step `h`), the derivatives of A
-    /// and of the output vector, the parameter's `master` derivative (for each tag's
-    /// dP_tag), and A's factors `lu`. One temperature: dPSD = 4k_B/ω (dT |Im R| +
-    /// T sign(Im R) Im dR), dR = 2(do)ᵀz − zᵀ(dA)z. Per tag: dPSD = 4k_B/ω Σ
-    /// [d(T_tag ε''_tag) E_tag + T_tag ε''_tag (z̄ᵀ dP_tag z + 2 Re z̄ᵀ P_tag dz)],
-    /// dz = A⁻¹(do − dA z), every d a difference over the points like the matrices.
+    /// d(PSD)/dp at `f_hz` from the stencil's `points` (step `h`), dE z (`dez`, over every
+    /// master row), the output vector's derivative `d_o` and the parameter's stage
+    /// derivative (for each tag's dP_tag). One temperature: dPSD = 4k_B/ω (dT |Im R| +
+    /// T sign(Im R) Im dR), dR = 2(do)ᵀz − zᵀ(dE)z. Per tag: the sum's change
+    /// ([`pendkit_noise::TagSum::change`]) with d(T_tag ε''_tag) differenced like the
+    /// matrices and dE_tag = z̄ᵀ dP_tag z + 2 Re yᵀ(do − dE z), y the tag's adjoint.
     fn d_psd(
         &self,
         points: &[Point],
         (h, f_hz): (f64, f64),
-        (da, d_o): (&DMatrix<C>, &DVector<f64>),
-        master: &MasterDerivative<'_>,
-        lu: &nalgebra::LU<C, nalgebra::Dyn, nalgebra::Dyn>,
+        (dez, d_o): (&[C], &DVector<f64>),
+        master: &StageDerivative<'_>,
+        by_tag: &[(String, Vec<f64>)],
     ) -> Result<f64, Error> {
-        let u = self.z.len();
-        let z = &self.z;
-        let d_o = complex(&d_o.rows(0, u).into_owned());
-        let da = da.view((0, 0), (u, u));
-        if self.tags.is_empty() {
+        let u = points[0].result.model.unknowns();
+        let z = &self.w[..u];
+        let Some((sum, adjoints)) = &self.tags else {
             let d_t = difference(points, h, |p| p.result.system.temperature);
-            let dr = (d_o.transpose() * z)[(0, 0)] * 2.0 - (z.transpose() * (da * z))[(0, 0)];
+            let dr: C = (0..u).map(|i| z[i] * (2.0 * d_o[i]) - z[i] * dez[i]).sum();
             let im = self.response.im;
             return Ok(self.scale * (d_t * im.abs() + self.temperature * im.signum() * dr.im));
-        }
-        let dz = lu
-            .solve(&(&d_o - da * z))
-            .ok_or_else(|| bad("the dynamic stiffness is singular"))?;
-        let mut sum = 0.0;
-        for tag in &self.tags {
-            // the nominal's tags are the points' (MasterDerivative::new checked them)
-            let dp = master.tag(&tag.name, u).ok_or_else(|| {
+        };
+        let rhs: Vec<C> = (0..u).map(|i| C::new(d_o[i], 0.0) - dez[i]).collect();
+        let mut d_weights = Vec::with_capacity(by_tag.len());
+        let mut d_energies = Vec::with_capacity(by_tag.len());
+        for ((tag, _), adjoint) in by_tag.iter().zip(adjoints) {
+            // the nominal's tags are the points' (StageDerivative::new checked them)
+            let part = master.tag(tag).ok_or_else(|| {
                 bad(format!(
-                    "damping tag '{}' dissipates at the nominal value only: no derivative",
-                    tag.name
+                    "damping tag '{tag}' dissipates at the nominal value only: no derivative"
                 ))
             })?;
-            let d_weight = difference(points, h, |p| tag_weight(p, &tag.name, f_hz));
-            let d_stiffness = dp.map_or(0.0, |dp| real_energy(&dp, z));
-            let d_energy = d_stiffness + 2.0 * dz.dotc(&tag.p_z).re;
-            sum += d_weight * tag.energy + tag.weight * d_energy;
+            d_weights.push(difference(points, h, |p| {
+                let system = &p.result.system;
+                pendkit_noise::tag_weight(&system.damping, tag, system.temperature, f_hz)
+            }));
+            let along: C = adjoint.iter().zip(&rhs).map(|(y, r)| y * r).sum();
+            d_energies.push(part.energy(h, z)? + 2.0 * along.re);
         }
-        Ok(self.scale * sum)
+        Ok(sum.change(&d_weights, &d_energies))
     }
 }
 
-fn complex(v: &DVector<f64>) -> DVector<C> {
-    v.map(|x| C::new(x, 0.0))
+/// The transfer function's nominal at one frequency: the response w to the input over every
+/// master row, E w, and the adjoint y (Eᵀ y = c over the unknowns) from the same factors.
+fn tf_nominal(
+    model: &StageModel,
+    damping: &pendkit_system::Damping,
+    e: &[C],
+    ports: &Ports,
+    sizes: (usize, usize, usize),
+    f_hz: f64,
+) -> Result<TfNominal, Error> {
+    let (nx, nq, ns) = sizes;
+    let (u, n) = (nx + nq, nx + nq + ns);
+    let zero = C::new(0.0, 0.0);
+    let input = ports
+        .input
+        .as_ref()
+        .ok_or_else(|| bad("a transfer function without an input"))?;
+    let (b, c) = port_vectors(ports, sizes);
+    let force_in = matches!(input, Input::Force(_));
+    let force_out = matches!(ports.output, Output::SupportForce(_));
+    let mut sweep = Sweep::new(model, damping, input, &ports.output, Solver::Full)?;
+    let value = sweep.at(f_hz)?;
+    let mut w = vec![zero; n];
+    w[..u].copy_from_slice(sweep.response());
+    if !force_in {
+        for (x, &s) in w[u..].iter_mut().zip(b.iter()) {
+            *x = C::new(s, 0.0);
+        }
+    }
+    let mut e_w = vec![zero; n];
+    model.multiply(e, &w, &mut e_w)?;
+    let mut adjoint: Vec<C> = if force_out {
+        let mut on_support = vec![zero; n];
+        for (x, &ck) in on_support[u..].iter_mut().zip(c.iter()) {
+            *x = C::new(ck, 0.0);
+        }
+        let mut e_c = vec![zero; n];
+        model.multiply(e, &on_support, &mut e_c)?;
+        e_c[..u].iter().map(|x| -x).collect()
+    } else {
+        c.iter().take(u).map(|&x| C::new(x, 0.0)).collect()
+    };
+    sweep.solve_again(&mut adjoint)?;
+    Ok(TfNominal {
+        value,
+        c,
+        force_in,
+        force_out,
+        w,
+        e_w,
+        adjoint,
+    })
 }
 
-impl Nominal {
+/// The noise's nominal at one frequency: the response w to a unit force along the output,
+/// its value, and per tag (only where some tag has its own temperature) the sum and the
+/// adjoints of each tag's dissipation.
+fn noise_nominal(
+    model: &StageModel,
+    system: &System,
+    ports: &Ports,
+    sizes: (usize, usize, usize),
+    f_hz: f64,
+) -> Result<NoiseNominal, Error> {
+    let (nx, nq, ns) = sizes;
+    let (u, n) = (nx + nq, nx + nq + ns);
+    let zero = C::new(0.0, 0.0);
+    let damping = &system.damping;
+    let o = port_vectors(ports, sizes).1.rows(0, u).into_owned();
+    let mut sweep = Sweep::new(
+        model,
+        damping,
+        &Input::Force(o.clone()),
+        &Output::Displacement(o),
+        Solver::Full,
+    )?;
+    let response = sweep.at(f_hz)?;
+    let mut w = vec![zero; n];
+    w[..u].copy_from_slice(sweep.response());
+    let temperature = system.temperature;
+    // per tag only where some tag has its own temperature: otherwise the
+    // one-temperature form, as the noise itself is computed
+    let tags = if model
+        .by_tag
+        .iter()
+        .any(|(t, _)| damping.temperature(t).is_some())
+    {
+        let sum = pendkit_noise::TagSum::new(model, damping, temperature, f_hz, &w[..u])?;
+        let mut adjoints = Vec::with_capacity(model.by_tag.len());
+        let mut p = vec![zero; model.pattern.len()];
+        for (_, values) in &model.by_tag {
+            model.sum_parts(&[(C::new(1.0, 0.0), values)], &mut p)?;
+            let mut p_w = vec![zero; n];
+            model.multiply(&p, &w, &mut p_w)?;
+            let mut y: Vec<C> = p_w[..u].iter().map(|x| x.conj()).collect();
+            sweep.solve_again(&mut y)?;
+            adjoints.push(y);
+        }
+        Some((sum, adjoints))
+    } else {
+        None
+    };
+    Ok(NoiseNominal {
+        w,
+        response,
+        scale: pendkit_noise::fd_scale(f_hz),
+        temperature,
+        tags,
+    })
+}
+
+impl<'a> Nominal<'a> {
     fn new(
-        point: &Point,
+        point: &'a Point,
         f_hz: f64,
         tf: Option<&Ports>,
         noise: Option<&Ports>,
         sizes: (usize, usize, usize),
-    ) -> Result<Nominal, Error> {
-        let (nx, nq, ns) = sizes;
-        let u = nx + nq;
+    ) -> Result<Nominal<'a>, Error> {
+        let model = &point.result.model;
+        let system = &point.result.system;
+        let damping = &system.damping;
         // the multipliers `pendkit tf` and `noise` refuse (a negative loss, a non-finite
         // value) are refused here too, not differentiated
-        point
-            .result
-            .model
-            .check_damping_at(&point.result.system.damping, f_hz)?;
-        let a = dynamic_matrix(point, f_hz);
-        let lu = a.view((0, 0), (u, u)).into_owned().lu();
-        let singular = || Error::Dynamics(pendkit_dynamics::DynamicsError::Singular { f_hz });
-        let solve = |rhs: &DVector<C>| lu.solve(rhs).ok_or_else(singular);
-        let mut w = DVector::zeros(u + ns);
-        let mut tf_value = C::new(0.0, 0.0);
-        let mut tf_vectors = None;
-        if let Some(ports) = tf {
-            let (b, c) = port_vectors(ports, sizes);
-            let force_in = matches!(ports.input, Some(Input::Force(_)));
-            let force_out = matches!(ports.output, Output::SupportForce(_));
-            let rhs = if force_in {
-                complex(&b)
-            } else {
-                -(a.view((0, u), (u, ns)) * complex(&b))
-            };
-            let z = solve(&rhs)?;
-            w.rows_mut(0, u).copy_from(&z);
-            if !force_in {
-                w.rows_mut(u, ns).copy_from(&complex(&b));
-            }
-            tf_value = if force_out {
-                -(complex(&c).transpose() * (a.view((u, 0), (ns, u + ns)) * &w))[(0, 0)]
-            } else {
-                (complex(&c).transpose() * &w)[(0, 0)]
-            };
-            tf_vectors = Some((b, c, force_in, force_out));
-        }
-        let noise = match noise {
-            Some(ports) => {
-                let o = complex(&port_vectors(ports, sizes).1.rows(0, u).into_owned());
-                let z = solve(&o)?;
-                let response = (o.transpose() * &z)[(0, 0)];
-                let damping = &point.result.system.damping;
-                let by_tag = &point.result.model.by_tag;
-                // per tag only where some tag has its own temperature: otherwise the
-                // one-temperature form, as the noise itself is computed
-                let tags = if by_tag.iter().any(|(t, _)| damping.temperature(t).is_some()) {
-                    tag_stiffnesses(point, u)?
-                        .into_iter()
-                        .map(|(name, stiffness)| TagNoise {
-                            weight: tag_weight(point, &name, f_hz),
-                            p_z: stiffness.map(|x| C::new(x, 0.0)) * &z,
-                            energy: real_energy(&stiffness, &z),
-                            name,
-                        })
-                        .collect()
-                } else {
-                    Vec::new()
-                };
-                Some(NoiseNominal {
-                    z,
-                    response,
-                    scale: 4.0 * BOLTZMANN / (2.0 * std::f64::consts::PI * f_hz),
-                    temperature: point.result.system.temperature,
-                    tags,
-                })
-            }
-            None => None,
-        };
+        model.check_damping_at(damping, f_hz)?;
+        let zero = C::new(0.0, 0.0);
+        let mut e = vec![zero; model.pattern.len()];
+        model.sum_parts(&model.dynamic_parts(damping, f_hz), &mut e)?;
+        let tf = tf
+            .map(|ports| tf_nominal(model, damping, &e, ports, sizes, f_hz))
+            .transpose()?;
+        let noise = noise
+            .map(|ports| noise_nominal(model, system, ports, sizes, f_hz))
+            .transpose()?;
         Ok(Nominal {
-            a,
-            lu,
-            tf_vectors,
-            w,
-            tf: tf_value,
+            model,
+            e,
+            tf,
             noise,
         })
     }
 
-    /// dH for the derivative `da` of A and `db`, `dc` of the port vectors.
+    /// dH for dE w (`dew`, over every master row) and the derivatives `db`, `dc` of the
+    /// port vectors: yᵀ r' with r' = d rhs − (dE w)_u (d rhs = db for a force input,
+    /// −E_us db for a displacement), plus, for a displacement output, dcᵀw + c_sᵀ db; for a
+    /// support force, −(dcᵀ(E w)_s + cᵀ(dE w)_s + cᵀ E_ss db).
     fn d_transfer(
         &self,
-        da: &DMatrix<C>,
+        tf: &TfNominal,
+        dew: &[C],
         db: &DVector<f64>,
         dc: &DVector<f64>,
         sizes: (usize, usize, usize),
     ) -> Result<C, Error> {
         let (nx, nq, ns) = sizes;
         let u = nx + nq;
-        let Some((_, c, force_in, force_out)) = &self.tf_vectors else {
-            return Ok(C::new(0.0, 0.0));
-        };
-        // d rhs − dA_uu z (and for a displacement input, −dA_us s − A_us ds)
-        let mut rhs = -(da.view((0, 0), (u, u + ns)) * &self.w);
-        let mut dw = DVector::zeros(u + ns);
-        if *force_in {
-            rhs += complex(db);
+        let zero = C::new(0.0, 0.0);
+        let mut rhs: Vec<C> = dew[..u].iter().map(|x| -x).collect();
+        // E [0; db]: the displacement input's change through the stage
+        let mut e_db = Vec::new();
+        if tf.force_in {
+            for (r, &x) in rhs.iter_mut().zip(db.iter()) {
+                *r += x;
+            }
         } else {
-            rhs -= self.a.view((0, u), (u, ns)) * complex(db);
-            dw.rows_mut(u, ns).copy_from(&complex(db));
+            let mut on_support = vec![zero; u + ns];
+            for (x, &d) in on_support[u..].iter_mut().zip(db.iter()) {
+                *x = C::new(d, 0.0);
+            }
+            e_db = vec![zero; u + ns];
+            self.model.multiply(&self.e, &on_support, &mut e_db)?;
+            for (r, x) in rhs.iter_mut().zip(&e_db) {
+                *r -= x;
+            }
         }
-        let dz = self
-            .lu
-            .solve(&rhs)
-            .ok_or_else(|| bad("the dynamic stiffness is singular"))?;
-        dw.rows_mut(0, u).copy_from(&dz);
-        let c = complex(c);
-        Ok(if *force_out {
-            let a_s = self.a.view((u, 0), (ns, u + ns));
-            let da_s = da.view((u, 0), (ns, u + ns));
-            -((complex(dc).transpose() * (a_s * &self.w))[(0, 0)]
-                + (c.transpose() * (da_s * &self.w))[(0, 0)]
-                + (c.transpose() * (a_s * &dw))[(0, 0)])
+        let through: C = tf.adjoint.iter().zip(&rhs).map(|(y, r)| y * r).sum();
+        Ok(if tf.force_out {
+            let direct: C = (0..ns)
+                .map(|k| {
+                    let from_input = e_db.get(u + k).copied().unwrap_or(zero);
+                    tf.e_w[u + k] * dc[k] + (dew[u + k] + from_input) * tf.c[k]
+                })
+                .sum();
+            through - direct
         } else {
-            (complex(dc).transpose() * &self.w)[(0, 0)] + (c.transpose() * &dw)[(0, 0)]
+            let from_dc: C = dc.iter().zip(&tf.w).map(|(&d, w)| w * d).sum();
+            let from_input: f64 = if tf.force_in {
+                0.0
+            } else {
+                (0..ns).map(|k| tf.c[u + k] * db[k]).sum()
+            };
+            through + from_dc + from_input
         })
     }
 }

@@ -381,6 +381,12 @@ impl FloatMap {
         z
     }
 
+    /// Whether the float block Q is singular: then there is no map (it is empty, and
+    /// [`FloatMap::matrix`] is zero).
+    pub fn is_singular(&self) -> bool {
+        self.nq > 0 && self.groups.is_empty()
+    }
+
     /// The map −Q⁻¹ C_qx itself (floats × variables).
     pub fn matrix(&self) -> DMatrix<f64> {
         let mut m = DMatrix::zeros(self.nq, self.nx);

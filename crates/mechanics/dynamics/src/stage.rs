@@ -409,6 +409,90 @@ impl StageModel {
         m
     }
 
+    /// The parts of the dynamic stiffness E(f) = P(f) − ω² M over every master row, each
+    /// as (multiplier, values on the pattern): the lossless part (1), every damping tag's
+    /// tension-off part (ε'_tag(f) + i ε''_tag(f), in `by_tag` order) and the mass (−ω²,
+    /// zero outside the variables' block). Their sum is the matrix the sweeps factorise;
+    /// [`StageModel::sum_parts`] puts it together on the pattern.
+    pub fn dynamic_parts(&self, damping: &Damping, f_hz: f64) -> Vec<(c64, &[f64])> {
+        let w2 = (TWO_PI * f_hz).powi(2);
+        let mut parts = Vec::with_capacity(self.by_tag.len() + 2);
+        parts.push((c64::new(1.0, 0.0), self.lossless.as_slice()));
+        for (tag, values) in &self.by_tag {
+            let (re, im) = damping.at(tag, f_hz);
+            parts.push((c64::new(re, im), values.as_slice()));
+        }
+        parts.push((c64::new(-w2, 0.0), self.mass_on_pattern.as_slice()));
+        parts
+    }
+
+    /// The matrix Σ_k m_k V_k as complex values on this model's pattern (into `out`, one
+    /// per slot), for parts (m_k, V_k) given as values on the pattern: E(f) from
+    /// [`StageModel::dynamic_parts`], or a change of E with a parameter. Put together once,
+    /// it multiplies any number of vectors ([`StageModel::multiply`]). An error when a part
+    /// or `out` has another length.
+    pub fn sum_parts(&self, parts: &[(c64, &[f64])], out: &mut [c64]) -> Result<(), DynamicsError> {
+        let len = self.pattern.len();
+        for got in std::iter::once(out.len()).chain(parts.iter().map(|(_, v)| v.len())) {
+            if got != len {
+                return Err(DynamicsError::Length {
+                    what: "values on the pattern",
+                    expected: len,
+                    got,
+                });
+            }
+        }
+        out.fill(c64::new(0.0, 0.0));
+        for &(m, values) in parts {
+            if m == c64::new(0.0, 0.0) {
+                continue;
+            }
+            for (o, &v) in out.iter_mut().zip(values) {
+                *o += m * v;
+            }
+        }
+        Ok(())
+    }
+
+    /// Adds A w to `out` (both over every master row) for the matrix A given as complex
+    /// values on this model's pattern ([`StageModel::sum_parts`]), sparse, without forming
+    /// A. An error when `values`, `w` or `out` has another length.
+    pub fn multiply(
+        &self,
+        values: &[c64],
+        w: &[c64],
+        out: &mut [c64],
+    ) -> Result<(), DynamicsError> {
+        let n = self.pattern.dim();
+        for (what, expected, got) in [
+            ("values on the pattern", self.pattern.len(), values.len()),
+            ("multiply: w", n, w.len()),
+            ("multiply: out", n, out.len()),
+        ] {
+            if got != expected {
+                return Err(DynamicsError::Length {
+                    what,
+                    expected,
+                    got,
+                });
+            }
+        }
+        for (i, o) in out.iter_mut().enumerate() {
+            let slots = self.pattern.row_slots(i);
+            let mut sum = c64::new(0.0, 0.0);
+            for (a, &j) in values[slots].iter().zip(self.pattern.row(i)) {
+                // w is often zero over whole blocks (a support displacement, the
+                // parameters' rows of a response)
+                let wj = w[j];
+                if wj != c64::new(0.0, 0.0) {
+                    sum += a * wj;
+                }
+            }
+            *o += sum;
+        }
+        Ok(())
+    }
+
     /// Real stiffness at f = 0 (ε' of each tag at DC), dense: the matrix the modes use.
     pub fn real_stiffness(&self, damping: &Damping) -> DMatrix<f64> {
         self.dense_on_pattern(&self.master_values(damping, 0.0).0)

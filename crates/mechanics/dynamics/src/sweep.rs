@@ -174,6 +174,22 @@ enum Factor {
 
 const NONE: usize = usize::MAX;
 
+/// Which factorisation the last solve left in [`Fast`]'s values, for [`Sweep::solve_again`].
+#[derive(Clone, Copy, PartialEq)]
+enum Factored {
+    /// None usable (no solve yet, or the last one failed).
+    Nothing,
+    /// Dense, by the schedule (no row exchange).
+    Schedule,
+    /// Dense, by the pivoting LU.
+    Pivoted,
+    /// Sparse, by the schedule or faer's pivoting LU (the factor knows which).
+    Sparse,
+    /// Sparse, by the schedule where partial pivoting would have exchanged rows: each
+    /// solve is checked against E itself and refined.
+    Refined,
+}
+
 /// The fixed-pattern engine: parts prepared once, assembled and solved per frequency.
 struct Fast {
     matrix: Linear,
@@ -187,6 +203,9 @@ struct Fast {
     /// E(f) unfactorised, for checking a solve without row exchanges.
     original: Vec<c64>,
     scalar: Vec<c64>,
+    /// What the last solve left factorised, and its ω² (rad²/s²).
+    factored: Factored,
+    w2: f64,
 }
 
 /// The reference engine: today's dense algorithm.
@@ -214,6 +233,8 @@ pub struct Sweep<'m> {
     now_varying: Vec<c64>,
     engine: Engine,
     z: Vec<c64>,
+    /// The last frequency solved at (Hz).
+    last_f: Option<f64>,
 }
 
 impl<'m> Sweep<'m> {
@@ -281,6 +302,7 @@ impl<'m> Sweep<'m> {
             multipliers,
             varying,
             engine,
+            last_f: None,
         })
     }
 
@@ -363,8 +385,41 @@ impl<'m> Sweep<'m> {
         Ok(())
     }
 
+    /// Solves E(f) x = rhs in place for another right-hand side `rhs` over the solved
+    /// unknowns ([`Sweep::unknowns`] order), E at the last frequency given to [`Sweep::at`]
+    /// or [`Sweep::for_each`], reusing its factorisation: the adjoint responses of a
+    /// derivative, or further inputs at one frequency. An error before any solve, for a
+    /// `rhs` of another length, or where E is singular.
+    pub fn solve_again(&mut self, rhs: &mut [c64]) -> Result<(), DynamicsError> {
+        if rhs.len() != self.unknowns.len() {
+            return Err(DynamicsError::Length {
+                what: "solve_again: right-hand side",
+                expected: self.unknowns.len(),
+                got: rhs.len(),
+            });
+        }
+        let Some(f_hz) = self.last_f else {
+            return Err(DynamicsError::Solver(
+                "solve_again before any frequency was solved".into(),
+            ));
+        };
+        let solved = match &mut self.engine {
+            Engine::Fast(fast) => fast.solve_again(&self.now_varying, rhs),
+            Engine::Reference(_) => {
+                Reference::solve_dense(self.model, self.damping, f_hz, rhs);
+                true
+            }
+        };
+        if solved && rhs.iter().all(|x| x.re.is_finite() && x.im.is_finite()) {
+            Ok(())
+        } else {
+            Err(DynamicsError::Singular { f_hz })
+        }
+    }
+
     /// Solves at `f_hz` with the multipliers already set for it.
     fn solve(&mut self, f_hz: f64) -> Result<c64, DynamicsError> {
+        self.last_f = Some(f_hz);
         let w2 = (TWO_PI * f_hz).powi(2);
         let solved = match &mut self.engine {
             Engine::Fast(fast) => fast.solve(&self.now_varying, w2, &mut self.z),
@@ -529,6 +584,8 @@ impl Fast {
             values: vec![c64::new(0.0, 0.0); len],
             original: vec![c64::new(0.0, 0.0); len],
             scalar: vec![c64::new(0.0, 0.0); 1],
+            factored: Factored::Nothing,
+            w2: 0.0,
             matrix,
             mass,
             rhs,
@@ -536,6 +593,50 @@ impl Fast {
             direct,
             factor,
         })
+    }
+
+    /// Solves E x = b in place by the factorisation the last [`Fast::solve`] left (its
+    /// multipliers `varying`): false where there is none, or where a refined solve is
+    /// refused and faer's pivoting LU fails too (that LU is then the factorisation kept).
+    fn solve_again(&mut self, varying: &[c64], b: &mut [c64]) -> bool {
+        let Fast {
+            matrix,
+            mass,
+            values,
+            original,
+            factor,
+            factored,
+            w2,
+            ..
+        } = self;
+        match (factor, *factored) {
+            (Factor::Dense { schedule, .. }, Factored::Schedule) => {
+                schedule.solve(values, b);
+                true
+            }
+            (Factor::Dense { schedule, pivots }, Factored::Pivoted) => {
+                lu::solve(values, schedule.len(), pivots, b);
+                true
+            }
+            (Factor::Sparse(s), Factored::Sparse) => s.solve(values, b),
+            (Factor::Sparse(s), Factored::Refined) => {
+                let rhs = b.to_vec();
+                if s.solve_refined(values, original, b) {
+                    return true;
+                }
+                // as in `solve`: faer's pivoting LU on the matrix afresh, kept from now on
+                b.copy_from_slice(&rhs);
+                Self::assemble(matrix, mass, varying, *w2, values);
+                let ok = s.factor_pivoting(values) && s.solve(values, b);
+                *factored = if ok {
+                    Factored::Sparse
+                } else {
+                    Factored::Nothing
+                };
+                ok
+            }
+            _ => false,
+        }
     }
 
     /// E(f) = P(f) − ω² M into `values`.
@@ -554,6 +655,7 @@ impl Fast {
 
     /// Assembles E(f), factorises, solves into `z` and returns the output value.
     fn solve(&mut self, varying: &[c64], w2: f64, z: &mut [c64]) -> Option<c64> {
+        self.w2 = w2;
         let Fast {
             matrix,
             mass,
@@ -561,45 +663,52 @@ impl Fast {
             original,
             factor,
             rhs,
+            factored,
             ..
         } = self;
         Self::assemble(matrix, mass, varying, w2, values);
         rhs.evaluate(varying, z);
-        let solved = match factor {
+        *factored = match factor {
             Factor::Dense { schedule, pivots } => {
                 if schedule.factor(values) {
                     schedule.solve(values, z);
-                    true
+                    Factored::Schedule
                 } else {
                     // a row exchange is needed: the general LU on the matrix afresh
                     Self::assemble(matrix, mass, varying, w2, values);
                     let n = schedule.len();
-                    let ok = lu::factor(values, n, pivots);
-                    if ok {
+                    if lu::factor(values, n, pivots) {
                         lu::solve(values, n, pivots, z);
+                        Factored::Pivoted
+                    } else {
+                        Factored::Nothing
                     }
-                    ok
                 }
             }
             Factor::Sparse(s) => {
                 let solved = match s.factor(values) {
-                    Pivots::Kept => s.solve(values, z),
-                    Pivots::Failed => false,
+                    Pivots::Kept => s.solve(values, z).then_some(Factored::Sparse),
+                    Pivots::Failed => None,
                     Pivots::Exceeded => {
                         // checked against E itself, refined, or refused
                         Self::assemble(matrix, mass, varying, w2, original);
                         s.solve_refined(values, original, z)
+                            .then_some(Factored::Refined)
                     }
                 };
-                if !solved {
+                solved.unwrap_or_else(|| {
                     // faer's pivoting LU on the matrix afresh
                     rhs.evaluate(varying, z);
                     Self::assemble(matrix, mass, varying, w2, values);
-                }
-                solved || (s.factor_pivoting(values) && s.solve(values, z))
+                    if s.factor_pivoting(values) && s.solve(values, z) {
+                        Factored::Sparse
+                    } else {
+                        Factored::Nothing
+                    }
+                })
             }
         };
-        if !solved {
+        if *factored == Factored::Nothing {
             return None;
         }
         self.direct.evaluate(varying, &mut self.scalar);
@@ -618,6 +727,36 @@ impl Fast {
 }
 
 impl Reference {
+    /// Solves E(f) x = b in place over every unknown: dense P(f) and A(f) =
+    /// P_{xq,xq} − ω² diag(M, 0), faer's pivoting LU and one step of iterative refinement in
+    /// working precision (Higham, Accuracy and Stability of Numerical Algorithms, §12.2):
+    /// the solution becomes componentwise backward stable, so the reference's rounding is
+    /// that of its backward error and not of the pivoting LU's growth (which reached 1e-12
+    /// of the noise of a point on quad-v5's test mass, whose own per-term sum agreed with
+    /// the refined value).
+    fn solve_dense(model: &StageModel, damping: &Damping, f_hz: f64, b: &mut [c64]) {
+        let (nx, nq, _) = model.sizes;
+        let n = nx + nq;
+        let (re, im) = model.master(damping, f_hz);
+        let w2 = (TWO_PI * f_hz).powi(2);
+        let a = Mat::<c64>::from_fn(n, n, |i, j| {
+            let m = if i < nx && j < nx {
+                model.mass[(i, j)]
+            } else {
+                0.0
+            };
+            c64::new(re[(i, j)], im[(i, j)]) - c64::new(w2 * m, 0.0)
+        });
+        let rhs = Mat::<c64>::from_fn(n, 1, |i, _| b[i]);
+        let lu = a.partial_piv_lu();
+        let mut x = lu.solve(&rhs);
+        let residual = &rhs - &a * &x;
+        x += lu.solve(&residual);
+        for (i, bi) in b.iter_mut().enumerate() {
+            *bi = x[(i, 0)];
+        }
+    }
+
     /// Today's algorithm: dense P(f), dense A(f) = P_{xq,xq} − ω² diag(M, 0), faer's LU.
     fn solve(
         &self,
@@ -630,31 +769,15 @@ impl Reference {
         let n = nx + nq;
         let (re, im) = model.master(damping, f_hz);
         let pc = |i: usize, j: usize| c64::new(re[(i, j)], im[(i, j)]);
-        let w2 = (TWO_PI * f_hz).powi(2);
-        let a = Mat::<c64>::from_fn(n, n, |i, j| {
-            let m = if i < nx && j < nx {
-                model.mass[(i, j)]
-            } else {
-                0.0
-            };
-            pc(i, j) - c64::new(w2 * m, 0.0)
-        });
-        let rhs = Mat::<c64>::from_fn(n, 1, |i, _| match &self.input {
-            Input::Force(force) => c64::new(force.as_slice().get(i).copied().unwrap_or(0.0), 0.0),
-            Input::Displacement(s) => -(0..ns).map(|k| pc(i, n + k) * s[k]).sum::<c64>(),
-        });
-        // one step of iterative refinement in working precision (Higham, Accuracy and
-        // Stability of Numerical Algorithms, §12.2): the solution becomes componentwise
-        // backward stable, so the reference's rounding is that of its backward error and
-        // not of the pivoting LU's growth (which reached 1e-12 of the noise of a point on
-        // quad-v5's test mass, whose own per-term sum agreed with the refined value)
-        let lu = a.partial_piv_lu();
-        let mut x = lu.solve(&rhs);
-        let residual = &rhs - &a * &x;
-        x += lu.solve(&residual);
         for (i, zi) in z.iter_mut().enumerate() {
-            *zi = x[(i, 0)];
+            *zi = match &self.input {
+                Input::Force(force) => {
+                    c64::new(force.as_slice().get(i).copied().unwrap_or(0.0), 0.0)
+                }
+                Input::Displacement(s) => -(0..ns).map(|k| pc(i, n + k) * s[k]).sum::<c64>(),
+            };
         }
+        Self::solve_dense(model, damping, f_hz, z);
         Some(match &self.output {
             Output::Displacement(o) => {
                 let from_z: c64 = (0..n.min(o.len())).map(|i| z[i] * o[i]).sum();

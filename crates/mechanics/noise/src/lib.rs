@@ -78,6 +78,110 @@ impl ThermalNoise {
     }
 }
 
+/// 4 k_B / ω at `f_hz` (Hz): the fluctuation–dissipation theorem's factor (J/K per rad/s)
+/// between T Im(vᵀ E⁻¹ v) (K m/N) and the one-sided PSD (m²/Hz).
+pub fn fd_scale(f_hz: f64) -> f64 {
+    4.0 * BOLTZMANN / (2.0 * std::f64::consts::PI * f_hz)
+}
+
+/// A damping tag's weight T_tag ε''_tag(f) (K) in the fluctuation–dissipation sum at
+/// `f_hz` (Hz): its loss times its own temperature, or `temperature` (K) without one.
+pub fn tag_weight(damping: &Damping, tag: &str, temperature: f64, f_hz: f64) -> f64 {
+    damping.temperature(tag).unwrap_or(temperature) * damping.at(tag, f_hz).1
+}
+
+/// z̄ᵀ P z (N m per unit response², real for a real symmetric P) over the unknowns, P given
+/// as values on `model`'s pattern (a tag's tension-off stiffness, or its change with a
+/// parameter) and `z` over the unknowns: the quadratic form that the loss ε''_tag weighs in
+/// the fluctuation–dissipation sum. The parameters' rows and columns are left out (the
+/// support does not move). An error when `values` or `z` has another length.
+pub fn dissipation_form(
+    model: &StageModel,
+    values: &[f64],
+    z: &[c64],
+) -> Result<f64, DynamicsError> {
+    let u = model.unknowns();
+    if z.len() != u {
+        return Err(DynamicsError::Length {
+            what: "dissipation_form: response",
+            expected: u,
+            got: z.len(),
+        });
+    }
+    if values.len() != model.pattern.len() {
+        return Err(DynamicsError::Length {
+            what: "values on the pattern",
+            expected: model.pattern.len(),
+            got: values.len(),
+        });
+    }
+    Ok(values
+        .iter()
+        .zip(model.pattern.positions())
+        .filter(|&(&v, (i, j))| v != 0.0 && i < u && j < u)
+        .map(|(&v, (i, j))| v * (z[i].re * z[j].re + z[i].im * z[j].im))
+        .sum())
+}
+
+/// The fluctuation–dissipation sum over the damping tags at one frequency, S = 4 k_B/ω
+/// Σ_tag T_tag ε''_tag z̄ᵀ P_tag z (m²/Hz or rad²/Hz), for the response z over the unknowns
+/// to a unit force along the output; each tag at its own temperature where the damping
+/// gives one. With [`TagSum::change`], its first-order change with a parameter.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TagSum {
+    /// 4 k_B / ω ([`fd_scale`]).
+    pub scale: f64,
+    /// Per tag (the model's `by_tag` order): T_tag ε''_tag(f) (K, [`tag_weight`]).
+    pub weights: Vec<f64>,
+    /// Per tag: z̄ᵀ P_tag z ([`dissipation_form`]).
+    pub energies: Vec<f64>,
+}
+
+impl TagSum {
+    /// The sum for `model` with `damping` at `f_hz` (Hz) and the model's `temperature`
+    /// (K), at the response `z` over the unknowns.
+    pub fn new(
+        model: &StageModel,
+        damping: &Damping,
+        temperature: f64,
+        f_hz: f64,
+        z: &[c64],
+    ) -> Result<TagSum, DynamicsError> {
+        let mut weights = Vec::with_capacity(model.by_tag.len());
+        let mut energies = Vec::with_capacity(model.by_tag.len());
+        for (tag, values) in &model.by_tag {
+            weights.push(tag_weight(damping, tag, temperature, f_hz));
+            energies.push(dissipation_form(model, values, z)?);
+        }
+        Ok(TagSum {
+            scale: fd_scale(f_hz),
+            weights,
+            energies,
+        })
+    }
+
+    /// The PSD S (m²/Hz or rad²/Hz).
+    pub fn psd(&self) -> f64 {
+        self.scale
+            * self
+                .weights
+                .iter()
+                .zip(&self.energies)
+                .map(|(w, e)| w * e)
+                .sum::<f64>()
+    }
+
+    /// dS for the tags' changes of weight `d_weights` (K) and of energy `d_energies`
+    /// (each in tag order; missing entries count as 0): 4 k_B/ω Σ (dw E + w dE).
+    pub fn change(&self, d_weights: &[f64], d_energies: &[f64]) -> f64 {
+        let at = |v: &[f64], t: usize| v.get(t).copied().unwrap_or(0.0);
+        self.scale
+            * (0..self.weights.len())
+                .map(|t| at(d_weights, t) * self.energies[t] + self.weights[t] * at(d_energies, t))
+                .sum::<f64>()
+    }
+}
+
 /// Thermal-noise PSD of the output combination `v` of the variables (or of the variables
 /// and the floats) (m²/Hz or rad²/Hz) at temperature `temperature` (K, positive) and
 /// frequencies `freqs` (Hz), for the stage `model` with damping `damping`, with the share
