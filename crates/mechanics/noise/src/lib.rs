@@ -518,6 +518,55 @@ mod tests {
         }
     }
 
+    /// The sensitivities' pieces on the same oscillator: the response z to a unit force
+    /// solved by `Sweep` (and again by `Sweep::solve_again` from its factors), E(f) put
+    /// together by `StageModel::sum_parts` and applied by `StageModel::multiply`, and
+    /// `TagSum`'s PSD: each against the closed forms z = 1/(k(1 + iφ) − m ω²) and S_x above.
+    /// Tolerance 1e-10 relative, as above: one 1×1 complex solve separates them.
+    #[test]
+    fn the_sensitivities_pieces_give_the_closed_form() {
+        let (k, phi) = (TWO_PI * TWO_PI, 1e-3);
+        let (model, damping) = oscillator(k, DampingSpec::structural("1e-3"));
+        let v = DVector::from_element(1, 1.0);
+        let input = Input::Force(v.clone());
+        let output = Output::Displacement(v);
+        let mut sweep = Sweep::new(&model, &damping, &input, &output, Solver::Full).unwrap();
+        for f in [0.1, 1.0, 10.0] {
+            let w2 = (TWO_PI * f).powi(2);
+            let z_expected = c64::new(1.0, 0.0) / (c64::new(k, k * phi) - w2);
+            sweep.at(f).unwrap();
+            let z = sweep.response().to_vec();
+            assert_eq!(z.len(), 1);
+            assert!(
+                (z[0] - z_expected).norm() <= 1e-10 * z_expected.norm(),
+                "{f} Hz"
+            );
+            let mut again = vec![c64::new(2.0, 0.0)];
+            sweep.solve_again(&mut again).unwrap();
+            let twice = z_expected * 2.0;
+            assert!((again[0] - twice).norm() <= 1e-10 * twice.norm(), "{f} Hz");
+            // E z = 1 over the variable's row
+            let mut e = vec![c64::new(0.0, 0.0); model.pattern.len()];
+            model
+                .sum_parts(&model.dynamic_parts(&damping, f), &mut e)
+                .unwrap();
+            let mut w = vec![c64::new(0.0, 0.0); model.pattern.dim()];
+            w[0] = z[0];
+            let mut ez = vec![c64::new(0.0, 0.0); model.pattern.dim()];
+            model.multiply(&e, &w, &mut ez).unwrap();
+            assert!((ez[0] - 1.0).norm() <= 1e-10, "{f} Hz: E z = {}", ez[0]);
+            let sum = TagSum::new(&model, &damping, TEMPERATURE, f, &z).unwrap();
+            let expected = closed_form(k, phi, f);
+            assert!(
+                (sum.psd() - expected).abs() <= 1e-10 * expected,
+                "{f} Hz: {} vs {expected}",
+                sum.psd()
+            );
+        }
+        // a right-hand side of another length is an error, not a panic
+        assert!(sweep.solve_again(&mut [c64::new(1.0, 0.0); 2]).is_err());
+    }
+
     #[test]
     fn noise_is_refused_without_loss_and_at_a_bad_temperature() {
         // a model that dissipates nothing has no thermal noise: an error, not zeros; and the
