@@ -57,14 +57,10 @@ mod tests {
     //! exact (dual-number) derivative, evaluated here; the element uses the bending crate's
     //! overflow-free rewriting.
     use super::*;
-    use nalgebra::{Matrix3, Vector3};
+    use nalgebra::Vector3;
     use num_dual::DualNum;
     use pendkit_energy::OffHessian;
-    use pendkit_expr::{Slot, parse};
-    use pendkit_geometry::{FrameMap, PoseMap};
-    use pendkit_system::{
-        Body, CoordKind, Coordinate, EndDirection, System, Wire, WireEnd, WireSection, WireTags,
-    };
+    use pendkit_system::{EndDirection, System, Wire, WireEnd, WireSection, WireTags};
 
     const RADIUS: f64 = 2e-4;
     const YOUNG: f64 = 7.2e10;
@@ -79,39 +75,6 @@ mod tests {
     /// it on one round fibre, clamped (auto) at both ends, from the support's origin to the
     /// body's origin, at tension `TENSION`.
     fn hanging_fibre() -> (System, Vec<f64>) {
-        let names: Vec<String> = ["s", "b"]
-            .iter()
-            .flat_map(|b| ["x", "y", "z", "yaw", "pitch", "roll"].map(|c| format!("{c}{b}")))
-            .collect();
-        let coords = names
-            .iter()
-            .enumerate()
-            .map(|(i, n)| Coordinate {
-                name: n.clone(),
-                kind: if i < 6 {
-                    CoordKind::Parameter
-                } else {
-                    CoordKind::Variable
-                },
-                start: 0.0,
-                pinned: false,
-            })
-            .collect();
-        let slot = |s: &str| names.iter().position(|n| n == s).map(Slot::Var);
-        let body = |k: usize, name: &str, mass: f64| Body {
-            name: name.into(),
-            frame: FrameMap::root(PoseMap {
-                entries: std::array::from_fn(|m| {
-                    parse(&names[6 * k + m]).unwrap().compile(&slot).unwrap()
-                }),
-            }),
-            mass,
-            inertia: Matrix3::identity(),
-            centre_of_mass: Vector3::zeros(),
-            shape: None,
-            pose_coords: std::array::from_fn(|m| Some(6 * k + m)),
-            mode_family: None,
-        };
         let end = |body| WireEnd {
             body,
             point: Vector3::zeros(),
@@ -129,13 +92,9 @@ mod tests {
                 torsion: "t".into(),
             },
         );
-        let system = System {
-            coords,
-            bodies: vec![body(0, "support", 0.0), body(1, "mass", 10.0)],
-            wires: vec![wire],
-            gravity: 9.81,
-            ..System::default()
-        };
+        let mut system = System::free_bodies(&[("support", 0.0), ("mass", 10.0)])
+            .expect("fixed coordinate names compile");
+        system.wires.push(wire);
         let mut x = vec![0.0; 12];
         x[6 + 2] = -LENGTH;
         (system, x)

@@ -554,6 +554,56 @@ impl<S: Real> System<S> {
     }
 }
 
+impl System {
+    /// A support and free rigid bodies, each with its own six coordinates (x, y, z, yaw,
+    /// pitch, roll, suffixed by the body's index: `x0` … `roll0` are the support's and are
+    /// parameters, the others variables), every frame at the lab's root, each `(name, mass
+    /// in kg)` with unit inertia (kg m²) and its centre of mass at its origin, g = 9.81 m/s²
+    /// and nothing connecting them: the smallest system on which to try an element kind or
+    /// a term (add its wires, springs or instances to it).
+    pub fn free_bodies(bodies: &[(&str, f64)]) -> Result<System, pendkit_expr::ExprError> {
+        const AXES: [&str; 6] = ["x", "y", "z", "yaw", "pitch", "roll"];
+        let coords = (0..bodies.len())
+            .flat_map(|k| AXES.map(|axis| format!("{axis}{k}")))
+            .enumerate()
+            .map(|(i, name)| Coordinate {
+                name,
+                kind: if i < 6 {
+                    CoordKind::Parameter
+                } else {
+                    CoordKind::Variable
+                },
+                start: 0.0,
+                pinned: false,
+            })
+            .collect();
+        let mut built = Vec::with_capacity(bodies.len());
+        for (k, &(name, mass)) in bodies.iter().enumerate() {
+            // pose entry m is coordinate 6k + m itself
+            let [x, y, z, yaw, pitch, roll] = std::array::from_fn(|m| {
+                Expr::Sym(AXES[m].into()).compile(&|_| Some(pendkit_expr::Slot::Var(6 * k + m)))
+            });
+            let entries = [x?, y?, z?, yaw?, pitch?, roll?];
+            built.push(Body {
+                name: name.into(),
+                frame: FrameMap::root(pendkit_geometry::PoseMap { entries }),
+                mass,
+                inertia: Matrix3::identity(),
+                centre_of_mass: Vector3::zeros(),
+                shape: None,
+                pose_coords: std::array::from_fn(|m| Some(6 * k + m)),
+                mode_family: None,
+            });
+        }
+        Ok(System {
+            coords,
+            bodies: built,
+            gravity: 9.81,
+            ..System::default()
+        })
+    }
+}
+
 impl<S: Real> Default for System<S> {
     fn default() -> Self {
         System {
