@@ -215,7 +215,7 @@ fn oscillator(k: f64, spec: DampingSpec) -> (StageModel, Damping, f64) {
         spec.resolve("spring", &ParamSet::new().resolve().unwrap())
             .unwrap(),
     );
-    (r.model, damping, 300.0)
+    (r.into_run().model, damping, 300.0)
 }
 
 #[test]

@@ -46,7 +46,7 @@
 //! |---|---|
 //! | the root | [`Case`], [`Override`], [`Model`], [`Stage`], [`run_stage`], [`StageResult`], [`Solver`], [`NoiseOptions`], [`log_grid`], [`Error`], [`VERSION`] |
 //! | [`catalogue`] | the bundled models ([`catalogue::models`], [`catalogue::find_model`]) and suspension files read at run time |
-//! | [`stage`] | running a stage with options ([`stage::run_stage_with`]), provenance, the named state space, [`stage::bench`] |
+//! | [`stage`] | running a stage with options ([`stage::run_stage_with`], over [`dynamics::StageRun`]), provenance, the named state space, [`stage::bench`] |
 //! | [`describe`] | units, mode families and the parameter table (`pendkit params`) |
 //! | [`fit`], [`sensitivity`], [`tradeoff`] | fitting measured modes, exact sensitivities, the speed–accuracy ladder |
 //! | the layers | [`model`] (builder, [`model::schema`]: the fields with units and domains), [`suspension`] (the file format), [`system`] (the numeric description, `System`), [`energy`] (the terms), [`assembly`], [`dynamics`], [`noise`], [`geometry`], [`params`], [`expr`], [`nalgebra`] |
@@ -185,7 +185,7 @@ pub enum Error {
     Build(#[from] BuildError),
     /// Equilibrium or assembly failed.
     #[error(transparent)]
-    Assembly(#[from] AssemblyError),
+    Assembly(AssemblyError),
     /// Two element crates registered the same kind name.
     #[error(transparent)]
     Registry(#[from] pendkit_energy::DuplicateKind),
@@ -260,6 +260,27 @@ pub enum Error {
         /// What it is.
         given: String,
     },
+}
+
+/// The assembly's refusal; a duplicate element kind, which it finds first, as the
+/// registry's.
+impl From<AssemblyError> for Error {
+    fn from(e: AssemblyError) -> Error {
+        match e {
+            AssemblyError::Registry(e) => Error::Registry(e),
+            e => Error::Assembly(e),
+        }
+    }
+}
+
+/// A stage run's refusal, as the variant of the layer that refused it.
+impl From<pendkit_dynamics::RunError> for Error {
+    fn from(e: pendkit_dynamics::RunError) -> Error {
+        match e {
+            pendkit_dynamics::RunError::Assembly(e) => e.into(),
+            pendkit_dynamics::RunError::Dynamics(e) => Error::Dynamics(e),
+        }
+    }
 }
 
 /// One change a case makes to its model ([`Case::with`]).

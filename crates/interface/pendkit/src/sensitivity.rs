@@ -106,8 +106,8 @@ use pendkit_assembly::{
     side_by_side,
 };
 use pendkit_dynamics::{
-    FloatMap, Input, Modes, Output, Solver, Stability, StageModel, Sweep, eliminate_floats,
-    validate::check_frequencies,
+    FloatMap, Input, Modes, Output, Solver, Stability, StageModel, StageRun, Sweep,
+    eliminate_floats, validate::check_frequencies,
 };
 use pendkit_model::{Defaults, parameters_with};
 use pendkit_system::{Stage, System};
@@ -256,13 +256,14 @@ fn matrices_point(
     };
     let stability = Stability::assess(&modes, Default::default(), model.sizes.1, Vec::new());
     Ok(Point {
-        result: StageResult {
+        result: StageRun {
             system,
             assembled,
             model,
             modes,
             stability,
-        },
+        }
+        .into(),
         k_eff,
     })
 }

@@ -4,16 +4,12 @@
 //! provenance of its numbers and the timing of its phases ([`bench()`]).
 
 use nalgebra::{DVector, Vector3};
-use pendkit_assembly::{Assembled, assemble_with, timed};
-use pendkit_dynamics::{
-    DynamicsError, TermRounding, eliminate_floats, float_directions, inverted_bodies,
-    normal_modes_with_rounding,
-};
+use pendkit_dynamics::DynamicsError;
 use pendkit_noise::thermal_noise_with;
 use pendkit_system::{NamedSignal, SignalTerm};
 
-use pendkit_assembly::{AssemblyOptions, PhaseTimes, PointWeights};
-use pendkit_dynamics::{Input, Modes, Output, Solver, Stability, StageModel};
+use pendkit_assembly::{PhaseTimes, PointWeights};
+use pendkit_dynamics::{Input, Output, Solver, StageRun};
 use pendkit_noise::{NoiseOptions, ThermalNoise};
 use pendkit_system::{Stage, System};
 
@@ -23,6 +19,7 @@ use crate::{Case, Error, VERSION};
 
 pub use crate::bench::{BenchPhase, BenchReport, MAX_REPEAT, bench};
 pub use crate::state_space::NamedStateSpace;
+pub use pendkit_dynamics::{DENSE_MODES_LIMIT, ModeSelection, RunOptions};
 
 /// One parameter of a case as resolved for a run.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
@@ -94,37 +91,34 @@ impl Case {
     }
 }
 
-/// The result of running one stage of a model.
+/// The result of running one stage of a model: the dynamics layer's [`StageRun`] (its
+/// fields `system`, `assembled`, `model`, `modes` and `stability` read through it), with
+/// what the facade adds on top: inputs and outputs by name, transfer functions and noise
+/// checked for finite values, the named state space, the modes described.
 pub struct StageResult {
-    /// The numeric model.
-    pub system: System,
-    /// Equilibrium and per-term matrices.
-    pub assembled: Assembled,
-    /// The stage's frequency-independent matrices for responses and noise.
-    pub model: StageModel,
-    /// Normal modes (possibly with unstable ones: see `stability`). Each carries its
-    /// estimated error ([`pendkit_dynamics::Mode::omega_squared_error`]).
-    pub modes: Modes,
-    /// The stability verdict of the equilibrium: growing modes, floats without a stable
-    /// position, bodies upside down. [`StageResult::check_stable`] turns it into an error.
-    pub stability: Stability,
+    run: StageRun,
 }
 
-/// Which normal modes a stage run computes.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub enum ModeSelection {
-    /// Every mode, by the dense eigensolver block by block.
-    #[default]
-    All,
-    /// The modes below this frequency (Hz): by the dense eigensolver up to
-    /// [`DENSE_MODES_LIMIT`] variables, by shift-invert Lanczos on the sparse factorisation
-    /// above ([`StageModel::modes_below`]).
-    Below(f64),
+impl std::ops::Deref for StageResult {
+    type Target = StageRun;
+
+    fn deref(&self) -> &StageRun {
+        &self.run
+    }
 }
 
-/// Largest number of variables for which [`ModeSelection::Below`] uses the dense
-/// eigensolver (a few ms at this size); larger models use shift-invert.
-pub const DENSE_MODES_LIMIT: usize = 200;
+impl From<StageRun> for StageResult {
+    fn from(run: StageRun) -> StageResult {
+        StageResult { run }
+    }
+}
+
+impl StageResult {
+    /// The dynamics layer's run, for the functions of `pendkit::dynamics` that take one.
+    pub fn into_run(self) -> StageRun {
+        self.run
+    }
+}
 
 /// Equilibrium, stiffness, mass and modes of `system` at `stage`. The modes use the real
 /// stiffness at f = 0 (each tag's ε'(0); 1 unless a model says otherwise).
@@ -132,129 +126,28 @@ pub fn run_stage(system: System, stage: Stage) -> Result<StageResult, Error> {
     run_stage_with(system, stage, &RunOptions::default(), None)
 }
 
-/// How [`run_stage_with`] runs a stage: assembly options (equilibrium controls, derivative
-/// path) and which modes to compute.
-#[derive(Clone, Debug, Default)]
-pub struct RunOptions {
-    /// Equilibrium controls and derivative path.
-    pub assembly: AssemblyOptions,
-    /// All modes, or those below a frequency.
-    pub modes: ModeSelection,
-}
-
-/// [`run_stage`] with options, recording the time of each phase into `times` when given:
-/// the assembly's (`terms`, `equilibrium`, `hessian:<kind>`, `mass`), then `stage-model`
-/// (the stage's matrices by tag), `rounding` (each term's share of the stiffness rounding,
-/// for the modes' accuracy), `floats` (their elimination), `modes` and `stability` (the
-/// float block's and the bodies' checks for the verdict).
+/// [`run_stage`] with options, recording the time of each phase into `times` when given
+/// (the phases are listed at [`StageRun::new`], which runs them).
 pub fn run_stage_with(
     system: System,
     stage: Stage,
     options: &RunOptions,
-    mut times: Option<&mut PhaseTimes>,
+    times: Option<&mut PhaseTimes>,
 ) -> Result<StageResult, Error> {
-    if let ModeSelection::Below(hz) = options.modes
-        && !(hz > 0.0 && hz.is_finite())
-    {
-        return Err(DynamicsError::BelowFrequency(hz).into());
-    }
-    pendkit_energy::check_registrations()?;
-    let assembled = assemble_with(&system, stage, &options.assembly, times.as_deref_mut())?;
-    let model = timed(&mut times, "stage-model", 1, || {
-        StageModel::new(&system, &assembled)
-    });
-    model.check_damping_at_dc(&system.damping)?;
-    let rounding = timed(&mut times, "rounding", 1, || {
-        TermRounding::new(&model, &assembled, &system.damping)
-    });
-    let modes = match options.modes {
-        ModeSelection::Below(hz) if model.sizes.0 > DENSE_MODES_LIMIT => {
-            let below = timed(&mut times, "modes", 1, || {
-                model.modes_below_with_rounding(&system.damping, hz, &rounding)
-            });
-            match below {
-                Ok(modes) => modes,
-                // the shift-invert iteration could not resolve every mode below the bound
-                // (a growing mode beyond its shift's resolution, a shift on an eigenvalue):
-                // the dense solve, slower but complete, decides instead
-                Err(DynamicsError::Solver(_)) => {
-                    dense_modes(&model, &assembled, &system, &rounding, Some(hz), &mut times)?
-                }
-                Err(e) => return Err(e.into()),
-            }
-        }
-        ModeSelection::Below(hz) => {
-            dense_modes(&model, &assembled, &system, &rounding, Some(hz), &mut times)?
-        }
-        ModeSelection::All => {
-            dense_modes(&model, &assembled, &system, &rounding, None, &mut times)?
-        }
-    };
-    // after the modes, so that a model the modes refuse outright (a massless body, whose
-    // wires then carry no tension) is refused for that
-    pendkit_dynamics::validate::check_wire_stretch(&system, &assembled.equilibrium.coords)?;
-    let stability = timed(&mut times, "stability", 1, || {
-        let floats = float_directions(&model, &system.damping, Some(&rounding))?;
-        let inverted = inverted_bodies(&system, &assembled.equilibrium.coords);
-        Ok::<_, Error>(Stability::assess(&modes, floats, model.sizes.1, inverted))
-    })?;
-    Ok(StageResult {
-        system,
-        assembled,
-        model,
-        modes,
-        stability,
-    })
-}
-
-/// The stage's modes by the dense eigensolver block by block (those below `below` Hz when
-/// given, every growing mode among them), recording the `floats` and `modes` phases.
-fn dense_modes(
-    model: &StageModel,
-    assembled: &Assembled,
-    system: &System,
-    rounding: &TermRounding,
-    below: Option<f64>,
-    times: &mut Option<&mut PhaseTimes>,
-) -> Result<Modes, Error> {
-    let reduced = timed(times, "floats", 1, || {
-        eliminate_floats(
-            &model.real_stiffness(&system.damping),
-            &assembled.layout,
-            system,
-        )
-    })?;
-    let mut modes = timed(times, "modes", 1, || {
-        normal_modes_with_rounding(&reduced.k_eff, &assembled.mass, &model.variables, rounding)
-    })?;
-    if let Some(hz) = below {
-        modes.modes.retain(|m| m.hz < hz);
-    }
-    Ok(modes)
+    Ok(StageRun::new(system, stage, options, times)?.into())
 }
 
 impl StageResult {
     /// One line saying what grows, as an error, unless the equilibrium is stable (or
     /// neutral). Every calculation that answers with a linearised model checks this first.
     pub fn check_stable(&self) -> Result<(), Error> {
-        Ok(self.stability.check()?)
+        Ok(self.run.check_stable()?)
     }
 
-    /// The check every command answering with a linearised model (transfer functions,
-    /// noise, state space, ...) makes before it answers: `Ok(None)` when nothing grows;
-    /// when something does, the error, or with `allow_unstable` `Ok(Some(warning))`, the
-    /// one line to show the user before going on (control design needs unstable plants).
-    /// A neutral verdict that rests on a float stiffness rounding cannot sign (nothing
-    /// shown to grow) goes on, with the verdict as the line to show.
+    /// The check every command answering with a linearised model makes before it answers
+    /// (see [`StageRun::require_stable`]).
     pub fn require_stable(&self, allow_unstable: bool) -> Result<Option<String>, Error> {
-        match (self.check_stable(), allow_unstable) {
-            (Ok(()), _) if !self.stability.neutral_floats.is_empty() => {
-                Ok(Some(self.stability.to_string()))
-            }
-            (Ok(()), _) => Ok(None),
-            (Err(e), true) => Ok(Some(format!("{e} (going on: --allow-unstable)"))),
-            (Err(e), false) => Err(e),
-        }
+        Ok(self.run.require_stable(allow_unstable)?)
     }
 }
 

@@ -234,10 +234,11 @@ pub fn answer(variant: &Variant, question: &Question, grid: &[f64]) -> Result<An
         Some(input) => Some(result.transfer_with(input, &question.output, grid, variant.solver)?),
         None => None,
     };
+    let run = result.into_run();
     Ok(Answer {
-        coordinates: result.modes.coordinates.clone(),
-        modes: result.modes.modes,
-        mass: result.assembled.mass,
+        coordinates: run.modes.coordinates,
+        modes: run.modes.modes,
+        mass: run.assembled.mass,
         noise_asd: noise.asd(),
         transfer,
     })

@@ -45,6 +45,10 @@ pub enum AssemblyError {
     /// A model element could not produce its terms.
     #[error(transparent)]
     Energy(#[from] EnergyError),
+    /// Two element crates register the same kind, so a kind's name would not say which
+    /// energy its instances get.
+    #[error(transparent)]
+    Registry(#[from] pendkit_energy::DuplicateKind),
     /// Newton's method did not converge.
     #[error(
         "equilibrium search did not converge after {iterations} iterations: residual force {residual:.3e} on '{coordinate}'"
@@ -480,6 +484,7 @@ pub fn assemble_with(
     options: &AssemblyOptions,
     mut times: Option<&mut PhaseTimes>,
 ) -> Result<Assembled, AssemblyError> {
+    pendkit_energy::check_registrations()?;
     let early = system.early_wire_terms != EarlyWireTerms::No;
     let (mut evaluator, before) = timed(&mut times, "terms", 1, || {
         terms_before(system, options.derivatives, early)

@@ -2,12 +2,14 @@
 //! pattern, elimination of the floats (one Schur complement for modes and responses alike),
 //! normal modes block by block (all of them, or those below a frequency by shift-invert on
 //! a sparse factorisation), transfer-function sweeps solved only over the blocks an input
-//! and output couple to, and state-space matrices.
+//! and output couple to, and state-space matrices; [`StageRun`] runs them all on a system
+//! in the order every command uses.
 
 mod lanczos;
 mod lu;
 mod modes;
 mod pattern;
+mod run;
 mod schur;
 mod sparse_lu;
 mod stability;
@@ -20,6 +22,7 @@ pub use modes::{
     normal_modes, normal_modes_with_rounding,
 };
 pub use pattern::Pattern;
+pub use run::{DENSE_MODES_LIMIT, ModeSelection, RunError, RunOptions, StageRun};
 pub use stability::{
     FloatDirections, FloatMap, GrowingMode, InvertedBody, RunawayFloat, Stability, TermRounding,
     Verdict, float_directions, inverted_bodies, runaway_floats,
