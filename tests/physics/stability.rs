@@ -100,6 +100,17 @@ fn quad_with_the_pitch_break_off_passed_is_unstable_and_names_the_test_mass_pitc
     assert!(r.require_stable(false).is_err());
     let warning = r.require_stable(true).unwrap().expect("a warning");
     assert!(warning.contains("pitch3"), "{warning}");
+    // the library's plain answers refuse it with the same line; the `_with` forms, for a
+    // caller that goes on from an unstable plant on purpose, answer
+    let freqs = [0.1, 1.0];
+    let refused = r.transfer("x00", "pitch3", &freqs).unwrap_err().to_string();
+    assert_eq!(refused, message);
+    let refused = r.noise("pitch3", &freqs).unwrap_err().to_string();
+    assert_eq!(refused, message);
+    let h = r
+        .transfer_with("x00", "pitch3", &freqs, pendkit::Solver::Restricted)
+        .expect("answers when asked to go on");
+    assert!(h.iter().all(|z| z.re.is_finite() && z.im.is_finite()));
     // nominal: stable
     let nominal = run("quad", &[], Stage::S2);
     assert_eq!(nominal.stability.verdict, Verdict::Stable);

@@ -10,6 +10,7 @@ use std::time::Instant;
 
 use pendkit::energy::registrations;
 
+use pendkit::Solver;
 use pendkit::stage::ModeSelection;
 use pendkit::system::{CoordKind, Shape, Stage};
 use pendkit_plot::Figure;
@@ -533,7 +534,8 @@ fn transfer_section(
     ));
     let mut responses: Vec<(String, Response)> = Vec::new();
     for (input, output) in &pairs {
-        let values = r.transfer(input, output, freqs)?;
+        // the stability section above decided whether to answer at all
+        let values = r.transfer_with(input, output, freqs, Solver::Restricted)?;
         let unit = r.transfer_unit(input, output).unwrap_or_default();
         let kind = if input.starts_with("force:") {
             "force"

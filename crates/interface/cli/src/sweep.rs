@@ -8,6 +8,7 @@ use std::path::{Path, PathBuf};
 use nalgebra::DMatrix;
 use pendkit::describe::unit_slug;
 use pendkit::stage::ModeSelection;
+use pendkit::{NoiseOptions, Solver};
 use pendkit_plot::{Axis, BodePlot, BodeSeries, Figure, LinePlot, Scale, Series};
 
 use crate::common::{GridArgs, ModelArgs, Run, check_plot_path, split_pair};
@@ -414,12 +415,15 @@ fn step_response(
     tf: Option<&(String, String)>,
     freqs: &[f64],
 ) -> Result<Vec<(f64, f64)>, CliError> {
+    // the stability was checked (or let through by --allow-unstable) when the step ran
     Ok(if let Some(output) = &a.noise {
-        let noise = run.result.noise(output, freqs)?;
+        let noise = run
+            .result
+            .noise_with(output, freqs, &NoiseOptions::default())?;
         noise.asd().into_iter().map(|x| (x, 0.0)).collect()
     } else if let Some((input, output)) = tf {
         run.result
-            .transfer(input, output, freqs)?
+            .transfer_with(input, output, freqs, Solver::Restricted)?
             .into_iter()
             .map(|z| (z.re, z.im))
             .collect()

@@ -213,6 +213,40 @@ impl StageResult {
             .map_or_else(|| OTHER_FAMILY.to_string(), |(f, _)| f)
     }
 
+    /// Follows the modes of `reference` (a run of the same model at other parameter
+    /// values) into this result by the overlap of their shapes: for each of the reference's
+    /// modes, in its order, the index into `self.modes.modes` of the mode that continues it
+    /// and their overlap (1 for the same shape, 0 for shapes sharing no kinetic energy; see
+    /// [`crate::fit::pair_modes_by_overlap`]), or `None` when this result has fewer modes.
+    /// Modes keep their identity where they cross in frequency, which sorting by frequency
+    /// does not. A reference over other coordinates is an error naming both counts.
+    pub fn match_modes(&self, reference: &StageResult) -> Result<Vec<Option<(usize, f64)>>, Error> {
+        if reference.modes.coordinates != self.modes.coordinates {
+            return Err(Error::Argument {
+                function: "StageResult::match_modes",
+                argument: "reference",
+                expected: format!(
+                    "a run over the same {} coordinates",
+                    self.modes.coordinates.len()
+                ),
+                given: format!("{} coordinates", reference.modes.coordinates.len()),
+            });
+        }
+        let pairs = crate::fit::pair_modes_by_overlap(
+            &crate::fit::all_shapes(reference),
+            &reference.assembled.mass,
+            &crate::fit::all_shapes(self),
+            &self.assembled.mass,
+        )?;
+        let mut continued = vec![None; reference.modes.modes.len()];
+        for (new, pair) in pairs.into_iter().enumerate() {
+            if let Some((old, overlap)) = pair {
+                continued[old] = Some((new, overlap));
+            }
+        }
+        Ok(continued)
+    }
+
     /// Lab position (m) of body `b`'s centre of mass at the equilibrium; `None` for an
     /// index past the model's bodies.
     pub fn body_centre(&self, b: BodyId) -> Option<Vector3<f64>> {

@@ -577,7 +577,7 @@ pub fn pair_modes_by_overlap(
 }
 
 /// The shapes of all modes of `result`, one column each.
-fn all_shapes(result: &StageResult) -> DMatrix<f64> {
+pub(crate) fn all_shapes(result: &StageResult) -> DMatrix<f64> {
     let modes = &result.modes.modes;
     let n = result.modes.coordinates.len();
     DMatrix::from_fn(n, modes.len(), |i, j| {

@@ -440,18 +440,24 @@ fn check_finite<'a>(
 impl StageResult {
     /// Transfer function from the named input to the named output (see
     /// [`StageResult::input`], [`StageResult::output`]) at `freqs` (Hz), with the model's
-    /// damping, solved over the blocks they couple to.
+    /// damping, solved over the blocks they couple to. An equilibrium that is not stable
+    /// is refused ([`StageResult::check_stable`]): a growing system has no steady response,
+    /// and its frequency response would look like one.
     pub fn transfer(
         &self,
         input: &str,
         output: &str,
         freqs: &[f64],
     ) -> Result<Vec<faer::c64>, Error> {
+        self.check_stable()?;
         self.transfer_with(input, output, freqs, Solver::Restricted)
     }
 
     /// [`StageResult::transfer`] solved as `solver` says (restricted, full, or the dense
-    /// reference).
+    /// reference), without the stability check: for a caller that has made it already, or
+    /// that goes on from an unstable equilibrium on purpose
+    /// ([`StageResult::require_stable`] with `allow_unstable`; control design needs
+    /// unstable plants).
     pub fn transfer_with(
         &self,
         input: &str,
@@ -473,13 +479,16 @@ impl StageResult {
     }
 
     /// Thermal noise (PSD, m²/Hz or rad²/Hz) of the named displacement output at `freqs`
-    /// (Hz), at the model's temperature, with its breakdown by damping tag.
+    /// (Hz), at the model's temperature, with its breakdown by damping tag. An equilibrium
+    /// that is not stable is refused, as by [`StageResult::transfer`].
     pub fn noise(&self, output: &str, freqs: &[f64]) -> Result<ThermalNoise, Error> {
+        self.check_stable()?;
         self.noise_with(output, freqs, &NoiseOptions::default())
     }
 
     /// [`StageResult::noise`] solved and broken down as `options` says (per term too, full
-    /// or restricted solve).
+    /// or restricted solve), without the stability check (see
+    /// [`StageResult::transfer_with`]).
     pub fn noise_with(
         &self,
         output: &str,

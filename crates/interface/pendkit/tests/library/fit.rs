@@ -546,3 +546,50 @@ fn a_weighted_residual_too_large_to_square_names_its_line() {
         "{err}"
     );
 }
+
+#[test]
+fn match_modes_follows_each_mode_across_a_crossing() {
+    // The same crossing as above (pitch1 moves below y1 with a 4 % larger I1y). The labels
+    // (each mode's dominant coordinate) are computed without any overlap, so they are an
+    // independent check of which new mode continues which old one.
+    let run = |sets: &[String]| {
+        let case = Case::model("quad").unwrap().with_sets(sets).unwrap();
+        run_stage(case.build().unwrap().0, Stage::S2).unwrap()
+    };
+    let nominal = run(&[]);
+    let crossed = run(&[format!("I1y={}", 0.0598 * 1.04)]);
+    let index = |r: &pendkit::StageResult, label: &str| {
+        r.modes.modes.iter().position(|m| m.label == label).unwrap()
+    };
+    let (pitch_old, y_old) = (index(&nominal, "pitch1"), index(&nominal, "y1"));
+    let (pitch_new, y_new) = (index(&crossed, "pitch1"), index(&crossed, "y1"));
+    assert!(pitch_old > y_old && pitch_new < y_new, "no crossing");
+
+    let continued = crossed.match_modes(&nominal).unwrap();
+    assert_eq!(continued.len(), nominal.modes.modes.len());
+    assert_eq!(continued[pitch_old].unwrap().0, pitch_new);
+    assert_eq!(continued[y_old].unwrap().0, y_new);
+    // every mode keeps its label: a 4 % inertia change does not turn one mode into another
+    for (old, pair) in continued.iter().enumerate() {
+        let (new, overlap) = pair.expect("as many modes");
+        assert_eq!(
+            crossed.modes.modes[new].label, nominal.modes.modes[old].label,
+            "mode {old}"
+        );
+        assert!(
+            overlap > 0.5 && overlap <= 1.0 + 1e-12,
+            "mode {old}: {overlap}"
+        );
+    }
+    // against itself: each mode is itself, with overlap 1 to rounding (mass-normalised
+    // shapes, so u'Mu = 1 to about n·ε)
+    for (k, pair) in nominal.match_modes(&nominal).unwrap().iter().enumerate() {
+        let (same, overlap) = pair.unwrap();
+        assert_eq!(same, k);
+        assert!((overlap - 1.0).abs() < 1e-12, "mode {k}: {overlap}");
+    }
+    // a run over other coordinates is refused, naming the argument
+    let triple = run_stage(Case::model("triple").unwrap().build().unwrap().0, Stage::S2).unwrap();
+    let e = triple.match_modes(&nominal).unwrap_err().to_string();
+    assert!(e.contains("reference"), "{e}");
+}
