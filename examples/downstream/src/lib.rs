@@ -160,11 +160,13 @@ pub struct Study {
     pub samples: usize,
     /// Samples whose build or stage run failed, or whose equilibrium is unstable.
     pub failed: usize,
-    /// Samples with a different number of pitch or yaw modes than the nominal model (a
-    /// mixed mode whose larger energy share moved to another family): their modes cannot
-    /// be matched to the nominal's, so they are left out of the statistics.
+    /// Samples in which a tracked mode, followed from the nominal model by the overlap of
+    /// its shape ([`StageResult::match_modes`]), kept less than half of it (overlap < 0.5):
+    /// no mode of the sample is that mode any more, so the sample is left out of the
+    /// statistics. A mode that keeps its shape is tracked even where its family letter
+    /// changes (a mixed mode whose larger energy share moved to another family).
     pub mismatched: usize,
-    /// The first such sample, as (sample index, every mode's frequency and family).
+    /// The first such sample, as (sample index, what became of the tracked modes).
     pub first_mismatch: Option<(usize, String)>,
     /// The first failure, as (sample index, message), if any.
     pub first_failure: Option<(usize, String)>,
@@ -196,14 +198,14 @@ pub fn run_study(
     let (system, _parameters) = case.build()?;
     let nominal = run_stage(system, Stage::S2)?;
     nominal.check_stable()?;
-    let (mut quantities, counts) = describe(&nominal)?;
+    let (mut quantities, tracked) = describe(&nominal)?;
 
     let sigmas = tolerances.per_parameter();
     let start = Instant::now();
     // collected in index order whatever thread ran each sample
     let outcomes: Vec<Outcome> = (0..samples)
         .into_par_iter()
-        .map(|index| run_sample(&case, &sigmas, seed, index, &counts))
+        .map(|index| run_sample(&case, &sigmas, seed, index, &nominal, &tracked))
         .collect();
     let elapsed = start.elapsed();
 
@@ -245,22 +247,21 @@ pub fn run_study(
 enum Outcome {
     /// The quantities, in the order of [`Study::quantities`].
     Values(Vec<f64>),
-    /// The mode families' sizes differ from the nominal's: every mode's frequency (Hz)
-    /// and family, for the report.
+    /// A tracked mode lost its shape: what became of each, for the report.
     Mismatched(String),
     /// The build, the stage run or the stability check failed: why.
     Failed(String),
 }
 
-/// The quantities of the nominal model (values, no samples yet), and how many modes each
-/// reported family has there.
+/// The quantities of the nominal model (values, no samples yet), and the index of each
+/// tracked mode (every pitch mode, then every yaw mode) in its mode list.
 fn describe(nominal: &StageResult) -> Result<(Vec<Quantity>, Vec<usize>), pendkit::Error> {
     let mut quantities = Vec::new();
-    let mut counts = Vec::new();
+    let mut tracked = Vec::new();
     for family in FAMILIES {
         let modes = family_modes(nominal, family);
-        counts.push(modes.len());
-        for (k, mode) in modes.iter().enumerate() {
+        tracked.extend(modes.iter().map(|&(index, _)| index));
+        for (k, (_, mode)) in modes.iter().enumerate() {
             quantities.push(Quantity {
                 name: format!("{}{}", DOF_FAMILIES[family], k + 1),
                 nominal_label: mode.label.clone(),
@@ -283,19 +284,20 @@ fn describe(nominal: &StageResult) -> Result<(Vec<Quantity>, Vec<usize>), pendki
         values: Vec::new(),
         stats: Stats::of(&[]),
     });
-    Ok((quantities, counts))
+    Ok((quantities, tracked))
 }
 
-/// The modes of one family (an index into [`DOF_FAMILIES`]), by ascending frequency: the
-/// k-th of a sample is matched with the k-th of the nominal model.
-fn family_modes(result: &StageResult, family: usize) -> Vec<&pendkit::dynamics::Mode> {
+/// The modes of one family (an index into [`DOF_FAMILIES`]) with their indices in the mode
+/// list, by ascending frequency.
+fn family_modes(result: &StageResult, family: usize) -> Vec<(usize, &pendkit::dynamics::Mode)> {
     let mut modes: Vec<_> = result
         .modes
         .modes
         .iter()
-        .filter(|m| result.mode_family(m) == DOF_FAMILIES[family])
+        .enumerate()
+        .filter(|(_, m)| result.mode_family(m) == DOF_FAMILIES[family])
         .collect();
-    modes.sort_by(|a, b| a.hz.total_cmp(&b.hz));
+    modes.sort_by(|a, b| a.1.hz.total_cmp(&b.1.hz));
     modes
 }
 
@@ -311,10 +313,16 @@ fn run_sample(
     tolerances: &[(&'static str, f64)],
     seed: u64,
     index: usize,
-    counts: &[usize],
+    nominal: &StageResult,
+    tracked: &[usize],
 ) -> Outcome {
-    evaluate(case, &draw_errors(tolerances, seed, index), counts)
-        .unwrap_or_else(|e| Outcome::Failed(e.to_string()))
+    evaluate(
+        case,
+        &draw_errors(tolerances, seed, index),
+        nominal,
+        tracked,
+    )
+    .unwrap_or_else(|e| Outcome::Failed(e.to_string()))
 }
 
 /// The errors of sample `index`: each parameter of `tolerances` with its standard deviation
@@ -334,12 +342,14 @@ fn draw_errors(
 }
 
 /// The quantities of `case` with each parameter of `errors` incremented by its error (SI
-/// units), at stage 2; [`Outcome::Mismatched`] when the families do not have `counts`
-/// modes.
+/// units), at stage 2: the frequencies of the nominal modes `tracked`, each followed into
+/// the sample by the overlap of its shape, then the cross-coupling; [`Outcome::Mismatched`]
+/// when a tracked mode kept less than half its shape.
 fn evaluate(
     case: &Case,
     errors: &[(&str, f64)],
-    counts: &[usize],
+    nominal: &StageResult,
+    tracked: &[usize],
 ) -> Result<Outcome, pendkit::Error> {
     // `increment(x)` adds to the model's definition (whatever it is); `{:e}` prints the
     // shortest text that reads back as the same f64
@@ -349,19 +359,30 @@ fn evaluate(
     let (system, _parameters) = case.clone().with(overrides)?.build()?;
     let result = run_stage(system, Stage::S2)?;
     result.check_stable()?;
+    let continued = result.match_modes(nominal)?;
     let mut values = Vec::new();
-    for (&family, &count) in FAMILIES.iter().zip(counts) {
-        let modes = family_modes(&result, family);
-        if modes.len() != count {
-            let families: Vec<String> = result
-                .modes
-                .modes
-                .iter()
-                .map(|m| format!("{:.3} Hz {}", m.hz, result.mode_family(m)))
-                .collect();
-            return Ok(Outcome::Mismatched(families.join(", ")));
+    for &old in tracked {
+        match continued[old] {
+            Some((new, overlap)) if overlap >= 0.5 => values.push(result.modes.modes[new].hz),
+            _ => {
+                let became: Vec<String> = tracked
+                    .iter()
+                    .map(|&k| match continued[k] {
+                        Some((new, overlap)) => {
+                            let m = &result.modes.modes[new];
+                            format!(
+                                "{} -> {:.3} Hz {} (overlap {overlap:.2})",
+                                nominal.modes.modes[k].label,
+                                m.hz,
+                                result.mode_family(m)
+                            )
+                        }
+                        None => format!("{} -> none", nominal.modes.modes[k].label),
+                    })
+                    .collect();
+                return Ok(Outcome::Mismatched(became.join(", ")));
+            }
         }
-        values.extend(modes.iter().map(|m| m.hz));
     }
     values.push(coupling(&result)?);
     Ok(Outcome::Values(values))
@@ -495,8 +516,9 @@ mod tests {
 
         let case = Case::model(MODEL)?;
         let (system, _) = case.build()?;
-        let (_, counts) = describe(&run_stage(system, Stage::S2)?)?;
-        let values = |errors: &[(&str, f64)]| match evaluate(&case, errors, &counts) {
+        let nominal = run_stage(system, Stage::S2)?;
+        let (_, tracked) = describe(&nominal)?;
+        let values = |errors: &[(&str, f64)]| match evaluate(&case, errors, &nominal, &tracked) {
             Ok(Outcome::Values(v)) => v,
             _ => panic!("the build with {errors:?} failed"),
         };

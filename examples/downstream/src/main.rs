@@ -84,11 +84,11 @@ fn run() -> Result<(), Box<dyn Error>> {
         );
     }
     println!(
-        "\nfailed: {} (build, run or stability); mode families changed: {} (left out)",
+        "\nfailed: {} (build, run or stability); tracked modes changed: {} (left out)",
         study.failed, study.mismatched
     );
     if let Some((index, modes)) = &study.first_mismatch {
-        println!("first with changed families: sample {index}: {modes}");
+        println!("first with a changed mode: sample {index}: {modes}");
     }
     if let Some((index, message)) = &study.first_failure {
         println!("first failure: sample {index}: {message}");
