@@ -718,16 +718,16 @@ fn a_sum_evaluates_a_shared_body_once_and_equals_the_terms_one_by_one() {
     // sum must equal the two terms evaluated separately (to rounding: the same arithmetic,
     // summed in another order), and a term listed twice must count twice (a part the body
     // does not have is an error: pendkit-energy's own unit test)
-    use pendkit_energy::{TangentSum, tangent_frames, tangent_frames_along};
+    use pendkit_energy::{TangentSum, tangent_frames};
     let (dual, at_rest, terms) = dual_terms_at_rest(&Case::open("quad").expect("case"), "m3");
     let n = dual.coords.len();
     let u: Vec<f64> = (0..n).map(|i| ((i * 7) % 5) as f64 - 2.0).collect();
     let v: Vec<f64> = (0..n).map(|i| ((i * 3) % 4) as f64 - 1.5).collect();
-    let along = tangent_frames_along(&dual, &at_rest, &u).expect("frames");
+    let along = tangent_frames(&dual, &at_rest, &u, &u).expect("frames");
     let across = tangent_frames(&dual, &at_rest, &u, &v).expect("frames");
     let one_by_one_along: f64 = terms
         .iter()
-        .map(|t| t.second_along_frames_once(&along).expect("term").eps)
+        .map(|t| t.second_along_frames(&along).expect("term").eps)
         .sum();
     let one_by_one_across: f64 = terms
         .iter()
@@ -737,7 +737,7 @@ fn a_sum_evaluates_a_shared_body_once_and_equals_the_terms_one_by_one() {
     // the 14 beams' two parts each fold into one evaluation
     assert_eq!(sum.len(), terms.len() - 14);
     let close = |a: f64, b: f64| (a - b).abs() <= 1e-12 * b.abs().max(1e-300);
-    let summed = sum.second_along_frames_once(&along).expect("sum").eps;
+    let summed = sum.second_along_frames(&along).expect("sum").eps;
     assert!(
         close(summed, one_by_one_along),
         "{summed} vs {one_by_one_along}"
@@ -748,7 +748,7 @@ fn a_sum_evaluates_a_shared_body_once_and_equals_the_terms_one_by_one() {
         "{summed} vs {one_by_one_across}"
     );
     let twice = TangentSum::new(terms.iter().chain(&terms));
-    let summed = twice.second_along_frames_once(&along).expect("sum").eps;
+    let summed = twice.second_along_frames(&along).expect("sum").eps;
     assert!(
         close(summed, 2.0 * one_by_one_along),
         "{summed} vs 2 × {one_by_one_along}"
@@ -759,15 +759,16 @@ fn a_sum_evaluates_a_shared_body_once_and_equals_the_terms_one_by_one() {
 fn a_pass_along_several_modes_at_once_is_the_passes_along_each() {
     // The projection and each parameter's column evaluate the terms along LANES modes at
     // once (`SecondLanes`: the value shared, one lane per direction). Each lane must be the
-    // one-direction pass along its own direction (`Dual2<Dual64>`, an independent scalar
-    // of num-dual's), term by term and summed, to rounding (the same products summed in
-    // another order: 1e-12 of the term's size is a thousand times the rounding seen); the
+    // one-direction pass along its own direction (`HyperDual<Dual64>` with u = v, an
+    // independent scalar of num-dual's), term by term and summed, to rounding (the same
+    // second derivative by other products: 1e-12 of the term's size is a thousand times the
+    // rounding seen); the
     // lanes past the directions given are 0, and more directions than lanes is an error.
     // Every kind of the quad and of quad-full (6 × 6 blade springs), with a parameter
     // whose derivative moves terms of each kind (the PUM mass: gravity, wire stretch,
     // bending through the tension, torsion), and the coordinates' own motion.
     use num_dual::Dual64;
-    use pendkit_energy::{TangentSum, tangent_frames_along, tangent_frames_along_lanes};
+    use pendkit_energy::{TangentSum, tangent_frames, tangent_frames_along_lanes};
     use pendkit_rotations::LANES;
     for (model, parameter) in [("quad", "m2"), ("quad-full", "m2"), ("quad", "l3")] {
         let (dual, at_rest, terms) =
@@ -805,13 +806,13 @@ fn a_pass_along_several_modes_at_once_is_the_passes_along_each() {
                     );
                     continue;
                 }
-                let along = tangent_frames_along(&dual, &at_rest, direction).expect("frames");
+                let along = tangent_frames(&dual, &at_rest, direction, direction).expect("frames");
                 for term in &terms {
-                    let one = term.second_along_frames_once(&along).expect("term");
+                    let one = term.second_along_frames(&along).expect("term");
                     let lane = term.second_along_frames_lanes(&lanes).expect("term")[k];
                     close(lane, one, &format!("{} lane {k}", term.label));
                 }
-                let one = sum.second_along_frames_once(&along).expect("sum");
+                let one = sum.second_along_frames(&along).expect("sum");
                 close(summed[k], one, &format!("sum lane {k}"));
             }
         }
@@ -824,9 +825,9 @@ fn a_pass_along_several_modes_at_once_is_the_passes_along_each() {
             .second_along_frames_lanes(&lanes)
             .expect("sum");
         for (k, direction) in refs.iter().enumerate().take(LANES) {
-            let along = tangent_frames_along(&dual, &moving, direction).expect("frames");
+            let along = tangent_frames(&dual, &moving, direction, direction).expect("frames");
             let one = TangentSum::new(&terms)
-                .second_along_frames_once(&along)
+                .second_along_frames(&along)
                 .expect("sum");
             assert!(
                 (summed[k].eps - one.eps).abs() <= 1e-12 * one.eps.abs().max(1e-300),

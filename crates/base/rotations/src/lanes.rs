@@ -267,6 +267,10 @@ impl_dual!(TangentLanes, [eps, v1, v1e, v2, v2e]);
 
 /// The scalar of the passes along [`LANES`] modes at once: each lane's second derivative,
 /// every part carrying its derivative with respect to one parameter (or coordinate).
+/// `cargo bench -p pendkit-benches --bench scalars -- modes-along`: the quad's terms along
+/// 24 modes 2.2× faster (median of six runs, 1.8–2.7×) than one mode at a time by the
+/// hyper-dual number, and 1.5× (1.2–3.4×) than by `Dual2<Dual64>`, measured before that
+/// one-mode path was removed (issue 33).
 pub type SecondLanes = TangentLanes<f64>;
 
 /// A coordinate of a pass along [`LANES`] directions: its value `x` (with its derivative),

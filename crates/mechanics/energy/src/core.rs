@@ -682,56 +682,17 @@ crate::register_element!(SpringKind);
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{Body, CoordKind, Coordinate, OffHessian, Spring, System};
-    use nalgebra::Matrix3;
-    use pendkit_expr::{Slot, parse};
-    use pendkit_geometry::PoseMap;
+    use crate::{OffHessian, Spring, System};
 
-    /// Two free bodies (12 coordinates) below a support driven by six parameters.
+    /// Two free bodies (12 coordinates) below a support driven by six parameters, each
+    /// centre of mass off its body's origin (so that gravity's fast path turns it).
     fn two_bodies() -> System {
-        let names: Vec<String> = ["s", "a", "b"]
-            .iter()
-            .flat_map(|b| ["x", "y", "z", "yaw", "pitch", "roll"].map(|c| format!("{c}{b}")))
-            .collect();
-        let coords = names
-            .iter()
-            .enumerate()
-            .map(|(i, n)| Coordinate {
-                name: n.clone(),
-                kind: if i < 6 {
-                    CoordKind::Parameter
-                } else {
-                    CoordKind::Variable
-                },
-                start: 0.0,
-                pinned: false,
-            })
-            .collect();
-        let slot = |s: &str| names.iter().position(|n| n == s).map(Slot::Var);
-        let body = |k: usize, name: &str, mass: f64| Body {
-            name: name.into(),
-            frame: FrameMap::root(PoseMap {
-                entries: std::array::from_fn(|m| {
-                    parse(&names[6 * k + m]).unwrap().compile(&slot).unwrap()
-                }),
-            }),
-            mass,
-            inertia: Matrix3::identity(),
-            centre_of_mass: Vector3::new(0.01, -0.02, 0.03),
-            shape: None,
-            pose_coords: std::array::from_fn(|m| Some(6 * k + m)),
-            mode_family: None,
-        };
-        System {
-            coords,
-            bodies: vec![
-                body(0, "support", 0.0),
-                body(1, "upper", 3.0),
-                body(2, "lower", 5.0),
-            ],
-            gravity: 9.81,
-            ..System::default()
+        let mut system =
+            System::free_bodies(&[("support", 0.0), ("upper", 3.0), ("lower", 5.0)]).unwrap();
+        for body in &mut system.bodies {
+            body.centre_of_mass = Vector3::new(0.01, -0.02, 0.03);
         }
+        system
     }
 
     /// Largest |fast − reference| relative to the reference's largest entry.

@@ -24,9 +24,8 @@ pub use fast::{
     add_curvature, add_jacobian, hyper_dual_over_frames, on_stack,
 };
 pub use tangent::{
-    DualTangent, GradientFrames, HyperTangent, SecondTangent, TangentDerivatives, TangentPotential,
-    TangentSharedPotential, TangentSum, TangentTerm, tangent_frames, tangent_frames_along,
-    tangent_frames_along_lanes,
+    DualTangent, GradientFrames, HyperTangent, TangentDerivatives, TangentPotential,
+    TangentSharedPotential, TangentSum, TangentTerm, tangent_frames, tangent_frames_along_lanes,
 };
 pub use term::{
     LocalDerivatives, OffHessian, PartOff, Potential, SharedPotential, TensionOff, Term,

@@ -14,22 +14,23 @@
 
 use std::sync::Arc;
 
-use num_dual::{Dual, Dual2, Dual64, HyperDual};
+use num_dual::{Dual, Dual64, HyperDual};
 use pendkit_geometry::Frame;
 use pendkit_rotations::{LANES, Lift, Real, SecondLanes, second_lanes_parts, second_lanes_seed};
 
 use crate::{BodyId, EnergyError, LocalFrames, MAX_FRAMES, MAX_PARTS};
 
 /// The scalar of the parameter-derivative Hessian pass: second derivatives over two
-/// coordinates, each part carrying its derivative with respect to the parameter.
+/// coordinates, each part carrying its derivative with respect to the parameter. The one
+/// pass with cross derivatives (a pair across two modes, every entry of dK/dp); along one
+/// mode at a time it is also the lanes' reference ([`SecondLanes`]).
 pub type HyperTangent = HyperDual<Dual64>;
 
-/// The scalar of the parameter-derivative gradient pass.
+/// The scalar of the parameter-derivative gradient pass (∂g/∂p). `cargo bench -p
+/// pendkit-benches --bench scalars -- gradient`: the quad's terms' gradients 21× faster
+/// (median of three runs, 14–74×) than by the hyper-dual pass that also gives them
+/// ([`TangentTerm::derivatives`]), at least 2× per evaluation.
 pub type DualTangent = Dual<Dual64>;
-
-/// The scalar of the parameter-derivative pass along one direction (a mode): the second
-/// derivative along it, with its derivative with respect to the parameter.
-pub type SecondTangent = Dual2<Dual64>;
 
 /// An energy body whose constants are `Dual64` (a value and its derivative with respect to
 /// one parameter), written once over every scalar that can take such constants, as a
@@ -63,14 +64,14 @@ pub trait TangentSharedPotential: Send + Sync + 'static {
     }
 }
 
-/// Object-safe view of the three scalars the passes use. `parts` lists the energy parts
-/// summed (a body with one part ignores it).
+/// Object-safe view of the three scalars the passes use (the gradient's, the hyper-dual
+/// one's and the lanes'). `parts` lists the energy parts summed (a body with one part
+/// ignores it).
 trait DynTangent: Send + Sync {
     fn moves(&self) -> bool;
     /// The shared body's address, for a part of a shared body.
     fn shared(&self) -> Option<usize>;
     fn value_d(&self, frames: &[&Frame<DualTangent>], parts: &[usize]) -> DualTangent;
-    fn value_d2(&self, frames: &[&Frame<SecondTangent>], parts: &[usize]) -> SecondTangent;
     fn value_hd(&self, frames: &[&Frame<HyperTangent>], parts: &[usize]) -> HyperTangent;
     fn value_lanes(&self, frames: &[&Frame<SecondLanes>], parts: &[usize]) -> SecondLanes;
 }
@@ -83,9 +84,6 @@ impl<P: TangentPotential> DynTangent for P {
         None
     }
     fn value_d(&self, frames: &[&Frame<DualTangent>], _parts: &[usize]) -> DualTangent {
-        self.energy_on_frames(frames)
-    }
-    fn value_d2(&self, frames: &[&Frame<SecondTangent>], _parts: &[usize]) -> SecondTangent {
         self.energy_on_frames(frames)
     }
     fn value_hd(&self, frames: &[&Frame<HyperTangent>], _parts: &[usize]) -> HyperTangent {
@@ -134,9 +132,6 @@ impl<S: TangentSharedPotential> DynTangent for PartOf<S> {
         Some(Arc::as_ptr(&self.shared) as *const () as usize)
     }
     fn value_d(&self, frames: &[&Frame<DualTangent>], parts: &[usize]) -> DualTangent {
-        self.value(frames, parts)
-    }
-    fn value_d2(&self, frames: &[&Frame<SecondTangent>], parts: &[usize]) -> SecondTangent {
         self.value(frames, parts)
     }
     fn value_hd(&self, frames: &[&Frame<HyperTangent>], parts: &[usize]) -> HyperTangent {
@@ -403,20 +398,10 @@ impl TangentTerm {
         self.second_of_parts(frames, self.own_part())
     }
 
-    /// [`TangentTerm::second_along_frames`] with u = v, given every body's frame at x + εu
-    /// ([`tangent_frames_along`]): uᵀ H u by the cheaper second-order dual number. One
-    /// direction at a time; the sensitivities take six at once
-    /// ([`TangentTerm::second_along_frames_lanes`]), whose tests compare each lane with this.
-    pub fn second_along_frames_once(
-        &self,
-        frames: &[Frame<SecondTangent>],
-    ) -> Result<Dual64, EnergyError> {
-        self.second_once_of_parts(frames, self.own_part())
-    }
-
-    /// [`TangentTerm::second_along_frames_once`] along [`LANES`] directions at once, given
-    /// every body's frame at x + Σₖ εₖuₖ ([`tangent_frames_along_lanes`]): each lane's uₖᵀ H uₖ
-    /// with its derivative, equal to the one-direction pass's to rounding.
+    /// [`TangentTerm::second_along_frames`] with u = v along [`LANES`] directions at once,
+    /// given every body's frame at x + Σₖ εₖuₖ ([`tangent_frames_along_lanes`]): each lane's
+    /// uₖᵀ H uₖ with its derivative, equal to the one-direction pass's to rounding (the
+    /// tests compare each lane with it).
     pub fn second_along_frames_lanes(
         &self,
         frames: &[Frame<SecondLanes>],
@@ -433,15 +418,6 @@ impl TangentTerm {
         parts: &[usize],
     ) -> Result<Dual64, EnergyError> {
         self.with_frames(frames, |mine| self.body.value_hd(mine, parts).eps1eps2)
-    }
-
-    /// [`TangentTerm::second_along_frames_once`] of the sum of the body's parts `parts`.
-    fn second_once_of_parts(
-        &self,
-        frames: &[Frame<SecondTangent>],
-        parts: &[usize],
-    ) -> Result<Dual64, EnergyError> {
-        self.with_frames(frames, |mine| self.body.value_d2(mine, parts).v2)
     }
 
     /// [`TangentTerm::second_along_frames_lanes`] of the sum of the body's parts `parts`,
@@ -562,14 +538,6 @@ impl<'t> TangentSum<'t> {
         self.sum(|(t, parts)| t.second_of_parts(frames, parts))
     }
 
-    /// Σ [`TangentTerm::second_along_frames_once`].
-    pub fn second_along_frames_once(
-        &self,
-        frames: &[Frame<SecondTangent>],
-    ) -> Result<Dual64, EnergyError> {
-        self.sum(|(t, parts)| t.second_once_of_parts(frames, parts))
-    }
-
     /// Σ [`TangentTerm::second_along_frames_lanes`].
     pub fn second_along_frames_lanes(
         &self,
@@ -683,19 +651,6 @@ impl GradientFrames {
     }
 }
 
-/// Every body's frame of `system` at x + εu: the frames
-/// [`TangentTerm::second_along_frames_once`] reads.
-pub fn tangent_frames_along<S: Real>(
-    system: &crate::System<S>,
-    x: &[Dual64],
-    u: &[f64],
-) -> Result<Vec<Frame<SecondTangent>>, EnergyError> {
-    let zero = Dual64::from_re(0.0);
-    frames_at(system, [("x", x.len()), ("u", u.len())], |i| {
-        SecondTangent::new(x[i], Dual64::from_re(u[i]), zero)
-    })
-}
-
 /// Every body's frame of `system` at x + Σₖ εₖuₖ for up to [`LANES`] directions `u` (the
 /// lanes past them along no direction): the frames
 /// [`TangentTerm::second_along_frames_lanes`] reads. More directions than lanes is an
@@ -770,7 +725,7 @@ mod tests {
         // the two parts of one body fold into one evaluation; their sum is 3 J
         let sum = TangentSum::new([&first, &second]);
         assert_eq!(sum.len(), 1);
-        let value = sum.groups[0].0.body.value_d2(&[], &sum.groups[0].1);
+        let value = sum.groups[0].0.body.value_d(&[], &sum.groups[0].1);
         assert_eq!(value.re.re, 3.0);
     }
 }
