@@ -7,7 +7,7 @@
 //! coordinates sits at X + R p in space. Angles are in radians.
 
 use nalgebra::{Matrix3, Vector3};
-use num_dual::{Dual, Dual2, Dual64, DualNum, HyperDual};
+use num_dual::{Dual, Dual64, DualNum, HyperDual};
 
 mod lanes;
 pub use lanes::{
@@ -104,19 +104,6 @@ impl Lift<Dual64> for Dual<Dual64> {
     #[inline]
     fn times(self, constant: Dual64) -> Self {
         Dual::new(self.re * constant, self.eps * constant)
-    }
-}
-
-/// The second derivative along one direction of a function whose constants carry a
-/// parameter derivative (the dK/dp pass along a mode).
-impl Lift<Dual64> for Dual2<Dual64> {
-    #[inline]
-    fn lift(constant: Dual64) -> Self {
-        Dual2::from_re(constant)
-    }
-    #[inline]
-    fn times(self, constant: Dual64) -> Self {
-        Dual2::new(self.re * constant, self.v1 * constant, self.v2 * constant)
     }
 }
 
