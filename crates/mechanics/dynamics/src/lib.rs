@@ -2,8 +2,10 @@
 //! pattern, elimination of the floats (one Schur complement for modes and responses alike),
 //! normal modes block by block (all of them, or those below a frequency by shift-invert on
 //! a sparse factorisation), transfer-function sweeps solved only over the blocks an input
-//! and output couple to, and state-space matrices.
+//! and output couple to, state-space matrices, and the derivative of the stage's matrices
+//! with respect to a parameter by central differences over stepped models ([`difference`]).
 
+pub mod difference;
 mod lanczos;
 mod lu;
 mod modes;
@@ -19,7 +21,7 @@ pub use modes::{
     BodyMotion, EntryRounding, Mode, Modes, REFINE_ABOVE, StiffnessRounding, lab_motion,
     normal_modes, normal_modes_with_rounding,
 };
-pub use pattern::Pattern;
+pub use pattern::{CommonPattern, Pattern};
 pub use stability::{
     FloatDirections, FloatMap, GrowingMode, InvertedBody, RunawayFloat, Stability, TermRounding,
     Verdict, float_directions, inverted_bodies, runaway_floats,
