@@ -1271,6 +1271,23 @@ impl TangentChunk {
     }
 }
 
+/// The `f64` model `dual` (a model built with one parameter seeded, [`build_tangent`] or
+/// [`TangentChunk::direction`]) moved by `step` (the parameter's unit) along its exact
+/// tangent, every mechanical number x + step·dx (to first order, all a central difference
+/// sees of it), with what [`build_with`] adds (the damping, the temperature, the "wire
+/// terms early" switch) attached at the parameters of `defaults` with `overrides` (those
+/// of the stepped value): the model a rebuild at the stepped value gives, to first order,
+/// without the build.
+pub fn build_stepped(
+    dual: &System<Dual64>,
+    step: f64,
+    defaults: &Defaults,
+    overrides: &Overrides,
+) -> Result<System, BuildError> {
+    let (_, resolved) = parameters_with(defaults, overrides)?;
+    attach_to_build(dual.stepped(step), defaults, overrides, &resolved)
+}
+
 /// Resolves `model`'s defaults with `overrides` applied, builds the system and attaches
 /// its damping multipliers, temperature (parameter `temperature`, K, default 290) and the
 /// "wire terms early" switch (parameter `wire_terms_early`: 0 no, 1 yes, 2 equilibrium

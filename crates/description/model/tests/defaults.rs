@@ -6,12 +6,13 @@ use std::collections::BTreeMap;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use nalgebra::{Matrix6, Vector3, Vector6};
+use num_dual::Dual64;
 use pendkit_model::{
     BodySpec, BuildError, DampingSpec, Defaults, DefaultsCache, Model, Overrides, SystemBuilder,
-    build_with,
+    build_stepped, build_with,
 };
 use pendkit_params::{ParamError, ParamSet, Resolved};
-use pendkit_system::{SpringEnd, System};
+use pendkit_system::{Real, SpringEnd, System};
 
 /// A mass `m` (kg) on a spring `k` (N/m) along x with structural loss `phi` on tag
 /// `spring`, counting how often its defaults are asked for.
@@ -56,28 +57,40 @@ impl Model for Oscillator {
         BTreeMap::from([("spring".to_string(), DampingSpec::structural("phi"))])
     }
     fn build(&self, p: &Resolved) -> Result<System, BuildError> {
-        let mut b = SystemBuilder::new(0.0);
-        b.variable("x", 0.0)?;
-        b.parameter("s", 0.0)?;
-        let ground = b.body(BodySpec::new("ground").pose(["s", "0", "0", "0", "0", "0"]))?;
-        let mass = b.body(
-            BodySpec::new("mass")
-                .pose(["x", "0", "0", "0", "0", "0"])
-                .mass(p.get("m")?),
-        )?;
-        let end = |body| SpringEnd {
-            body,
-            point: Vector3::zeros(),
-            angles: [0.0; 3],
-        };
-        let mut k = Matrix6::zeros();
-        k[(0, 0)] = p.get("k")?;
-        b.spring("k", [end(ground), end(mass)], k, Vector6::zeros(), "spring")?;
-        b.build()
+        oscillator_system(p.get("m")?, p.get("k")?)
     }
     fn defaults_cache(&self) -> Option<&DefaultsCache> {
         self.cache.as_ref()
     }
+}
+
+/// The oscillator's mechanics over any scalar: a mass `m` (kg) on a spring `k` (N/m) along x
+/// to the support `s`, tag `spring`.
+fn oscillator_system<S: Real>(m: S, k: S) -> Result<System<S>, BuildError> {
+    let mut b = SystemBuilder::new(S::from(0.0));
+    b.variable("x", 0.0)?;
+    b.parameter("s", 0.0)?;
+    let ground = b.body(BodySpec::new("ground").pose(["s", "0", "0", "0", "0", "0"]))?;
+    let mass = b.body(
+        BodySpec::new("mass")
+            .pose(["x", "0", "0", "0", "0", "0"])
+            .mass(m),
+    )?;
+    let end = |body| SpringEnd {
+        body,
+        point: Vector3::zeros(),
+        angles: [S::from(0.0); 3],
+    };
+    let mut stiffness = Matrix6::zeros();
+    stiffness[(0, 0)] = k;
+    b.spring(
+        "k",
+        [end(ground), end(mass)],
+        stiffness,
+        Vector6::zeros(),
+        "spring",
+    )?;
+    b.build()
 }
 
 fn overrides(parameters: &[(&str, &str)], structural: Option<&str>) -> Overrides {
@@ -235,4 +248,24 @@ fn the_mechanical_reads_are_the_model_builds_own() {
         .to_string();
     assert_eq!(e, build_with(&model, &o).unwrap_err().to_string());
     assert!(e.contains("wire_terms_early") && e.contains("0.5"), "{e}");
+}
+
+#[test]
+fn a_stepped_build_moves_along_the_tangent_and_attaches_the_stepped_damping() {
+    // the mechanics built with m seeded (dm/dm = 1, k's tangent 0) and moved by 1/4 kg:
+    // m = 1 + 1/4 = 1.25 kg with no rounding (binary fractions); the damping and the
+    // temperature attached at the overrides' parameters, as a rebuild at m = 1.25 attaches
+    // them: the loss angle is the override's 2e-3, read back as written
+    let model = Oscillator::new("stepped", false);
+    let defaults = Defaults::of(&model).expect("defaults");
+    let dual = oscillator_system(Dual64::new(1.0, 1.0), Dual64::new(100.0, 0.0)).expect("dual");
+    let o = overrides(&[("m", "1.25"), ("phi", "2e-3")], None);
+    let stepped = build_stepped(&dual, 0.25, &defaults, &o).expect("stepped");
+    assert_eq!(stepped.bodies[1].mass, 1.25);
+    assert_eq!(stepped.damping.at("spring", 10.0), (1.0, 2e-3));
+    let (rebuilt, _) = build_with(&model, &o).expect("rebuilt");
+    assert_eq!(stepped.temperature, rebuilt.temperature);
+    // a stepped value the parameters refuse is the build's error, as for a rebuild
+    let unknown = overrides(&[("no_such", "1")], None);
+    assert!(build_stepped(&dual, 0.25, &defaults, &unknown).is_err());
 }

@@ -43,7 +43,8 @@
 //!    parameter a dual number (the chunk build above): the tangent of every
 //!    mass, inertia, point, section constant, stiffness and unstretched length. The model
 //!    at each step below is the nominal one moved along that tangent
-//!    ([`System::stepped`]), which has the same derivative at p₀ as the rebuilt one. A
+//!    ([`pendkit_model::build_stepped`]), which has the same derivative at p₀ as the
+//!    rebuilt one. A
 //!    parameter the dual build cannot follow (written into a pose's text, a count, a
 //!    switch) rebuilds the model at each step ([`Sensitivities::exact_build`]).
 //! 1. **The stage's matrices, by a difference.** For each parameter p (value p₀, step h),
@@ -51,7 +52,7 @@
 //!    equilibrium (so the equilibrium's motion dq*/dp is included), Hessians of the stage,
 //!    float elimination (K_eff = K_aa − K_af K_ff⁻¹ K_fa), mass matrix, damping. The
 //!    derivatives dK_eff/dp, dM/dp and dP(f)/dp (the complex master matrix with damping)
-//!    are the fourth-order central difference
+//!    are the fourth-order central difference ([`pendkit_dynamics::difference`])
 //!    (−X(p₀+2h) + 8X(p₀+h) − 8X(p₀−h) + X(p₀−2h)) / 12h, whose truncation error is
 //!    h⁴ X⁽⁵⁾/30: with h = 10⁻³|p₀| ([`RELATIVE_STEP`]) that is ~10⁻¹³ of X for a smooth
 //!    dependence on the scale of p₀, below the rounding of the matrices' entries
@@ -61,7 +62,9 @@
 //!    the lossless part): ε dP_tag where a tag's multiplier does not move with p, the
 //!    difference of ε P_tag point by point where it does (a loss angle); so one parameter's
 //!    matrices are differenced once, not at every frequency, and a loss angle's derivative
-//!    does not carry the rounding of the other tags' imaginary parts.
+//!    does not carry the rounding of the other tags' imaginary parts
+//!    ([`pendkit_dynamics::difference::StageDerivative`], on the pattern that holds every
+//!    point's, [`pendkit_dynamics::CommonPattern`]).
 //! 2. **Everything after the matrices, exactly** (both routes). Mode frequencies: dω²/dp =
 //!    vᵀ(dK_eff/dp − ω² dM/dp)v with the mass-normalised mode v (Hellmann–Feynman); for a
 //!    cluster of (nearly) equal ω² the derivatives are the eigenvalues of that projected
@@ -105,11 +108,12 @@ use pendkit_assembly::{
     Along, AssemblyOptions, Balance, Projection, assemble_with, in_parallel, in_parallel_with,
     side_by_side,
 };
+use pendkit_dynamics::difference::{STENCIL, StageDerivative, difference, difference_of};
 use pendkit_dynamics::{
     FloatMap, Input, Modes, Output, Solver, Stability, StageModel, StageRun, Sweep,
     eliminate_floats, validate::check_frequencies,
 };
-use pendkit_model::{Defaults, parameters_with};
+use pendkit_model::Defaults;
 use pendkit_system::{Stage, System};
 
 use crate::{Case, Error, StageResult, run_stage};
@@ -266,38 +270,6 @@ fn matrices_point(
         .into(),
         k_eff,
     })
-}
-
-/// Offsets (in steps) of the points of the fourth-order central difference, in the order
-/// [`difference`] takes them, with their weights (× 1/h).
-const STENCIL: [(f64, f64); 4] = [
-    (-2.0, 1.0 / 12.0),
-    (-1.0, -8.0 / 12.0),
-    (1.0, 8.0 / 12.0),
-    (2.0, -1.0 / 12.0),
-];
-
-/// The fourth-order central difference [8(X₊₁ − X₋₁) − (X₊₂ − X₋₂)] / 12h over the
-/// stencil's points (`points` holds one point per [`STENCIL`] entry). Written as
-/// differences of pairs, so that a quantity the parameter does not move gives exactly 0.
-fn difference<T>(points: &[Point], h: f64, x: impl Fn(&Point) -> T) -> T
-where
-    T: std::ops::Mul<f64, Output = T> + std::ops::Add<T, Output = T>,
-{
-    let inner = x(&points[2]) + x(&points[1]) * -1.0;
-    let outer = x(&points[3]) + x(&points[0]) * -1.0;
-    inner * (8.0 / (12.0 * h)) + outer * (-1.0 / (12.0 * h))
-}
-
-/// [`difference`] of vectors or matrices given one per stencil point.
-fn difference_of<M>(v: &[&M], h: f64) -> M
-where
-    for<'a> &'a M: std::ops::Sub<&'a M, Output = M>,
-    M: std::ops::Mul<f64, Output = M>
-        + std::ops::Sub<M, Output = M>
-        + std::ops::Div<f64, Output = M>,
-{
-    ((v[2] - v[1]) * 8.0 - (v[3] - v[0])) / (12.0 * h)
 }
 
 /// How each parameter enters the model.
@@ -478,86 +450,119 @@ impl Tangents {
     }
 }
 
-/// Parameter `j`'s column: the stage rebuilt at the stencil's points and differenced, then
-/// the exact algebra of the module's documentation. `None` for a parameter nothing reads
-/// (every derivative exactly 0, nothing computed).
-#[expect(
-    clippy::too_many_lines,
-    reason = "one parameter's column: the stencil's rebuilt stages and the exact algebra read the same differenced matrices"
-)]
+/// Parameter `j`'s column: the modes by the exact route where it is open, else (and for the
+/// responses) the stage rebuilt at the stencil's points and differenced, then the exact
+/// algebra of the module's documentation. `None` for a parameter nothing reads (every
+/// derivative exactly 0, nothing computed: exact for the modes, as a loss angle's zero is,
+/// where the exact route was asked for).
 fn column(
     shared: &Shared,
     j: usize,
     scratch: &mut pendkit_model::DirectionScratch,
 ) -> Result<Option<Column>, Error> {
-    let Shared {
-        case,
-        defaults,
-        request,
-        names,
-        values,
-        reach,
-        base_point,
-        base_ports,
-        nominal,
-        sizes,
-        responses,
-        ..
-    } = *shared;
-    if reach[j] == Reach::Nothing {
-        // nothing reads it: every derivative is exactly 0, with nothing computed (exact for
-        // the modes, as a loss angle's zero is, where the exact route was asked for)
+    if shared.reach[j] == Reach::Nothing {
         return Ok(None);
     }
-    let name = &names[j];
-    let modes = &base_point.result.modes.modes;
-    let nf = request.freqs.len();
-    let p0 = values[j];
-    let h = if p0 == 0.0 {
-        ZERO_STEP
-    } else {
-        RELATIVE_STEP * p0.abs()
-    };
+    let h = step_of(shared.values[j]);
     // the model's numbers along their exact tangent, where the build offers one (else each
     // step rebuilds the model)
     let tangent = shared.tangents.of(j, scratch);
-    let mut out = Column {
-        step: h,
-        exact_build: tangent.is_some(),
-        exact: false,
-        refused: None,
-        dfdp: vec![0.0; if request.modes { modes.len() } else { 0 }],
-        pending: None,
-        d_tf: vec![C::new(0.0, 0.0); nf],
-        d_noise: vec![0.0; nf],
-    };
-    // the modes by the exact route where it is open (the responses, if asked for, are
-    // differenced below whatever the modes took)
-    if request.modes && !request.differences {
-        if shared.modes_blind[j] {
-            // a parameter only the damping's loss angles and the temperature read: the
-            // modes' stiffness (the tension-on Hessian, each tag's times its ε'(0)) and the
-            // mass do not move with it, so every mode's derivative is exactly 0, with
-            // nothing computed
-            out.exact = true;
-        } else if let Some(dual) = tangent
-            && let Some(projections) = exact_projections(shared, j, p0, h, dual)?
-        {
-            // the stage's matrices differentiated by the implicit function theorem (the
-            // equilibrium's motion added by finish_modes)
-            out.pending = Some(projections);
-            out.exact = true;
-        }
-        if out.exact && !responses {
+    let mut out = Column::new(shared, h, tangent.is_some());
+    // the responses, if asked for, are differenced whatever the modes took
+    if exact_modes(shared, j, tangent, &mut out)? && !shared.responses {
+        return Ok(Some(out));
+    }
+    let points = match stencil_points(shared, j, h, tangent)? {
+        Ok(points) => points,
+        Err(why) => {
+            out.refused = Some(why);
             return Ok(Some(out));
         }
+    };
+    if shared.request.modes && !out.exact {
+        out.dfdp = differenced_modes(shared, &points, h)?;
     }
+    if shared.responses {
+        response_derivatives(shared, j, &points, h, &mut out)?;
+    }
+    Ok(Some(out))
+}
+
+/// The step of the difference for a parameter of value `p0` (its unit): [`RELATIVE_STEP`]
+/// of it, or [`ZERO_STEP`] at 0.
+fn step_of(p0: f64) -> f64 {
+    if p0 == 0.0 {
+        ZERO_STEP
+    } else {
+        RELATIVE_STEP * p0.abs()
+    }
+}
+
+impl Column {
+    /// A column of zeros with step `h`, nothing yet computed.
+    fn new(shared: &Shared, h: f64, exact_build: bool) -> Column {
+        let (request, nf) = (shared.request, shared.request.freqs.len());
+        let modes = &shared.base_point.result.modes.modes;
+        Column {
+            step: h,
+            exact_build,
+            exact: false,
+            refused: None,
+            dfdp: vec![0.0; if request.modes { modes.len() } else { 0 }],
+            pending: None,
+            d_tf: vec![C::new(0.0, 0.0); nf],
+            d_noise: vec![0.0; nf],
+        }
+    }
+}
+
+/// The modes of parameter `j` by the exact route, where the request asks for the modes, does
+/// not ask for differences, and the route is open: exactly 0 for a parameter only what
+/// moves no mode reads, else the projections of the stage's matrices differentiated by the
+/// implicit function theorem (the equilibrium's motion added by [`finish_modes`]). Whether
+/// they took it (`out.exact`).
+fn exact_modes(
+    shared: &Shared,
+    j: usize,
+    tangent: Option<&System<Dual64>>,
+    out: &mut Column,
+) -> Result<bool, Error> {
+    if !shared.request.modes || shared.request.differences {
+        return Ok(false);
+    }
+    if shared.modes_blind[j] {
+        // a parameter only the damping's loss angles and the temperature read: the
+        // modes' stiffness (the tension-on Hessian, each tag's times its ε'(0)) and the
+        // mass do not move with it, so every mode's derivative is exactly 0, with
+        // nothing computed
+        out.exact = true;
+    } else if let Some(dual) = tangent
+        && let Some(projections) = exact_projections(shared, j, shared.values[j], out.step, dual)?
+    {
+        out.pending = Some(projections);
+        out.exact = true;
+    }
+    Ok(out.exact)
+}
+
+/// The stage of parameter `j` at the stencil's points p₀ + k h, each model moved along the
+/// exact tangent where there is one, else rebuilt; the inner error is why the model refuses
+/// one of the values (a switch or a count), when every parameter was asked for (a parameter
+/// named in the request is an error instead).
+fn stencil_points(
+    shared: &Shared,
+    j: usize,
+    h: f64,
+    tangent: Option<&System<Dual64>>,
+) -> Result<Result<[Point; 4], String>, Error> {
+    let (case, request, name) = (shared.case, shared.request, &shared.names[j]);
+    let p0 = shared.values[j];
     let mut points = Vec::with_capacity(STENCIL.len());
     for &(k, _) in &STENCIL {
         let value = p0 + k * h;
         let overrides = overridden(case, name, value);
         let built = match tangent {
-            Some(dual) => stepped(dual, k * h, defaults, &overrides),
+            Some(dual) => pendkit_model::build_stepped(dual, k * h, shared.defaults, &overrides),
             None => pendkit_model::build_with(&*case.model, &overrides).map(|(system, _)| system),
         }
         .map_err(Error::from);
@@ -569,91 +574,127 @@ fn column(
                 if request.parameters.is_some() {
                     return Err(bad(format!("'{name}' has no derivative: {why}")));
                 }
-                out.refused = Some(why);
-                return Ok(Some(out));
+                return Ok(Err(why));
             }
             Err(e) => return Err(e),
         };
-        points.push(match reach[j] {
+        let base = &shared.base_point.result;
+        points.push(match shared.reach[j] {
             Reach::Mechanics => stage_point(system, request.stage)?,
-            _ => matrices_point(
-                system,
-                base_point.result.assembled.clone(),
-                base_point.result.model.clone(),
-            )?,
+            _ => matrices_point(system, base.assembled.clone(), base.model.clone())?,
         });
     }
-    for p in &points {
-        if p.result.model.sizes != sizes {
-            return Err(bad(format!(
-                "changing '{name}' changes the model's coordinates: no derivative"
-            )));
-        }
+    if points.iter().any(|p| p.result.model.sizes != shared.sizes) {
+        return Err(bad(format!(
+            "changing '{name}' changes the model's coordinates: no derivative"
+        )));
     }
-    if request.modes && !out.exact {
-        let dk = difference(&points, h, |p| p.k_eff.clone());
-        let dm = difference(&points, h, |p| p.result.assembled.mass.clone());
-        let vectors = shared.vectors;
-        let vk = vectors.transpose() * &dk * vectors;
-        let vm = vectors.transpose() * &dm * vectors;
-        out.dfdp = mode_derivatives(shared, &vk, &vm)?;
-    }
-    if responses {
-        let tf_ports: Vec<Ports> = match &request.tf {
-            Some(tf) => points
-                .iter()
-                .map(|p| ports(p, tf))
-                .collect::<Result<_, _>>()?,
-            None => Vec::new(),
+    let points: [Point; 4] = points
+        .try_into()
+        .map_err(|_| bad("the stencil has four points"))?;
+    Ok(Ok(points))
+}
+
+/// The modes' derivatives from the stage's matrices differenced over the stencil's points
+/// (step `h`), projected on the nominal modes.
+fn differenced_modes(shared: &Shared, points: &[Point; 4], h: f64) -> Result<Vec<f64>, Error> {
+    let dk = difference(points, h, |p| p.k_eff.clone());
+    let dm = difference(points, h, |p| p.result.assembled.mass.clone());
+    let vectors = shared.vectors;
+    let vk = vectors.transpose() * &dk * vectors;
+    let vm = vectors.transpose() * &dm * vectors;
+    mode_derivatives(shared, &vk, &vm)
+}
+
+/// The port vectors' derivatives over the stencil's points: the transfer function's input
+/// (db) and output (dc) and the noise output's (do), each where asked for.
+struct PortChanges {
+    tf: Option<(DVector<f64>, DVector<f64>)>,
+    noise: Option<DVector<f64>>,
+}
+
+impl PortChanges {
+    /// The ports at each point, checked against the nominal's kinds, differenced (step `h`).
+    fn new(shared: &Shared, name: &str, points: &[Point; 4], h: f64) -> Result<Self, Error> {
+        let request = shared.request;
+        let [p0, p1, p2, p3] = points;
+        let at = |port: &dyn Fn(&Point) -> Result<Ports, Error>| -> Result<[Ports; 4], Error> {
+            Ok([port(p0)?, port(p1)?, port(p2)?, port(p3)?])
         };
-        let noise_ports: Vec<Ports> = match &request.noise {
-            Some(name) => points
-                .iter()
-                .map(|p| noise_port(p, name))
-                .collect::<Result<_, _>>()?,
-            None => Vec::new(),
+        let tf_ports = match &request.tf {
+            Some(tf) => Some(at(&|p| ports(p, tf))?),
+            None => None,
         };
-        if let Some(b) = base_ports
+        let noise_ports = match &request.noise {
+            Some(output) => Some(at(&|p| noise_port(p, output))?),
+            None => None,
+        };
+        if let (Some(b), Some(tf_ports)) = (shared.base_ports, &tf_ports)
             && tf_ports.iter().any(|p| !same_kinds(p, b))
         {
             return Err(bad(format!(
                 "changing '{name}' changes the kind of the transfer function's input or output"
             )));
         }
-        let tf_vectors: Vec<(DVector<f64>, DVector<f64>)> =
-            tf_ports.iter().map(|p| port_vectors(p, sizes)).collect();
-        let noise_vectors: Vec<DVector<f64>> = noise_ports
-            .iter()
-            .map(|p| port_vectors(p, sizes).1)
-            .collect();
-        let db = (tf_vectors.len() == STENCIL.len())
-            .then(|| difference_of(&tf_vectors.iter().map(|v| &v.0).collect::<Vec<_>>(), h));
-        let dc = (tf_vectors.len() == STENCIL.len())
-            .then(|| difference_of(&tf_vectors.iter().map(|v| &v.1).collect::<Vec<_>>(), h));
-        let d_o = (noise_vectors.len() == STENCIL.len())
-            .then(|| difference_of(&noise_vectors.iter().collect::<Vec<_>>(), h));
-        // the frequency-independent parts' derivatives once, dE(f) w from them per frequency
-        let master = StageDerivative::new(&points, h, name)?;
-        let mut dew = vec![C::new(0.0, 0.0); sizes.0 + sizes.1 + sizes.2];
-        let by_tag = &base_point.result.model.by_tag;
-        let mut buffer = Vec::new();
-        for (i, &f) in request.freqs.iter().enumerate() {
-            let nominal = &nominal[i];
-            let change = master.at(&points, f, std::mem::take(&mut buffer))?;
-            if let (Some(tf), Some(db), Some(dc)) = (&nominal.tf, &db, &dc) {
-                dew.fill(C::new(0.0, 0.0));
-                change.multiply(&tf.w, &mut dew)?;
-                out.d_tf[i] = nominal.d_transfer(tf, &dew, db, dc, sizes)?;
-            }
-            if let (Some(d_o), Some(noise)) = (&d_o, &nominal.noise) {
-                dew.fill(C::new(0.0, 0.0));
-                change.multiply(&noise.w, &mut dew)?;
-                out.d_noise[i] = noise.d_psd(&points, (h, f), (&dew, d_o), &master, by_tag)?;
-            }
-            buffer = change.values;
-        }
+        let sizes = shared.sizes;
+        let tf = tf_ports.map(|ports| {
+            let vectors = ports.each_ref().map(|p| port_vectors(p, sizes));
+            (
+                difference_of(vectors.each_ref().map(|v| &v.0), h),
+                difference_of(vectors.each_ref().map(|v| &v.1), h),
+            )
+        });
+        let noise = noise_ports.map(|ports| {
+            let vectors = ports.each_ref().map(|p| port_vectors(p, sizes).1);
+            difference_of(vectors.each_ref(), h)
+        });
+        Ok(PortChanges { tf, noise })
     }
-    Ok(Some(out))
+}
+
+/// Parameter `j`'s |H| and noise derivatives into `out`, one per frequency: the port
+/// vectors' and the stage's dE(f) differenced over the stencil's points (the
+/// frequency-independent parts once, dE(f) w per frequency from them), then the adjoint
+/// algebra against the nominal responses.
+fn response_derivatives(
+    shared: &Shared,
+    j: usize,
+    points: &[Point; 4],
+    h: f64,
+    out: &mut Column,
+) -> Result<(), Error> {
+    let (name, sizes) = (&shared.names[j], shared.sizes);
+    let ports = PortChanges::new(shared, name, points, h)?;
+    let master = StageDerivative::new(
+        points
+            .each_ref()
+            .map(|p| (&p.result.model, &p.result.system.damping)),
+        h,
+    )
+    .ok_or_else(|| {
+        bad(format!(
+            "changing '{name}' changes which damping tags dissipate: no derivative"
+        ))
+    })?;
+    let mut dew = vec![C::new(0.0, 0.0); sizes.0 + sizes.1 + sizes.2];
+    let by_tag = &shared.base_point.result.model.by_tag;
+    let mut buffer = Vec::new();
+    for (i, &f) in shared.request.freqs.iter().enumerate() {
+        let nominal = &shared.nominal[i];
+        let change = master.at(f, std::mem::take(&mut buffer))?;
+        if let (Some(tf), Some((db, dc))) = (&nominal.tf, &ports.tf) {
+            dew.fill(C::new(0.0, 0.0));
+            change.multiply(&tf.w, &mut dew)?;
+            out.d_tf[i] = nominal.d_transfer(tf, &dew, db, dc, sizes)?;
+        }
+        if let (Some(d_o), Some(noise)) = (&ports.noise, &nominal.noise) {
+            dew.fill(C::new(0.0, 0.0));
+            change.multiply(&noise.w, &mut dew)?;
+            out.d_noise[i] = noise.d_psd(points, (h, f), (&dew, d_o), &master, by_tag)?;
+        }
+        buffer = change.into_buffer();
+    }
+    Ok(())
 }
 
 /// The case's overrides with `name = value` last (the nominal build has checked that every
@@ -706,7 +747,8 @@ fn exact_projections(
     };
     for &k in near {
         let overrides = overridden(shared.case, name, p0 + k * h);
-        let Ok(system) = stepped(dual, k * h, shared.defaults, &overrides) else {
+        let Ok(system) = pendkit_model::build_stepped(dual, k * h, shared.defaults, &overrides)
+        else {
             return Ok(None);
         };
         if base
@@ -912,307 +954,6 @@ fn mode_derivatives(
     Ok(dfdp)
 }
 
-/// The model moved by `step` along its exact tangent `dual` (the mechanical numbers to
-/// first order, which is all a central difference sees of them), with what the build adds
-/// (damping, temperature, switches) evaluated at the overridden parameters.
-fn stepped(
-    dual: &System<num_dual::Dual64>,
-    step: f64,
-    defaults: &Defaults,
-    overrides: &pendkit_model::Overrides,
-) -> Result<System, pendkit_model::BuildError> {
-    let (_, resolved) = parameters_with(defaults, overrides)?;
-    pendkit_model::attach_to_build(dual.stepped(step), defaults, overrides, &resolved)
-}
-
-/// The entries of `v` whose `keep` is true.
-fn kept<T>(v: Vec<T>, keep: &[bool]) -> Vec<T> {
-    v.into_iter()
-        .zip(keep)
-        .filter_map(|(x, &k)| k.then_some(x))
-        .collect()
-}
-
-/// Adds the term m V to a list of parts for [`StageModel::sum_parts`], [`StageModel::multiply`], merged with the last one
-/// where that has the same values (a tag's real and imaginary multipliers: one pass).
-fn push_part<'a>(parts: &mut Vec<(C, &'a [f64])>, m: C, values: &'a [f64]) {
-    match parts.last_mut() {
-        Some((last, v)) if std::ptr::eq(*v, values) => *last += m,
-        _ => parts.push((m, values)),
-    }
-}
-
-/// One frequency-independent part of E(f) (the lossless part, a damping tag's P_tag, or the
-/// mass) at the stencil's points: its values on each point's pattern and its change with
-/// the parameter, multiplied into vectors on the pattern by the engine
-/// ([`StageModel::sum_parts`], [`StageModel::multiply`]), never formed densely.
-struct Part<'a> {
-    /// Per point: the model whose pattern its values are on (the common pattern's where
-    /// there is one, [`common_pattern`]) and the values there.
-    at: Vec<(&'a StageModel, std::borrow::Cow<'a, [f64]>)>,
-    change: Change,
-}
-
-/// A pattern that holds every stencil point's: the point whose pattern it is, and per
-/// point the slot there of each of its own slots (`None` for a point with that very
-/// pattern, the usual case).
-struct CommonPattern {
-    base: usize,
-    maps: Vec<Option<Vec<usize>>>,
-}
-
-/// The [`CommonPattern`] of the points, if one point's pattern holds every other's (a
-/// parameter that moves an entry to or from an exact zero changes a pattern).
-fn common_pattern(points: &[Point]) -> Option<CommonPattern> {
-    let patterns: Vec<&pendkit_dynamics::Pattern> =
-        points.iter().map(|p| &p.result.model.pattern).collect();
-    (0..patterns.len()).find_map(|base| {
-        let target = patterns[base];
-        let maps = patterns
-            .iter()
-            .map(|&own| {
-                if own == target {
-                    return Some(None);
-                }
-                own.positions()
-                    .map(|(i, j)| target.slot(i, j))
-                    .collect::<Option<Vec<usize>>>()
-                    .map(Some)
-            })
-            .collect::<Option<Vec<_>>>()?;
-        Some(CommonPattern { base, maps })
-    })
-}
-
-/// How a [`Part`] moves with the parameter.
-enum Change {
-    /// The same at every point: an exact 0.
-    Zero,
-    /// The difference of its values on the points' common pattern.
-    OnPattern(Vec<f64>),
-    /// No point's pattern holds every other's: the difference is taken of the products,
-    /// point by point.
-    ByPoint,
-}
-
-impl<'a> Part<'a> {
-    /// The part whose values on each point's pattern `values` gives, differenced on the
-    /// points' common pattern where they have one (the usual case: then a part the
-    /// parameter does not move costs one comparison).
-    fn new(
-        points: &'a [Point],
-        h: f64,
-        common: Option<&CommonPattern>,
-        values: impl Fn(&'a StageModel) -> &'a [f64],
-    ) -> Self {
-        use std::borrow::Cow;
-        let Some(common) = common else {
-            let at = points
-                .iter()
-                .map(|p| (&p.result.model, Cow::Borrowed(values(&p.result.model))))
-                .collect();
-            return Part {
-                at,
-                change: Change::ByPoint,
-            };
-        };
-        let base = &points[common.base].result.model;
-        let at: Vec<(&StageModel, Cow<[f64]>)> = points
-            .iter()
-            .zip(&common.maps)
-            .map(|(p, map)| {
-                let own = values(&p.result.model);
-                let on_base = match map {
-                    None => Cow::Borrowed(own),
-                    Some(map) => {
-                        let mut v = vec![0.0; base.pattern.len()];
-                        for (&slot, &x) in map.iter().zip(own) {
-                            v[slot] = x;
-                        }
-                        Cow::Owned(v)
-                    }
-                };
-                (base, on_base)
-            })
-            .collect();
-        let change = if at.iter().all(|(_, v)| *v == at[0].1) {
-            Change::Zero
-        } else {
-            let on_pattern: Vec<DVector<f64>> = at
-                .iter()
-                .map(|(_, v)| DVector::from_column_slice(v))
-                .collect();
-            let d = difference_of(&on_pattern.iter().collect::<Vec<_>>(), h);
-            Change::OnPattern(d.as_slice().to_vec())
-        };
-        Part { at, change }
-    }
-
-    /// Lists this part's d(ε P)/dp for one real (`unit` 1) or imaginary (`unit` i) part of
-    /// its multiplier, given that part of ε at each point: ε dP where ε is the same at every
-    /// point (nothing where the part does not move either: an exact 0), else Σ_k (weight_k /
-    /// h) ε_k P_k over the stencil's points. Terms on the first point's pattern go to
-    /// `shared` (one product for all of them), the others to `own` with their point's model.
-    fn collect<'s>(
-        &'s self,
-        (eps, unit): (&[f64], C),
-        h: f64,
-        shared: &mut Vec<(C, &'s [f64])>,
-        own: &mut Vec<(&'s StageModel, C, &'s [f64])>,
-    ) {
-        if eps.iter().all(|&e| e == eps[0]) {
-            let e = eps[0];
-            match &self.change {
-                Change::Zero => return,
-                _ if e == 0.0 => return,
-                Change::OnPattern(d) => {
-                    push_part(shared, unit * e, d);
-                    return;
-                }
-                Change::ByPoint => {}
-            }
-        }
-        let same_pattern = !matches!(self.change, Change::ByPoint);
-        for ((model, values), (&e, &(_, weight))) in self.at.iter().zip(eps.iter().zip(&STENCIL)) {
-            let m = unit * (weight / h * e);
-            if same_pattern {
-                push_part(shared, m, values);
-            } else {
-                own.push((model, m, values));
-            }
-        }
-    }
-
-    /// z̄ᵀ (dP/dp) z over the unknowns (the noise crate's form,
-    /// [`pendkit_noise::dissipation_form`]), `z` over the unknowns.
-    fn energy(&self, h: f64, z: &[C]) -> Result<f64, Error> {
-        Ok(match &self.change {
-            Change::Zero => 0.0,
-            Change::OnPattern(d) => pendkit_noise::dissipation_form(self.at[0].0, d, z)?,
-            Change::ByPoint => {
-                let mut sum = 0.0;
-                for ((model, values), &(_, weight)) in self.at.iter().zip(&STENCIL) {
-                    sum += weight / h * pendkit_noise::dissipation_form(model, values, z)?;
-                }
-                sum
-            }
-        })
-    }
-}
-
-/// dE(f)/dp of one parameter from the stencil's points, E(f) = L + Σ_tag ε_tag(f) P_tag −
-/// ω² M (L the lossless part, P_tag each damping tag's tension-off part, M the mass), as
-/// the parts' changes on the stage's pattern: the parts are differenced once per
-/// parameter, and dE(f) w is put together per frequency by the engine's product.
-struct StageDerivative<'a> {
-    /// The lossless part.
-    lossless: Part<'a>,
-    /// The mass on the pattern.
-    mass: Part<'a>,
-    /// Per damping tag (the stage's order): its name and its part.
-    tags: Vec<(&'a str, Part<'a>)>,
-    /// The step of the difference.
-    h: f64,
-    /// The model whose pattern the parts' changes are on.
-    base: &'a StageModel,
-}
-
-impl<'a> StageDerivative<'a> {
-    fn new(points: &'a [Point], h: f64, parameter: &str) -> Result<Self, Error> {
-        fn by_tag(p: &Point) -> Vec<&str> {
-            p.result
-                .model
-                .by_tag
-                .iter()
-                .map(|(t, _)| t.as_str())
-                .collect()
-        }
-        let names = by_tag(&points[0]);
-        if points.iter().any(|p| by_tag(p) != names) {
-            return Err(bad(format!(
-                "changing '{parameter}' changes which damping tags dissipate: no derivative"
-            )));
-        }
-        let common = common_pattern(points);
-        let common = common.as_ref();
-        let tags = names
-            .iter()
-            .enumerate()
-            .map(|(t, &name)| (name, Part::new(points, h, common, move |m| &m.by_tag[t].1)))
-            .collect();
-        Ok(StageDerivative {
-            lossless: Part::new(points, h, common, |m| &m.lossless),
-            mass: Part::new(points, h, common, |m| &m.mass_on_pattern),
-            tags,
-            h,
-            base: &points[common.map_or(0, |c| c.base)].result.model,
-        })
-    }
-
-    /// dE(f_hz)/dp: the parts on the shared pattern summed there once (they then multiply
-    /// the transfer function's and the noise's responses alike), any part whose points'
-    /// patterns differ kept point by point.
-    /// `values` is a buffer to reuse (the last frequency's [`ChangeAt::values`]).
-    fn at<'s>(
-        &'s self,
-        points: &'s [Point],
-        f_hz: f64,
-        mut values: Vec<C>,
-    ) -> Result<ChangeAt<'s>, Error> {
-        let (one, i) = (C::new(1.0, 0.0), C::new(0.0, 1.0));
-        let mut shared = Vec::with_capacity(2 * self.tags.len() + 2);
-        let mut own = Vec::new();
-        // the lossless part's multiplier is 1 at every point
-        self.lossless
-            .collect((&[1.0; 4], one), self.h, &mut shared, &mut own);
-        for (tag, part) in &self.tags {
-            // one multiplier per stencil point
-            let (mut real, mut imag) = ([0.0; STENCIL.len()], [0.0; STENCIL.len()]);
-            for ((r, m), p) in real.iter_mut().zip(&mut imag).zip(points) {
-                (*r, *m) = p.result.system.damping.at(tag, f_hz);
-            }
-            part.collect((&real, one), self.h, &mut shared, &mut own);
-            part.collect((&imag, i), self.h, &mut shared, &mut own);
-        }
-        let w2 = (2.0 * std::f64::consts::PI * f_hz).powi(2);
-        self.mass
-            .collect((&[-w2; 4], one), self.h, &mut shared, &mut own);
-        let model = self.base;
-        values.resize(model.pattern.len(), C::new(0.0, 0.0));
-        model.sum_parts(&shared, &mut values)?;
-        Ok(ChangeAt { model, values, own })
-    }
-
-    /// The part of the tag named `tag`; `None` when the points have no such tag.
-    fn tag(&self, tag: &str) -> Option<&Part<'a>> {
-        self.tags
-            .iter()
-            .find(|(name, _)| *name == tag)
-            .map(|(_, part)| part)
-    }
-}
-
-/// dE(f)/dp at one frequency ([`StageDerivative::at`]): values on the shared pattern, and
-/// the terms (model, multiplier, values) of any part whose points' patterns differ.
-struct ChangeAt<'s> {
-    model: &'s StageModel,
-    values: Vec<C>,
-    own: Vec<(&'s StageModel, C, &'s [f64])>,
-}
-
-impl ChangeAt<'_> {
-    /// Adds dE w to `out`, both over every master row.
-    fn multiply(&self, w: &[C], out: &mut [C]) -> Result<(), Error> {
-        self.model.multiply(&self.values, w, out)?;
-        for &(model, m, values) in &self.own {
-            let mut term = vec![C::new(0.0, 0.0); values.len()];
-            model.sum_parts(&[(m, values)], &mut term)?;
-            model.multiply(&term, w, out)?;
-        }
-        Ok(())
-    }
-}
-
 /// Which parameters what reads, from the case's own builds.
 struct ParameterReads {
     reach: Vec<Reach>,
@@ -1332,15 +1073,90 @@ impl NominalStage {
             exact: exact_route,
         })
     }
+
+    /// The nominal responses at the request's frequencies (none without a response to
+    /// differentiate: the request then has no frequencies), factorised once each.
+    fn responses(&self, request: &SensitivityRequest) -> Result<Vec<Nominal<'_>>, Error> {
+        let sizes = self.point.result.model.sizes;
+        request
+            .freqs
+            .iter()
+            .map(|&f| {
+                Nominal::new(
+                    &self.point,
+                    f,
+                    self.ports.as_ref(),
+                    self.noise.as_ref(),
+                    sizes,
+                )
+            })
+            .collect()
+    }
 }
 
 /// Sensitivities of `case` at the request's stage. See the module's documentation for the
 /// method and its accuracy.
-#[expect(
-    clippy::too_many_lines,
-    reason = "the request's steps in order: nominal stage, parameter columns in parallel, then the modes', responses' and noise's tables from them"
-)]
 pub fn sensitivities(case: &Case, request: &SensitivityRequest) -> Result<Sensitivities, Error> {
+    let responses = check_request(request)?;
+    let (system, resolved, mechanical_reads) = case.build_with_mechanical_reads()?;
+    let defaults = Defaults::of(&*case.model)?;
+    let (names, values) = requested_parameters(case, request, &resolved)?;
+    // the nominal stage (and what the exact route shares) beside which parameters what
+    // reads and the parameters' dual builds: neither needs the other
+    let (nominal_stage, reads) = side_by_side(
+        request.threads,
+        || NominalStage::new(system, request),
+        || -> Result<_, Error> {
+            let reads = ParameterReads::new(case, &defaults, &resolved, &mechanical_reads, &names)?;
+            let tangents = Tangents::build(case, &names, &reads.reach, request.threads)?;
+            Ok((reads, tangents))
+        },
+    );
+    // a failing read comes first, as it would in order: the stage needs nothing read
+    let (reads, tangents) = reads?;
+    let mut nominal_stage = nominal_stage?;
+    let exact = nominal_stage.exact.take();
+    // the nominal responses' factorisations, once per frequency
+    let nominal = nominal_stage.responses(request)?;
+    let shared = Shared {
+        case,
+        defaults: &defaults,
+        request,
+        names: &names,
+        values: &values,
+        reach: &reads.reach,
+        real_multiplier_reads: &reads.real_multiplier_reads,
+        modes_blind: &reads.modes_blind,
+        base_point: &nominal_stage.point,
+        base_ports: nominal_stage.ports.as_ref(),
+        nominal: &nominal,
+        vectors: &nominal_stage.vectors,
+        clusters: &nominal_stage.clusters,
+        sizes: nominal_stage.point.result.model.sizes,
+        responses,
+        exact,
+        tangents: &tangents,
+    };
+    // the columns, then the coefficients of the equilibrium's motion along the coordinates
+    // their dq*/dp move (finish_modes)
+    let mut columns = in_parallel_with(
+        names.len(),
+        request.threads,
+        pendkit_model::DirectionScratch::default,
+        |scratch, j| column(&shared, j, scratch),
+    )?;
+    finish_modes(&shared, &mut columns)?;
+    let table = Table::new(&shared, columns);
+    let out = table.into_sensitivities(&shared, nominal_stage.warning.clone())?;
+    if !all_finite(&out) {
+        return Err(bad("a sensitivity came out NaN or infinite"));
+    }
+    Ok(out)
+}
+
+/// Whether `request` asks for response sensitivities (|H| or noise); an error for a request
+/// that asks for nothing, frequencies without a response to differentiate, or the reverse.
+fn check_request(request: &SensitivityRequest) -> Result<bool, Error> {
     let responses = request.tf.is_some() || request.noise.is_some();
     if responses {
         if request.stage == Stage::S0A {
@@ -1362,9 +1178,16 @@ pub fn sensitivities(case: &Case, request: &SensitivityRequest) -> Result<Sensit
             "nothing to differentiate: ask for the modes, a transfer function or noise",
         ));
     }
+    Ok(responses)
+}
 
-    let (system, resolved, mechanical_reads) = case.build_with_mechanical_reads()?;
-    let defaults = Defaults::of(&*case.model)?;
+/// The parameters `request` differentiates with respect to (every numeric parameter of the
+/// case, in definition order, where it names none), with their values in `resolved`.
+fn requested_parameters(
+    case: &Case,
+    request: &SensitivityRequest,
+    resolved: &pendkit_params::Resolved,
+) -> Result<(Vec<String>, Vec<f64>), Error> {
     let all: Vec<(String, f64)> = resolved.iter().map(|(n, v)| (n.to_string(), v)).collect();
     let names: Vec<String> = match &request.parameters {
         None => all.iter().map(|(n, _)| n.clone()).collect(),
@@ -1401,224 +1224,210 @@ pub fn sensitivities(case: &Case, request: &SensitivityRequest) -> Result<Sensit
         .iter()
         .map(|n| all.iter().find(|(m, _)| m == n).map_or(0.0, |(_, v)| *v))
         .collect();
-    let units: Vec<String> = names
-        .iter()
-        .map(|n| defaults.params.unit(n).unwrap_or_default().to_string())
-        .collect();
+    Ok((names, values))
+}
 
-    // the nominal stage (and what the exact route shares) beside which parameters what
-    // reads and the parameters' dual builds: neither needs the other
-    let (nominal_stage, reads) = side_by_side(
-        request.threads,
-        || NominalStage::new(system, request),
-        || -> Result<_, Error> {
-            let reads = ParameterReads::new(case, &defaults, &resolved, &mechanical_reads, &names)?;
-            let tangents = Tangents::build(case, &names, &reads.reach, request.threads)?;
-            Ok((reads, tangents))
-        },
-    );
-    // a failing read comes first, as it would in order: the stage needs nothing read
-    let (
-        ParameterReads {
-            reach,
-            real_multiplier_reads,
-            modes_blind,
-        },
-        tangents,
-    ) = reads?;
-    let NominalStage {
-        point: base_point,
-        warning,
-        ports: base_ports,
-        noise: base_noise,
-        vectors,
-        clusters,
-        exact: exact_route,
-    } = nominal_stage?;
-    let sizes = base_point.result.model.sizes;
-    let modes = &base_point.result.modes.modes;
-    let modes_hz: Vec<f64> = modes.iter().map(|m| m.hz).collect();
-    let mode_labels: Vec<String> = modes.iter().map(|m| m.label.clone()).collect();
+/// The parameters' columns as the output's rows hold them, without the parameters the
+/// model refuses to move (which lose their columns).
+struct Table {
+    /// The parameters kept (indices into the request's), and each one's step, build and
+    /// route.
+    kept: Vec<usize>,
+    steps: Vec<f64>,
+    exact_build: Vec<bool>,
+    exact: Vec<bool>,
+    /// `[mode][kept parameter]`.
+    dfdp: Vec<Vec<f64>>,
+    /// `[frequency][kept parameter]`: d of the TF and of the noise PSD.
+    d_tf: Vec<Vec<C>>,
+    d_noise: Vec<Vec<f64>>,
+    /// The parameters refused, with why.
+    not_differentiable: Vec<(String, String)>,
+}
 
-    let np = names.len();
-    let nf = request.freqs.len();
-    let mut dfdp = vec![vec![0.0; np]; if request.modes { modes.len() } else { 0 }];
-    // per frequency, per parameter: d of the TF and of the noise response R
-    let mut d_tf: Vec<Vec<C>> = vec![vec![C::new(0.0, 0.0); np]; nf];
-    let mut d_noise: Vec<Vec<f64>> = vec![vec![0.0; np]; nf];
-    let mut steps = vec![0.0; np];
-    let mut exact_build = vec![false; np];
-    let mut exact = vec![false; np];
-    let mut refused: Vec<Option<String>> = vec![None; np];
-
-    // the nominal responses' factorisations, once per frequency
-    let nominal: Vec<Nominal> = if responses {
-        request
-            .freqs
-            .iter()
-            .map(|&f| {
-                Nominal::new(
-                    &base_point,
-                    f,
-                    base_ports.as_ref(),
-                    base_noise.as_ref(),
-                    sizes,
-                )
-            })
-            .collect::<Result<_, _>>()?
-    } else {
-        Vec::new()
-    };
-
-    let shared = Shared {
-        case,
-        defaults: &defaults,
-        request,
-        names: &names,
-        values: &values,
-        reach: &reach,
-        real_multiplier_reads: &real_multiplier_reads,
-        modes_blind: &modes_blind,
-        base_point: &base_point,
-        base_ports: base_ports.as_ref(),
-        nominal: &nominal,
-        vectors: &vectors,
-        clusters: &clusters,
-        sizes,
-        responses,
-        exact: exact_route,
-        tangents: &tangents,
-    };
-    // the columns, then the coefficients of the equilibrium's motion along the coordinates
-    // their dq*/dp move (finish_modes)
-    let mut columns = in_parallel_with(
-        np,
-        request.threads,
-        pendkit_model::DirectionScratch::default,
-        |scratch, j| column(&shared, j, scratch),
-    )?;
-    finish_modes(&shared, &mut columns)?;
-    for (j, col) in columns.into_iter().enumerate() {
-        let Some(col) = col else {
-            exact[j] = request.modes && !request.differences;
-            continue;
+impl Table {
+    fn new(shared: &Shared, columns: Vec<Option<Column>>) -> Table {
+        let request = shared.request;
+        let (nm, nf) = (
+            if request.modes {
+                shared.base_point.result.modes.modes.len()
+            } else {
+                0
+            },
+            request.freqs.len(),
+        );
+        let mut table = Table {
+            kept: Vec::new(),
+            steps: Vec::new(),
+            exact_build: Vec::new(),
+            exact: Vec::new(),
+            dfdp: vec![Vec::new(); nm],
+            d_tf: vec![Vec::new(); nf],
+            d_noise: vec![Vec::new(); nf],
+            not_differentiable: Vec::new(),
         };
-        steps[j] = col.step;
-        exact_build[j] = col.exact_build;
-        exact[j] = col.exact;
-        if col.refused.is_some() {
-            refused[j] = col.refused;
-            continue;
+        for (j, column) in columns.into_iter().enumerate() {
+            let column = match column {
+                Some(Column {
+                    refused: Some(why), ..
+                }) => {
+                    table
+                        .not_differentiable
+                        .push((shared.names[j].clone(), why));
+                    continue;
+                }
+                Some(column) => column,
+                // nothing reads it: every derivative exactly 0 (exact where the exact route
+                // was asked for), no step
+                None => Column {
+                    exact: request.modes && !request.differences,
+                    ..Column::new(shared, 0.0, false)
+                },
+            };
+            table.push(j, column);
         }
-        for (row, d) in dfdp.iter_mut().zip(col.dfdp) {
-            row[j] = d;
+        table
+    }
+
+    fn push(&mut self, j: usize, column: Column) {
+        self.kept.push(j);
+        self.steps.push(column.step);
+        self.exact_build.push(column.exact_build);
+        self.exact.push(column.exact);
+        for (row, d) in self.dfdp.iter_mut().zip(column.dfdp) {
+            row.push(d);
         }
-        for (row, d) in d_tf.iter_mut().zip(col.d_tf) {
-            row[j] = d;
+        for (row, d) in self.d_tf.iter_mut().zip(column.d_tf) {
+            row.push(d);
         }
-        for (row, d) in d_noise.iter_mut().zip(col.d_noise) {
-            row[j] = d;
+        for (row, d) in self.d_noise.iter_mut().zip(column.d_noise) {
+            row.push(d);
         }
     }
 
-    let tf_abs = match &request.tf {
-        Some(_) => {
-            let mut abs = Vec::with_capacity(nf);
-            let mut d = Vec::with_capacity(nf);
-            for (i, n) in nominal.iter().enumerate() {
-                let h = n.tf.as_ref().map_or(C::new(f64::NAN, 0.0), |t| t.value);
-                let a = h.norm();
-                if a == 0.0 {
-                    // |H| has a corner at 0: no derivative (the input does not reach the
-                    // output at this frequency)
-                    return Err(bad(format!(
-                        "|H| is exactly 0 at {} Hz (the input does not reach the output): \
-                         it has no derivative there",
-                        request.freqs[i]
-                    )));
-                }
-                if !a.is_finite() {
-                    return Err(Error::NotFinite {
-                        what: "|H|".into(),
-                        f_hz: request.freqs[i],
-                    });
-                }
-                abs.push(a);
-                d.push(
-                    d_tf[i]
-                        .iter()
-                        .map(|dh| (h.conj() * dh).re / a)
-                        .collect::<Vec<f64>>(),
-                );
-            }
-            Some((abs, d))
-        }
-        None => None,
-    };
-    let noise_asd = match &request.noise {
-        Some(_) => {
-            let mut asd = Vec::with_capacity(nf);
-            let mut d = Vec::with_capacity(nf);
-            for (i, n) in nominal.iter().enumerate() {
-                let f = request.freqs[i];
-                let a = n.noise.as_ref().map_or(f64::NAN, NoiseNominal::psd).sqrt();
-                if a == 0.0 {
-                    // √PSD has no derivative at 0
-                    return Err(bad(format!(
-                        "the thermal-noise ASD is exactly 0 at {f} Hz (nothing on the output's \
-                         path dissipates): it has no derivative there"
-                    )));
-                }
-                if !a.is_finite() {
-                    return Err(Error::NotFinite {
-                        what: "the thermal-noise ASD".into(),
-                        f_hz: f,
-                    });
-                }
-                asd.push(a);
-                d.push(d_noise[i].iter().map(|dpsd| dpsd / (2.0 * a)).collect());
-            }
-            Some((asd, d))
-        }
-        None => None,
-    };
+    /// The request's answer: the kept parameters with their values and units, the modes, and
+    /// |H| and the noise ASD with their derivatives from the nominal responses.
+    fn into_sensitivities(
+        self,
+        shared: &Shared,
+        warning: Option<String>,
+    ) -> Result<Sensitivities, Error> {
+        let (request, freqs) = (shared.request, &shared.request.freqs);
+        let tf_abs = match &request.tf {
+            Some(_) => Some(tf_abs(shared.nominal, &self.d_tf, freqs)?),
+            None => None,
+        };
+        let noise_asd = match &request.noise {
+            Some(_) => Some(noise_asd(shared.nominal, &self.d_noise, freqs)?),
+            None => None,
+        };
+        let modes = &shared.base_point.result.modes.modes;
+        let parameters: Vec<String> = self.kept.iter().map(|&j| shared.names[j].clone()).collect();
+        let units = parameters
+            .iter()
+            .map(|n| {
+                shared
+                    .defaults
+                    .params
+                    .unit(n)
+                    .unwrap_or_default()
+                    .to_string()
+            })
+            .collect();
+        Ok(Sensitivities {
+            not_differentiable: self.not_differentiable,
+            values: self.kept.iter().map(|&j| shared.values[j]).collect(),
+            parameters,
+            units,
+            steps: self.steps,
+            exact_build: self.exact_build,
+            exact: self.exact,
+            modes_hz: modes.iter().map(|m| m.hz).collect(),
+            mode_labels: modes.iter().map(|m| m.label.clone()).collect(),
+            dfdp: self.dfdp,
+            tf_abs,
+            noise_asd,
+            warning,
+        })
+    }
+}
 
-    // the parameters the model refuses to move lose their columns
-    let keep: Vec<bool> = refused.iter().map(Option::is_none).collect();
-    let not_differentiable: Vec<(String, String)> = names
-        .iter()
-        .zip(&refused)
-        .filter_map(|(n, r)| r.as_ref().map(|r| (n.clone(), r.clone())))
-        .collect();
-    let tf_abs = tf_abs.map(|(a, d)| (a, d.into_iter().map(|r| kept(r, &keep)).collect()));
-    let noise_asd = noise_asd.map(|(a, d)| (a, d.into_iter().map(|r| kept(r, &keep)).collect()));
-    let dfdp: Vec<Vec<f64>> = dfdp.into_iter().map(|r| kept(r, &keep)).collect();
-    let names = kept(names, &keep);
-    let units = kept(units, &keep);
-    let out = Sensitivities {
-        not_differentiable,
-        parameters: names,
-        values: kept(values, &keep),
-        units,
-        steps: kept(steps, &keep),
-        exact_build: kept(exact_build, &keep),
-        exact: kept(exact, &keep),
-        modes_hz,
-        mode_labels,
-        dfdp,
-        tf_abs,
-        noise_asd,
-        warning,
-    };
-    let finite = out.dfdp.iter().flatten().all(|x| x.is_finite())
+/// |H| at each frequency, and d|H|/dp = Re(H̄ dH)/|H| from each parameter's dH; an error
+/// where |H| is 0 (a corner: no derivative) or not finite.
+fn tf_abs(
+    nominal: &[Nominal],
+    d_tf: &[Vec<C>],
+    freqs: &[f64],
+) -> Result<(Vec<f64>, Vec<Vec<f64>>), Error> {
+    let mut abs = Vec::with_capacity(freqs.len());
+    let mut d = Vec::with_capacity(freqs.len());
+    for (i, n) in nominal.iter().enumerate() {
+        let h = n.tf.as_ref().map_or(C::new(f64::NAN, 0.0), |t| t.value);
+        let a = h.norm();
+        if a == 0.0 {
+            // |H| has a corner at 0: no derivative (the input does not reach the
+            // output at this frequency)
+            return Err(bad(format!(
+                "|H| is exactly 0 at {} Hz (the input does not reach the output): \
+                 it has no derivative there",
+                freqs[i]
+            )));
+        }
+        if !a.is_finite() {
+            return Err(Error::NotFinite {
+                what: "|H|".into(),
+                f_hz: freqs[i],
+            });
+        }
+        abs.push(a);
+        d.push(
+            d_tf[i]
+                .iter()
+                .map(|dh| (h.conj() * dh).re / a)
+                .collect::<Vec<f64>>(),
+        );
+    }
+    Ok((abs, d))
+}
+
+/// The thermal-noise ASD at each frequency, and d(ASD)/dp = d(PSD)/dp / 2 ASD from each
+/// parameter's d(PSD); an error where the ASD is 0 (no derivative) or not finite.
+fn noise_asd(
+    nominal: &[Nominal],
+    d_noise: &[Vec<f64>],
+    freqs: &[f64],
+) -> Result<(Vec<f64>, Vec<Vec<f64>>), Error> {
+    let mut asd = Vec::with_capacity(freqs.len());
+    let mut d = Vec::with_capacity(freqs.len());
+    for (i, n) in nominal.iter().enumerate() {
+        let f = freqs[i];
+        let a = n.noise.as_ref().map_or(f64::NAN, NoiseNominal::psd).sqrt();
+        if a == 0.0 {
+            // √PSD has no derivative at 0
+            return Err(bad(format!(
+                "the thermal-noise ASD is exactly 0 at {f} Hz (nothing on the output's \
+                 path dissipates): it has no derivative there"
+            )));
+        }
+        if !a.is_finite() {
+            return Err(Error::NotFinite {
+                what: "the thermal-noise ASD".into(),
+                f_hz: f,
+            });
+        }
+        asd.push(a);
+        d.push(d_noise[i].iter().map(|dpsd| dpsd / (2.0 * a)).collect());
+    }
+    Ok((asd, d))
+}
+
+/// Whether every derivative and value of `out` is finite.
+fn all_finite(out: &Sensitivities) -> bool {
+    out.dfdp.iter().flatten().all(|x| x.is_finite())
         && [&out.tf_abs, &out.noise_asd]
             .iter()
             .filter_map(|x| x.as_ref())
-            .all(|(v, d)| v.iter().chain(d.iter().flatten()).all(|x| x.is_finite()));
-    if !finite {
-        return Err(bad("a sensitivity came out NaN or infinite"));
-    }
-    Ok(out)
+            .all(|(v, d)| v.iter().chain(d.iter().flatten()).all(|x| x.is_finite()))
 }
 
 /// Modes grouped into clusters of (nearly) equal ω², each ascending.
@@ -1705,7 +1514,7 @@ impl NoiseNominal {
     /// matrices and dE_tag = z̄ᵀ dP_tag z + 2 Re yᵀ(do − dE z), y the tag's adjoint.
     fn d_psd(
         &self,
-        points: &[Point],
+        points: &[Point; 4],
         (h, f_hz): (f64, f64),
         (dez, d_o): (&[C], &DVector<f64>),
         master: &StageDerivative<'_>,
@@ -1734,7 +1543,10 @@ impl NoiseNominal {
                 pendkit_noise::tag_weight(&system.damping, tag, system.temperature, f_hz)
             }));
             let along: C = adjoint.iter().zip(&rhs).map(|(y, r)| y * r).sum();
-            d_energies.push(part.energy(h, z)? + 2.0 * along.re);
+            let form = |model: &StageModel, values: &[f64]| {
+                pendkit_noise::dissipation_form(model, values, z)
+            };
+            d_energies.push(part.linear(h, form)? + 2.0 * along.re);
         }
         Ok(sum.change(&d_weights, &d_energies))
     }

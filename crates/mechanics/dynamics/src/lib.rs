@@ -2,9 +2,11 @@
 //! pattern, elimination of the floats (one Schur complement for modes and responses alike),
 //! normal modes block by block (all of them, or those below a frequency by shift-invert on
 //! a sparse factorisation), transfer-function sweeps solved only over the blocks an input
-//! and output couple to, and state-space matrices; [`StageRun`] runs them all on a system
-//! in the order every command uses.
+//! and output couple to, state-space matrices, and the derivative of the stage's matrices
+//! with respect to a parameter by central differences over stepped models ([`difference`]);
+//! [`StageRun`] runs a stage on a system in the order every command uses.
 
+pub mod difference;
 mod lanczos;
 mod lu;
 mod modes;
@@ -21,7 +23,7 @@ pub use modes::{
     BodyMotion, EntryRounding, Mode, Modes, REFINE_ABOVE, StiffnessRounding, lab_motion,
     normal_modes, normal_modes_with_rounding,
 };
-pub use pattern::Pattern;
+pub use pattern::{CommonPattern, Pattern};
 pub use run::{DENSE_MODES_LIMIT, ModeSelection, RunError, RunOptions, StageRun};
 pub use stability::{
     FloatDirections, FloatMap, GrowingMode, InvertedBody, RunawayFloat, Stability, TermRounding,

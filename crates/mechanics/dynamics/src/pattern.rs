@@ -3,6 +3,7 @@
 //! tag and the mass matrix. Everything that runs per frequency works on this fixed pattern,
 //! and the exactly decoupled blocks of a suspension are its connected components.
 
+use std::borrow::Cow;
 use std::ops::Range;
 
 /// A symmetric sparsity pattern of an n × n matrix in compressed rows, columns sorted in
@@ -206,6 +207,71 @@ impl Pattern {
     }
 }
 
+/// A pattern that holds several models' patterns (those of a parameter's stepped models,
+/// which differ where the parameter moves an entry to or from an exact zero): which of
+/// them it is, and how each one's slots map into it, so that values on any of the
+/// patterns can be compared, differenced and summed on the one.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CommonPattern {
+    base: usize,
+    len: usize,
+    /// Per pattern: the slot in the base pattern of each of its own slots; `None` for a
+    /// pattern equal to the base (the usual case).
+    maps: Vec<Option<Vec<usize>>>,
+}
+
+impl CommonPattern {
+    /// The first of `patterns` that holds every other's positions, with each one's map into
+    /// it; `None` when none does (or `patterns` is empty).
+    pub fn of(patterns: &[&Pattern]) -> Option<CommonPattern> {
+        (0..patterns.len()).find_map(|base| {
+            let target = patterns[base];
+            let maps = patterns
+                .iter()
+                .map(|&own| {
+                    if own == target {
+                        return Some(None);
+                    }
+                    own.positions()
+                        .map(|(i, j)| target.slot(i, j))
+                        .collect::<Option<Vec<usize>>>()
+                        .map(Some)
+                })
+                .collect::<Option<Vec<_>>>()?;
+            Some(CommonPattern {
+                base,
+                len: target.len(),
+                maps,
+            })
+        })
+    }
+
+    /// The index (in the slice given to [`CommonPattern::of`]) of the pattern that holds
+    /// the others.
+    pub fn base(&self) -> usize {
+        self.base
+    }
+
+    /// Values on the `k`-th pattern (one per slot) as values on the base pattern: borrowed
+    /// where the `k`-th pattern is the base's, else copied into their slots there with
+    /// zeros elsewhere. `None` for `k` past the patterns or values of another length.
+    pub fn on_base<'v>(&self, k: usize, values: &'v [f64]) -> Option<Cow<'v, [f64]>> {
+        match self.maps.get(k)? {
+            None => (values.len() == self.len).then_some(Cow::Borrowed(values)),
+            Some(map) => {
+                if values.len() != map.len() {
+                    return None;
+                }
+                let mut v = vec![0.0; self.len];
+                for (&slot, &x) in map.iter().zip(values) {
+                    v[slot] = x;
+                }
+                Some(Cow::Owned(v))
+            }
+        }
+    }
+}
+
 /// Connected components of the graph over `0..n` joining i and j wherever any of
 /// `matrices` (each n × n, column-major) has a non-zero (i, j) or (j, i): a label per node
 /// (numbered from 0 in order of lowest node) and the number of components. One pass over
@@ -275,5 +341,38 @@ mod tests {
         assert_eq!(kept, [(0, 2), (1, 1), (2, 0)]);
         let before: Vec<_> = old.iter().map(|&s| p.position(s)).collect();
         assert_eq!(before, kept);
+    }
+
+    #[test]
+    fn a_common_pattern_holds_the_others_and_maps_their_slots() {
+        // a diagonal 2 × 2 pattern and the full one: the full one holds both. Its slots in
+        // row order are (0,0) 0, (0,1) 1, (1,0) 2, (1,1) 3, so the diagonal's slots (0,0)
+        // and (1,1) map to 0 and 3
+        let diagonal = Pattern::from_positions(2, [(0, 0), (1, 1)]);
+        let full = Pattern::from_positions(2, [(0, 0), (0, 1), (1, 1)]);
+        let common = CommonPattern::of(&[&diagonal, &full, &diagonal]).expect("full holds both");
+        assert_eq!(common.base(), 1);
+        let moved = common.on_base(0, &[2.0, 5.0]).unwrap();
+        assert_eq!(&*moved, &[2.0, 0.0, 0.0, 5.0]);
+        assert!(matches!(moved, Cow::Owned(_)));
+        // the base's own values are borrowed, not copied
+        let own = [1.0, 2.0, 3.0, 4.0];
+        assert!(matches!(common.on_base(1, &own), Some(Cow::Borrowed(v)) if v == own));
+        // values of another length, or a pattern past the list: none
+        assert!(common.on_base(0, &own).is_none());
+        assert!(common.on_base(3, &own).is_none());
+        // equal patterns: the first is the base and no values move
+        let same = CommonPattern::of(&[&full, &full]).unwrap();
+        assert_eq!(same.base(), 0);
+        assert!(matches!(same.on_base(1, &own), Some(Cow::Borrowed(_))));
+    }
+
+    #[test]
+    fn patterns_none_of_which_holds_the_others_have_no_common_pattern() {
+        // (0,1) only in one, (1,1) only in the other
+        let a = Pattern::from_positions(2, [(0, 0), (0, 1)]);
+        let b = Pattern::from_positions(2, [(0, 0), (1, 1)]);
+        assert!(CommonPattern::of(&[&a, &b]).is_none());
+        assert!(CommonPattern::of(&[]).is_none());
     }
 }
