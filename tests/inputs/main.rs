@@ -7,6 +7,7 @@
 mod builder;
 mod bundled_files;
 mod case_text;
+mod element_instances;
 mod errors;
 mod input_checks;
 mod no_silent_nonsense;

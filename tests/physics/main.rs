@@ -11,6 +11,7 @@ mod modes_blocks;
 mod oracles_responses;
 mod oracles_stage0a;
 mod oracles_wires;
+mod point_spring_file;
 mod quad;
 mod quad_aligo;
 mod registry;

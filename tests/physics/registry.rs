@@ -15,6 +15,7 @@ fn registered_kinds_are_exactly_the_bundled_set() {
         kinds,
         vec![
             ("gravity", Stage::S0A),
+            ("point-spring", Stage::S0A),
             ("spring", Stage::S0A),
             ("wire-stretch", Stage::S0A),
             ("wire-torsion", Stage::S1A),

@@ -1,15 +1,33 @@
-//! Example of adding an element kind as its own crate, without touching the core: an
-//! isotropic spring between two body points, E = ½ k |Δ|², Δ the change of the points'
+//! Example of adding an element kind from outside the repository's element crates, without
+//! touching the core: `example-point-spring`, a copy of the shipped `point-spring` kind
+//! (elements/point-spring) under its own name. An isotropic spring between two body points, E = ½ k |Δ|², Δ the change of the points'
 //! separation vector from the reference configuration (a magnet-coil pair; a negative k is
-//! a magnetic anti-spring). A model adds instances as `PluginElement { kind: "point-spring",
+//! a magnetic anti-spring). A model adds instances as `PluginElement { kind: "example-point-spring",
 //! bodies: [a, b], points: [pa, pb], values: {"k": N/m}, tag, .. }`; linking this crate
 //! (any `use pendkit_example_point_spring as _;`) registers the kind.
 
 use nalgebra::Vector3;
-use pendkit_energy::{Element, EnergyError, LocalFrames, Potential, Reference, Term};
+use pendkit_energy::{
+    Domain, Element, EnergyError, InstanceSchema, LocalFrames, Potential, Reference, Term,
+    ValueField,
+};
 use pendkit_geometry::FrameMap;
 use pendkit_rotations::Real;
 use pendkit_system::Stage;
+
+/// What an instance needs: two bodies, a point on each, the stiffness k. Every instance is
+/// checked against it before any term is built, so `terms` reads the values unchecked.
+pub const SCHEMA: InstanceSchema = InstanceSchema {
+    bodies: 2,
+    points: 2,
+    values: &[ValueField {
+        name: "k",
+        unit: "N/m",
+        domain: Domain::Finite,
+        default: None,
+        description: "stiffness (negative: a magnetic anti-spring)",
+    }],
+};
 
 /// ½ k |(p1 − p0) − d_ref|² for one instance.
 #[derive(Clone, Debug)]
@@ -36,13 +54,16 @@ pub struct PointSpring;
 
 impl Element for PointSpring {
     fn kind(&self) -> &'static str {
-        "point-spring"
+        "example-point-spring"
     }
     fn stage(&self) -> Stage {
         Stage::S0A
     }
     fn summary(&self) -> &'static str {
-        "isotropic spring ½ k |Δ|² between two body points (example plug-in)"
+        "isotropic spring ½ k |Δ|² between two body points (an example kind from outside)"
+    }
+    fn instance_schema(&self) -> Option<InstanceSchema> {
+        Some(SCHEMA)
     }
     fn terms(&self, reference: &Reference) -> Result<Vec<Term>, EnergyError> {
         let system = reference.system;
@@ -52,33 +73,20 @@ impl Element for PointSpring {
             .iter()
             .filter(|e| e.kind == self.kind())
         {
-            let fail = |message: &str| EnergyError::Element {
-                kind: "point-spring",
-                element: e.name.clone(),
-                message: message.to_string(),
-            };
-            let ([b0, b1], [q0, q1]) = (
-                <[usize; 2]>::try_from(e.bodies.as_slice())
-                    .map_err(|_| fail("needs two bodies"))?,
-                <[Vector3<f64>; 2]>::try_from(e.points.as_slice())
-                    .map_err(|_| fail("needs two points"))?,
-            );
-            let stiffness = *e
-                .values
-                .get("k")
-                .ok_or_else(|| fail("needs a value 'k' (N/m)"))?;
-            let at = |b: usize, p: &Vector3<f64>| reference.frame(b).point(p);
-            let local = LocalFrames::new(system, &[b0, b1]);
+            // checked against SCHEMA: two bodies, two points, k finite
+            let (b, q) = ([e.bodies[0], e.bodies[1]], [e.points[0], e.points[1]]);
+            let at = |k: usize| reference.frame(b[k]).point(&q[k]);
+            let local = LocalFrames::new(system, &b);
             terms.push(Term::new(
-                format!("point-spring {}", e.name),
-                "point-spring",
+                format!("example-point-spring {}", e.name),
+                "example-point-spring",
                 e.tag.clone(),
                 local.coords,
                 PointSpringEnergy {
                     frames: [local.frames[0].clone(), local.frames[1].clone()],
-                    points: [q0, q1],
-                    rest: at(b1, &q1) - at(b0, &q0),
-                    stiffness,
+                    points: q,
+                    rest: at(1) - at(0),
+                    stiffness: SCHEMA.value(e, "k"),
                 },
             ));
         }

@@ -12,7 +12,7 @@ fn registered_next_to_the_bundled_kinds() {
     assert!(
         registry()
             .iter()
-            .any(|k| k.kind() == "point-spring" && k.stage() == Stage::S0A)
+            .any(|k| k.kind() == "example-point-spring" && k.stage() == Stage::S0A)
     );
 }
 
@@ -25,7 +25,7 @@ fn spring_to_the_support_stiffens_the_pendulum() {
     );
     let k = 100.0;
     system.plugin_elements.push(PluginElement {
-        kind: "point-spring".into(),
+        kind: "example-point-spring".into(),
         name: "coil".into(),
         bodies: vec![support, mass],
         points: vec![Vector3::new(0.0, 0.0, -0.6), Vector3::zeros()],

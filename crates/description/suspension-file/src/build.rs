@@ -13,14 +13,15 @@ use std::collections::{BTreeSet, HashMap};
 
 use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
 use num_dual::Derivative;
+use pendkit_energy::Part;
 use pendkit_expr::{Expr, number_text};
 use pendkit_model::beads::{BeadedFibre, add_beaded_fibre, beads_mass};
 use pendkit_model::schema::{self, MATERIAL_FIELDS};
 use pendkit_model::{BodySpec, BuildError, FibreProfile, Shape, SystemBuilder};
 use pendkit_params::{ChunkDual, Resolved, Values};
 use pendkit_system::{
-    BodyId, CoordKind, EndDirection, ExtraPhase, NamedSignal, Real, SignalTerm, SpringEnd, Stage,
-    System, WireEnd, WireSection, WireTags,
+    BodyId, CoordKind, EndDirection, ExtraPhase, NamedSignal, PluginElement, Real, SignalTerm,
+    SpringEnd, Stage, System, WireEnd, WireSection, WireTags,
 };
 
 use crate::damping::{Hanging, blade_tag, find_material};
@@ -28,8 +29,8 @@ use crate::read::Ex;
 use crate::signals::{linear_form, point_form};
 use crate::source::{At, Located};
 use crate::spec::{
-    AXES, BladeFields, BladeForm, BladeSet, BodyFile, Inertia, MaterialSpec, Points, ShapeFile,
-    Spec, SpringSet, StageFile, WireSet,
+    AXES, BladeFields, BladeForm, BladeSet, BodyFile, Inertia, InstanceFile, MaterialSpec, Points,
+    ShapeFile, Spec, SpringSet, StageFile, WireSet,
 };
 
 /// Largest number of violin beads per wire (the model crate's limit).
@@ -585,6 +586,9 @@ impl<'s, 'c, S: BuildScalar> Interpreter<'s, 'c, S> {
             if let Some(springs) = &stage.springs {
                 self.springs(stage, springs)?;
             }
+        }
+        for instance in &self.spec.instances {
+            self.instance(instance)?;
         }
         self.extras()?;
         let system = self.b.build()?;
@@ -1445,6 +1449,84 @@ impl<'s, 'c, S: BuildScalar> Interpreter<'s, 'c, S> {
                 .map_err(placed(&set.at))?;
         }
         Ok(())
+    }
+
+    /// One `[[element]]`: its bodies found, points and values evaluated (through the
+    /// parameters, so overrides and sensitivities see them), checked against its kind's
+    /// schema (the one check every instance meets, placed here on the line at fault;
+    /// defaults filled), then added as a plug-in element instance.
+    fn instance(&mut self, file: &'s InstanceFile) -> Result<(), BuildError> {
+        let ctx = self.ctx;
+        let kind = pendkit_energy::find_kind(&file.kind.value);
+        let Some(schema) = kind.and_then(|k| k.instance_schema()) else {
+            let why = if kind.is_some() {
+                "owns no instances (it acts on every wire of a stage; `[elements]` moves it)"
+            } else {
+                "is not registered"
+            };
+            return Err(invalid(
+                &file.kind.at,
+                format!(
+                    "element kind '{}' {why}; kinds with instances: {}",
+                    file.kind.value,
+                    pendkit_energy::kinds_with_instances()
+                ),
+            ));
+        };
+        let who = format!("{} '{}'", file.kind.value, file.name);
+        let mut bodies = Vec::with_capacity(file.between.value.len());
+        for name in &file.between.value {
+            let body = self
+                .index
+                .get(name.as_str())
+                .and_then(|&i| self.bodies.get(i))
+                .ok_or_else(|| {
+                    let known = known_bodies(self.spec);
+                    let message = format!("{who}: unknown body '{name}' (bodies: {known})");
+                    invalid(&file.between.at, message)
+                })?;
+            bodies.push(body.0);
+        }
+        let points = match &file.points {
+            Some(p) => p
+                .value
+                .iter()
+                .map(|q| ctx.vec3(q))
+                .collect::<Result<_, _>>()?,
+            None => Vec::new(),
+        };
+        let mut values = std::collections::BTreeMap::new();
+        for (name, ex) in &file.values {
+            values.insert(name.value.clone(), ctx.eval(ex)?);
+        }
+        let mut element = PluginElement {
+            kind: file.kind.value.clone(),
+            name: file.name.clone(),
+            bodies,
+            points,
+            values,
+            tag: file
+                .tag
+                .as_ref()
+                .map_or_else(|| file.name.clone(), |t| t.value.clone()),
+        };
+        schema.check(&element).map_err(|m| {
+            let value = |name: &str| file.values.iter().find(|(n, _)| n.value == name);
+            let (at, message) = match &m.part {
+                Part::Bodies => (&file.between.at, m.message),
+                Part::Points => (file.points.as_ref().map_or(&file.at, |p| &p.at), m.message),
+                Part::Values => (&file.values_at, m.message),
+                // a value out of its domain shows the expression that gave it
+                Part::Value(name) => match value(name) {
+                    Some((n, _)) if schema.field(name).is_none() => (&n.at, m.message),
+                    Some((_, ex)) => (&ex.at, format!("`{}`: {}", ex.text, m.message)),
+                    None => (&file.values_at, m.message),
+                },
+            };
+            invalid(at, format!("{who}: {message}"))
+        })?;
+        schema.fill_defaults(&mut element);
+        self.b.plugin_element(element).map_err(placed(&file.at))
     }
 
     /// Element stages, named signals, extra terms, constraints and pins.

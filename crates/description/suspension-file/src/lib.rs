@@ -474,13 +474,43 @@ fn load_tree(
     base_table.remove("name");
     base_table.remove("summary");
     keep_parameter_documentation(base_table, &mut node);
-    if let Value::Table(child) = std::mem::replace(&mut node.value, Value::Bool(false)) {
+    if let Value::Table(mut child) = std::mem::replace(&mut node.value, Value::Bool(false)) {
+        carry_instances(base_table, &mut child);
         base_table.merge(child);
     }
     Ok(Node {
         value: base.value,
         origin: node.origin,
     })
+}
+
+/// `[[element]]` instances add up along `extends`: the extending file's instances follow
+/// the base's, and one with the name of a base instance replaces it (as a key replaces a
+/// key). Anything but two arrays is left to the ordinary merge.
+fn carry_instances(base: &mut tree::Table, child: &mut tree::Table) {
+    let (Some(mine), Some(theirs)) = (base.get("element"), child.get("element")) else {
+        return;
+    };
+    let (Value::Array(mine), Value::Array(theirs)) = (&mine.value, &theirs.value) else {
+        return;
+    };
+    let name = |n: &Node| match &n.value {
+        Value::Table(t) => t.get("name").and_then(|v| match &v.value {
+            Value::Str(s) => Some(s.clone()),
+            _ => None,
+        }),
+        _ => None,
+    };
+    let replaced: Vec<String> = theirs.iter().filter_map(name).collect();
+    let mut all: Vec<Node> = mine
+        .iter()
+        .filter(|n| name(n).is_none_or(|m| !replaced.contains(&m)))
+        .cloned()
+        .collect();
+    all.extend(theirs.iter().cloned());
+    if let Some((_, _, node)) = child.entries.iter_mut().find(|(k, _, _)| k == "element") {
+        node.value = Value::Array(all);
+    }
 }
 
 /// The file at `path` that an `extends` at `at` names, read.

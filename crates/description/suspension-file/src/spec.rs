@@ -35,6 +35,8 @@ pub struct Spec {
     pub damping: Vec<DampingFile>,
     /// `[elements]`: element kinds moved to another stage or switched off.
     pub elements: Vec<ElementChoice>,
+    /// `[[element]]`: instances of element kinds that own instances (a point spring).
+    pub instances: Vec<InstanceFile>,
     /// `[inputs]`.
     pub inputs: Vec<SignalFile>,
     /// `[outputs]`.
@@ -526,6 +528,27 @@ pub struct ElementChoice {
     pub at: At,
 }
 
+/// One `[[element]]`: an instance of a registered element kind.
+#[derive(Clone, Debug)]
+pub struct InstanceFile {
+    /// `kind`: the registered kind's name.
+    pub kind: Located<String>,
+    /// `name`: the instance's name (term labels, reports).
+    pub name: String,
+    /// `between`: the bodies it connects, in the kind's order.
+    pub between: Located<Vec<String>>,
+    /// `points`: one point (m, three expressions in that body's coordinates) per body.
+    pub points: Option<Located<Vec<Located<Vec<Ex>>>>>,
+    /// `values`: each value's name (with its place) and expression, in the file's order.
+    pub values: Vec<(Located<String>, Ex)>,
+    /// Where `values` is written (the instance's place when absent).
+    pub values_at: At,
+    /// `tag`: damping tag (the instance's name when absent).
+    pub tag: Option<Located<String>>,
+    /// Where the instance is written.
+    pub at: At,
+}
+
 /// A named input or output: a linear expression of coordinates, a point
 /// `<body>@x,y,z/dx,dy,dz`, or either after `force:`.
 #[derive(Clone, Debug)]
@@ -589,6 +612,9 @@ pub fn read(root: &Node, at: At) -> Result<Spec, FileError> {
     }
     for (kind, node, at) in f.named("elements")? {
         spec.elements.push(element(kind, node, at)?);
+    }
+    if let Some((node, at)) = f.node("element") {
+        spec.instances = instances(node, at)?;
     }
     for (key, list) in [("inputs", &mut spec.inputs), ("outputs", &mut spec.outputs)] {
         for (name, node, at) in f.named(key)? {
@@ -1328,6 +1354,118 @@ fn extra(name: String, node: &Node, at: At) -> Result<ExtraFile, FileError> {
         after_equilibrium,
         at,
     })
+}
+
+/// `[[element]]`: the array of instance tables.
+fn instances(node: &Node, at: At) -> Result<Vec<InstanceFile>, FileError> {
+    let Value::Array(items) = &node.value else {
+        return Err(at.error(format!(
+            "expected an array of tables ([[element]]), got {}",
+            node.value.type_name()
+        )));
+    };
+    items
+        .iter()
+        .enumerate()
+        .map(|(i, item)| instance(item, &at, i))
+        .collect()
+}
+
+/// The `[[element]]` table `item`, the `i`-th of the array at `array`.
+fn instance(item: &Node, array: &At, i: usize) -> Result<InstanceFile, FileError> {
+    // every field of an instance is placed under its name (element.coil.values.k), which
+    // the reader sees before it has read the table; one without a name keeps its index
+    let name = match &item.value {
+        Value::Table(t) => t.get("name").and_then(|n| match &n.value {
+            Value::Str(s) if !s.is_empty() => Some(s.clone()),
+            _ => None,
+        }),
+        _ => None,
+    };
+    let at = At {
+        origin: item.origin.clone(),
+        path: name.map_or_else(
+            || format!("{}[{i}]", array.path),
+            |n| format!("{}.{n}", array.path),
+        ),
+    };
+    let mut f = Fields::of(item, at.clone())?;
+    let kind = f.string("kind")?.ok_or_else(|| {
+        at.error("needs `kind` (a registered element kind; `pendkit elements` lists them)")
+    })?;
+    let name = f
+        .string("name")?
+        .ok_or_else(|| at.error("needs `name` (the instance's name)"))?;
+    if name.value.is_empty() {
+        return Err(name.at.error("empty instance name"));
+    }
+    let between = f
+        .strings("between")?
+        .ok_or_else(|| at.error("needs `between` (the bodies it connects)"))?;
+    let points = f
+        .node("points")
+        .map(|(n, a)| instance_points(n, a))
+        .transpose()?;
+    let (values, values_at) = match f.node("values") {
+        None => (Vec::new(), at.clone()),
+        Some((node, values_at)) => (instance_values(node, &values_at)?, values_at),
+    };
+    let tag = f.string("tag")?;
+    f.finish()?;
+    Ok(InstanceFile {
+        kind,
+        name: name.value,
+        between,
+        points,
+        values,
+        values_at,
+        tag,
+        at,
+    })
+}
+
+/// An instance's `points`: an array of points, each three expressions (m).
+fn instance_points(node: &Node, at: At) -> Result<Located<Vec<Located<Vec<Ex>>>>, FileError> {
+    let Value::Array(items) = &node.value else {
+        return Err(at.error(format!(
+            "expected an array of points [[x, y, z], ...], got {}",
+            node.value.type_name()
+        )));
+    };
+    let value = items
+        .iter()
+        .enumerate()
+        .map(|(k, p)| {
+            let p_at = At {
+                origin: p.origin.clone(),
+                path: format!("{}[{k}]", at.path),
+            };
+            expr_array(p, p_at, Some(3))
+        })
+        .collect::<Result<_, _>>()?;
+    Ok(Located { value, at })
+}
+
+/// An instance's `values`: a table of expressions, each name with its place.
+fn instance_values(node: &Node, at: &At) -> Result<Vec<(Located<String>, Ex)>, FileError> {
+    let Value::Table(table) = &node.value else {
+        return Err(at.error(format!(
+            "expected a table of values {{ name = expression, ... }}, got {}",
+            node.value.type_name()
+        )));
+    };
+    table
+        .entries
+        .iter()
+        .map(|(key, key_origin, n)| {
+            let v_at = at.child(key_origin.clone(), key);
+            let name = Located {
+                value: key.clone(),
+                at: v_at.clone(),
+            };
+            Ok((name, Ex::read(n, v_at)?))
+        })
+        .collect()
 }
 
 #[cfg(test)]

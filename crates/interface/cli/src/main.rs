@@ -72,9 +72,10 @@ enum Command {
     /// name to the answer and measured against the richest; tradeoff.csv and tradeoff.svg,
     /// and the cheapest variant within a tolerance.
     Tradeoff(tradeoff::Args),
-    /// List the registered element kinds, the stage each joins at and the crate that
-    /// registered it.
-    Elements,
+    /// List the registered element kinds, the stage each joins at, the crate that
+    /// registered it and the fields of an instance; with a KIND, that kind's schema (units,
+    /// domains, defaults) and a suspension-file snippet to copy.
+    Elements(ElementsArgs),
     /// List the bundled models.
     Models,
     /// List every parameter of a model, case or suspension file: value, unit,
@@ -84,6 +85,136 @@ enum Command {
     ChainFile(params::ChainArgs),
     /// Print a bundled model's suspension file, to copy and edit into a new suspension.
     ModelFile(params::ModelFileArgs),
+}
+
+/// `pendkit elements [KIND]`.
+#[derive(clap::Args, Debug)]
+struct ElementsArgs {
+    /// A registered kind: print its instance schema and a `[[element]]` snippet.
+    kind: Option<String>,
+}
+
+/// The registered kinds, or one kind's schema with a snippet to copy.
+fn elements(args: ElementsArgs) -> Result<String, CliError> {
+    let mut out = String::new();
+    let Some(name) = args.kind else {
+        let _ = writeln!(
+            out,
+            "{:<20} {:<5} {:<32} {:<14} what",
+            "kind", "stage", "crate", "fields"
+        );
+        for r in registrations() {
+            let kind = r.element;
+            let fields = kind.instance_schema().map_or("-".to_string(), |s| {
+                s.values
+                    .iter()
+                    .map(|f| f.name)
+                    .collect::<Vec<_>>()
+                    .join(",")
+            });
+            let _ = writeln!(
+                out,
+                "{:<20} {:<5} {:<32} {:<14} {}",
+                kind.kind(),
+                kind.stage().name(),
+                r.crate_name,
+                fields,
+                kind.summary()
+            );
+        }
+        return Ok(out);
+    };
+    let Some(r) = registrations().iter().find(|r| r.element.kind() == name) else {
+        let known: Vec<&str> = registrations().iter().map(|r| r.element.kind()).collect();
+        return Err(CliError::Usage(format!(
+            "unknown element kind '{name}' (registered: {})",
+            known.join(", ")
+        )));
+    };
+    let kind = r.element;
+    let _ = writeln!(out, "{}: {}", kind.kind(), kind.summary());
+    let _ = writeln!(
+        out,
+        "stage {}, registered by crate {}",
+        kind.stage().name(),
+        r.crate_name
+    );
+    let Some(schema) = kind.instance_schema() else {
+        let _ = writeln!(
+            out,
+            "owns no instances: it acts on every wire of a stage (a suspension file moves it or switches it off in [elements])"
+        );
+        return Ok(out);
+    };
+    let _ = writeln!(
+        out,
+        "an instance connects {} bodies, with {} points (m, each in its body's coordinates)",
+        schema.bodies, schema.points
+    );
+    let _ = writeln!(
+        out,
+        "{:<12} {:<10} {:<10} {:<12} what",
+        "value", "unit", "domain", "default"
+    );
+    for f in schema.values {
+        let default = f
+            .default
+            .map_or("required".to_string(), pendkit::expr::number_text);
+        let _ = writeln!(
+            out,
+            "{:<12} {:<10} {:<10} {:<12} {}",
+            f.name,
+            f.unit,
+            f.domain.describe(),
+            default,
+            f.description
+        );
+    }
+    let _ = writeln!(out, "\nin a suspension file:\n");
+    snippet(&mut out, kind.kind(), &schema);
+    Ok(out)
+}
+
+/// A `[[element]]` of `kind` to copy into a suspension file, its bodies, points and
+/// parameters placeholders to rename.
+fn snippet(out: &mut String, kind: &str, schema: &pendkit::energy::InstanceSchema) {
+    let snake = kind.replace('-', "_");
+    let _ = writeln!(out, "[[element]]");
+    let _ = writeln!(out, "kind = \"{kind}\"");
+    let _ = writeln!(out, "name = \"my_{snake}\"");
+    let bodies: Vec<String> = (1..=schema.bodies)
+        .map(|k| format!("\"body{k}\""))
+        .collect();
+    let _ = writeln!(out, "between = [{}]", bodies.join(", "));
+    if schema.points > 0 {
+        let points = vec!["[0, 0, 0]"; schema.points];
+        let _ = writeln!(out, "points = [{}]", points.join(", "));
+    }
+    // a required value reads a parameter of its own (so --set and sensitivity reach it),
+    // which the file must declare: the comment names each with its unit
+    let mut declare = Vec::new();
+    let values: Vec<String> = schema
+        .values
+        .iter()
+        .map(|f| {
+            let v = f.default.map_or_else(
+                || {
+                    let parameter = format!("{}_{snake}", f.name);
+                    declare.push(format!("{parameter} ({})", f.unit));
+                    format!("\"{parameter}\"")
+                },
+                pendkit::expr::number_text,
+            );
+            format!("{} = {v}", f.name)
+        })
+        .collect();
+    let _ = write!(out, "values = {{ {} }}", values.join(", "));
+    if declare.is_empty() {
+        let _ = writeln!(out);
+    } else {
+        let _ = writeln!(out, "  # declare in [parameters]: {}", declare.join(", "));
+    }
+    let _ = writeln!(out, "tag = \"my_{snake}\"");
 }
 
 fn main() -> ExitCode {
@@ -116,22 +247,7 @@ fn run(cli: Cli) -> Result<String, CliError> {
         Command::Params(a) => params::run(a),
         Command::ChainFile(a) => params::chain_file(a),
         Command::ModelFile(a) => params::model_file(a),
-        Command::Elements => {
-            let mut out = String::new();
-            let _ = writeln!(out, "{:<20} {:<5} {:<32} what", "kind", "stage", "crate");
-            for r in registrations() {
-                let kind = r.element;
-                let _ = writeln!(
-                    out,
-                    "{:<20} {:<5} {:<32} {}",
-                    kind.kind(),
-                    kind.stage().name(),
-                    r.crate_name,
-                    kind.summary()
-                );
-            }
-            Ok(out)
-        }
+        Command::Elements(a) => elements(a),
         Command::Models => {
             let mut out = String::new();
             for m in pendkit::catalogue::models() {

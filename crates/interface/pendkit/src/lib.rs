@@ -64,8 +64,9 @@
 //!
 //! # What it links
 //!
-//! This crate names every bundled element crate (wire torsion, bending, extra stretch) so
-//! that the linker keeps their `inventory` registrations (inventory issue #50): a program
+//! This crate names every bundled element crate (wire torsion, bending, extra stretch, the
+//! point spring) so that the linker keeps their `inventory` registrations (inventory issue
+//! #50): a program
 //! that depends on `pendkit` alone sees all of them in [`energy::registry`]. It also
 //! re-exports the crates whose types its functions take and return, so downstream code
 //! needs no version-matched dependencies of its own.
@@ -99,6 +100,7 @@ use stage::MAX_REPEAT;
 // Name every bundled element crate so the linker keeps its registration.
 use pendkit_element_bending as _;
 use pendkit_element_extra_stretch as _;
+use pendkit_element_point_spring as _;
 use pendkit_element_torsion as _;
 
 // the layers, each reachable as a module

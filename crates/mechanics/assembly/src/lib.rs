@@ -348,25 +348,6 @@ impl Assembled {
     }
 }
 
-/// Checks that every plug-in element instance names a registered kind.
-fn check_plugin_kinds(system: &System) -> Result<(), EnergyError> {
-    let kinds = registry();
-    for e in &system.plugin_elements {
-        if !kinds.iter().any(|k| k.kind() == e.kind) {
-            return Err(EnergyError::UnknownKind {
-                element: e.name.clone(),
-                kind: e.kind.clone(),
-                known: kinds
-                    .iter()
-                    .map(|k| k.kind())
-                    .collect::<Vec<_>>()
-                    .join(", "),
-            });
-        }
-    }
-    Ok(())
-}
-
 /// How to assemble: the equilibrium search's controls and the derivative path.
 #[derive(Clone, Debug, Default)]
 pub struct AssemblyOptions {
@@ -387,7 +368,7 @@ fn kind_terms(
     let reference = Reference::new(system, x);
     let mut terms = Vec::new();
     // a model may move a kind to another stage or switch it off (System::element_stages)
-    for kind in registry().into_iter().filter(|k| {
+    for kind in registry().iter().filter(|k| {
         system
             .element_stage(k.kind(), k.stage())
             .is_some_and(&include)
@@ -416,7 +397,8 @@ fn terms_before(
     early: bool,
 ) -> Result<(Evaluator<'_>, Before), AssemblyError> {
     system.check_indices()?;
-    check_plugin_kinds(system)?;
+    // every instance fits its kind's schema before any term is built
+    pendkit_energy::check_plugin_elements(system)?;
     let start = system.start();
     let shared = SharedBodies::new();
     let mut evaluator = Evaluator::new(system, path);

@@ -26,7 +26,7 @@ use nalgebra::{DMatrix, DVector, Vector3};
 use num_dual::{Dual, Dual64};
 use pendkit_energy::{
     EnergyError, GradientFrames, HyperTangent, LocalFrames, Reference, SharedBodies,
-    TangentDerivatives, TangentSum, TangentTerm, registry,
+    TangentDerivatives, TangentSum, TangentTerm, check_plugin_elements, registry,
 };
 use pendkit_geometry::Frame;
 use pendkit_rotations::{
@@ -86,6 +86,10 @@ fn kind_tangent_terms(
     moving_only: bool,
     frames: &[Arc<LocalFrames>],
 ) -> Result<Option<Vec<TangentTerm>>, EnergyError> {
+    // the seeded build is checked as the f64 one is (`terms_before`): every instance fits
+    // its kind's schema before any term is built, so a kind reads its values unchecked on
+    // this path too (a handful of instances: cheap next to building the terms)
+    check_plugin_elements(system)?;
     let reference = if moving_only {
         Reference::moving_only(system, coords)
     } else {
@@ -95,7 +99,7 @@ fn kind_tangent_terms(
     // the local frames another build of the model made, where the caller has them
     let shared = SharedBodies::with_frames(frames.iter().cloned());
     let mut terms = Vec::new();
-    for kind in registry().into_iter().filter(|k| {
+    for kind in registry().iter().filter(|k| {
         system
             .element_stage(k.kind(), k.stage())
             .is_some_and(&include)

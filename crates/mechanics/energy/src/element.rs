@@ -170,6 +170,15 @@ pub trait Element: Sync {
     fn stage(&self) -> Stage;
     /// One line saying what the kind models.
     fn summary(&self) -> &'static str;
+    /// What an instance of the kind needs (its value fields, bodies and points), for a kind
+    /// whose terms come from [`PluginElement`](crate::PluginElement) instances: every
+    /// instance is checked against it before any term is built
+    /// ([`check_plugin_elements`](crate::check_plugin_elements)), so `terms` reads the
+    /// values unchecked. `None` (the default): the kind owns no instances (wire bending and
+    /// torsion act on every wire of a stage).
+    fn instance_schema(&self) -> Option<crate::InstanceSchema> {
+        None
+    }
     /// The kind's terms for `reference.system`, built around `reference`.
     fn terms(&self, reference: &Reference) -> Result<Vec<Term>, EnergyError>;
 
@@ -298,11 +307,40 @@ macro_rules! register_element {
     };
 }
 
-/// Every registration linked into this program, ordered by stage, kind name, then crate.
-pub fn registrations() -> Vec<&'static Registration> {
-    let mut all: Vec<&'static Registration> = inventory::iter::<Registration>.into_iter().collect();
-    all.sort_by_key(|r| (r.element.stage(), r.element.kind(), r.crate_name));
-    all
+/// The registry, collected from `inventory` and sorted once, on first use.
+struct Registry {
+    /// Every registration, ordered by stage, kind name, then crate.
+    registrations: Vec<&'static Registration>,
+    /// Their kinds, in the same order.
+    kinds: Vec<&'static dyn Element>,
+    /// Each kind name's first registration (an index into `kinds`).
+    by_name: std::collections::HashMap<&'static str, usize>,
+}
+
+/// The registry of this program, built at the first call.
+fn the_registry() -> &'static Registry {
+    static REGISTRY: OnceLock<Registry> = OnceLock::new();
+    REGISTRY.get_or_init(|| {
+        let mut registrations: Vec<&'static Registration> =
+            inventory::iter::<Registration>.into_iter().collect();
+        registrations.sort_by_key(|r| (r.element.stage(), r.element.kind(), r.crate_name));
+        let kinds: Vec<&'static dyn Element> = registrations.iter().map(|r| r.element).collect();
+        let mut by_name = std::collections::HashMap::with_capacity(kinds.len());
+        for (k, kind) in kinds.iter().enumerate() {
+            by_name.entry(kind.kind()).or_insert(k);
+        }
+        Registry {
+            registrations,
+            kinds,
+            by_name,
+        }
+    })
+}
+
+/// Every registration linked into this program, ordered by stage, kind name, then crate
+/// (collected once, at the first call).
+pub fn registrations() -> &'static [&'static Registration] {
+    &the_registry().registrations
 }
 
 /// Two registrations of one kind name: the second would be summed into every energy
@@ -336,19 +374,26 @@ pub fn duplicate_kind(registrations: &[&Registration]) -> Option<DuplicateKind> 
     None
 }
 
-/// Checks that every kind name linked into this program is registered once.
+/// Checks that every kind name linked into this program is registered once (the check
+/// itself runs once, at the first call).
 pub fn check_registrations() -> Result<(), DuplicateKind> {
-    duplicate_kind(&registrations()).map_or(Ok(()), Err)
+    static CHECKED: OnceLock<Option<DuplicateKind>> = OnceLock::new();
+    CHECKED
+        .get_or_init(|| duplicate_kind(registrations()))
+        .clone()
+        .map_or(Ok(()), Err)
 }
 
-/// All linked element kinds, ordered by stage then kind name.
-pub fn registry() -> Vec<&'static dyn Element> {
-    registrations().into_iter().map(|r| r.element).collect()
+/// All linked element kinds, ordered by stage then kind name (collected once).
+pub fn registry() -> &'static [&'static dyn Element] {
+    &the_registry().kinds
 }
 
-/// The registered kind called `name`.
+/// The registered kind called `name` (its first registration, if two crates register it:
+/// [`check_registrations`] refuses that), found in constant time.
 pub fn find_kind(name: &str) -> Option<&'static dyn Element> {
-    registry().into_iter().find(|k| k.kind() == name)
+    let registry = the_registry();
+    registry.by_name.get(name).map(|&k| registry.kinds[k])
 }
 
 /// A term's label, `<kind> <element name>` (e.g. `wire-stretch fibre1`), in one allocation

@@ -7,6 +7,7 @@ mod core;
 mod element;
 mod extra;
 mod fast;
+mod schema;
 mod tangent;
 mod term;
 
@@ -22,6 +23,9 @@ pub use extra::{constraint_terms, extra_terms};
 pub use fast::{
     Attached, Derivatives, FrameAt, JetPoint, MAX_FRAMES, MAX_PARTS, OffForm, Scratch,
     add_curvature, add_jacobian, hyper_dual_over_frames, on_stack,
+};
+pub use schema::{
+    Domain, InstanceSchema, Misfit, Part, ValueField, check_plugin_elements, kinds_with_instances,
 };
 pub use tangent::{
     DualTangent, GradientFrames, HyperTangent, TangentDerivatives, TangentPotential,

@@ -5,6 +5,7 @@
 mod common;
 
 mod cli;
+mod elements;
 mod fit;
 mod modes_accuracy;
 mod refusals;
