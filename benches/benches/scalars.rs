@@ -75,7 +75,7 @@ fn quad() -> Quad {
     let reference = Reference::new(&dual, &at_rest);
     let f64_reference = Reference::new(&system, &equilibrium);
     let (mut tangent_terms, mut terms) = (Vec::new(), Vec::new());
-    for kind in registry().into_iter().filter(to_stage_2) {
+    for kind in registry().iter().copied().filter(to_stage_2) {
         tangent_terms.extend(
             kind.tangent_terms(&reference, &tangent_shared)
                 .expect("tangent terms")
