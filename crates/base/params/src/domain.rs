@@ -28,6 +28,31 @@ impl Domain {
             }
     }
 
+    /// `Ok` when `value` lies in the domain; otherwise the one-line reason, naming the field
+    /// `name`, the value with its SI `unit` (`-` for a pure number) and the domain, with
+    /// the field's `meaning`: `specific_heat = -486 J/(kg K) is outside its domain:
+    /// specific heat must be > 0`. The one wording of every schema's refusals.
+    pub fn check(self, name: &str, unit: &str, meaning: &str, value: f64) -> Result<(), String> {
+        if self.contains(value) {
+            return Ok(());
+        }
+        let unit = match unit {
+            "-" => String::new(),
+            unit => format!(" {unit}"),
+        };
+        if !value.is_finite() {
+            return Err(format!(
+                "{name} = {}{unit} is not a finite number",
+                number_text(value)
+            ));
+        }
+        Err(format!(
+            "{name} = {}{unit} is outside its domain: {meaning} must be {}",
+            number_text(value),
+            self.describe()
+        ))
+    }
+
     /// The domain as an error message, a table or a file states it: `finite`, `> 0`,
     /// `>= 0`, `in (-1, 0.5)` (what [`Domain::from_str`](std::str::FromStr) reads back).
     pub fn describe(self) -> String {

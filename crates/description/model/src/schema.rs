@@ -4,7 +4,6 @@
 //! read and write these fields through this table, and every build checks the values it
 //! holds against their domains, whether or not the command at hand reads them.
 
-use pendkit_expr::number_text;
 pub use pendkit_params::Domain;
 
 /// One settable field: how files and `--set` name it, its SI unit, its domain, its meaning.
@@ -25,27 +24,8 @@ impl Field {
     /// the field, the value with its unit, and the domain (`specific_heat = -486 J/(kg K)
     /// is outside its domain: must be > 0`).
     pub fn check(&self, value: f64) -> Result<(), String> {
-        if self.domain.contains(value) {
-            return Ok(());
-        }
-        let unit = match self.unit {
-            "-" => String::new(),
-            unit => format!(" {unit}"),
-        };
-        if !value.is_finite() {
-            return Err(format!(
-                "{} = {}{unit} is not a finite number",
-                self.name,
-                number_text(value)
-            ));
-        }
-        Err(format!(
-            "{} = {}{unit} is outside its domain: {} must be {}",
-            self.name,
-            number_text(value),
-            self.description,
-            self.domain.describe()
-        ))
+        self.domain
+            .check(self.name, self.unit, self.description, value)
     }
 }
 

@@ -29,27 +29,8 @@ impl ValueField {
     /// `Ok` when `value` lies in the field's domain; otherwise the reason, naming the field,
     /// the value with its unit and the domain (`k = NaN N/m is not a finite number`).
     pub fn check(&self, value: f64) -> Result<(), String> {
-        if self.domain.contains(value) {
-            return Ok(());
-        }
-        let unit = match self.unit {
-            "-" => String::new(),
-            unit => format!(" {unit}"),
-        };
-        if !value.is_finite() {
-            return Err(format!(
-                "{} = {}{unit} is not a finite number",
-                self.name,
-                number_text(value)
-            ));
-        }
-        Err(format!(
-            "{} = {}{unit} is outside its domain: {} must be {}",
-            self.name,
-            number_text(value),
-            self.description,
-            self.domain.describe()
-        ))
+        self.domain
+            .check(self.name, self.unit, self.description, value)
     }
 
     /// The field in short: `k (N/m, finite, required)`.
