@@ -13,49 +13,29 @@ use std::path::{Path, PathBuf};
 use crate::common;
 use common::pendkit;
 
-/// The bob's mass (kg).
+/// The bundled pendulum's mass `m1` (kg).
 const M: f64 = 40.0;
 
-/// A hinged 40 kg bob on 0.6 m fibres from a driven support, with the parameter `k_magnet`
-/// (100 N/m) and `extra` appended.
-fn hinged_bob(extra: &str) -> String {
+/// The bundled `pendulum` (a 40 kg point mass, `mass1`, hinged on four 0.6 m silica fibres
+/// from a driven support), with the parameter `k_magnet` (100 N/m) and `extra` appended.
+fn pendulum_with(extra: &str) -> String {
     format!(
-        r#"[parameters]
-m = {{ value = {M}, unit = "kg", description = "the bob" }}
+        r#"extends = "pendulum"
+[parameters]
 k_magnet = {{ value = 100, unit = "N/m", description = "the magnet's stiffness" }}
-[materials.silica]
-youngs_modulus = 72e9
-poisson_ratio = 0.17
-density = 2200
-loss_angle = 1e-7
-[bodies.support]
-coordinates = "00"
-driven = true
-[bodies.bob]
-coordinates = "1"
-dof = "xyz"
-mass = "m"
-[stages.bob]
-from = "support"
-[stages.bob.fibres]
-upper = {{ at = [0.005, 0.17, 0], mirror = ["y", "x"] }}
-lower = {{ at = [0.005, 0.17, 0], mirror = ["y", "x"], hinged = 1 }}
-length = 0.6
-radius = 0.2e-3
-material = "silica"
 {extra}"#
     )
 }
 
 /// The instance `name` of a point spring of stiffness `k` (an expression) between the bob's
-/// centre of mass and the same point on the support.
+/// centre of mass (`mass1`) and the same point on the support.
 fn coil(name: &str, k: &str) -> String {
     format!(
         r#"
 [[element]]
 kind = "point-spring"
 name = "{name}"
-between = ["bob", "support"]
+between = ["mass1", "support"]
 points = [[0, 0, 0], [0, 0, 0]]
 values = {{ k = "{k}" }}
 "#
@@ -118,7 +98,7 @@ fn elements_kind_prints_the_schema_and_a_snippet_that_loads() {
         .map(|(_, s)| format!("[[element]]{s}"))
         .unwrap_or_else(|| panic!("no snippet: {stdout}"));
     let snippet = snippet
-        .replace("\"body1\"", "\"bob\"")
+        .replace("\"body1\"", "\"mass1\"")
         .replace("\"body2\"", "\"support\"");
     let value = snippet
         .lines()
@@ -126,8 +106,8 @@ fn elements_kind_prints_the_schema_and_a_snippet_that_loads() {
         .and_then(|l| l.split('"').next())
         .unwrap_or_else(|| panic!("k given by a parameter: {snippet}"));
     let dir = scratch("snippet");
-    let bare = write(&dir.join("bare.toml"), &hinged_bob(""));
-    let with = hinged_bob(&format!(
+    let bare = write(&dir.join("bare.toml"), &pendulum_with(""));
+    let with = pendulum_with(&format!(
         "\n[parameters.{value}]\nvalue = 250\nunit = \"N/m\"\ndescription = \"pasted\"\n\n{snippet}"
     ));
     let pasted = write(&dir.join("pasted.toml"), &with);
@@ -148,11 +128,11 @@ fn elements_unknown_kind_is_a_usage_error_listing_kinds() {
 #[test]
 fn extends_carries_instances_along() {
     let dir = scratch("extends");
-    let bare = write(&dir.join("bare.toml"), &hinged_bob(""));
+    let bare = write(&dir.join("bare.toml"), &pendulum_with(""));
     let f0 = swings(&bare, &[]);
     write(
         &dir.join("base.toml"),
-        &hinged_bob(&coil("coil", "k_magnet")),
+        &pendulum_with(&coil("coil", "k_magnet")),
     );
     // extending without touching [[element]]: the base's instance, its value a parameter
     // that --set reaches
