@@ -18,6 +18,7 @@ fn registered_kinds_are_exactly_the_bundled_set() {
             ("point-spring", Stage::S0A),
             ("spring", Stage::S0A),
             ("wire-stretch", Stage::S0A),
+            ("optical-spring", Stage::S0B),
             ("wire-torsion", Stage::S1A),
             ("wire-bending", Stage::S1B),
             ("wire-extra-stretch", Stage::S2),

@@ -577,10 +577,11 @@ impl<S: Real> SystemBuilder<S> {
         for &b in &element.bodies {
             self.check_end_body(&item, b)?;
         }
-        if element.points.len() != element.bodies.len() {
+        // one point per body, or none for a kind that reads none (its schema says which)
+        if !element.points.is_empty() && element.points.len() != element.bodies.len() {
             return Err(BuildError::Invalid {
                 item,
-                message: "needs one point per body".into(),
+                message: "needs one point per body, or none".into(),
             });
         }
         self.system.plugin_elements.push(element);

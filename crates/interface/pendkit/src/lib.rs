@@ -100,6 +100,7 @@ use stage::MAX_REPEAT;
 // Name every bundled element crate so the linker keeps its registration.
 use pendkit_element_bending as _;
 use pendkit_element_extra_stretch as _;
+use pendkit_element_optical_spring as _;
 use pendkit_element_point_spring as _;
 use pendkit_element_torsion as _;
 

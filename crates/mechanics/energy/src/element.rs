@@ -179,6 +179,13 @@ pub trait Element: Sync {
     fn instance_schema(&self) -> Option<crate::InstanceSchema> {
         None
     }
+    /// Checks of an instance beyond its schema's per-field domains (fields that must agree
+    /// with each other), given its values by name (SI units, defaults filled in): `Err`
+    /// says what is wrong in one line. Called for every instance, after the schema's check
+    /// and before any term is built. The default accepts every instance.
+    fn check_instance(&self, _value: &dyn Fn(&str) -> f64) -> Result<(), String> {
+        Ok(())
+    }
     /// The kind's terms for `reference.system`, built around `reference`.
     fn terms(&self, reference: &Reference) -> Result<Vec<Term>, EnergyError>;
 

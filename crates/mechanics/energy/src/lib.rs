@@ -7,6 +7,7 @@ mod core;
 mod element;
 mod extra;
 mod fast;
+mod kind;
 mod schema;
 mod tangent;
 mod term;
@@ -24,6 +25,7 @@ pub use fast::{
     Attached, Derivatives, FrameAt, JetPoint, MAX_FRAMES, MAX_PARTS, OffForm, Scratch,
     add_curvature, add_jacobian, hyper_dual_over_frames, on_stack,
 };
+pub use kind::{InstanceAt, InstanceKind, KindElement, check_fast_path};
 pub use schema::{
     Domain, InstanceSchema, Misfit, Part, ValueField, check_plugin_elements, kinds_with_instances,
 };

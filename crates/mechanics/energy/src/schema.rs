@@ -210,6 +210,8 @@ pub fn check_plugin_elements<S: Real>(system: &System<S>) -> Result<(), EnergyEr
             )));
         };
         schema.check(e).map_err(|m| fail(m.message))?;
+        kind.check_instance(&|name| schema.value(e, name).re())
+            .map_err(fail)?;
     }
     Ok(())
 }
