@@ -7,6 +7,7 @@
 //! (P L / c) / (1 − g1 g2) · (−(g1 + g2) ± √((g1 − g2)² + 4)). The closed form is
 //! evaluated here from its own formula, not from the kind. Tolerance 1e-9 relative: the
 //! model is exactly this linear system, so only the eigensolver's rounding (~1e-14) remains.
+//! The model is examples/two-mirrors.toml.
 
 use std::f64::consts::PI;
 use std::path::Path;
@@ -18,40 +19,17 @@ const L: f64 = 3994.5;
 const R1: f64 = 1934.0;
 const R2: f64 = 2245.0;
 const C: f64 = 299_792_458.0;
-/// Each mirror's mass (kg) and principal moments of inertia (kg m²) about x, y, z.
+/// examples/two-mirrors.toml's numbers: each mirror's mass (kg) and principal moments of
+/// inertia (kg m²) about x, y, z.
 const M: f64 = 40.0;
 const I: [f64; 3] = [0.3, 0.4, 0.5];
 /// The holding springs: x, y, z (N/m), yaw, pitch, roll (N m/rad).
 const K: [f64; 6] = [2000.0, 3000.0, 5000.0, 800.0, 1000.0, 700.0];
 
+/// examples/two-mirrors.toml, whose parameters are the constants above.
 fn file() -> String {
-    let body = |name: &str, n: usize| {
-        format!(
-            "[bodies.{name}]\ncoordinates = \"{n}\"\nmass = {M}\ninertia = [{}, {}, {}]\n\
-             [stages.{name}]\nfrom = \"support\"\n\
-             springs = {{ name = \"hold_{name}\", stiffness = [{}, {}, {}, {}, {}, {}], tag = \"hold\" }}\n",
-            I[0], I[1], I[2], K[0], K[1], K[2], K[3], K[4], K[5]
-        )
-    };
-    format!(
-        r#"name = "two-mirrors"
-gravity = 0
-[parameters]
-power = {{ value = 0, unit = "W", description = "power circulating in the cavity" }}
-[bodies.support]
-coordinates = "0"
-driven = true
-{}{}
-[[element]]
-kind = "optical-spring"
-name = "arm"
-between = ["itm", "etm"]
-values = {{ power = "power", length = {L}, roc1 = {R1}, roc2 = {R2} }}
-tag = "radiation"
-"#,
-        body("itm", 1),
-        body("etm", 2)
-    )
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/two-mirrors.toml");
+    std::fs::read_to_string(path).unwrap()
 }
 
 /// The closed form's twelve mode frequencies (Hz), ascending, at power `p` (W).
@@ -117,10 +95,9 @@ fn the_soft_mode_goes_unstable_where_the_closed_form_says() {
 #[test]
 fn a_cavity_outside_the_stable_range_is_refused_naming_the_element() {
     // R = L/2 for both mirrors: g = −1, g1 g2 = 1, the edge of stability
-    let text = file().replace(
-        &format!("roc1 = {R1}, roc2 = {R2}"),
-        "roc1 = 1997.25, roc2 = 1997.25",
-    );
+    let text = file()
+        .replace("roc_itm = { value = 1934", "roc_itm = { value = 1997.25")
+        .replace("roc_etm = { value = 2245", "roc_etm = { value = 1997.25");
     let error = Case::from_text(Path::new("two-mirrors.toml"), &text)
         .unwrap()
         .build()

@@ -7,6 +7,7 @@ use std::path::{Path, PathBuf};
 
 use nalgebra::DMatrix;
 use pendkit::describe::unit_slug;
+use pendkit::dynamics::Verdict;
 use pendkit::stage::ModeSelection;
 use pendkit::{NoiseOptions, Solver};
 use pendkit_plot::{Axis, BodePlot, BodeSeries, Figure, LinePlot, Scale, Series};
@@ -27,9 +28,15 @@ pub struct Args {
     /// the last --vary changing fastest; at most 100000 steps in all.
     #[arg(long = "vary", required = true, value_name = "NAME=START:STOP:N")]
     vary: Vec<String>,
-    /// The normal modes at every step, tracked by shape.
+    /// The normal modes at every step, tracked by shape. Unstable steps are data here:
+    /// growing modes are listed at minus their growth rate, and over one --vary the value
+    /// where the equilibrium turns unstable (or stable) is found and reported.
     #[arg(long)]
     modes: bool,
+    /// With --modes: only the modes of this family at the first step (`P` for pitch, as
+    /// `pendkit modes` prints the families), in the table and the figure.
+    #[arg(long, value_name = "FAMILY", requires = "modes")]
+    family: Option<String>,
     /// The thermal noise (ASD) of this output at every step.
     #[arg(long, value_name = "OUTPUT")]
     noise: Option<String>,
@@ -249,8 +256,11 @@ pub fn run(a: Args) -> Result<String, CliError> {
     let mut curves: Vec<(String, Vec<(f64, f64)>)> = Vec::new();
     let mut unit = String::new();
     let mut x_unit = String::new();
+    // per step of a modes sweep: whether the equilibrium is unstable there
+    let mut unstable: Vec<bool> = Vec::new();
     for point in &points {
         let (values, run, step_name) = step_run(&a, &varies, point)?;
+        unstable.push(is_unstable(&run));
         if !header_written {
             (x_unit, unit) = write_header(&mut out, &a, &varies, &run, tf.as_ref());
             header_written = true;
@@ -267,7 +277,8 @@ pub fn run(a: Args) -> Result<String, CliError> {
                 .map(|(j, id)| (id, j))
                 .collect();
             rows.sort();
-            for (id, j) in rows {
+            let keep = |id: usize| a.family.as_ref().is_none_or(|f| first.families[id] == *f);
+            for (id, j) in rows.into_iter().filter(|&(id, _)| keep(id)) {
                 let _ = writeln!(
                     out,
                     "{prefix}{},{},{},{},{},{}",
@@ -292,9 +303,20 @@ pub fn run(a: Args) -> Result<String, CliError> {
         progress.step();
     }
     drop(progress);
+    if let Some(family) = &a.family
+        && out.lines().count() <= 1
+    {
+        return Err(CliError::usage(format!(
+            "--family {family}: no mode of that family at the first step (families are those `pendkit modes` prints)"
+        )));
+    }
+    let mut crossings = Vec::new();
+    if a.modes && varies.len() == 1 {
+        crossings = stability_crossings(&a, &varies[0], &unstable, &x_unit)?;
+    }
     if let Some(path) = &a.plot {
         if a.modes {
-            plot_modes(path, &varies[0], x_unit, mode_series)?;
+            plot_modes(path, &varies[0], x_unit, mode_series, &crossings)?;
         } else if a.noise.is_some() {
             plot_noise(
                 path,
@@ -327,7 +349,11 @@ fn step_run(
         sets.push(format!("{}={value:e}", v.name));
     }
     let run = a.args.run_with(ModeSelection::All, &sets, false)?;
-    run.check_stable(a.args.allow_unstable)?;
+    // a modes sweep scans for instability: an unstable step is a result (its growing
+    // modes at minus their growth rate), not an error; responses need a stable plant
+    if !a.modes {
+        run.check_stable(a.args.allow_unstable)?;
+    }
     let step_name = varies
         .iter()
         .zip(&values)
@@ -512,15 +538,33 @@ fn plot_modes(
     v: &Vary,
     x_unit: String,
     mode_series: Vec<(String, Vec<f64>, Vec<f64>)>,
+    crossings: &[Crossing],
 ) -> Result<(), CliError> {
+    let values = || mode_series.iter().flat_map(|s| s.2.iter().copied());
+    // a growing mode is drawn at minus its growth rate, which a log axis cannot show
+    let scale = if values().all(|y| y > 0.0) {
+        Scale::Log
+    } else {
+        Scale::Linear
+    };
+    let (low, high) = values().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), y| {
+        (l.min(y), h.max(y))
+    });
     let mut plot = LinePlot::new(
         format!("Modes against {}", v.name),
         Axis::new(v.name.clone(), x_unit, Scale::Linear),
-        Axis::new("frequency", "Hz", Scale::Log),
+        Axis::new("frequency (growth rate < 0)", "Hz", scale),
     );
     plot.markers = v.values.len() <= 30;
     for (name, x, y) in mode_series {
         plot.series.push(Series::new(name, x, y));
+    }
+    for c in crossings {
+        plot.series.push(Series::new(
+            c.describe_short(&v.name),
+            vec![c.value, c.value],
+            vec![low, high],
+        ));
     }
     plot.render(path)?;
     Ok(())
@@ -580,6 +624,154 @@ fn fixed_or_sci(x: f64) -> String {
     } else {
         format!("{}", (x * 1e6).round() / 1e6)
     }
+}
+
+/// Whether the equilibrium of `run` is unstable (a mode grows or a float runs away).
+fn is_unstable(run: &Run) -> bool {
+    run.result.stability.verdict == Verdict::Unstable
+}
+
+/// The most negative ω² (rad²/s²) among the modes of `run`: it crosses zero where a mode
+/// starts to grow.
+fn lowest_omega_squared(run: &Run) -> f64 {
+    run.result
+        .modes
+        .modes
+        .iter()
+        .map(|m| m.omega_squared)
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// Where the equilibrium changes from stable to unstable (or back) along one swept
+/// parameter.
+#[derive(Clone, Debug)]
+struct Crossing {
+    /// The parameter's value there.
+    value: f64,
+    /// Unstable above `value` (else below it).
+    unstable_above: bool,
+    /// The mode that grows on the unstable side: its label and family.
+    mode: String,
+    /// The parameter's unit.
+    unit: String,
+}
+
+impl Crossing {
+    /// `unstable above power = 3.1e5 W`, for the figure.
+    fn describe_short(&self, name: &str) -> String {
+        format!(
+            "unstable {} {name} = {} {}",
+            if self.unstable_above {
+                "above"
+            } else {
+                "below"
+            },
+            crate::format::sci(self.value, 6, 0),
+            self.unit
+        )
+    }
+}
+
+/// Bisections of the verdict to a relative 1e-9 of the swept range, at most.
+const BISECTIONS: usize = 60;
+
+/// Each place along the one swept parameter `v` where the verdict changes between
+/// neighbouring steps (`unstable`, one per value): the verdict is bisected between the two
+/// steps, then the growing mode's ω² is interpolated to zero between the last two values
+/// (the growth rate's zero crossing). Reported on stderr, with a line when there is none.
+fn stability_crossings(
+    a: &Args,
+    v: &Vary,
+    unstable: &[bool],
+    unit: &str,
+) -> Result<Vec<Crossing>, CliError> {
+    let run_at = |x: f64| -> Result<Run, CliError> {
+        let mut sets = a.args.sets.clone();
+        sets.push(format!("{}={x:e}", v.name));
+        a.args.run_with(ModeSelection::All, &sets, false)
+    };
+    let width = (v.values[v.values.len() - 1] - v.values[0]).abs();
+    let mut crossings = Vec::new();
+    for k in 1..v.values.len() {
+        if unstable[k] == unstable[k - 1] {
+            continue;
+        }
+        // stable at `lo`, unstable at `hi`
+        let (mut lo, mut hi) = if unstable[k] {
+            (v.values[k - 1], v.values[k])
+        } else {
+            (v.values[k], v.values[k - 1])
+        };
+        let (mut lo_run, mut hi_run) = (run_at(lo)?, run_at(hi)?);
+        for _ in 0..BISECTIONS {
+            if (hi - lo).abs() <= 1e-9 * width {
+                break;
+            }
+            let mid = 0.5 * (lo + hi);
+            let run = run_at(mid)?;
+            if is_unstable(&run) {
+                (hi, hi_run) = (mid, run);
+            } else {
+                (lo, lo_run) = (mid, run);
+            }
+        }
+        let (w_lo, w_hi) = (lowest_omega_squared(&lo_run), lowest_omega_squared(&hi_run));
+        let value = if w_lo > 0.0 && w_hi < 0.0 {
+            lo + (hi - lo) * w_lo / (w_lo - w_hi)
+        } else {
+            // the verdict turned on something other than a mode (a float), or on a
+            // neutral mode: the bisected bracket is the answer
+            0.5 * (lo + hi)
+        };
+        let mode = hi_run
+            .result
+            .stability
+            .growing
+            .first()
+            .and_then(|g| hi_run.result.modes.modes.get(g.index - 1))
+            .map_or("a float direction".to_string(), |m| {
+                format!(
+                    "mode '{}' ({})",
+                    hi_run.coord(&m.label),
+                    hi_run.result.mode_family(m)
+                )
+            });
+        crossings.push(Crossing {
+            value,
+            unstable_above: hi > lo,
+            mode,
+            unit: unit.to_string(),
+        });
+    }
+    let range = format!(
+        "{} from {} to {} {unit}",
+        v.name,
+        fixed_or_sci(v.values[0]),
+        fixed_or_sci(v.values[v.values.len() - 1])
+    );
+    if crossings.is_empty() {
+        let state = if unstable.iter().all(|&u| u) {
+            "unstable at every step"
+        } else {
+            "stable at every step: no instability"
+        };
+        eprintln!("sweep: {state} for {range}");
+    }
+    for c in &crossings {
+        eprintln!(
+            "sweep: the equilibrium is {} at {} = {} {unit}: {} grows {} it (the verdict bisected between the steps, then the mode's ω² interpolated to zero)",
+            if c.unstable_above {
+                "stable below and unstable above"
+            } else {
+                "unstable below and stable above"
+            },
+            v.name,
+            crate::format::sci(c.value, 6, 0),
+            c.mode,
+            if c.unstable_above { "above" } else { "below" },
+        );
+    }
+    Ok(crossings)
 }
 
 #[cfg(test)]

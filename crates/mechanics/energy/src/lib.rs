@@ -26,6 +26,10 @@ pub use fast::{
     add_curvature, add_jacobian, hyper_dual_over_frames, on_stack,
 };
 pub use kind::{InstanceAt, InstanceKind, KindElement, check_fast_path};
+// what a kind's energy is written with, so that a kind's crate needs only this one
+pub use pendkit_geometry::Frame;
+pub use pendkit_rotations::{Constant, Lift, Real};
+pub use pendkit_system::{PluginElement, Stage};
 pub use schema::{
     Domain, InstanceSchema, Misfit, Part, ValueField, check_plugin_elements, kinds_with_instances,
 };

@@ -8,6 +8,7 @@ mod cli;
 mod elements;
 mod fit;
 mod modes_accuracy;
+mod optical_spring;
 mod refusals;
 mod sensitivity;
 mod suspension_files;
