@@ -872,3 +872,74 @@ fn resolve_blade_defaults(spec: &mut Spec) {
         blades.fields = blades.fields.or(&defaults);
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::source::{Origin, Source};
+
+    fn at(path: &str) -> At {
+        At {
+            origin: Origin {
+                source: Source::new("s.toml", None, ""),
+                span: 0..0,
+            },
+            path: path.into(),
+        }
+    }
+
+    /// Identifiers are renamed in the parsed expression, never by matching text: `m1` in
+    /// `m10` or in `sqrt` stays, `pi`, the functions and the built-in parameters stay.
+    #[test]
+    fn expressions_rename_their_identifiers_only() {
+        let p = Prefix("a_");
+        let renamed = |text: &str, frequency: bool| {
+            p.expr(&pendkit_expr::parse(text).unwrap(), frequency)
+                .to_string()
+        };
+        assert_eq!(
+            renamed("sqrt(m1*m10)*2*pi + temperature*x1.eq", false),
+            "sqrt(a_m1*a_m10)*2*pi + temperature*a_x1.eq"
+        );
+        assert_eq!(renamed("phi*(1 + f/100)", true), "a_phi*(1 + f/100)");
+        assert_eq!(renamed("phi*(1 + f/100)", false), "a_phi*(1 + a_f/100)");
+    }
+
+    #[test]
+    fn signals_rename_bodies_and_expressions() {
+        let p = Prefix("itm_");
+        let mut text = Located {
+            value: "force:optic@-0.5*t_optic, max(h, 0), 0 / 1, 0, 0".to_string(),
+            at: at("outputs.beam"),
+        };
+        p.signal(&mut text).unwrap();
+        assert_eq!(
+            text.value,
+            "force:itm_optic@-0.5*itm_t_optic, max(itm_h, 0), 0 / 1, 0, 0"
+        );
+        assert_eq!(text.at.path, "outputs.itm_beam");
+        let mut linear = Located {
+            value: "x3 + theta*z3".to_string(),
+            at: at("outputs.tm"),
+        };
+        p.signal(&mut linear).unwrap();
+        assert_eq!(linear.value, "itm_x3 + itm_theta*itm_z3");
+    }
+
+    #[test]
+    fn paths_name_the_prefixed_entry() {
+        let p = Prefix("a_");
+        for (path, renamed) in [
+            ("bodies.top.mass", "bodies.a_top.mass"),
+            ("parameters.m1", "parameters.a_m1"),
+            ("parameters.temperature", "parameters.temperature"),
+            ("element[0].kind", "element[0].kind"),
+            ("gravity", "gravity"),
+            ("names.ligo.bodies.top", "names.ligo.bodies.top"),
+        ] {
+            let mut a = at(path);
+            p.at(&mut a);
+            assert_eq!(a.path, renamed);
+        }
+    }
+}
