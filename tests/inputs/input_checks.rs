@@ -509,6 +509,7 @@ fn a_beaded_fibre_with_more_beads_than_the_limit_is_an_error_not_an_overflow() {
     let support = b.body(pendkit::model::BodySpec::new("support")).unwrap();
     let fibre = |beads| BeadedFibre {
         name: "f",
+        scope: "",
         upper: end(support),
         lower: end(support),
         nominal: [

@@ -11,3 +11,4 @@ mod element_instances;
 mod errors;
 mod input_checks;
 mod no_silent_nonsense;
+mod scenes;

@@ -45,6 +45,7 @@ fn fibre(
         &mut b,
         &BeadedFibre {
             name: "f",
+            scope: "",
             upper: end(top),
             lower: end(bottom),
             nominal: [Vector3::z() * LENGTH, Vector3::zeros()],

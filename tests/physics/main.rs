@@ -16,5 +16,6 @@ mod point_spring_file;
 mod quad;
 mod quad_aligo;
 mod registry;
+mod scenes;
 mod stability;
 mod triple;

@@ -64,6 +64,9 @@ pub struct BeadedFibre<'a, S: Real = f64> {
     /// `x<name>b1 y<name>b1 z<name>b1 ...`), clamped joints `<name>j1 ...` (floats
     /// `yaw<name>b1 pitch<name>b1 roll<name>b1 ...`).
     pub name: &'a str,
+    /// Written before every name the fibre makes (wire, segments, beads, joints and their
+    /// coordinates): a scene's include prefix (`itm_` gives `itm_xf1b1`), empty otherwise.
+    pub scope: &'a str,
     /// The upper end: body, attachment point (m, body coordinates) and direction.
     pub upper: WireEnd<S>,
     /// The lower end.
@@ -105,7 +108,7 @@ pub fn add_beaded_fibre<S: Real>(
 ) -> Result<(), BuildError> {
     if f.beads > MAX_BEADS {
         return Err(BuildError::Invalid {
-            item: format!("fibre '{}'", f.name),
+            item: format!("fibre '{}{}'", f.scope, f.name),
             message: format!(
                 "add_beaded_fibre: beads is {}, at most {MAX_BEADS}",
                 f.beads
@@ -135,9 +138,9 @@ pub fn add_beaded_fibre<S: Real>(
             f.lower.clone()
         };
         let name = if f.beads == 0 {
-            f.name.to_string()
+            format!("{}{}", f.scope, f.name)
         } else {
-            format!("{}s{}", f.name, k + 1)
+            format!("{}{}s{}", f.scope, f.name, k + 1)
         };
         let ends = [above, below.clone()];
         let carried = f.tension + bead_masses[k..].iter().copied().sum::<S>() * f.g;
@@ -218,7 +221,7 @@ fn bead<S: Real>(
     mass: S,
 ) -> Result<WireEnd<S>, BuildError> {
     let label = format!("{}b{}", f.name, k + 1);
-    let names = ["x", "y", "z"].map(|c| format!("{c}{label}"));
+    let names = ["x", "y", "z"].map(|c| format!("{}{c}{label}", f.scope));
     // the beads' start positions (search starts, not model numbers: real parts)
     let [top, bottom] = f.nominal.each_ref().map(|v| v.map(|x| x.re()));
     let at = top + (bottom - top) * ((k + 1) as f64 / (f.beads + 1) as f64);
@@ -226,7 +229,7 @@ fn bead<S: Real>(
         b.variable(name, *value)?;
     }
     let bead = b.body(
-        BodySpec::new(&label)
+        BodySpec::new(format!("{}{label}", f.scope))
             .pose([&names[0], &names[1], &names[2], "0", "0", "0"])
             .mass(mass)
             .mode_family("violin"),
@@ -234,14 +237,16 @@ fn bead<S: Real>(
     let (body, direction) = match f.joints {
         BeadJoints::Hinged => (bead, EndDirection::Hinged),
         BeadJoints::Clamped => {
-            let angles = ["yaw", "pitch", "roll"].map(|c| format!("{c}{label}"));
+            let angles = ["yaw", "pitch", "roll"].map(|c| format!("{}{c}{label}", f.scope));
             for angle in &angles {
                 b.float(angle, 0.0)?;
                 b.pin(angle)?;
             }
-            let joint = b.body(BodySpec::new(format!("{}j{}", f.name, k + 1)).pose([
-                &names[0], &names[1], &names[2], &angles[0], &angles[1], &angles[2],
-            ]))?;
+            let joint = b.body(
+                BodySpec::new(format!("{}{}j{}", f.scope, f.name, k + 1)).pose([
+                    &names[0], &names[1], &names[2], &angles[0], &angles[1], &angles[2],
+                ]),
+            )?;
             (joint, EndDirection::Auto)
         }
     };

@@ -361,6 +361,8 @@ struct PlannedWire<S: Real> {
 /// A wire set, planned.
 struct PlannedSet<'s, S: Real> {
     set: &'s WireSet,
+    /// The stage's scope ([`StageFile::scope`]): written before the wires' names.
+    scope: &'s str,
     wires: Vec<PlannedWire<S>>,
     ends: [EndDirection<S>; 2],
     length: S,
@@ -374,6 +376,8 @@ struct PlannedSet<'s, S: Real> {
 /// A blade set, planned.
 struct PlannedBlades<'s, S: Real> {
     set: &'s BladeSet,
+    /// The stage's scope ([`StageFile::scope`]): written before the names the tips make.
+    scope: &'s str,
     fields: BladeFields,
     tag: String,
     names: Vec<String>,
@@ -442,6 +446,29 @@ fn check_material_domains(spec: &Spec, params: &Resolved) -> Result<(), BuildErr
     Ok(())
 }
 
+/// In a scene, every included suspension's own gravity must be the scene's: one planet
+/// (see [`crate::scene`]). Relative 1e-12, so that `9.81` written two ways agrees.
+fn check_scene_gravity<S: BuildScalar>(spec: &Spec, ctx: &Ctx<S>, g: S) -> Result<(), BuildError> {
+    for (prefix, gravity) in &spec.gravity_checks {
+        let (own, at) = match gravity {
+            Some(ex) => (ctx.eval(ex)?.re(), &ex.at),
+            None => (9.81, &prefix.at),
+        };
+        if (own - g.re()).abs() > 1e-12 * g.re().abs() {
+            return Err(invalid(
+                at,
+                format!(
+                    "the suspension included as '{}' has gravity {} m/s^2, the scene {} m/s^2: a scene has one gravity; set the scene's `gravity`",
+                    prefix.value,
+                    number_text(own),
+                    number_text(g.re())
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
 struct Interpreter<'s, 'c, S: BuildScalar> {
     spec: &'s Spec,
     ctx: &'c Ctx<'c, S>,
@@ -466,6 +493,7 @@ impl<'s, 'c, S: BuildScalar> Interpreter<'s, 'c, S> {
             Some(ex) => ctx.eval(ex)?,
             None => S::from(9.81),
         };
+        check_scene_gravity(spec, ctx, g)?;
         let index: HashMap<&str, usize> = spec
             .bodies
             .iter()
@@ -742,7 +770,7 @@ impl<'s, 'c, S: BuildScalar> Interpreter<'s, 'c, S> {
             // axis is there (a number in the pose's text)
             let start = nominal_k.re();
             if dof.contains(&k) {
-                let name = format!("{}{suffix}", AXES[k]);
+                let name = format!("{}{}{suffix}", body.scope, AXES[k]);
                 if body.driven {
                     // a driven coordinate's value is where it starts: a number
                     self.ctx.lose(
@@ -913,6 +941,7 @@ impl<'s, 'c, S: BuildScalar> Interpreter<'s, 'c, S> {
             }
             sets.push(PlannedSet {
                 set,
+                scope: &stage.scope,
                 wires,
                 ends,
                 length,
@@ -973,7 +1002,7 @@ impl<'s, 'c, S: BuildScalar> Interpreter<'s, 'c, S> {
 
     fn plan_blades(
         &self,
-        stage: &StageFile,
+        stage: &'s StageFile,
         set: &'s BladeSet,
     ) -> Result<PlannedBlades<'s, S>, BuildError> {
         let ctx = self.ctx;
@@ -1006,6 +1035,7 @@ impl<'s, 'c, S: BuildScalar> Interpreter<'s, 'c, S> {
         }
         Ok(PlannedBlades {
             set,
+            scope: &stage.scope,
             fields,
             tag,
             names,
@@ -1250,8 +1280,9 @@ impl<'s, 'c, S: BuildScalar> Interpreter<'s, 'c, S> {
         };
         let tip_at = blades.tips[t];
         let value = |v: S| num(v.re());
-        let (z, x) = (format!("zb{name}"), format!("xb{name}"));
-        let tip_name = format!("blade{name}");
+        let scope = blades.scope;
+        let (z, x) = (format!("{scope}zb{name}"), format!("{scope}xb{name}"));
+        let tip_name = format!("{scope}blade{name}");
         let zero = S::from(0.0);
         let mut stiffness = Vector6::new(zero, zero, kc, zero, zero, zero);
         let mut tip_weight = zero;
@@ -1293,7 +1324,7 @@ impl<'s, 'c, S: BuildScalar> Interpreter<'s, 'c, S> {
             }
             BladeForm::Full => {
                 let lab = parent_at + tip_at;
-                let names = AXES.map(|n| format!("{n}b{name}"));
+                let names = AXES.map(|n| format!("{scope}{n}b{name}"));
                 for (k, n) in names.iter().enumerate() {
                     // search starts: real parts
                     b.variable(n, if k < 3 { lab[k].re() } else { 0.0 })
@@ -1362,6 +1393,7 @@ impl<'s, 'c, S: BuildScalar> Interpreter<'s, 'c, S> {
             &mut self.b,
             &BeadedFibre {
                 name: &w.name,
+                scope: set.scope,
                 upper: end(upper, &set.ends[0]),
                 lower: end(lower, &set.ends[1]),
                 nominal: w.nominal,
@@ -1432,6 +1464,7 @@ impl<'s, 'c, S: BuildScalar> Interpreter<'s, 'c, S> {
             }
         }
         for (s, name) in names.iter().enumerate() {
+            let name = format!("{}{name}", stage.scope);
             let spring_ends = [
                 SpringEnd {
                     body: upper,
@@ -1445,7 +1478,7 @@ impl<'s, 'c, S: BuildScalar> Interpreter<'s, 'c, S> {
                 },
             ];
             self.b
-                .spring(name, spring_ends, k, preload, &set.tag.value)
+                .spring(&name, spring_ends, k, preload, &set.tag.value)
                 .map_err(placed(&set.at))?;
         }
         Ok(())

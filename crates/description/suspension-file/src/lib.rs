@@ -52,6 +52,7 @@ pub mod build;
 pub mod damping;
 pub mod generate;
 pub mod read;
+pub mod scene;
 pub mod signals;
 pub mod spec;
 
@@ -116,7 +117,7 @@ impl Library for NoLibrary {
 
 /// Parameters every model has; a file that does not define them gets them with these units
 /// and descriptions (the model builder reads them).
-const BUILT_IN: [(&str, f64, &str, &str, &str); 2] = [
+pub(crate) const BUILT_IN: [(&str, f64, &str, &str, &str); 2] = [
     (
         "temperature",
         pendkit_model::DEFAULT_TEMPERATURE,
@@ -369,15 +370,74 @@ impl Suspension {
     }
 }
 
-/// The description read from the tree `root` of `source`, merged over the files it extends.
+/// The description read from the tree `root` of `source`, merged over the files it extends,
+/// with the suspensions it includes.
 fn read_spec(source: &Arc<Source>, root: Node, library: &dyn Library) -> Result<Spec, FileError> {
-    let mut chain = Vec::new();
-    let root = load_tree(source, root, library, &mut chain)?;
+    read_scene(source, root, library, &mut Vec::new())
+}
+
+/// [`read_spec`] of a file reached through `chain` (the files that extend or include it, in
+/// order: a file met again goes round in a circle).
+fn read_scene(
+    source: &Arc<Source>,
+    root: Node,
+    library: &dyn Library,
+    chain: &mut Vec<String>,
+) -> Result<Spec, FileError> {
+    let mut root = load_tree(source, root, library, chain)?;
+    let includes = scene::take_includes(&mut root)?;
     let at = At {
         origin: root.origin.clone(),
         path: String::new(),
     };
-    spec::read(&root, at)
+    let own = spec::read(&root, at)?;
+    if includes.is_empty() {
+        return Ok(own);
+    }
+    let mut assembled = scene::Scene::default();
+    for include in &includes {
+        let at = At {
+            origin: include.model.at.origin.clone(),
+            path: include.model.at.path.clone(),
+        };
+        let (sub_source, sub_root) = open(&include.model.value, &at, library)?;
+        if chain.contains(&sub_source.name) {
+            return Err(include.model.at.error(format!(
+                "include goes round in a circle: {} -> {}",
+                chain.join(" -> "),
+                sub_source.name
+            )));
+        }
+        // each include starts from this file's chain: two includes of one file are fine
+        let mut sub_chain = chain.clone();
+        let mut sub = read_scene(&sub_source, sub_root, library, &mut sub_chain)?;
+        scene::Prefix(&include.prefix.value).spec(&mut sub)?;
+        assembled.add(sub, include)?;
+    }
+    assembled.finish(own)
+}
+
+/// The file an `extends` or an `include` at `at` names: a path ending in `.toml` relative to
+/// the file that names it (when that file was read from disk), or a bundled file's name.
+fn open(target: &str, at: &At, library: &dyn Library) -> Result<(Arc<Source>, Node), FileError> {
+    let naming = &at.origin.source;
+    if target.ends_with(".toml")
+        && let Some(path) = &naming.path
+    {
+        let dir = path.parent().unwrap_or_else(|| Path::new(""));
+        return read_beside(&dir.join(target), at);
+    }
+    let file = library.file(target).ok_or_else(|| {
+        at.error(format!(
+            "no file '{target}'{}",
+            if target.ends_with(".toml") {
+                " among the bundled files"
+            } else {
+                " (a bundled model name, or a path ending in .toml)"
+            }
+        ))
+    })?;
+    file.read()
 }
 
 /// Defines the file's parameters and resolves them, reporting a problem at the parameter it
@@ -446,26 +506,7 @@ fn load_tree(
     let Value::Str(target) = &extends.value else {
         return Err(at.error("expected the name of a file or of a bundled model"));
     };
-    let (base_source, base) = if target.ends_with(".toml") && source.path.is_some() {
-        let dir = source
-            .path
-            .as_ref()
-            .and_then(|p| p.parent())
-            .unwrap_or_else(|| Path::new(""));
-        read_beside(&dir.join(target), &at)?
-    } else {
-        let file = library.file(target).ok_or_else(|| {
-            at.error(format!(
-                "no file '{target}'{}",
-                if target.ends_with(".toml") {
-                    " among the bundled files"
-                } else {
-                    " (a bundled model name, or a path ending in .toml)"
-                }
-            ))
-        })?;
-        file.read()?
-    };
+    let (base_source, base) = open(target, &at, library)?;
     let mut base = load_tree(&base_source, base, library, chain)?;
     let Value::Table(base_table) = &mut base.value else {
         return Ok(node);
@@ -475,7 +516,8 @@ fn load_tree(
     base_table.remove("summary");
     keep_parameter_documentation(base_table, &mut node);
     if let Value::Table(mut child) = std::mem::replace(&mut node.value, Value::Bool(false)) {
-        carry_instances(base_table, &mut child);
+        carry_entries(base_table, &mut child, "element", "name");
+        carry_entries(base_table, &mut child, "include", "prefix");
         base_table.merge(child);
     }
     Ok(Node {
@@ -484,18 +526,19 @@ fn load_tree(
     })
 }
 
-/// `[[element]]` instances add up along `extends`: the extending file's instances follow
-/// the base's, and one with the name of a base instance replaces it (as a key replaces a
-/// key). Anything but two arrays is left to the ordinary merge.
-fn carry_instances(base: &mut tree::Table, child: &mut tree::Table) {
-    let (Some(mine), Some(theirs)) = (base.get("element"), child.get("element")) else {
+/// Arrays of tables that add up along `extends` (`[[element]]` instances, a scene's
+/// `[[include]]`s): the extending file's entries follow the base's, and one with the `id`
+/// (`name`, `prefix`) of a base entry replaces it (as a key replaces a key). Anything but
+/// two arrays is left to the ordinary merge.
+fn carry_entries(base: &mut tree::Table, child: &mut tree::Table, key: &str, id: &str) {
+    let (Some(mine), Some(theirs)) = (base.get(key), child.get(key)) else {
         return;
     };
     let (Value::Array(mine), Value::Array(theirs)) = (&mine.value, &theirs.value) else {
         return;
     };
     let name = |n: &Node| match &n.value {
-        Value::Table(t) => t.get("name").and_then(|v| match &v.value {
+        Value::Table(t) => t.get(id).and_then(|v| match &v.value {
             Value::Str(s) => Some(s.clone()),
             _ => None,
         }),
@@ -508,7 +551,7 @@ fn carry_instances(base: &mut tree::Table, child: &mut tree::Table) {
         .cloned()
         .collect();
     all.extend(theirs.iter().cloned());
-    if let Some((_, _, node)) = child.entries.iter_mut().find(|(k, _, _)| k == "element") {
+    if let Some((_, _, node)) = child.entries.iter_mut().find(|(k, _, _)| k == key) {
         node.value = Value::Array(all);
     }
 }

@@ -106,7 +106,7 @@ pub fn point_form(
 }
 
 /// `text` split at the commas outside parentheses.
-fn split_top_level(text: &str) -> Vec<&str> {
+pub(crate) fn split_top_level(text: &str) -> Vec<&str> {
     let (mut depth, mut start, mut parts) = (0i32, 0, Vec::new());
     for (i, c) in text.char_indices() {
         match c {

@@ -19,6 +19,11 @@ pub struct Spec {
     pub summary: Option<Located<String>>,
     /// `gravity` (m/s²); 9.81 when absent.
     pub gravity: Option<Ex>,
+    /// In a scene ([`crate::scene`]): the gravity of each included suspension but the one
+    /// whose gravity is the scene's (`None`: it writes none, 9.81 m/s²), with the prefix it
+    /// is included under (placed at the include); the build checks that each equals the
+    /// scene's.
+    pub gravity_checks: Vec<(Located<String>, Option<Ex>)>,
     /// `[parameters]`, in the file's order.
     pub parameters: Vec<ParameterSpec>,
     /// `[materials.<name>]`.
@@ -183,6 +188,9 @@ pub struct BodyFile {
     /// `mode_family`: modes dominated by this body's coordinates belong to this family
     /// (e.g. `violin`) rather than to their degree of freedom.
     pub mode_family: Option<Located<String>>,
+    /// The prefix of the scene's `[[include]]` the body came from (empty for a file's own
+    /// bodies): its coordinates are `<scope>x<suffix>` ... (see [`crate::scene`]).
+    pub scope: String,
 }
 
 /// An inertia as written: principal moments or a full tensor.
@@ -232,6 +240,10 @@ pub struct StageFile {
     pub springs: Option<SpringSet>,
     /// A rigid link: the body rides on the upper one.
     pub link: Option<LinkFile>,
+    /// The prefix of the scene's `[[include]]` the stage came from (empty for a file's own
+    /// stages): the names of its parts, and of what the build makes from them (blade tips,
+    /// beads), start with it (see [`crate::scene`]).
+    pub scope: String,
 }
 
 impl StageFile {
@@ -855,6 +867,7 @@ fn body(name: String, node: &Node, at: At) -> Result<BodyFile, FileError> {
         centre_of_mass: vector3(&mut f, "centre_of_mass")?,
         shape,
         mode_family: f.string("mode_family")?,
+        scope: String::new(),
     };
     f.planned("temperature", "a temperature per body")?;
     f.finish()?;
@@ -1132,6 +1145,7 @@ fn stage(body: String, node: &Node, at: At) -> Result<StageFile, FileError> {
         fibres,
         springs,
         link,
+        scope: String::new(),
     })
 }
 
