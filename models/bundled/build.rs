@@ -8,7 +8,7 @@ use std::{env, fs};
 use pendkit_source::{Source, packed, tree};
 
 /// Every bundled file: its folder under `models/` and its name.
-const FILES: [(&str, &str); 17] = [
+const FILES: [(&str, &str); 18] = [
     ("basic", "toy.toml"),
     ("basic", "pendulum.toml"),
     ("basic", "double-pendulum.toml"),
@@ -21,6 +21,7 @@ const FILES: [(&str, &str); 17] = [
     ("ligo", "quad-lateral.toml"),
     ("ligo", "quad-v5.toml"),
     ("ligo", "quad-aligo.toml"),
+    ("ligo", "arm-cavity.toml"),
     ("ligo", "triple.toml"),
     ("ligo", "triple-lite.toml"),
     ("ligo", "triple-full.toml"),

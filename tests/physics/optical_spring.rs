@@ -110,3 +110,48 @@ fn a_cavity_outside_the_stable_range_is_refused_naming_the_element() {
         "{error}"
     );
 }
+
+#[test]
+fn the_modes_sensitivity_to_the_power_is_the_closed_forms() {
+    use pendkit::sensitivity::{SensitivityRequest, sensitivities};
+    // f = sqrt((k + λ(P))/I)/2π with λ linear in P: df/dP = (λ/P) / (8π² I f)
+    let power = 1e6;
+    let request = SensitivityRequest {
+        parameters: Some(vec!["power".to_string()]),
+        ..SensitivityRequest::modes(Stage::S2)
+    };
+    let s = sensitivities(&case_at(power), &request).unwrap();
+    assert!(
+        s.exact[0],
+        "the optical spring's power should be differentiated exactly"
+    );
+    let (g1, g2) = (1.0 - L / R1, 1.0 - L / R2);
+    let per_watt = L / C / (1.0 - g1 * g2);
+    let root = ((g1 - g2).powi(2) + 4.0).sqrt();
+    let hz = |k: f64, inertia: f64| (k / inertia).sqrt() / (2.0 * PI);
+    let mut expected: Vec<(f64, f64)> = Vec::new();
+    for (k, inertia) in [(K[4], I[1]), (K[3], I[2])] {
+        for lambda in [
+            per_watt * (-(g1 + g2) + root),
+            per_watt * (-(g1 + g2) - root),
+        ] {
+            let f = hz(k + lambda * power, inertia);
+            expected.push((f, lambda / (8.0 * PI * PI * inertia * f)));
+        }
+    }
+    let (system, _) = case_at(power).build().unwrap();
+    let result = run_stage(system, Stage::S2).unwrap();
+    let modes = &result.modes.modes;
+    // exact derivatives: 1e-8 relative covers the modes' rounding
+    for (f, dfdp) in expected {
+        let k = modes
+            .iter()
+            .position(|m| (m.hz - f).abs() < 1e-9 * f)
+            .unwrap_or_else(|| panic!("no mode at {f} Hz"));
+        let got = s.dfdp[k][0];
+        assert!(
+            (got - dfdp).abs() <= 1e-8 * dfdp.abs(),
+            "mode at {f} Hz: {got} against {dfdp}"
+        );
+    }
+}

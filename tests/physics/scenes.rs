@@ -74,6 +74,10 @@ fn two_uncoupled_copies_have_each_mode_of_the_model_twice() {
         let both = modes_hz(&scene(&two(model, "")));
         assert_same(&both, &union(&alone, &alone), 1e-12);
     }
+    // the bundled arm-cavity scene without light: its optical spring (power 0) adds
+    // nothing, so the two quad-aligo suspensions are independent
+    let alone = model_hz("quad-aligo", &[]);
+    assert_same(&model_hz("arm-cavity", &[]), &union(&alone, &alone), 1e-12);
 }
 
 #[test]

@@ -26,7 +26,7 @@ include!(concat!(env!("OUT_DIR"), "/files.rs"));
 
 /// The bundled models, in the order `pendkit models` lists them: each is the file of its
 /// name (`chain` is written by its generator for its parameter `n_stages`).
-const MODELS: [&str; 16] = [
+const MODELS: [&str; 17] = [
     "toy",
     "pendulum",
     "double-pendulum",
@@ -38,6 +38,7 @@ const MODELS: [&str; 16] = [
     "quad-lateral",
     "quad-v5",
     "quad-aligo",
+    "arm-cavity",
     "triple",
     "triple-lite",
     "triple-full",

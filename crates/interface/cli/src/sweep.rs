@@ -258,6 +258,9 @@ pub fn run(a: Args) -> Result<String, CliError> {
     let mut x_unit = String::new();
     // per step of a modes sweep: whether the equilibrium is unstable there
     let mut unstable: Vec<bool> = Vec::new();
+    // a modes sweep's rows (tracked id, line), and which tracked modes --family keeps
+    let mut mode_rows: Vec<(usize, String)> = Vec::new();
+    let mut in_family: Vec<bool> = Vec::new();
     for point in &points {
         let (values, run, step_name) = step_run(&a, &varies, point)?;
         unstable.push(is_unstable(&run));
@@ -277,18 +280,26 @@ pub fn run(a: Args) -> Result<String, CliError> {
                 .map(|(j, id)| (id, j))
                 .collect();
             rows.sort();
-            let keep = |id: usize| a.family.as_ref().is_none_or(|f| first.families[id] == *f);
-            for (id, j) in rows.into_iter().filter(|&(id, _)| keep(id)) {
-                let _ = writeln!(
-                    out,
-                    "{prefix}{},{},{},{},{},{}",
-                    id + 1,
-                    first.labels[id],
-                    first.families[id],
-                    csv(modes.frequencies[j]),
-                    modes.labels[j],
-                    fixed(overlaps[j], 6, 0)
-                );
+            for (id, j) in rows {
+                // --family keeps a tracked mode that is of the family at any step (a
+                // mode can change family where it meets another, as a soft pitch mode
+                // meeting a longitudinal one does)
+                if in_family.len() <= id {
+                    in_family.resize(id + 1, false);
+                }
+                in_family[id] |= a.family.as_ref().is_none_or(|f| modes.families[j] == *f);
+                mode_rows.push((
+                    id,
+                    format!(
+                        "{prefix}{},{},{},{},{},{}\n",
+                        id + 1,
+                        first.labels[id],
+                        first.families[id],
+                        csv(modes.frequencies[j]),
+                        modes.labels[j],
+                        fixed(overlaps[j], 6, 0)
+                    ),
+                ));
                 if varies.len() == 1 {
                     extend_series(&mut mode_series, id, first, values[0], modes.frequencies[j]);
                 }
@@ -303,8 +314,13 @@ pub fn run(a: Args) -> Result<String, CliError> {
         progress.step();
     }
     drop(progress);
+    for (id, line) in &mode_rows {
+        if in_family[*id] {
+            out.push_str(line);
+        }
+    }
     if let Some(family) = &a.family
-        && out.lines().count() <= 1
+        && !in_family.contains(&true)
     {
         return Err(CliError::usage(format!(
             "--family {family}: no mode of that family at the first step (families are those `pendkit modes` prints)"
@@ -316,6 +332,12 @@ pub fn run(a: Args) -> Result<String, CliError> {
     }
     if let Some(path) = &a.plot {
         if a.modes {
+            let mode_series = mode_series
+                .into_iter()
+                .enumerate()
+                .filter(|(id, _)| in_family.get(*id).copied().unwrap_or(false))
+                .map(|(id, (name, x, y))| (last_label(&steps, &ids, id, name), x, y))
+                .collect();
             plot_modes(path, &varies[0], x_unit, mode_series, &crossings)?;
         } else if a.noise.is_some() {
             plot_noise(
@@ -623,6 +645,19 @@ fn fixed_or_sci(x: f64) -> String {
         crate::format::sci(x, 3, 0)
     } else {
         format!("{}", (x * 1e6).round() / 1e6)
+    }
+}
+
+/// A mode series' name (`id label (family)` at the first step) with the label and family
+/// at the last step added when they differ: `1 itm_x3 (L) → itm_pitch3 (P)`.
+fn last_label(steps: &[StepModes], ids: &[Vec<usize>], id: usize, name: String) -> String {
+    let last = steps.last().zip(ids.last()).and_then(|(step, ids)| {
+        let j = ids.iter().position(|&i| i == id)?;
+        Some(format!("{} ({})", step.labels[j], step.families[j]))
+    });
+    match last {
+        Some(end) if !name.ends_with(&end) => format!("{name} → {end}"),
+        _ => name,
     }
 }
 
