@@ -248,19 +248,13 @@ pub fn run(a: Args) -> Result<String, CliError> {
     );
     let mut out = String::new();
     let mut header_written = false;
-    // per step: tracked mode ids in the order of that step's modes
-    let mut steps: Vec<StepModes> = Vec::new();
-    let mut ids: Vec<Vec<usize>> = Vec::new();
-    // for the figures: (series name, x or f, y or response)
-    let mut mode_series: Vec<(String, Vec<f64>, Vec<f64>)> = Vec::new();
+    let mut table = ModeTable::default();
+    // for the response figures: (step name, response)
     let mut curves: Vec<(String, Vec<(f64, f64)>)> = Vec::new();
     let mut unit = String::new();
     let mut x_unit = String::new();
     // per step of a modes sweep: whether the equilibrium is unstable there
     let mut unstable: Vec<bool> = Vec::new();
-    // a modes sweep's rows (tracked id, line), and which tracked modes --family keeps
-    let mut mode_rows: Vec<(usize, String)> = Vec::new();
-    let mut in_family: Vec<bool> = Vec::new();
     for point in &points {
         let (values, run, step_name) = step_run(&a, &varies, point)?;
         unstable.push(is_unstable(&run));
@@ -268,45 +262,10 @@ pub fn run(a: Args) -> Result<String, CliError> {
             (x_unit, unit) = write_header(&mut out, &a, &varies, &run, tf.as_ref());
             header_written = true;
         }
-        let prefix: String = values.iter().map(|x| csv(*x) + ",").collect();
         if a.modes {
-            let modes = StepModes::of(&run);
-            let (step_ids, overlaps) = track(&points, point, &steps, &ids, &modes, &step_name)?;
-            let first = steps.first().unwrap_or(&modes);
-            let mut rows: Vec<(usize, usize)> = step_ids
-                .iter()
-                .copied()
-                .enumerate()
-                .map(|(j, id)| (id, j))
-                .collect();
-            rows.sort();
-            for (id, j) in rows {
-                // --family keeps a tracked mode that is of the family at any step (a
-                // mode can change family where it meets another, as a soft pitch mode
-                // meeting a longitudinal one does)
-                if in_family.len() <= id {
-                    in_family.resize(id + 1, false);
-                }
-                in_family[id] |= a.family.as_ref().is_none_or(|f| modes.families[j] == *f);
-                mode_rows.push((
-                    id,
-                    format!(
-                        "{prefix}{},{},{},{},{},{}\n",
-                        id + 1,
-                        first.labels[id],
-                        first.families[id],
-                        csv(modes.frequencies[j]),
-                        modes.labels[j],
-                        fixed(overlaps[j], 6, 0)
-                    ),
-                ));
-                if varies.len() == 1 {
-                    extend_series(&mut mode_series, id, first, values[0], modes.frequencies[j]);
-                }
-            }
-            steps.push(modes);
-            ids.push(step_ids);
+            table.add(&a, &points, point, &run, &values, &step_name)?;
         } else {
+            let prefix: String = values.iter().map(|x| csv(*x) + ",").collect();
             let response = step_response(&a, &run, tf.as_ref(), &freqs)?;
             write_response_rows(&mut out, &prefix, &freqs, &response, a.noise.is_some());
             curves.push((step_name, response));
@@ -314,16 +273,12 @@ pub fn run(a: Args) -> Result<String, CliError> {
         progress.step();
     }
     drop(progress);
-    for (id, line) in &mode_rows {
-        if in_family[*id] {
-            out.push_str(line);
-        }
-    }
+    table.write(&mut out);
     if let Some(family) = &a.family
-        && !in_family.contains(&true)
+        && !table.in_family.contains(&true)
     {
         return Err(CliError::usage(format!(
-            "--family {family}: no mode of that family at the first step (families are those `pendkit modes` prints)"
+            "--family {family}: no mode of that family at any step (families are those `pendkit modes` prints)"
         )));
     }
     let mut crossings = Vec::new();
@@ -332,13 +287,7 @@ pub fn run(a: Args) -> Result<String, CliError> {
     }
     if let Some(path) = &a.plot {
         if a.modes {
-            let mode_series = mode_series
-                .into_iter()
-                .enumerate()
-                .filter(|(id, _)| in_family.get(*id).copied().unwrap_or(false))
-                .map(|(id, (name, x, y))| (last_label(&steps, &ids, id, name), x, y))
-                .collect();
-            plot_modes(path, &varies[0], x_unit, mode_series, &crossings)?;
+            plot_modes(path, &varies[0], x_unit, table.series(), &crossings)?;
         } else if a.noise.is_some() {
             plot_noise(
                 path,
@@ -383,6 +332,95 @@ fn step_run(
         .collect::<Vec<_>>()
         .join(", ");
     Ok((values, run, step_name))
+}
+
+/// A modes sweep's table as it grows: each step's modes, their tracked ids, the rows, which
+/// tracked modes `--family` keeps, and the series of the figure.
+#[derive(Default)]
+struct ModeTable {
+    steps: Vec<StepModes>,
+    /// Per step: the tracked id of each of its modes, in the step's order.
+    ids: Vec<Vec<usize>>,
+    /// (tracked id, CSV line).
+    rows: Vec<(usize, String)>,
+    /// Per tracked id: of the `--family` at some step (every mode without one).
+    in_family: Vec<bool>,
+    /// Per tracked id: (series name, swept values, frequencies), over one `--vary`.
+    series: Vec<(String, Vec<f64>, Vec<f64>)>,
+}
+
+impl ModeTable {
+    /// The modes of `run`, the step `point` at the swept `values`, tracked from the steps
+    /// before.
+    fn add(
+        &mut self,
+        a: &Args,
+        points: &[Vec<usize>],
+        point: &[usize],
+        run: &Run,
+        values: &[f64],
+        step_name: &str,
+    ) -> Result<(), CliError> {
+        let modes = StepModes::of(run);
+        let (step_ids, overlaps) = track(points, point, &self.steps, &self.ids, &modes, step_name)?;
+        let prefix: String = values.iter().map(|x| csv(*x) + ",").collect();
+        let first = self.steps.first().unwrap_or(&modes);
+        let mut order: Vec<(usize, usize)> = step_ids
+            .iter()
+            .copied()
+            .enumerate()
+            .map(|(j, id)| (id, j))
+            .collect();
+        order.sort();
+        for (id, j) in order {
+            // --family keeps a tracked mode that is of the family at any step (a mode can
+            // change family where it meets another, as a soft pitch mode meeting a
+            // longitudinal one does)
+            if self.in_family.len() <= id {
+                self.in_family.resize(id + 1, false);
+            }
+            self.in_family[id] |= a.family.as_ref().is_none_or(|f| modes.families[j] == *f);
+            self.rows.push((
+                id,
+                format!(
+                    "{prefix}{},{},{},{},{},{}\n",
+                    id + 1,
+                    first.labels[id],
+                    first.families[id],
+                    csv(modes.frequencies[j]),
+                    modes.labels[j],
+                    fixed(overlaps[j], 6, 0)
+                ),
+            ));
+            if values.len() == 1 {
+                extend_series(&mut self.series, id, first, values[0], modes.frequencies[j]);
+            }
+        }
+        self.steps.push(modes);
+        self.ids.push(step_ids);
+        Ok(())
+    }
+
+    /// The rows of the modes `--family` keeps, in step order.
+    fn write(&self, out: &mut String) {
+        for (id, line) in &self.rows {
+            if self.in_family[*id] {
+                out.push_str(line);
+            }
+        }
+    }
+
+    /// The figure's series of the modes `--family` keeps, each named at its first and
+    /// last steps.
+    fn series(self) -> Vec<(String, Vec<f64>, Vec<f64>)> {
+        let (steps, ids, in_family) = (self.steps, self.ids, self.in_family);
+        self.series
+            .into_iter()
+            .enumerate()
+            .filter(|(id, _)| in_family.get(*id).copied().unwrap_or(false))
+            .map(|(id, (name, x, y))| (last_label(&steps, &ids, id, name), x, y))
+            .collect()
+    }
 }
 
 /// Adds mode `id`'s frequency `hz` at swept value `x` to its series of the mode figure,
