@@ -42,6 +42,8 @@ impl Hasher for FxHasher {
             b[..rest.len()].copy_from_slice(rest);
             self.add(u64::from_le_bytes(b));
         }
+        // the length, so that trailing zero bytes are not lost in the padding above
+        self.add(bytes.len() as u64);
     }
 
     fn write_u8(&mut self, i: u8) {
