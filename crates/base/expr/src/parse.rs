@@ -83,34 +83,41 @@ fn syntax(src: &str, message: String, column: usize) -> ExprError {
 }
 
 fn lex(src: &str) -> Result<Vec<Token<'_>>, ExprError> {
-    let chars: Vec<char> = src.chars().collect();
-    // The byte offset of each character (and of the end), to slice a token's text.
-    let offsets: Vec<usize> = src
-        .char_indices()
-        .map(|(at, _)| at)
-        .chain(std::iter::once(src.len()))
-        .collect();
-    let text_of = |start: usize, end: usize| &src[offsets[start]..offsets[end]];
-    let is_digit = |i: usize| chars.get(i).is_some_and(char::is_ascii_digit);
+    // A byte scan: every token is ASCII, so only whitespace and errors need a whole
+    // character (a model's build lexes hundreds of expressions; collecting the characters
+    // and their offsets first cost a third of parsing). Columns count characters.
+    let bytes = src.as_bytes();
+    let is_digit = |i: usize| bytes.get(i).is_some_and(u8::is_ascii_digit);
     let mut tokens = Vec::new();
-    let mut i = 0;
-    while let Some(&c) = chars.get(i) {
+    // the byte at `i` is the character at 1-based column `col + 1`
+    let (mut i, mut col) = (0, 0);
+    while let Some(&b) = bytes.get(i) {
         let start = i;
-        let kind = if c.is_whitespace() {
+        let kind = if !b.is_ascii() {
+            // `i` is always at a character's first byte
+            let c = src[i..].chars().next().unwrap_or_default();
+            if c.is_whitespace() {
+                i += c.len_utf8();
+                col += 1;
+                continue;
+            }
+            return Err(syntax(src, format!("unexpected character '{c}'"), col + 1));
+        } else if char::from(b).is_whitespace() {
             i += 1;
+            col += 1;
             continue;
-        } else if c.is_ascii_digit() || (c == '.' && is_digit(i + 1)) {
+        } else if b.is_ascii_digit() || (b == b'.' && is_digit(i + 1)) {
             while is_digit(i) {
                 i += 1;
             }
-            if chars.get(i) == Some(&'.') {
+            if bytes.get(i) == Some(&b'.') {
                 i += 1;
                 while is_digit(i) {
                     i += 1;
                 }
             }
-            if matches!(chars.get(i), Some('e' | 'E')) {
-                let j = if matches!(chars.get(i + 1), Some('+' | '-')) {
+            if matches!(bytes.get(i), Some(b'e' | b'E')) {
+                let j = if matches!(bytes.get(i + 1), Some(b'+' | b'-')) {
                     i + 2
                 } else {
                     i + 1
@@ -122,35 +129,37 @@ fn lex(src: &str) -> Result<Vec<Token<'_>>, ExprError> {
                     }
                 }
             }
-            match crate::number_literal(text_of(start, i)) {
+            match crate::number_literal(&src[start..i]) {
                 Ok(x) => Kind::Num(x),
-                Err(e) => return Err(syntax(src, e.to_string(), start + 1)),
+                Err(e) => return Err(syntax(src, e.to_string(), col + 1)),
             }
-        } else if starts_name(c) {
+        } else if starts_name(char::from(b)) {
             i += 1;
-            while chars.get(i).copied().is_some_and(continues_name) {
+            while bytes.get(i).is_some_and(|&b| continues_name(char::from(b))) {
                 i += 1;
             }
             Kind::Ident
-        } else if "+-*/^(),".contains(c) {
+        } else if b"+-*/^(),".contains(&b) {
             i += 1;
-            Kind::Punct(c)
+            Kind::Punct(char::from(b))
         } else {
             return Err(syntax(
                 src,
-                format!("unexpected character '{c}'"),
-                start + 1,
+                format!("unexpected character '{}'", char::from(b)),
+                col + 1,
             ));
         };
         tokens.push(Token {
             kind,
-            col: start + 1,
-            text: text_of(start, i),
+            col: col + 1,
+            text: &src[start..i],
         });
+        // a token is ASCII: one column per byte
+        col += i - start;
     }
     tokens.push(Token {
         kind: Kind::End,
-        col: chars.len() + 1,
+        col: col + 1,
         text: "",
     });
     Ok(tokens)

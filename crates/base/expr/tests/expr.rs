@@ -285,6 +285,13 @@ fn error_messages() {
         err("é + #"),
         r#"unexpected character 'é' at column 1 in "é + #""#
     );
+    // columns count characters, whatever their bytes: a non-breaking and an em space are
+    // whitespace
+    assert!(
+        err("a\u{a0}+\u{2003}b #").starts_with("unexpected character '#' at column 7 in "),
+        "{}",
+        err("a\u{a0}+\u{2003}b #")
+    );
     assert_eq!(
         err("1e999"),
         r#"number '1e999' is too large (overflows to infinity; the largest is 1.8e308) at column 1 in "1e999""#

@@ -14,13 +14,15 @@
 //! ```
 
 mod domain;
+mod names;
 mod resolve;
 mod tangent;
 
-use std::collections::HashMap;
 use std::sync::Arc;
 
 use pendkit_expr::{BinOp, Expr, ExprError, is_symbol_name, parse};
+
+use crate::names::NameMap;
 
 pub use domain::Domain;
 pub use resolve::Resolved;
@@ -207,11 +209,11 @@ impl Entry {
 #[derive(Debug, Clone, Default)]
 pub struct ParamSet {
     entries: Vec<Arc<Entry>>,
-    index: Arc<HashMap<Arc<str>, usize>>,
+    index: Arc<NameMap<Arc<str>, usize>>,
     /// Units of the parameters that declare one (for reports; not checked).
-    units: Arc<HashMap<Arc<str>, Arc<str>>>,
+    units: Arc<NameMap<Arc<str>, Arc<str>>>,
     /// Domains of the parameters that declare one: every resolved value is checked.
-    domains: Arc<HashMap<Arc<str>, Domain>>,
+    domains: Arc<NameMap<Arc<str>, Domain>>,
 }
 
 impl ParamSet {

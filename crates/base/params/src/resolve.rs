@@ -1,10 +1,11 @@
 //! Order-independent resolution of a parameter set (depth-first, with cycle detection).
 
-use std::collections::{BTreeSet, HashMap};
+use std::collections::BTreeSet;
 use std::sync::Arc;
 
 use pendkit_expr::{Expr, parse};
 
+use crate::names::NameMap;
 use crate::{Entry, ParamError, unknown};
 
 /// A resolved value: a number, or an expression in the free symbols only.
@@ -21,7 +22,7 @@ pub struct Resolved {
     entries: Vec<(Arc<str>, Value)>,
     /// Position of each name in `entries`; shared with the parameter set when no parameter
     /// is left out as free (the usual case), so resolving does not rebuild it.
-    index: Arc<HashMap<Arc<str>, usize>>,
+    index: Arc<NameMap<Arc<str>, usize>>,
     /// Which entries have been looked up (by [`Resolved::get`], [`Resolved::expression`],
     /// [`Resolved::eval`], ...): what a model's build reads, so that an override of a
     /// parameter nothing reads can be refused. Clones share it.
@@ -67,7 +68,7 @@ enum State {
 
 struct Resolver<'a> {
     defs: &'a [Arc<Entry>],
-    index: &'a HashMap<Arc<str>, usize>,
+    index: &'a NameMap<Arc<str>, usize>,
     free: &'a [&'a str],
     state: Vec<State>,
     values: Vec<Option<Value>>,
@@ -77,7 +78,7 @@ struct Resolver<'a> {
 
 pub(crate) fn resolve(
     defs: &[Arc<Entry>],
-    index: &Arc<HashMap<Arc<str>, usize>>,
+    index: &Arc<NameMap<Arc<str>, usize>>,
     free: &[&str],
 ) -> Result<Resolved, ParamError> {
     let mut r = Resolver {

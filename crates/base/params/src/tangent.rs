@@ -2,11 +2,11 @@
 //! as dual numbers: what a model built with dual numbers reads
 //! (docs/exact-sensitivities.md, step 2).
 
-use std::collections::HashMap;
 use std::sync::Arc;
 
 use num_dual::{Derivative, Dual64, DualNum, DualSVec64};
 
+use crate::names::NameMap;
 use crate::{ParamError, ParamSet, unknown};
 
 /// How many parameters one vector-dual build carries ([`ChunkDual`]): a build over a chunk
@@ -28,7 +28,7 @@ pub type ChunkDual = DualSVec64<TANGENT_CHUNK>;
 pub struct Tangent<S = Dual64> {
     seeds: Vec<Arc<str>>,
     values: Vec<(Arc<str>, S)>,
-    index: Arc<HashMap<Arc<str>, usize>>,
+    index: Arc<NameMap<Arc<str>, usize>>,
 }
 
 impl<S: DualNum<Primitive = f64> + Copy> Tangent<S> {

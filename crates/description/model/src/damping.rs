@@ -1,7 +1,7 @@
 //! Damping specifications as a model or case writes them, parsed once and compiled against
 //! the model's resolved parameters into multipliers of frequency.
 
-use std::sync::OnceLock;
+use std::sync::{Arc, OnceLock};
 
 use pendkit_expr::{BinOp, Expr, Slot, parse};
 use pendkit_params::Resolved;
@@ -185,14 +185,14 @@ impl DampingSpec {
             .into_iter()
             .filter(|(field, _)| field.domain != Domain::Finite && **field != DAMPING_TEMPERATURE)
             .collect();
-        Ok(ParsedDamping {
+        Ok(ParsedDamping(Arc::new(Parsed {
             spec: self.clone(),
             real,
             imag,
             checked,
             inputs: inputs.into_iter().collect(),
             first: OnceLock::new(),
-        })
+        })))
     }
 }
 
@@ -252,8 +252,15 @@ fn context(tag: &str, which: &str) -> String {
 /// and hands out a copy whenever a later build reads the same values (bit for bit): a
 /// model's default damping is then compiled once, and stays so for every case that leaves
 /// the parameters it depends on alone. Other values are compiled afresh.
+///
+/// Clones share one parse (and its kept compilation): a model hands its parsed damping to
+/// its defaults by cloning it, which must not copy every expression tree.
 #[derive(Clone, Debug)]
-pub struct ParsedDamping {
+pub struct ParsedDamping(Arc<Parsed>);
+
+/// What a [`ParsedDamping`] shares among its clones.
+#[derive(Debug)]
+struct Parsed {
     spec: DampingSpec,
     real: Expr,
     imag: Expr,
@@ -268,15 +275,15 @@ pub struct ParsedDamping {
 impl ParsedDamping {
     /// The specification this was parsed from (to merge a case's fields into).
     pub fn spec(&self) -> &DampingSpec {
-        &self.spec
+        &self.0.spec
     }
 
     /// Compiles the multipliers of tag `tag` against resolved parameters: every symbol but
     /// `f` (Hz) must be a numeric parameter, and is folded in as a constant.
     pub fn compile(&self, tag: &str, params: &Resolved) -> Result<TagDamping, BuildError> {
         // None when an input is missing or symbolic: compiling reports it
-        let values: Option<Vec<f64>> = self.inputs.iter().map(|s| params.get(s).ok()).collect();
-        if let (Some(values), Some((first_values, compiled))) = (&values, self.first.get())
+        let values: Option<Vec<f64>> = self.0.inputs.iter().map(|s| params.get(s).ok()).collect();
+        if let (Some(values), Some((first_values, compiled))) = (&values, self.0.first.get())
             && values
                 .iter()
                 .map(|v| v.to_bits())
@@ -298,10 +305,10 @@ impl ParsedDamping {
             })
         };
         let compiled = TagDamping {
-            real: compile(&self.real, "real")?,
-            imag: compile(&self.imag, "imag")?,
+            real: compile(&self.0.real, "real")?,
+            imag: compile(&self.0.imag, "imag")?,
         };
-        for (field, expr) in &self.checked {
+        for (field, expr) in &self.0.checked {
             // NaN (a part that reads f) is refused by the check
             let value = compile(expr, field.name)?.eval(&[]).unwrap_or(f64::NAN);
             field.check(value).map_err(|message| BuildError::Invalid {
@@ -311,7 +318,7 @@ impl ParsedDamping {
         }
         if let Some(values) = values {
             // a concurrent build may have set it first, with its own values: either is right
-            let _ = self.first.set((values, compiled.clone()));
+            let _ = self.0.first.set((values, compiled.clone()));
         }
         Ok(compiled)
     }
@@ -403,20 +410,20 @@ mod tests {
         ] {
             spec.set_field(field, text).unwrap();
         }
-        assert_eq!(spec.parse("t").unwrap().imag, parse(&whole).unwrap());
+        assert_eq!(spec.parse("t").unwrap().0.imag, parse(&whole).unwrap());
         // one half of the pair: the other is 0; no part at all: 0
         let half = DampingSpec {
             thermoelastic_tau: Some(t.into()),
             ..Default::default()
         };
         let written = format!("(0)*(2*pi*f*({t}))/(1+(2*pi*f*({t}))^2)");
-        assert_eq!(half.parse("t").unwrap().imag, parse(&written).unwrap());
+        assert_eq!(half.parse("t").unwrap().0.imag, parse(&written).unwrap());
         assert_eq!(
-            DampingSpec::default().parse("t").unwrap().imag,
+            DampingSpec::default().parse("t").unwrap().0.imag,
             Expr::Num(0.0)
         );
         assert_eq!(
-            DampingSpec::default().parse("t").unwrap().real,
+            DampingSpec::default().parse("t").unwrap().0.real,
             Expr::Num(1.0)
         );
     }

@@ -192,14 +192,16 @@ impl StageResult {
     /// `violin` for beads) or else its degree of freedom ([`DOF_FAMILIES`]), and variables
     /// that are no body's own coordinate for [`OTHER_FAMILY`].
     pub fn mode_family(&self, mode: &Mode) -> String {
-        let mut shares: Vec<(String, f64)> = Vec::new();
+        // the families borrowed from the system (a command asks this of every mode): only
+        // the winner is copied
+        let mut shares: Vec<(&str, f64)> = Vec::new();
         for (k, &g) in self.assembled.layout.variables.iter().enumerate() {
             let family = match owner(self, g) {
                 Some((b, entry)) => self.system.bodies[b]
                     .mode_family
-                    .clone()
-                    .unwrap_or_else(|| DOF_FAMILIES[entry].to_string()),
-                None => OTHER_FAMILY.to_string(),
+                    .as_deref()
+                    .unwrap_or(DOF_FAMILIES[entry]),
+                None => OTHER_FAMILY,
             };
             let share = mode.energy_fractions.get(k).copied().unwrap_or(0.0);
             match shares.iter_mut().find(|(f, _)| *f == family) {
@@ -210,7 +212,8 @@ impl StageResult {
         shares
             .into_iter()
             .max_by(|a, b| a.1.total_cmp(&b.1))
-            .map_or_else(|| OTHER_FAMILY.to_string(), |(f, _)| f)
+            .map_or(OTHER_FAMILY, |(f, _)| f)
+            .to_string()
     }
 
     /// Follows the modes of `reference` (a run of the same model at other parameter

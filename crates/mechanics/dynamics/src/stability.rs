@@ -713,6 +713,13 @@ impl TermRounding {
                 let off = &off_values(&term.off, &term.on, &zeros)[a * size..(a + 1) * size];
                 for &(b, pb) in positions {
                     let (on, off) = (on[b], off[b]);
+                    // most of a term's local entries are exact zeros (a vertical wire does
+                    // not couple x to y): their weights are +0, which leave every sum
+                    // below as it is (the sums start at +0 and add only non-negative
+                    // numbers), so they are skipped
+                    if on == 0.0 && off == 0.0 {
+                        continue;
+                    }
                     let g = on - off;
                     let entries = (off * storage + g).abs() + (off * storage).abs();
                     let bound = entries + amplification * g.abs();
