@@ -194,6 +194,8 @@ pub fn files() -> impl Iterator<Item = (&'static str, &'static str, &'static str
 #[cfg(test)]
 mod tests {
     use super::*;
+    // the kinds the bundled files' instances use, linked so that they are registered
+    use pendkit_element_optical_spring as _;
 
     /// The bundled chain file is the generator's text for its default count, so that reading
     /// the file and generating it agree.
