@@ -765,14 +765,35 @@ fn every_bundled_model_exact_against_the_difference_route() {
             sensitivities(&case, &request).unwrap_or_else(|e| panic!("{name}: {e}"))
         };
         let (exact, differenced) = (run(false), run(true));
-        assert_eq!(exact.parameters, differenced.parameters, "{name}");
+        // a parameter on the edge of its declared domain (arm-cavity's power, 0 W by
+        // default) has no central difference: the difference route refuses it, naming the
+        // domain, and only the exact route gives its column (checked against the closed
+        // form in tests/physics/optical_spring.rs)
+        let on_edge = |p: &String| {
+            differenced
+                .not_differentiable
+                .iter()
+                .any(|(q, why)| q == p && why.contains("domain"))
+        };
+        let kept: Vec<&String> = exact.parameters.iter().filter(|p| !on_edge(p)).collect();
+        assert_eq!(
+            kept,
+            differenced.parameters.iter().collect::<Vec<_>>(),
+            "{name}"
+        );
         let mut compared = 0;
         for (j, p) in exact.parameters.iter().enumerate() {
-            if !exact.exact[j] {
+            if !exact.exact[j] || on_edge(p) {
                 continue;
             }
-            let column = |s: &Sensitivities| -> Vec<f64> { s.dfdp.iter().map(|r| r[j]).collect() };
-            let (a, b) = (column(&exact), column(&differenced));
+            let d = differenced
+                .parameters
+                .iter()
+                .position(|q| q == p)
+                .unwrap_or(j);
+            let column =
+                |s: &Sensitivities, j: usize| -> Vec<f64> { s.dfdp.iter().map(|r| r[j]).collect() };
+            let (a, b) = (column(&exact, j), column(&differenced, d));
             let largest = b.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
             let f_max = exact.modes_hz.iter().fold(0.0_f64, |m, f| m.max(f.abs()));
             let floor = if exact.values[j] == 0.0 {
