@@ -19,8 +19,11 @@ pub enum Output {
     /// Text written piece by piece as it is produced: for outputs too large to build in
     /// memory first (`modes --json` of a model with thousands of coordinates). The writer
     /// is buffered; an error writing to it is returned as [`CliError::Stdout`].
-    Stream(Box<dyn FnOnce(&mut dyn Write) -> Result<(), CliError>>),
+    Stream(Box<WriteOut>),
 }
+
+/// A writer of a streamed output: writes it all to the writer it is given.
+pub type WriteOut = dyn FnOnce(&mut dyn Write) -> Result<(), CliError>;
 
 impl From<String> for Output {
     fn from(text: String) -> Self {
