@@ -34,6 +34,24 @@ pub enum CliError {
         /// The underlying error.
         source: std::io::Error,
     },
+    /// Standard output could not be written (not a closed pipe, which is no error).
+    #[error("cannot write the output to stdout: {0}")]
+    Stdout(std::io::Error),
+}
+
+impl From<pendkit::export::FileError> for CliError {
+    fn from(e: pendkit::export::FileError) -> Self {
+        use pendkit::export::FileError;
+        match e {
+            FileError::Io { path, source } => CliError::Write { path, source },
+            // the command line replaces its outputs (docs/cli.md): never refused, but if
+            // it were, the line names the file
+            FileError::Exists { path } => CliError::Write {
+                path,
+                source: std::io::ErrorKind::AlreadyExists.into(),
+            },
+        }
+    }
 }
 
 /// The library's error as the command line says it: an override is a `--set` argument.

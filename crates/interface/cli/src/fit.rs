@@ -71,10 +71,7 @@ pub fn run(a: Args) -> Result<String, CliError> {
     let mut written = None;
     if let Some(path) = &a.out {
         let text = result.case_file(&model_reference(&a.model)?, &case);
-        std::fs::write(path, text).map_err(|source| CliError::Write {
-            path: path.clone(),
-            source,
-        })?;
+        crate::output::write_file(path, text.as_bytes())?;
         written = Some(path);
     }
     if a.json {

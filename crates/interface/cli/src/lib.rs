@@ -17,6 +17,7 @@ mod fit;
 mod format;
 mod modes;
 mod noise;
+mod output;
 mod params;
 mod plotting;
 mod progress;
@@ -28,13 +29,13 @@ mod tf;
 mod tradeoff;
 
 use std::fmt::Write as _;
-use std::io::Write as _;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 use pendkit::energy::registrations;
 
 use crate::error::CliError;
+use crate::output::Output;
 
 #[derive(Parser)]
 #[command(
@@ -237,13 +238,20 @@ fn snippet(out: &mut String, kind: &str, schema: &pendkit::energy::InstanceSchem
 /// The `pendkit` program: parses the process's arguments, runs the command, prints its
 /// output (or the error, one line on stderr) and returns the exit code. Every element kind
 /// linked into the calling binary is available to it.
+///
+/// SIGINT and SIGTERM remove the output files being written (their temporary files) and
+/// exit with status 130: an interrupted command leaves no half-written file.
 pub fn main() -> ExitCode {
-    match run(Cli::parse()) {
-        Ok(text) => {
-            // a closed pipe (`pendkit ... | head`) is not an error
-            let _ = std::io::stdout().lock().write_all(text.as_bytes());
-            ExitCode::SUCCESS
-        }
+    let cli = Cli::parse();
+    // Not fatal if it cannot be installed (another handler in an embedding program): the
+    // files are then still whole or absent, but a stray `.NAME.PID-N.tmp` may remain.
+    let _ = ctrlc::set_handler(|| {
+        pendkit::export::remove_temporaries();
+        eprintln!("error: interrupted");
+        std::process::exit(130);
+    });
+    match run(cli).and_then(output::print) {
+        Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e}");
             ExitCode::FAILURE
@@ -252,9 +260,10 @@ pub fn main() -> ExitCode {
 }
 
 /// Runs one command and returns what it prints.
-fn run(cli: Cli) -> Result<String, CliError> {
-    match cli.command {
-        Command::Modes(a) => modes::run(a),
+fn run(cli: Cli) -> Result<Output, CliError> {
+    let text = match cli.command {
+        // the one command whose output can be too large to build in memory first
+        Command::Modes(a) => return modes::run(a),
         Command::Tf(a) => tf::run(a),
         Command::Noise(a) => noise::run(a),
         Command::Ss(a) => ss::run(a),
@@ -275,5 +284,6 @@ fn run(cli: Cli) -> Result<String, CliError> {
             }
             Ok(out)
         }
-    }
+    };
+    text.map(Output::Text)
 }

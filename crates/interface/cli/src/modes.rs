@@ -1,16 +1,18 @@
 //! `pendkit modes`: equilibrium and normal modes, as a table or JSON, with a mode chart or
 //! one mode's shape as a figure.
 
+use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
 use pendkit::dynamics::lab_motion;
 use pendkit::stage::ModeSelection;
-use serde_json::json;
+use serde::Serialize;
 
 use crate::common::{ModelArgs, Run, check_plot_path};
 use crate::error::CliError;
 use crate::format::{fixed, sci};
+use crate::output::Output;
 use crate::plotting;
 
 /// Arguments of `pendkit modes`.
@@ -39,7 +41,7 @@ pub struct Args {
 }
 
 /// Runs the command and returns what it prints.
-pub fn run(a: Args) -> Result<String, CliError> {
+pub fn run(a: Args) -> Result<Output, CliError> {
     check_plot_path(&a.plot)?;
     let selection = a.below.map_or(ModeSelection::All, ModeSelection::Below);
     let run = a.args.run(selection)?;
@@ -51,9 +53,9 @@ pub fn run(a: Args) -> Result<String, CliError> {
         }
     }
     if a.json {
-        modes_json(&run)
+        Ok(modes_json(run))
     } else {
-        modes_table(&run, a.lab)
+        Ok(modes_table(&run, a.lab)?.into())
     }
 }
 
@@ -72,58 +74,128 @@ fn lab(
     .map_err(|e| CliError::Pendkit(e.into()))
 }
 
-fn modes_json(run: &Run) -> Result<String, CliError> {
-    let r = &run.result;
-    let modes: Vec<serde_json::Value> = r
-        .modes
-        .modes
-        .iter()
-        .map(|m| {
-            let lab: Vec<_> = lab(run, m)?
-                .into_iter()
-                .map(|b| json!({"body": run.body(&b.body), "translation": b.translation, "rotation": b.rotation}))
-                .collect();
-            Ok(json!({
-                "hz": m.hz,
-                "omega_squared": m.omega_squared,
-                "stable": m.is_stable(),
-                "label": run.coord(&m.label),
-                "family": r.mode_family(m),
-                "accuracy": finite_or_null(m.accuracy()),
-                "vector_accuracy": m.vector_error,
-                "vector": m.vector,
-                "energy_fractions": m.energy_fractions,
-                "lab": lab,
-            }))
-        })
-        .collect::<Result<_, CliError>>()?;
-    let equilibrium: serde_json::Map<String, serde_json::Value> = r
-        .system
-        .coords
-        .iter()
-        .zip(&r.assembled.equilibrium.coords)
-        .map(|(c, v)| (run.coord(&c.name), json!(v)))
-        .collect();
-    let out = json!({
-        "model": run.case.model.name(),
-        "case": run.case.name,
-        "stage": run.stage.name(),
-        "naming": run.scheme.as_deref().unwrap_or("model"),
-        "coordinates": r.modes.coordinates.iter().map(|c| run.coord(c)).collect::<Vec<_>>(),
-        "coordinate_units": r.modes.coordinates.iter().map(|c| r.coordinate_unit(c).unwrap_or_default()).collect::<Vec<_>>(),
-        "equilibrium": equilibrium,
-        "modes": modes,
-    });
-    Ok(serde_json::to_string_pretty(&out).unwrap_or_default() + "\n")
+/// `modes --json`, streamed: each mode is formatted as it is written, so that the memory
+/// taken is the model's and not a second copy of a possibly gigabyte-sized document (the
+/// quad with 200 beads per fibre prints 0.9 GB; built as one `serde_json::Value` and then
+/// one `String`, it took 5.6 GB).
+///
+/// The document is byte for byte what the earlier `json!` form printed: the keys of every
+/// object in alphabetical order (the order of serde_json's `Map`, a `BTreeMap`), hence the
+/// field order of the structs below, which is not their reading order.
+fn modes_json(run: Run) -> Output {
+    Output::Stream(Box::new(move |w| {
+        let document = ModesDocument {
+            case: &run.case.name,
+            coordinate_units: run
+                .result
+                .modes
+                .coordinates
+                .iter()
+                .map(|c| run.result.coordinate_unit(c).unwrap_or_default())
+                .collect(),
+            coordinates: run
+                .result
+                .modes
+                .coordinates
+                .iter()
+                .map(|c| run.coord(c))
+                .collect(),
+            equilibrium: run
+                .result
+                .system
+                .coords
+                .iter()
+                .zip(&run.result.assembled.equilibrium.coords)
+                .map(|(c, v)| (run.coord(&c.name), *v))
+                .collect(),
+            model: run.case.model.name(),
+            modes: ModesJson(&run),
+            naming: run.scheme.as_deref().unwrap_or("model"),
+            stage: run.stage.name(),
+        };
+        serde_json::to_writer_pretty(&mut *w, &document)
+            .and_then(|()| w.write_all(b"\n").map_err(serde_json::Error::io))
+            .map_err(|e| {
+                if e.is_io() {
+                    CliError::Stdout(e.into())
+                } else {
+                    // a mode's lab-frame motion could not be computed (its message)
+                    CliError::usage(e.to_string())
+                }
+            })
+    }))
 }
 
-/// A JSON number, or null for infinity (the relative accuracy of a neutral mode).
-fn finite_or_null(x: f64) -> serde_json::Value {
-    if x.is_finite() {
-        json!(x)
-    } else {
-        serde_json::Value::Null
+/// The `modes --json` document (keys in alphabetical order: see [`modes_json`]).
+#[derive(Serialize)]
+struct ModesDocument<'a> {
+    case: &'a str,
+    coordinate_units: Vec<&'static str>,
+    coordinates: Vec<String>,
+    equilibrium: BTreeMap<String, f64>,
+    model: &'a str,
+    modes: ModesJson<'a>,
+    naming: &'a str,
+    stage: &'a str,
+}
+
+/// The modes of a run, each formatted (with its lab-frame motion) only when written.
+struct ModesJson<'a>(&'a Run);
+
+impl Serialize for ModesJson<'_> {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::{Error as _, SerializeSeq as _};
+        let run = self.0;
+        let modes = &run.result.modes.modes;
+        let mut seq = serializer.serialize_seq(Some(modes.len()))?;
+        for m in modes {
+            let lab = lab(run, m).map_err(|e| S::Error::custom(e.to_string()))?;
+            seq.serialize_element(&ModeJson {
+                // null for infinity (the relative accuracy of a neutral mode)
+                accuracy: Some(m.accuracy()).filter(|a| a.is_finite()),
+                energy_fractions: &m.energy_fractions,
+                family: run.result.mode_family(m),
+                hz: m.hz,
+                lab: lab
+                    .into_iter()
+                    .map(|b| LabJson {
+                        body: run.body(&b.body),
+                        rotation: b.rotation,
+                        translation: b.translation,
+                    })
+                    .collect(),
+                label: run.coord(&m.label),
+                omega_squared: m.omega_squared,
+                stable: m.is_stable(),
+                vector: &m.vector,
+                vector_accuracy: m.vector_error,
+            })?;
+        }
+        seq.end()
     }
+}
+
+/// One mode in `modes --json` (keys in alphabetical order).
+#[derive(Serialize)]
+struct ModeJson<'a> {
+    accuracy: Option<f64>,
+    energy_fractions: &'a [f64],
+    family: String,
+    hz: f64,
+    lab: Vec<LabJson>,
+    label: String,
+    omega_squared: f64,
+    stable: bool,
+    vector: &'a [f64],
+    vector_accuracy: f64,
+}
+
+/// One body's lab-frame motion in a mode (keys in alphabetical order).
+#[derive(Serialize)]
+struct LabJson {
+    body: String,
+    rotation: [f64; 3],
+    translation: [f64; 3],
 }
 
 /// Relative accuracy worse than this is printed next to the frequency.

@@ -216,8 +216,12 @@ pub fn mode_shape(run: &Run, number: usize) -> Result<ModeShapePlot, CliError> {
     Ok(plot)
 }
 
-/// Writes a figure to `path` (SVG or PNG by the extension).
+/// Writes a figure to `path` (SVG or PNG by the extension), whole or not at all, replacing
+/// an existing file: every command's figures go through here. A failed write reads as any
+/// other output file's (`cannot write 'PATH': reason`).
 pub fn save(figure: &impl pendkit_plot::Figure, path: &std::path::Path) -> Result<(), CliError> {
-    figure.render(path)?;
-    Ok(())
+    figure.render(path).map_err(|e| match e {
+        pendkit_plot::PlotError::Io { path, source } => CliError::Write { path, source },
+        other => CliError::Plot(other),
+    })
 }

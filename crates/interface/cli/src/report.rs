@@ -18,6 +18,7 @@ use pendkit_plot::Figure;
 use crate::common::{GridArgs, ModelArgs, Run};
 use crate::error::CliError;
 use crate::format::{fixed, sci};
+use crate::output::{OutputDir, write_file};
 use crate::plotting::{self, Response};
 use crate::progress::Progress;
 
@@ -165,15 +166,10 @@ pub fn run(a: Args) -> Result<String, CliError> {
         freqs.last().copied().unwrap_or_default()
     );
     progress.message("report: write");
-    std::fs::create_dir_all(&a.out).map_err(|source| CliError::Write {
-        path: a.out.clone(),
-        source,
-    })?;
-    let path = a.out.join("index.html");
-    std::fs::write(&path, &page.html).map_err(|source| CliError::Write {
-        path: path.clone(),
-        source,
-    })?;
+    let dir = OutputDir::create(&a.out)?;
+    let path = dir.join("index.html");
+    write_file(&path, page.html.as_bytes())?;
+    dir.keep();
     progress.step();
     drop(progress);
     let mut out = format!(

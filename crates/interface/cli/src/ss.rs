@@ -17,13 +17,15 @@ pub struct Args {
     /// Frequency (Hz) at which damping is represented as viscous.
     #[arg(long, default_value_t = 1.0, value_parser = crate::common::number, allow_hyphen_values = true)]
     damping_frequency: f64,
-    /// Replace the output file if it exists.
-    #[arg(long)]
+    /// Accepted for scripts written when `ss` refused to replace an existing file; every
+    /// command now replaces its outputs (docs/cli.md, "Output files").
+    #[arg(long, hide = true)]
     force: bool,
 }
 
 /// Runs the command and returns what it prints.
 pub fn run(a: Args) -> Result<String, CliError> {
+    let _ = a.force;
     let run = a.args.run_lossy()?;
     let damping_frequency = a.damping_frequency;
     let provenance = run.provenance()?;
@@ -32,7 +34,8 @@ pub fn run(a: Args) -> Result<String, CliError> {
         damping_frequency,
         run.scheme.as_deref(),
         &provenance,
-        &pendkit::export::WriteOptions { overwrite: a.force },
+        // one policy for every output: replace (docs/cli.md, "Output files")
+        &pendkit::export::WriteOptions { overwrite: true },
     )?;
     let ss = &named.state_space;
     let mut out = String::new();

@@ -10,7 +10,7 @@ use pendkit::describe::unit_slug;
 use pendkit::dynamics::Verdict;
 use pendkit::stage::ModeSelection;
 use pendkit::{NoiseOptions, Solver};
-use pendkit_plot::{Axis, BodePlot, BodeSeries, Figure, LinePlot, Scale, Series};
+use pendkit_plot::{Axis, BodePlot, BodeSeries, LinePlot, Scale, Series};
 
 use crate::common::{GridArgs, ModelArgs, Run, check_plot_path, split_pair};
 use crate::error::CliError;
@@ -626,7 +626,7 @@ fn plot_modes(
             vec![low, high],
         ));
     }
-    plot.render(path)?;
+    crate::plotting::save(&plot, path)?;
     Ok(())
 }
 
@@ -650,7 +650,7 @@ fn plot_noise(
             values.into_iter().map(|(x, _)| x).collect(),
         ));
     }
-    plot.render(path)?;
+    crate::plotting::save(&plot, path)?;
     Ok(())
 }
 
@@ -673,7 +673,7 @@ fn plot_transfer(
         plot.series
             .push(BodeSeries::new(name, freqs.to_vec(), values));
     }
-    plot.render(path)?;
+    crate::plotting::save(&plot, path)?;
     Ok(())
 }
 

@@ -8,10 +8,11 @@ use std::path::PathBuf;
 
 use pendkit::Case;
 use pendkit::tradeoff::{Ladder, Question, Timing, Tradeoff, tradeoff};
-use pendkit_plot::{Figure, TradeoffChart, TradeoffPoint, pareto_front};
+use pendkit_plot::{TradeoffChart, TradeoffPoint, pareto_front};
 
 use crate::error::CliError;
 use crate::format::sci;
+use crate::output::{OutputDir, write_file};
 use crate::progress::Progress;
 
 /// Arguments of `pendkit tradeoff`.
@@ -113,22 +114,16 @@ pub fn run(a: Args) -> Result<String, CliError> {
         ..Timing::default()
     };
     let case = Case::open(&a.model)?.with_sets(&a.sets)?;
-    std::fs::create_dir_all(&a.out).map_err(|source| CliError::Write {
-        path: a.out.clone(),
-        source,
-    })?;
+    let dir = OutputDir::create(&a.out)?;
     let progress = Progress::spinner(format!("{}: trade-off", case.name));
     let result = tradeoff(&case, &question, &ladder, &timing, |name| {
         progress.message(format!("{}: trade-off, {name}", case.name));
     })?;
     drop(progress);
 
-    let csv_path = a.out.join("tradeoff.csv");
-    std::fs::write(&csv_path, result.to_csv()).map_err(|source| CliError::Write {
-        path: csv_path.clone(),
-        source,
-    })?;
-    let svg_path = a.out.join("tradeoff.svg");
+    let csv_path = dir.join("tradeoff.csv");
+    write_file(&csv_path, result.to_csv().as_bytes())?;
+    let svg_path = dir.join("tradeoff.svg");
     let mut chart = TradeoffChart::new(
         format!(
             "{}: time to answer against error, {}–{} Hz",
@@ -138,7 +133,8 @@ pub fn run(a: Args) -> Result<String, CliError> {
     );
     chart.error_quantity = "max relative error (modes, noise ASD, |TF|; dimensionless)".into();
     chart.tolerance = Some(a.tolerance);
-    chart.render(&svg_path)?;
+    crate::plotting::save(&chart, &svg_path)?;
+    dir.keep();
 
     let mut out = table(&case.name, &question, &result, a.tolerance);
     let _ = writeln!(

@@ -14,21 +14,23 @@
 //! with `rows * cols` values, all finite (NaN and infinity are never written). [`validate`]
 //! checks all three, and every writer calls it first. Units are the caller's business.
 //!
-//! Files are written to a temporary file in the same directory and renamed into place, so
-//! a failed write never leaves a truncated file under the name asked for; an existing file
-//! is refused unless [`WriteOptions::overwrite`] says otherwise.
+//! Files are written to a temporary file in the same directory and renamed into place
+//! ([`write_whole`], which pendkit's other outputs use too), so a failed write never leaves
+//! a truncated file under the name asked for; an existing file is refused unless
+//! [`WriteOptions::overwrite`] says otherwise.
 //! Units and provenance travel as more variables ([`Metadata`], [`write_with_metadata`]).
 
 use std::collections::HashSet;
-use std::fs::OpenOptions;
-use std::io::{self, BufWriter, Seek, Write};
+use std::io::{self, Seek, Write};
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicUsize, Ordering};
 
 use serde_json::Value;
 
+mod file;
 mod mat;
 mod npz;
+
+pub use file::{Existing, FileError, remove_temporaries, write_bytes_whole, write_whole};
 
 /// A named real matrix, `rows x cols`, its `data` in row-major order.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -231,15 +233,12 @@ pub fn write(path: &Path, matrices: &[Matrix], names: &[Names]) -> Result<(), Ex
     write_with(path, matrices, names, &WriteOptions::default())
 }
 
-/// Distinguishes temporary files of one process.
-static TEMPORARY: AtomicUsize = AtomicUsize::new(0);
-
 /// Writes the variables to `path`, in the format its extension names.
 ///
 /// Input is validated before anything is created (names, lengths, finite values). The file
-/// is written under a temporary name in the same directory and renamed to `path` when
-/// complete, so `path` holds either the whole new file or what it held before. Without
-/// `options.overwrite` an existing `path` is refused ([`ExportError::Exists`]).
+/// is written whole or not at all ([`write_whole`]), so `path` holds either the whole new
+/// file or what it held before. Without `options.overwrite` an existing `path` is refused
+/// ([`ExportError::Exists`]).
 pub fn write_with(
     path: &Path,
     matrices: &[Matrix],
@@ -248,76 +247,37 @@ pub fn write_with(
 ) -> Result<(), ExportError> {
     let format = Format::from_path(path)?;
     validate(matrices, names)?;
-    let with_path = |source: io::Error| ExportError::Io {
-        path: path.to_path_buf(),
-        source,
+    let existing = if options.overwrite {
+        Existing::Replace
+    } else {
+        Existing::Refuse
     };
-    if !options.overwrite && path.exists() {
-        return Err(ExportError::Exists {
-            path: path.to_path_buf(),
-        });
-    }
-    let file_name = path
-        .file_name()
-        .ok_or_else(|| with_path(io::Error::new(io::ErrorKind::InvalidInput, "no file name")))?;
-    let temporary = path.with_file_name(format!(
-        ".{}.{}-{}.tmp",
-        file_name.to_string_lossy(),
-        std::process::id(),
-        TEMPORARY.fetch_add(1, Ordering::Relaxed)
-    ));
-    let written = (|| {
-        let file = OpenOptions::new()
-            .write(true)
-            .create_new(true)
-            .open(&temporary)
-            .map_err(with_path)?;
-        let mut w = BufWriter::new(file);
+    write_whole(path, existing, |w| {
         let result = match format {
-            Format::Mat => mat::write(&mut w, matrices, names),
-            Format::Npz => npz::write(&mut w, matrices, names),
-            Format::Json => serde_json::to_writer_pretty(&mut w, &to_json(matrices, names))
+            Format::Mat => mat::write(&mut *w, matrices, names),
+            Format::Npz => npz::write(&mut *w, matrices, names),
+            Format::Json => serde_json::to_writer_pretty(&mut *w, &to_json(matrices, names))
                 .map_err(io::Error::from)
                 .and_then(|()| w.write_all(b"\n"))
                 .map_err(ExportError::from),
         };
-        match result {
-            Err(ExportError::Write(source)) => Err(with_path(source)),
+        // the writers know no file name: the error names the file asked for
+        result.map_err(|e| match e {
+            ExportError::Write(source) => ExportError::Io {
+                path: path.to_path_buf(),
+                source,
+            },
             other => other,
-        }?;
-        let file = w.into_inner().map_err(|e| with_path(e.into_error()))?;
-        file.sync_all().map_err(with_path)?;
-        place(&temporary, path, options.overwrite)
-    })();
-    if written.is_err() {
-        let _ = std::fs::remove_file(&temporary);
-    }
-    written
+        })
+    })
 }
 
-/// Moves the complete `temporary` file to `path`: a rename (which replaces `path`) when
-/// overwriting; otherwise a hard link, which fails if `path` appeared meanwhile, falling
-/// back to a checked rename on file systems without hard links.
-fn place(temporary: &Path, path: &Path, overwrite: bool) -> Result<(), ExportError> {
-    let with_path = |source: io::Error| ExportError::Io {
-        path: path.to_path_buf(),
-        source,
-    };
-    if overwrite {
-        return std::fs::rename(temporary, path).map_err(with_path);
-    }
-    match std::fs::hard_link(temporary, path) {
-        Ok(()) => {
-            let _ = std::fs::remove_file(temporary);
-            Ok(())
+impl From<FileError> for ExportError {
+    fn from(e: FileError) -> Self {
+        match e {
+            FileError::Io { path, source } => ExportError::Io { path, source },
+            FileError::Exists { path } => ExportError::Exists { path },
         }
-        Err(e) if e.kind() == io::ErrorKind::AlreadyExists => Err(ExportError::Exists {
-            path: path.to_path_buf(),
-        }),
-        Err(_) if !path.exists() => std::fs::rename(temporary, path).map_err(with_path),
-        Err(_) => Err(ExportError::Exists {
-            path: path.to_path_buf(),
-        }),
     }
 }
 

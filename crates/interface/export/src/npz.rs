@@ -69,8 +69,14 @@ pub(crate) fn names_npy(n: &Names) -> Vec<u8> {
 }
 
 /// Writes the archive; the input has been validated.
+///
+/// The archive is assembled in memory and then written to `w` in one piece. The zip
+/// crate's `ZipWriter` finishes its archive when dropped, and when that fails (a full disk,
+/// a file-size limit) it prints a debug line (`ZipWriter::drop: ...`) on stderr before the
+/// caller's one-line error. Into memory, no write of the `ZipWriter` can fail; `w`'s own
+/// errors come back here as ordinary errors.
 pub(crate) fn write<W: Write + Seek>(
-    w: W,
+    mut w: W,
     matrices: &[Matrix],
     names: &[Names],
 ) -> Result<(), ExportError> {
@@ -78,16 +84,25 @@ pub(crate) fn write<W: Write + Seek>(
         .iter()
         .map(|m| (m.name, matrix_npy(m)))
         .chain(names.iter().map(|n| (n.name, names_npy(n))));
-    let mut zip = ZipWriter::new(w);
+    let mut zip = ZipWriter::new(io::Cursor::new(Vec::new()));
     for (name, bytes) in entries {
         let options = SimpleFileOptions::default()
             .compression_method(CompressionMethod::Stored)
             .large_file(bytes.len() >= u32::MAX as usize);
-        zip.start_file(format!("{name}.npy"), options)
-            .map_err(io::Error::from)?;
-        zip.write_all(&bytes)?;
+        let added = zip
+            .start_file(format!("{name}.npy"), options)
+            .map_err(io::Error::from)
+            .and_then(|()| zip.write_all(&bytes));
+        if let Err(e) = added {
+            // the zip crate refused the entry: the half-built archive is abandoned, and
+            // forgetting it skips the drop's attempt to finish it (and its debug line)
+            std::mem::forget(zip);
+            return Err(e.into());
+        }
     }
-    zip.finish().map_err(io::Error::from)?.flush()?;
+    let archive = zip.finish().map_err(io::Error::from)?.into_inner();
+    w.write_all(&archive)?;
+    w.flush()?;
     Ok(())
 }
 

@@ -115,8 +115,9 @@ pub trait Figure {
         output::to_png(self)
     }
 
-    /// Writes the figure to `path` as SVG or PNG, chosen by the extension (any case).
-    /// Nothing is written when the extension, the size or the data is wrong.
+    /// Writes the figure to `path` as SVG or PNG, chosen by the extension (any case), whole
+    /// or not at all (`pendkit_export::write_whole`), replacing an existing file. Nothing
+    /// is written when the extension, the size or the data is wrong.
     fn render(&self, path: impl AsRef<Path>) -> Result<(), PlotError> {
         output::render(self, path.as_ref())
     }

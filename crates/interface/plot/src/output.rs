@@ -94,15 +94,20 @@ fn encode_png(rgb: &[u8], (width, height): (u32, u32)) -> Result<Vec<u8>, PlotEr
     Ok(bytes)
 }
 
-/// Draws the figure and writes it to `path`, in the format its extension names. Nothing is
-/// written if the name or the figure is invalid.
+/// Draws the figure and writes it to `path`, in the format its extension names, whole or
+/// not at all (a temporary file renamed into place, replacing an existing file). Nothing
+/// is written if the name or the figure is invalid.
 pub(crate) fn render<F: Figure + ?Sized>(figure: &F, path: &Path) -> Result<(), PlotError> {
     let bytes = match Format::from_path(path)? {
         Format::Svg => to_svg(figure)?.into_bytes(),
         Format::Png => to_png(figure)?,
     };
-    std::fs::write(path, bytes).map_err(|source| PlotError::Io {
-        path: path.to_path_buf(),
-        source,
+    pendkit_export::write_bytes_whole(path, &bytes).map_err(|e| match e {
+        pendkit_export::FileError::Io { path, source } => PlotError::Io { path, source },
+        // write_bytes_whole replaces: it never refuses an existing file
+        pendkit_export::FileError::Exists { path } => PlotError::Io {
+            path,
+            source: std::io::ErrorKind::AlreadyExists.into(),
+        },
     })
 }

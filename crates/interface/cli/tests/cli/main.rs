@@ -9,6 +9,7 @@ mod elements;
 mod fit;
 mod modes_accuracy;
 mod optical_spring;
+mod outputs;
 mod refusals;
 mod sensitivity;
 mod suspension_files;

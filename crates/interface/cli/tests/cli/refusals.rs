@@ -246,21 +246,22 @@ fn set_on_a_parameter_nothing_reads_is_refused() {
 }
 
 #[test]
-fn existing_export_is_refused_without_force_and_replaced_with_it() {
+fn existing_export_is_replaced_with_or_without_force() {
+    // Was: refused without --force (`ss` alone among the outputs; issue 35 made every
+    // command replace its outputs, docs/cli.md "Output files"). --force is still accepted.
     let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR"));
     let out = dir.join("refusals-existing.json");
-    std::fs::write(&out, "kept").unwrap();
     let path = out.to_string_lossy().into_owned();
-    refused(
-        &["ss", "double-pendulum", "--out", &path],
-        &["exists", "--force"],
-    );
-    assert_eq!(std::fs::read_to_string(&out).unwrap(), "kept");
-    let (ok, _, stderr) = pendkit(&["ss", "double-pendulum", "--out", &path, "--force"]);
-    assert!(ok, "{stderr}");
-    let written: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
-    assert!(written["A"].is_array());
+    for force in [&[][..], &["--force"][..]] {
+        std::fs::write(&out, "kept").unwrap();
+        let mut args = vec!["ss", "double-pendulum", "--out", &path];
+        args.extend_from_slice(force);
+        let (ok, _, stderr) = pendkit(&args);
+        assert!(ok, "{stderr}");
+        let written: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+        assert!(written["A"].is_array());
+    }
 }
 
 #[test]

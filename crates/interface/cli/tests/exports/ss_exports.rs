@@ -11,7 +11,7 @@ use serde_json::Value;
 
 fn export(file: &str) -> PathBuf {
     let path = Path::new(env!("CARGO_TARGET_TMPDIR")).join(file);
-    // exports refuse to overwrite: clear a previous run's file
+    // a previous run's file would be replaced; removed so that this run surely wrote it
     let _ = std::fs::remove_file(&path);
     let out = Command::new(env!("CARGO_BIN_EXE_pendkit"))
         .args(["ss", "quad", "--naming", "ligo", "--out"])

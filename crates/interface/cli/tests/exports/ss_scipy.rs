@@ -34,7 +34,8 @@ fn scipy_state_space_matches_pendkit_transfer_functions() {
     sets.push("m2=35".into());
     let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR"));
     let mat = dir.join("double-pendulum-ss.mat");
-    // a file left by an earlier run: ss refuses to overwrite without --force
+    // a file left by an earlier run is replaced (docs/cli.md, "Output files"); removed
+    // first all the same, so that the file read below is surely this run's
     let _ = std::fs::remove_file(&mat);
     let mut args: Vec<String> = vec!["ss".into(), "double-pendulum".into(), "--out".into()];
     args.push(mat.to_string_lossy().into_owned());
