@@ -464,8 +464,16 @@ fn positive_definite(a: &Mat<f64>) -> bool {
 /// The block's modes from the Cholesky factor of K + σM (positive definite, σ ≥ 0),
 /// solving M u = μ (K + σM) u: μ = 1/(ω² + σ), the largest μ (lowest ω², and the growing
 /// modes when σ > 0) resolved to ε relative, each ω² + σ to ε (ω² + σ)/(ω²_min + σ).
-/// Modes beyond double precision (μ below rounding of the largest) are reported at that
-/// bound, with an error of half their ω².
+///
+/// One solve resolves only the modes near the lowest: a mode 10⁴ times stiffer carries
+/// 10⁴ times the relative error, and one beyond 1/(100 ε) is not resolved at all. A
+/// (near-)neutral mode is the extreme case: with ω²_min ≈ 0 every other mode of the block
+/// would be lost. So the modes this solve resolves to [`RESOLVED`] are kept, and the rest
+/// are solved again in the part of the block M-orthogonal to them (`complement_modes`),
+/// where the lowest of the rest is the lowest, and so on until every mode is resolved.
+/// The pencil's eigenvectors are M-orthogonal, so the rest lie exactly in that part: the
+/// modes above a neutral one are its true neighbours, continuous as its stiffness goes to
+/// zero. `None` when K + σM is not numerically positive definite.
 fn shifted_modes(
     k: &Mat<f64>,
     m: &Mat<f64>,
@@ -479,8 +487,40 @@ fn shifted_modes(
     let (mus, u) = reduced_eigen(m, &llt)?;
     let mu_max = mus.last().copied().unwrap_or(0.0);
     let ulps = solver_ulps(n);
-    let floor = 100.0 * f64::EPSILON * mu_max;
+    // δμ = ulps ε μ_max for every μ, so μ ≥ `resolved` is known to RESOLVED relative
+    let resolved = ulps * f64::EPSILON * mu_max / RESOLVED;
+    // descending μ: ascending ω²
     let order: Vec<usize> = (0..n).rev().collect();
+    let kept = order.iter().take_while(|&&j| mus[j] >= resolved).count();
+    if kept > 0 && kept < n {
+        let basis = Mat::from_fn(n, kept, |i, c| u[(i, order[c])]);
+        if let Some(rest) = complement_modes(k, m, sigma, &basis)? {
+            let mut modes: Vec<(f64, f64, Vec<f64>)> = order[..kept]
+                .iter()
+                .map(|&j| {
+                    let mu = mus[j];
+                    let vector = u.col(j).iter().copied().collect();
+                    (
+                        1.0 / mu - sigma,
+                        ulps * f64::EPSILON * mu_max / (mu * mu),
+                        vector,
+                    )
+                })
+                .chain(rest)
+                .collect();
+            // the rest lie above the kept ones up to their errors: ascending as a whole
+            modes.sort_by(|a, b| a.0.total_cmp(&b.0));
+            return Ok(Some(BlockModes {
+                omega_squared: modes.iter().map(|mode| mode.0).collect(),
+                errors: modes.iter().map(|mode| mode.1).collect(),
+                vectors: Mat::from_fn(n, n, |i, c| modes[c].2[i]),
+            }));
+        }
+    }
+    // every mode resolved, or (rounding having made the rest's K + σM indefinite) no
+    // second solve: modes beyond double precision (μ below rounding of the largest) are
+    // then reported at that bound, with an error of half their ω²
+    let floor = 100.0 * f64::EPSILON * mu_max;
     let mut omega_squared = Vec::with_capacity(n);
     let mut errors = Vec::with_capacity(n);
     for &j in &order {
@@ -502,6 +542,67 @@ fn shifted_modes(
         vectors: Mat::from_fn(n, n, |i, c| u[(i, order[c])]),
         errors,
     }))
+}
+
+/// Relative accuracy of ω² + σ to which one solve of `shifted_modes` must resolve a mode
+/// for it to be kept; the others are solved again without the kept ones. Far above the
+/// solver's few ulps (so each solve keeps modes over about four decades of ω² and a
+/// block needs few), far below anything reported (the command line prints accuracies
+/// above 1e-6) or decided on.
+const RESOLVED: f64 = 1e-10;
+
+/// The modes of the pencil (K + σM, M) M-orthogonal to the columns of `kept` (modes
+/// already found): with Q an orthonormal basis of the vectors x with keptᵀ M x = 0 (the
+/// last columns of the Householder QR of M·kept), the block's other modes are Q y for
+/// the modes y of (Qᵀ K Q, Qᵀ M Q), solved by `shifted_modes` (so again from their own
+/// lowest). Each comes back as (ω², error, vector over the block), the error including the
+/// rounding of forming Qᵀ K Q and Qᵀ M Q, γ (|Q| |y|)ᵀ (|K| + |ω²| |M|) (|Q| |y|) for y
+/// normalised to yᵀ Qᵀ M Q y = 1. `None` when rounding has left Qᵀ (K + σM) Q indefinite.
+fn complement_modes(
+    k: &Mat<f64>,
+    m: &Mat<f64>,
+    sigma: f64,
+    kept: &Mat<f64>,
+) -> Result<Option<Vec<(f64, f64, Vec<f64>)>>, DynamicsError> {
+    let n = m.nrows();
+    let kept_count = kept.ncols();
+    let full = (m * kept).qr().compute_Q();
+    let q = full.subcols(kept_count, n - kept_count).to_owned();
+    let symmetric =
+        |a: Mat<f64>| Mat::from_fn(a.nrows(), a.ncols(), |i, j| 0.5 * (a[(i, j)] + a[(j, i)]));
+    let k_rest = symmetric(q.transpose() * k * &q);
+    let m_rest = symmetric(q.transpose() * m * &q);
+    let Some(rest) = shifted_modes(&k_rest, &m_rest, sigma)? else {
+        return Ok(None);
+    };
+    let abs_q = Mat::from_fn(n, q.ncols(), |i, j| q[(i, j)].abs());
+    let abs_form = |a: &Mat<f64>, z: &[f64]| -> f64 {
+        (0..n)
+            .map(|i| z[i] * (0..n).map(|j| a[(i, j)].abs() * z[j]).sum::<f64>())
+            .sum()
+    };
+    let gamma = solver_ulps(n) * f64::EPSILON;
+    Ok(Some(
+        (0..rest.omega_squared.len())
+            .map(|c| {
+                let y = rest.vectors.col(c);
+                let norm2 = (y.transpose() * &m_rest * y).abs();
+                let scale = if norm2 > 0.0 { 1.0 / norm2.sqrt() } else { 0.0 };
+                let z: Vec<f64> = (0..n)
+                    .map(|i| {
+                        scale
+                            * (0..y.nrows())
+                                .map(|j| abs_q[(i, j)] * y[j].abs())
+                                .sum::<f64>()
+                    })
+                    .collect();
+                let w2 = rest.omega_squared[c];
+                let forming = gamma * (abs_form(k, &z) + w2.abs() * abs_form(m, &z));
+                let vector = (&q * y).iter().copied().collect();
+                (w2, rest.errors[c] + forming, vector)
+            })
+            .collect(),
+    ))
 }
 
 /// Solves one block: with K's Cholesky factor and for 1/ω² when K is positive definite
