@@ -788,9 +788,10 @@ pub(crate) fn finish(
 /// factor of the shifted K_eff + σM as well (see `block_modes`), so that growth rates are
 /// resolved relative to themselves. Each mode carries its estimated error
 /// ([`Mode::omega_squared_error`]); ω² within it of zero is reported as exactly zero:
-/// neutral. Modes stiffer than the lowest of their block by more than 1/(100 ε) ≈ 4.5e13 in
-/// ω² cannot be resolved in double precision and are reported at that bound, with an error
-/// of half their ω². The entries of `k_eff` and `mass` are taken as exact to a few
+/// neutral. The modes one factorisation resolves to 1e-10 (those within about four decades
+/// of the lowest in ω²) are kept and the rest solved again without them, so a (near-)neutral
+/// mode or very stiff, light parts leave every other mode of the block resolved relative to
+/// itself (see `shifted_modes`). The entries of `k_eff` and `mass` are taken as exact to a few
 /// ulps ([`EntryRounding`]); [`normal_modes_with_rounding`] takes their rounding from how
 /// they were made. `names` are the variable names.
 pub fn normal_modes(
