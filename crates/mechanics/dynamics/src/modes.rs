@@ -495,25 +495,24 @@ fn shifted_modes(
     if kept > 0 && kept < n {
         let basis = Mat::from_fn(n, kept, |i, c| u[(i, order[c])]);
         if let Some(rest) = complement_modes(k, m, sigma, &basis)? {
-            let mut modes: Vec<(f64, f64, Vec<f64>)> = order[..kept]
+            let mut modes: Vec<FoundMode> = order[..kept]
                 .iter()
                 .map(|&j| {
                     let mu = mus[j];
-                    let vector = u.col(j).iter().copied().collect();
-                    (
-                        1.0 / mu - sigma,
-                        ulps * f64::EPSILON * mu_max / (mu * mu),
-                        vector,
-                    )
+                    FoundMode {
+                        omega_squared: 1.0 / mu - sigma,
+                        error: ulps * f64::EPSILON * mu_max / (mu * mu),
+                        vector: u.col(j).iter().copied().collect(),
+                    }
                 })
                 .chain(rest)
                 .collect();
             // the rest lie above the kept ones up to their errors: ascending as a whole
-            modes.sort_by(|a, b| a.0.total_cmp(&b.0));
+            modes.sort_by(|a, b| a.omega_squared.total_cmp(&b.omega_squared));
             return Ok(Some(BlockModes {
-                omega_squared: modes.iter().map(|mode| mode.0).collect(),
-                errors: modes.iter().map(|mode| mode.1).collect(),
-                vectors: Mat::from_fn(n, n, |i, c| modes[c].2[i]),
+                omega_squared: modes.iter().map(|mode| mode.omega_squared).collect(),
+                errors: modes.iter().map(|mode| mode.error).collect(),
+                vectors: Mat::from_fn(n, n, |i, c| modes[c].vector[i]),
             }));
         }
     }
@@ -544,6 +543,13 @@ fn shifted_modes(
     }))
 }
 
+/// A mode found by one solve of `shifted_modes`: ω², its error, its vector over the block.
+struct FoundMode {
+    omega_squared: f64,
+    error: f64,
+    vector: Vec<f64>,
+}
+
 /// Relative accuracy of ω² + σ to which one solve of `shifted_modes` must resolve a mode
 /// for it to be kept; the others are solved again without the kept ones. Far above the
 /// solver's few ulps (so each solve keeps modes over about four decades of ω² and a
@@ -555,7 +561,7 @@ const RESOLVED: f64 = 1e-10;
 /// already found): with Q an orthonormal basis of the vectors x with keptᵀ M x = 0 (the
 /// last columns of the Householder QR of M·kept), the block's other modes are Q y for
 /// the modes y of (Qᵀ K Q, Qᵀ M Q), solved by `shifted_modes` (so again from their own
-/// lowest). Each comes back as (ω², error, vector over the block), the error including the
+/// lowest). Each comes back with its vector over the whole block, its error including the
 /// rounding of forming Qᵀ K Q and Qᵀ M Q, γ (|Q| |y|)ᵀ (|K| + |ω²| |M|) (|Q| |y|) for y
 /// normalised to yᵀ Qᵀ M Q y = 1. `None` when rounding has left Qᵀ (K + σM) Q indefinite.
 fn complement_modes(
@@ -563,7 +569,7 @@ fn complement_modes(
     m: &Mat<f64>,
     sigma: f64,
     kept: &Mat<f64>,
-) -> Result<Option<Vec<(f64, f64, Vec<f64>)>>, DynamicsError> {
+) -> Result<Option<Vec<FoundMode>>, DynamicsError> {
     let n = m.nrows();
     let kept_count = kept.ncols();
     let full = (m * kept).qr().compute_Q();
@@ -599,7 +605,11 @@ fn complement_modes(
                 let w2 = rest.omega_squared[c];
                 let forming = gamma * (abs_form(k, &z) + w2.abs() * abs_form(m, &z));
                 let vector = (&q * y).iter().copied().collect();
-                (w2, rest.errors[c] + forming, vector)
+                FoundMode {
+                    omega_squared: w2,
+                    error: rest.errors[c] + forming,
+                    vector,
+                }
             })
             .collect(),
     ))
