@@ -1001,6 +1001,35 @@ mod tests {
     }
 
     #[test]
+    fn a_near_zero_mode_leaves_the_others_of_its_block_exact() {
+        // K = Rᵀ diag(δ, 1, 4) R with R a rotation mixing all three variables, M = I: one
+        // factorisation of K gives ω² = 1 and 4 only to about √n ε/δ relative, and before
+        // the deflation clamped both to one wrong value for δ ≲ 1e-13; now they are exact
+        // to rounding for every δ, down to a K that is singular to rounding
+        let (c, s) = (0.6f64, 0.8f64);
+        let r = DMatrix::from_row_slice(3, 3, &[c, -s, 0.0, s * c, c * c, -s, s * s, s * c, c]);
+        let names: Vec<String> = ["a", "b", "c"].iter().map(|s| s.to_string()).collect();
+        for delta in [1e-3, 1e-9, 1e-13, 1e-15, 1e-17] {
+            let d = DMatrix::from_diagonal(&nalgebra::DVector::from_vec(vec![delta, 1.0, 4.0]));
+            let k = r.transpose() * d * &r;
+            let k = (&k + k.transpose()) * 0.5;
+            let modes = normal_modes(&k, &DMatrix::identity(3, 3), &names).unwrap();
+            let w2: Vec<f64> = modes.modes.iter().map(|m| m.omega_squared).collect();
+            assert!(w2[0].abs() <= delta + 1e-14, "{delta:e}: {w2:?}");
+            for (got, want) in w2[1..].iter().zip([1.0, 4.0]) {
+                assert!((got - want).abs() <= 1e-14 * want, "{delta:e}: {w2:?}");
+            }
+            for m in &modes.modes[1..] {
+                assert!(
+                    m.accuracy() < 1e-10,
+                    "{delta:e}: accuracy {:e}",
+                    m.accuracy()
+                );
+            }
+        }
+    }
+
+    #[test]
     fn envelope_solves_equal_the_dense_triangular_solves() {
         // a banded symmetric positive definite matrix (bandwidth 3, diagonally dominant)
         // and a dense right-hand side with leading zeros: the envelope solves skip exact
