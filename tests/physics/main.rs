@@ -8,6 +8,7 @@ mod beads;
 mod chain;
 mod equilibrium;
 mod modes_blocks;
+mod neutral;
 mod optical_spring;
 mod oracles_responses;
 mod oracles_stage0a;

@@ -464,8 +464,16 @@ fn positive_definite(a: &Mat<f64>) -> bool {
 /// The block's modes from the Cholesky factor of K + σM (positive definite, σ ≥ 0),
 /// solving M u = μ (K + σM) u: μ = 1/(ω² + σ), the largest μ (lowest ω², and the growing
 /// modes when σ > 0) resolved to ε relative, each ω² + σ to ε (ω² + σ)/(ω²_min + σ).
-/// Modes beyond double precision (μ below rounding of the largest) are reported at that
-/// bound, with an error of half their ω².
+///
+/// One solve resolves only the modes near the lowest: a mode 10⁴ times stiffer carries
+/// 10⁴ times the relative error, and one beyond 1/(100 ε) is not resolved at all. A
+/// (near-)neutral mode is the extreme case: with ω²_min ≈ 0 every other mode of the block
+/// would be lost. So the modes this solve resolves to [`RESOLVED`] are kept, and the rest
+/// are solved again in the part of the block M-orthogonal to them (`complement_modes`),
+/// where the lowest of the rest is the lowest, and so on until every mode is resolved.
+/// The pencil's eigenvectors are M-orthogonal, so the rest lie exactly in that part: the
+/// modes above a neutral one are its true neighbours, continuous as its stiffness goes to
+/// zero. `None` when K + σM is not numerically positive definite.
 fn shifted_modes(
     k: &Mat<f64>,
     m: &Mat<f64>,
@@ -479,8 +487,39 @@ fn shifted_modes(
     let (mus, u) = reduced_eigen(m, &llt)?;
     let mu_max = mus.last().copied().unwrap_or(0.0);
     let ulps = solver_ulps(n);
-    let floor = 100.0 * f64::EPSILON * mu_max;
+    // δμ = ulps ε μ_max for every μ, so μ ≥ `resolved` is known to RESOLVED relative
+    let resolved = ulps * f64::EPSILON * mu_max / RESOLVED;
+    // descending μ: ascending ω²
     let order: Vec<usize> = (0..n).rev().collect();
+    let kept = order.iter().take_while(|&&j| mus[j] >= resolved).count();
+    if kept > 0 && kept < n {
+        let basis = Mat::from_fn(n, kept, |i, c| u[(i, order[c])]);
+        if let Some(rest) = complement_modes(k, m, sigma, &basis)? {
+            let mut modes: Vec<FoundMode> = order[..kept]
+                .iter()
+                .map(|&j| {
+                    let mu = mus[j];
+                    FoundMode {
+                        omega_squared: 1.0 / mu - sigma,
+                        error: ulps * f64::EPSILON * mu_max / (mu * mu),
+                        vector: u.col(j).iter().copied().collect(),
+                    }
+                })
+                .chain(rest)
+                .collect();
+            // the rest lie above the kept ones up to their errors: ascending as a whole
+            modes.sort_by(|a, b| a.omega_squared.total_cmp(&b.omega_squared));
+            return Ok(Some(BlockModes {
+                omega_squared: modes.iter().map(|mode| mode.omega_squared).collect(),
+                errors: modes.iter().map(|mode| mode.error).collect(),
+                vectors: Mat::from_fn(n, n, |i, c| modes[c].vector[i]),
+            }));
+        }
+    }
+    // every mode resolved, or (rounding having made the rest's K + σM indefinite) no
+    // second solve: modes beyond double precision (μ below rounding of the largest) are
+    // then reported at that bound, with an error of half their ω²
+    let floor = 100.0 * f64::EPSILON * mu_max;
     let mut omega_squared = Vec::with_capacity(n);
     let mut errors = Vec::with_capacity(n);
     for &j in &order {
@@ -502,6 +541,78 @@ fn shifted_modes(
         vectors: Mat::from_fn(n, n, |i, c| u[(i, order[c])]),
         errors,
     }))
+}
+
+/// A mode found by one solve of `shifted_modes`: ω², its error, its vector over the block.
+struct FoundMode {
+    omega_squared: f64,
+    error: f64,
+    vector: Vec<f64>,
+}
+
+/// Relative accuracy of ω² + σ to which one solve of `shifted_modes` must resolve a mode
+/// for it to be kept; the others are solved again without the kept ones. Far above the
+/// solver's few ulps (so each solve keeps modes over about four decades of ω² and a
+/// block needs few), far below anything reported (the command line prints accuracies
+/// above 1e-6) or decided on.
+const RESOLVED: f64 = 1e-10;
+
+/// The modes of the pencil (K + σM, M) M-orthogonal to the columns of `kept` (modes
+/// already found): with Q an orthonormal basis of the vectors x with keptᵀ M x = 0 (the
+/// last columns of the Householder QR of M·kept), the block's other modes are Q y for
+/// the modes y of (Qᵀ K Q, Qᵀ M Q), solved by `shifted_modes` (so again from their own
+/// lowest). Each comes back with its vector over the whole block, its error including the
+/// rounding of forming Qᵀ K Q and Qᵀ M Q, γ (|Q| |y|)ᵀ (|K| + |ω²| |M|) (|Q| |y|) for y
+/// normalised to yᵀ Qᵀ M Q y = 1. `None` when rounding has left Qᵀ (K + σM) Q indefinite.
+fn complement_modes(
+    k: &Mat<f64>,
+    m: &Mat<f64>,
+    sigma: f64,
+    kept: &Mat<f64>,
+) -> Result<Option<Vec<FoundMode>>, DynamicsError> {
+    let n = m.nrows();
+    let kept_count = kept.ncols();
+    let full = (m * kept).qr().compute_Q();
+    let q = full.subcols(kept_count, n - kept_count).to_owned();
+    let symmetric =
+        |a: Mat<f64>| Mat::from_fn(a.nrows(), a.ncols(), |i, j| 0.5 * (a[(i, j)] + a[(j, i)]));
+    let k_rest = symmetric(q.transpose() * k * &q);
+    let m_rest = symmetric(q.transpose() * m * &q);
+    let Some(rest) = shifted_modes(&k_rest, &m_rest, sigma)? else {
+        return Ok(None);
+    };
+    let abs_q = Mat::from_fn(n, q.ncols(), |i, j| q[(i, j)].abs());
+    let abs_form = |a: &Mat<f64>, z: &[f64]| -> f64 {
+        (0..n)
+            .map(|i| z[i] * (0..n).map(|j| a[(i, j)].abs() * z[j]).sum::<f64>())
+            .sum()
+    };
+    let gamma = solver_ulps(n) * f64::EPSILON;
+    Ok(Some(
+        (0..rest.omega_squared.len())
+            .map(|c| {
+                let y = rest.vectors.col(c);
+                let norm2 = (y.transpose() * &m_rest * y).abs();
+                let scale = if norm2 > 0.0 { 1.0 / norm2.sqrt() } else { 0.0 };
+                let z: Vec<f64> = (0..n)
+                    .map(|i| {
+                        scale
+                            * (0..y.nrows())
+                                .map(|j| abs_q[(i, j)] * y[j].abs())
+                                .sum::<f64>()
+                    })
+                    .collect();
+                let w2 = rest.omega_squared[c];
+                let forming = gamma * (abs_form(k, &z) + w2.abs() * abs_form(m, &z));
+                let vector = (&q * y).iter().copied().collect();
+                FoundMode {
+                    omega_squared: w2,
+                    error: rest.errors[c] + forming,
+                    vector,
+                }
+            })
+            .collect(),
+    ))
 }
 
 /// Solves one block: with K's Cholesky factor and for 1/ω² when K is positive definite
@@ -687,9 +798,10 @@ pub(crate) fn finish(
 /// factor of the shifted K_eff + σM as well (see `block_modes`), so that growth rates are
 /// resolved relative to themselves. Each mode carries its estimated error
 /// ([`Mode::omega_squared_error`]); ω² within it of zero is reported as exactly zero:
-/// neutral. Modes stiffer than the lowest of their block by more than 1/(100 ε) ≈ 4.5e13 in
-/// ω² cannot be resolved in double precision and are reported at that bound, with an error
-/// of half their ω². The entries of `k_eff` and `mass` are taken as exact to a few
+/// neutral. The modes one factorisation resolves to 1e-10 (those within about four decades
+/// of the lowest in ω²) are kept and the rest solved again without them, so a (near-)neutral
+/// mode or very stiff, light parts leave every other mode of the block resolved relative to
+/// itself (see `shifted_modes`). The entries of `k_eff` and `mass` are taken as exact to a few
 /// ulps ([`EntryRounding`]); [`normal_modes_with_rounding`] takes their rounding from how
 /// they were made. `names` are the variable names.
 pub fn normal_modes(
@@ -885,6 +997,35 @@ mod tests {
         // a bound at 1e-3 of ω² would state accuracy 5e-4: the fine estimate is used
         for e in errors(1e-14, 1e-3) {
             assert!((1e-14..1e-13).contains(&e), "{e:e}");
+        }
+    }
+
+    #[test]
+    fn a_near_zero_mode_leaves_the_others_of_its_block_exact() {
+        // K = Rᵀ diag(δ, 1, 4) R with R a rotation mixing all three variables, M = I: one
+        // factorisation of K gives ω² = 1 and 4 only to about √n ε/δ relative, and before
+        // the deflation clamped both to one wrong value for δ ≲ 1e-13; now they are exact
+        // to rounding for every δ, down to a K that is singular to rounding
+        let (c, s) = (0.6f64, 0.8f64);
+        let r = DMatrix::from_row_slice(3, 3, &[c, -s, 0.0, s * c, c * c, -s, s * s, s * c, c]);
+        let names: Vec<String> = ["a", "b", "c"].iter().map(|s| s.to_string()).collect();
+        for delta in [1e-3, 1e-9, 1e-13, 1e-15, 1e-17] {
+            let d = DMatrix::from_diagonal(&nalgebra::DVector::from_vec(vec![delta, 1.0, 4.0]));
+            let k = r.transpose() * d * &r;
+            let k = (&k + k.transpose()) * 0.5;
+            let modes = normal_modes(&k, &DMatrix::identity(3, 3), &names).unwrap();
+            let w2: Vec<f64> = modes.modes.iter().map(|m| m.omega_squared).collect();
+            assert!(w2[0].abs() <= delta + 1e-14, "{delta:e}: {w2:?}");
+            for (got, want) in w2[1..].iter().zip([1.0, 4.0]) {
+                assert!((got - want).abs() <= 1e-14 * want, "{delta:e}: {w2:?}");
+            }
+            for m in &modes.modes[1..] {
+                assert!(
+                    m.accuracy() < 1e-10,
+                    "{delta:e}: accuracy {:e}",
+                    m.accuracy()
+                );
+            }
         }
     }
 
