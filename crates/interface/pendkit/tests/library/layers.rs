@@ -96,10 +96,12 @@ fn the_leaves_and_the_dynamics_stay_as_the_architecture_says() {
         "pendkit-rotations",
         "pendkit-source",
         "pendkit-export",
-        "pendkit-plot",
     ] {
         assert!(uses(leaf).is_empty(), "{leaf} uses {:?}", uses(leaf));
     }
+    // the figures know no physics: they use only the one file writer (export's), so that a
+    // figure is written whole or not at all like every other output
+    assert_eq!(uses("pendkit-plot"), &["pendkit-export".to_string()]);
     // the data model computes no energy; the dynamics and noise work on assembled
     // matrices, not on terms
     for crate_ in ["pendkit-system", "pendkit-dynamics", "pendkit-noise"] {
