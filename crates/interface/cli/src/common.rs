@@ -122,6 +122,45 @@ impl Run {
         }
         Ok(())
     }
+
+    /// One line per neutral mode, for the engineer who has to remove it: which coordinates
+    /// move in it, why it is neutral (nothing in the model resists it: its ω² is zero within
+    /// the rounding of the stiffnesses), and what would give it stiffness, by the family of
+    /// the direction (pitch and roll from wires that meet the body at its centre of mass in
+    /// one vertical plane, yaw from wires on one line or without torsion).
+    pub fn neutral_notes(&self) -> Vec<String> {
+        let (run, r) = (self, &self.result);
+        r.modes
+            .modes
+            .iter()
+            .enumerate()
+            .filter(|(_, m)| m.omega_squared == 0.0)
+            .map(|(i, m)| {
+                let family = r.mode_family(m);
+                let remedy = match family.as_str() {
+                    "P" | "R" => {
+                        "give the wires a break-off distance (their lower ends above the centre of mass), attach them out of one vertical plane, or include wire bending (stage 1B or 2)"
+                    }
+                    "Y" => "separate the wires, or include wire torsion (stage 1A or later)",
+                    _ => "add a wire, blade or spring that this motion stretches",
+                };
+                let zero = if m.omega_squared_error > 0.0 {
+                    format!(
+                        "stiffness zero within rounding, |omega^2| < {:.1e} rad^2/s^2",
+                        m.omega_squared_error
+                    )
+                } else {
+                    "stiffness exactly zero".to_string()
+                };
+                format!(
+                    "note: mode {} is a neutral direction ({}): no wire, blade, spring or element of this stage resists it ({zero}); to remove it, {remedy}",
+                    i + 1,
+                    crate::modes::top_shares(run, &r.modes.coordinates, &m.energy_fractions)
+                        .join(", "),
+                )
+            })
+            .collect()
+    }
 }
 
 impl ModelArgs {
@@ -175,6 +214,11 @@ impl ModelArgs {
         }
         let run = self.run(ModeSelection::All)?;
         run.check_stable(self.allow_unstable)?;
+        // a response of a model with a neutral direction is a number with a caveat: the
+        // same notes as `modes` prints, on stderr beside the result
+        for note in run.neutral_notes() {
+            eprintln!("{note}");
+        }
         Ok(run)
     }
 }

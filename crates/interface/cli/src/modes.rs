@@ -280,39 +280,8 @@ fn modes_table(run: &Run, with_lab: bool) -> Result<String, CliError> {
             }
         }
     }
-    for line in neutral_notes(run) {
+    for line in run.neutral_notes() {
         let _ = writeln!(out, "{line}");
     }
     Ok(out)
-}
-
-/// One line per neutral mode, for the engineer who has to remove it: which coordinates
-/// move in it, why it is neutral (nothing in the model resists it: its ω² is zero within
-/// the rounding of the stiffnesses), and what would give it stiffness, by the family of
-/// the direction (pitch and roll from wires that meet the body at its centre of mass in
-/// one vertical plane, yaw from wires on one line or without torsion).
-fn neutral_notes(run: &Run) -> Vec<String> {
-    let r = &run.result;
-    r.modes
-        .modes
-        .iter()
-        .enumerate()
-        .filter(|(_, m)| m.omega_squared == 0.0)
-        .map(|(i, m)| {
-            let family = r.mode_family(m);
-            let remedy = match family.as_str() {
-                "P" | "R" => {
-                    "give the wires a break-off distance (their lower ends above the centre of mass), attach them out of one vertical plane, or include wire bending (stage 1B or 2)"
-                }
-                "Y" => "separate the wires, or include wire torsion (stage 1A or later)",
-                _ => "add a wire, blade or spring that this motion stretches",
-            };
-            format!(
-                "note: mode {} is a neutral direction ({}): no wire, blade, spring or element of this stage resists it (stiffness zero within rounding, |omega^2| < {:.1e} rad^2/s^2); to remove it, {remedy}",
-                i + 1,
-                top_shares(run, &r.modes.coordinates, &m.energy_fractions).join(", "),
-                m.omega_squared_error
-            )
-        })
-        .collect()
 }

@@ -65,3 +65,53 @@ fn a_nominal_quad_prints_no_accuracy() {
     assert!(!table.contains("accuracy"), "{table}");
     assert!(modes(&["quad"]).iter().all(|(_, acc)| *acc <= 1e-6));
 }
+
+#[test]
+fn every_command_on_a_neutral_model_names_the_neutral_direction() {
+    // issue 35, item 3: a body on two wires in one vertical plane, attached level with its
+    // centre of mass, has no pitch stiffness before bending joins (stage 1A): `tf` and
+    // `noise` printed their numbers without a word about it. Now every command that
+    // answers from that model says which direction is neutral and how to remove it, as
+    // `modes` does in its table.
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("neutral-note");
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("plane.toml");
+    std::fs::write(
+        &file,
+        r#"name = "plane"
+[materials.steel]
+youngs_modulus = 200e9
+poisson_ratio = 0.29
+density = 7800
+loss_angle = 1e-4
+[bodies.support]
+coordinates = "0"
+driven = true
+[bodies.top]
+coordinates = "1"
+mass = 10
+inertia = [0.1, 0.1, 0.1]
+[stages.top]
+from = "support"
+wires = { upper = { at = [0, 0.1, 0], mirror = "y" }, lower = { at = [0, 0.1, 0], mirror = "y" }, length = 0.4, radius = 0.3e-3, material = "steel" }
+"#,
+    )
+    .unwrap();
+    let file = file.to_str().unwrap();
+    let note = "is a neutral direction (pitch1 100%)";
+    let (ok, stdout, stderr) = pendkit(&["modes", file, "--stage", "1a"]);
+    assert!(ok && stdout.contains(note), "{stdout}{stderr}");
+    for args in [
+        &[
+            "tf", file, "--stage", "1a", "--input", "x0", "--output", "x1",
+        ][..],
+        &["noise", file, "--stage", "1a", "--output", "x1"][..],
+    ] {
+        let (ok, _, stderr) = pendkit(args);
+        assert!(ok, "{args:?}: {stderr}");
+        assert!(
+            stderr.contains(note) && stderr.contains("break-off"),
+            "{args:?}: {stderr}"
+        );
+    }
+}
