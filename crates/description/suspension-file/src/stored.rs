@@ -133,7 +133,7 @@ pub(crate) fn load_bundled(
 /// Each damping tag with its fields set, each field's text and expression.
 type Tags = Vec<(String, Vec<(&'static Field, (String, Expr))>)>;
 
-/// The bytes end early or hold something no [`store`] writes.
+/// The bytes end early or hold something no [`store_bundled`] writes.
 #[derive(Debug)]
 struct Corrupt;
 
@@ -619,4 +619,44 @@ stored_struct! {
     InstanceFile { kind, name, between, points, values, values_at, tag, at }
     SignalFile { name, text }
     ExtraFile { name, energy, tag, after_equilibrium, at }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A library of one file, `m.toml`, whose stored form is `stored`.
+    struct One(&'static [u8]);
+
+    impl Library for One {
+        fn file(&self, _: &str) -> Option<BundledFile> {
+            Some(BundledFile {
+                path: "models/m.toml",
+                text: "a = 1\n",
+                packed: "",
+                stored: self.0,
+            })
+        }
+    }
+
+    /// Damaged stored forms are errors naming the file, never a panic.
+    #[test]
+    fn corrupt_stored_forms_are_errors() {
+        for bad in [
+            &b""[..],
+            b"\x01",
+            b"\x01\x0dmodels/m.toml",
+            b"\x01\x0dmodels/x.toml\x00",
+            b"\x00\x05",
+            b"\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff",
+            b"\x00\x00\x00\x02",
+        ] {
+            let library = One(bad);
+            let file = library.file("m").unwrap();
+            let Err(e) = load_bundled(&file, &library) else {
+                panic!("{bad:?} loaded")
+            };
+            assert!(e.to_string().starts_with("models/m.toml: "), "{e}");
+        }
+    }
 }
