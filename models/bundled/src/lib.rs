@@ -223,6 +223,35 @@ mod tests {
         }
     }
 
+    /// Each bundled file's stored description is the one its packed tree reads as, every
+    /// value with its place (file, span and field path: what errors name), and so is its
+    /// damping, as written and as parsed.
+    #[test]
+    fn stored_descriptions_are_the_files() {
+        for (name, _, _) in files() {
+            let file = Bundled.file(name).unwrap();
+            assert!(!file.stored.is_empty(), "{name}");
+            let (source, root) = file.read().unwrap();
+            let read = Suspension::from_tree(source, root, &Bundled);
+            let stored = Suspension::bundled(name, &Bundled);
+            match (read, stored) {
+                (Ok(a), Ok(b)) => {
+                    assert_eq!(
+                        format!("{:?}", a.spec()),
+                        format!("{:?}", b.spec()),
+                        "{name}"
+                    );
+                    assert_eq!(a.damping(), b.damping(), "{name}");
+                    let parsed = |s: &Suspension| format!("{:?}", s.parsed_damping());
+                    assert_eq!(parsed(&a), parsed(&b), "{name}");
+                }
+                // the materials file has no bodies: the same error either way
+                (Err(a), Err(b)) => assert_eq!(a, b, "{name}"),
+                (a, b) => panic!("{name}: {a:?} against {b:?}"),
+            }
+        }
+    }
+
     /// Every bundled file reads (a broken file would only show when its model is built), and
     /// the summary listed without reading it is the one its model reads.
     #[test]

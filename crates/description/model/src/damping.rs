@@ -168,6 +168,15 @@ impl DampingSpec {
         for (field, text) in self.fields() {
             parts.push((field, parse_part(text, field.name)?));
         }
+        Ok(ParsedDamping::from_parts(self.clone(), parts))
+    }
+}
+
+impl ParsedDamping {
+    /// `spec` with its fields already parsed: `parts` holds each field that is set, with
+    /// the expression its text parses to, in the order of [`DampingSpec::fields`] (what
+    /// [`DampingSpec::parse`] makes; a bundled model stores it so as to parse nothing).
+    pub fn from_parts(spec: DampingSpec, parts: Vec<(&'static Field, Expr)>) -> ParsedDamping {
         let part = |name: &str| parts.iter().find(|(f, _)| f.name == name).map(|(_, e)| e);
         let real = part("real").cloned().unwrap_or(Expr::Num(1.0));
         let imag = imaginary_multiplier(
@@ -185,14 +194,14 @@ impl DampingSpec {
             .into_iter()
             .filter(|(field, _)| field.domain != Domain::Finite && **field != DAMPING_TEMPERATURE)
             .collect();
-        Ok(ParsedDamping(Arc::new(Parsed {
-            spec: self.clone(),
+        ParsedDamping(Arc::new(Parsed {
+            spec,
             real,
             imag,
             checked,
             inputs: inputs.into_iter().collect(),
             first: OnceLock::new(),
-        })))
+        }))
     }
 }
 

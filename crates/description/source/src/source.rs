@@ -2,7 +2,7 @@
 
 use std::ops::Range;
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 
 /// The text of one suspension file and where it came from.
 #[derive(Debug)]
@@ -15,28 +15,30 @@ pub struct Source {
     pub path: Option<PathBuf>,
     /// The file's text.
     pub text: String,
-    /// Byte offset of the start of each line.
-    line_starts: Vec<usize>,
+    /// Byte offset of the start of each line, found when a line is first asked for (only
+    /// messages ask: a bundled model's run reads its files' texts for none).
+    line_starts: OnceLock<Vec<usize>>,
 }
 
 impl Source {
     /// A source called `name` with `text`, read from `path` if it is a file.
     pub fn new(name: impl Into<String>, path: Option<&Path>, text: impl Into<String>) -> Arc<Self> {
-        let text = text.into();
-        let line_starts = std::iter::once(0)
-            .chain(text.match_indices('\n').map(|(i, _)| i + 1))
-            .collect();
         Arc::new(Source {
             name: name.into(),
             path: path.map(Path::to_path_buf),
-            text,
-            line_starts,
+            text: text.into(),
+            line_starts: OnceLock::new(),
         })
     }
 
     /// The 1-based line of byte offset `offset`.
     pub fn line(&self, offset: usize) -> usize {
-        self.line_starts.partition_point(|&start| start <= offset)
+        let line_starts = self.line_starts.get_or_init(|| {
+            std::iter::once(0)
+                .chain(self.text.match_indices('\n').map(|(i, _)| i + 1))
+                .collect()
+        });
+        line_starts.partition_point(|&start| start <= offset)
     }
 }
 

@@ -55,6 +55,7 @@ pub mod read;
 pub mod scene;
 pub mod signals;
 pub mod spec;
+pub mod stored;
 
 pub use pendkit_source::{packed, source, tree, writer};
 
@@ -86,8 +87,11 @@ pub struct BundledFile {
     pub path: &'static str,
     /// Its text.
     pub text: &'static str,
-    /// Its tree, packed ([`packed`]).
+    /// Its tree, packed ([`packed`]): what `extends` and `[[include]]` read.
     pub packed: &'static str,
+    /// Its description as read (merged with what it extends, with what it includes),
+    /// stored ([`stored`]): what running it as a model reads. Empty when not stored.
+    pub stored: &'static [u8],
 }
 
 impl BundledFile {
@@ -216,8 +220,12 @@ impl Suspension {
         let file = library
             .file(name)
             .ok_or_else(|| FileError::file(name, "no bundled file of this name"))?;
-        let (source, root) = file.read()?;
-        Suspension::from_tree(source, root, library)
+        if file.stored.is_empty() {
+            let (source, root) = file.read()?;
+            return Suspension::from_tree(source, root, library);
+        }
+        let (spec, damping) = stored::load_bundled(&file, library)?;
+        Suspension::from_spec(file.path, spec, Some(damping))
     }
 
     /// A bundled suspension whose file is written by `generator` (for its default count),
@@ -241,43 +249,47 @@ impl Suspension {
         library: &dyn Library,
     ) -> Result<Suspension, FileError> {
         let spec = read_spec(&source, root, library)?;
+        Suspension::from_spec(&source.name, spec, None)
+    }
+
+    /// A suspension from its description `spec`, read from the file called `source_name`:
+    /// its parameters checked, and its damping as `damping` gives it (stored) or else
+    /// derived and parsed here.
+    fn from_spec(
+        source_name: &str,
+        spec: Spec,
+        damping: Option<Damping>,
+    ) -> Result<Suspension, FileError> {
         // an empty file, or a case file's text without its `model` line, reads as a
         // suspension with nothing in it: say that, not "no variables" later
         if spec.bodies.is_empty() {
             return Err(FileError::file(
-                &source.name,
+                source_name,
                 "no bodies: a suspension file describes its bodies in [bodies.NAME] tables, \
                  and a case file names its model first (model = \"quad\")",
             ));
         }
-        let stem = Path::new(&source.name)
+        let stem = Path::new(source_name)
             .file_stem()
             .map(|s| s.to_string_lossy().into_owned())
             .unwrap_or_default();
         let name = spec.name.as_ref().map_or(stem, |n| n.value.clone());
         let summary = spec.summary.as_ref().map_or_else(
-            || format!("suspension file {}", source.name),
+            || format!("suspension file {source_name}"),
             |s| s.value.clone(),
         );
         let file_parameters = file_parameters(&spec)?;
-        let damping = damping::damping(&spec)?;
-        let mut parsed_damping = BTreeMap::new();
-        for (tag, d) in &damping {
-            let parsed = d.parse(tag).map_err(|e| {
-                spec.damping.iter().find(|x| &x.tag == tag).map_or_else(
-                    || FileError::file(&source.name, e.to_string()),
-                    |x| x.at.error(e.to_string()),
-                )
-            })?;
-            parsed_damping.insert(tag.clone(), parsed);
-        }
+        let Damping { damping, parsed } = match damping {
+            Some(d) => d,
+            None => Damping::of(source_name, &spec)?,
+        };
         Ok(Suspension {
             name,
             summary,
-            source_name: source.name.clone(),
+            source_name: source_name.to_string(),
             spec,
             damping,
-            parsed_damping,
+            parsed_damping: parsed,
             file_parameters,
             generator: None,
             cache: DefaultsCache::new(),
@@ -370,9 +382,38 @@ impl Suspension {
     }
 }
 
+/// The damping a description implies: each tag's fields, and the same parsed.
+pub(crate) struct Damping {
+    damping: BTreeMap<String, DampingSpec>,
+    parsed: BTreeMap<String, ParsedDamping>,
+}
+
+impl Damping {
+    /// The damping `spec` (read from the file called `source_name`) implies, each tag's
+    /// fields parsed, which checks them.
+    fn of(source_name: &str, spec: &Spec) -> Result<Damping, FileError> {
+        let damping = damping::damping(spec)?;
+        let mut parsed = BTreeMap::new();
+        for (tag, d) in &damping {
+            let p = d.parse(tag).map_err(|e| {
+                spec.damping.iter().find(|x| &x.tag == tag).map_or_else(
+                    || FileError::file(source_name, e.to_string()),
+                    |x| x.at.error(e.to_string()),
+                )
+            })?;
+            parsed.insert(tag.clone(), p);
+        }
+        Ok(Damping { damping, parsed })
+    }
+}
+
 /// The description read from the tree `root` of `source`, merged over the files it extends,
 /// with the suspensions it includes.
-fn read_spec(source: &Arc<Source>, root: Node, library: &dyn Library) -> Result<Spec, FileError> {
+pub(crate) fn read_spec(
+    source: &Arc<Source>,
+    root: Node,
+    library: &dyn Library,
+) -> Result<Spec, FileError> {
     read_scene(source, root, library, &mut Vec::new())
 }
 
