@@ -445,6 +445,11 @@ pub struct FitOptions {
     pub relative_step: f64,
     /// How the Jacobian is computed (see [`JacobianMethod`]).
     pub jacobian: JacobianMethod,
+    /// Above this χ²/dof the fit does not explain its data ([`FitResult::explains_data`]
+    /// is false): 100 by default, the model then missing its measurements by ten of their
+    /// σ on average, which no honest σ and no right model do. A fit that lands in a wrong
+    /// minimum, or matches a measurement to a mode it is not, ends far above it.
+    pub max_reduced_chi_squared: f64,
 }
 
 /// How the fit differentiates the model's mode frequencies (and |TF| points) with respect
@@ -481,6 +486,7 @@ impl Default for FitOptions {
             undetermined_below: 1e-6,
             relative_step: 1e-4,
             jacobian: JacobianMethod::Exact,
+            max_reduced_chi_squared: 100.0,
         }
     }
 }
@@ -976,6 +982,8 @@ pub struct ModeResidual {
     pub model_hz: f64,
     /// (measured − model)/σ.
     pub normalized: f64,
+    /// The measurement's line in its file (from 1).
+    pub line: usize,
 }
 
 /// A measured |TF| point against the fitted model.
@@ -991,6 +999,8 @@ pub struct TfResidual {
     pub model: f64,
     /// (measured − model)/σ.
     pub normalized: f64,
+    /// The point's line in its file (from 1).
+    pub line: usize,
 }
 
 /// A combination of parameters the data cannot determine: a right singular vector of the
@@ -1023,6 +1033,14 @@ pub struct FitResult {
     pub dof: usize,
     /// χ²/dof (`None` when dof = 0). The uncertainties are not scaled by it.
     pub reduced_chi_squared: Option<f64>,
+    /// The verdict: whether the fit explains its data, χ²/dof at most
+    /// `max_reduced_chi_squared`. When it does not, the values are the model's best
+    /// compromise (or a wrong minimum), no parameter is determined by them, and the
+    /// uncertainties, which assume the model right, do not hold.
+    pub explains_data: bool,
+    /// The χ²/dof above which the fit does not explain its data
+    /// ([`FitOptions::max_reduced_chi_squared`]).
+    pub max_reduced_chi_squared: f64,
     /// Singular values of the weighted Jacobian in relative parameter units, largest first.
     pub singular_values: Vec<f64>,
     /// The combinations the data cannot determine.
@@ -1143,6 +1161,7 @@ struct Problem<'a> {
     scale: Vec<f64>,
     units: Vec<Option<String>>,
     jacobian: JacobianMethod,
+    max_reduced_chi_squared: f64,
 }
 
 /// One point of the fit: the solution, its matched modes and residuals.
@@ -1163,6 +1182,16 @@ pub fn fit(
     free: &[String],
     options: &FitOptions,
 ) -> Result<FitResult, Error> {
+    let threshold = options.max_reduced_chi_squared;
+    // NaN would make every verdict false, 0 every fit with noise a failure
+    if threshold.is_nan() || threshold <= 0.0 {
+        return Err(Error::Argument {
+            function: "fit",
+            argument: "options.max_reduced_chi_squared",
+            expected: "positive".into(),
+            given: threshold.to_string(),
+        });
+    }
     let start = start_values(case, free)?;
     let n_data = measured.modes.len() + tf.map_or(0, |t| t.points.len());
     if n_data <= free.len() {
@@ -1223,6 +1252,7 @@ pub fn fit(
                 scale,
                 units,
                 jacobian: options.jacobian,
+                max_reduced_chi_squared: options.max_reduced_chi_squared,
             };
             return Ok(finish(
                 &problem,
@@ -1489,6 +1519,7 @@ fn mode_residuals(measured: &MeasuredModes, state: &State) -> Vec<ModeResidual> 
             sigma_hz: m.sigma_hz,
             model_hz: f,
             normalized: (m.hz - f) / m.sigma_hz,
+            line: m.line,
         })
         .collect()
 }
@@ -1505,6 +1536,7 @@ fn tf_residuals(tf: Option<&MeasuredTf>, state: &State) -> Vec<TfResidual> {
                 sigma: p.sigma_abs,
                 model,
                 normalized: (p.abs - model) / p.sigma_abs,
+                line: p.line,
             })
             .collect()
     })
@@ -1531,6 +1563,7 @@ fn finish(
         scale,
         units,
         jacobian,
+        max_reduced_chi_squared,
     } = problem;
     let (iterations, solves) = counts;
     let n = free.len();
@@ -1600,6 +1633,7 @@ fn finish(
     let dof = n_data.saturating_sub(determined.len());
     let mut singular_values: Vec<f64> = s.iter().copied().collect();
     singular_values.sort_by(|a, b| b.total_cmp(a));
+    let reduced_chi_squared = (dof > 0).then(|| state.chi_squared / dof as f64);
     FitResult {
         parameters,
         correlation,
@@ -1607,7 +1641,11 @@ fn finish(
         tf,
         chi_squared: state.chi_squared,
         dof,
-        reduced_chi_squared: (dof > 0).then(|| state.chi_squared / dof as f64),
+        reduced_chi_squared,
+        // with no degree of freedom there is nothing to judge by (fit() asks for more
+        // measurements than free parameters, so it does not happen there)
+        explains_data: reduced_chi_squared.is_none_or(|r| r <= *max_reduced_chi_squared),
+        max_reduced_chi_squared: *max_reduced_chi_squared,
         singular_values,
         undetermined,
         iterations,

@@ -121,6 +121,8 @@ fn recovers_five_quad_parameters_and_leaves_a_loss_angle_undetermined() {
     assert_eq!(result.dof, 19);
     let reduced = result.reduced_chi_squared.unwrap();
     assert!((0.285..2.306).contains(&reduced), "χ²/dof = {reduced}");
+    assert!(result.explains_data);
+    assert_eq!(result.max_reduced_chi_squared, 100.0);
     // every measured mode is matched to the mode it was generated from
     for (m, r) in measured.modes.iter().zip(&result.modes) {
         assert_eq!(m.label, r.model_label);
@@ -592,4 +594,46 @@ fn match_modes_follows_each_mode_across_a_crossing() {
     let triple = run_stage(Case::model("triple").unwrap().build().unwrap().0, Stage::S2).unwrap();
     let e = triple.match_modes(&nominal).unwrap_err().to_string();
     assert!(e.contains("reference"), "{e}");
+}
+
+/// Old failure: a fit that could not explain its data (χ²/dof 1.6·10⁷ with a duplicated
+/// measurement, 2.4·10⁵ in a wrong minimum) returned its values like any other, and the
+/// command printed "every parameter is determined" and exited 0. The result now carries
+/// the verdict.
+#[test]
+fn a_fit_that_cannot_explain_its_data_says_so_in_its_result() {
+    let mut measured = synthetic(&[], 2e-4, 21);
+    // z2 measured 10 % high: no UIM mass puts it there and keeps the other modes
+    let z2 = measured.modes.iter_mut().find(|m| m.label == "z2").unwrap();
+    z2.hz *= 1.1;
+    let case = Case::model("quad").unwrap();
+    let free = names(&["m1"]);
+    let result = fit(&case, &measured, None, &free, &FitOptions::default()).unwrap();
+    let reduced = result.reduced_chi_squared.unwrap();
+    assert!(reduced > 100.0, "χ²/dof = {reduced}");
+    assert!(!result.explains_data);
+    // the worst residual is z2's, and it names its line
+    let worst = result
+        .modes
+        .iter()
+        .max_by(|a, b| a.normalized.abs().total_cmp(&b.normalized.abs()))
+        .unwrap();
+    assert_eq!((worst.label.as_str(), worst.line), ("z2", worst.mode + 1));
+    // judged by a threshold above its χ²/dof, the same fit explains its data
+    let lenient = FitOptions {
+        max_reduced_chi_squared: 2.0 * reduced,
+        ..FitOptions::default()
+    };
+    let again = fit(&case, &measured, None, &free, &lenient).unwrap();
+    assert!(again.explains_data);
+    assert_eq!(again.parameters, result.parameters);
+    // a threshold that is not positive cannot judge anything
+    for bad in [0.0, -1.0, f64::NAN] {
+        let options = FitOptions {
+            max_reduced_chi_squared: bad,
+            ..FitOptions::default()
+        };
+        let e = fit(&case, &measured, None, &free, &options).unwrap_err();
+        assert!(e.to_string().contains("max_reduced_chi_squared"), "{e}");
+    }
 }
