@@ -450,6 +450,10 @@ pub struct FitOptions {
     /// σ on average, which no honest σ and no right model do. A fit that lands in a wrong
     /// minimum, or matches a measurement to a mode it is not, ends far above it.
     pub max_reduced_chi_squared: f64,
+    /// The first match pairs a measurement only with a model mode whose frequency is
+    /// within this factor of the measured one (2 by default): a start so far off that the
+    /// right mode is outside it needs a better start, not a fit to a wrong mode.
+    pub frequency_window: f64,
 }
 
 /// How the fit differentiates the model's mode frequencies (and |TF| points) with respect
@@ -487,6 +491,7 @@ impl Default for FitOptions {
             relative_step: 1e-4,
             jacobian: JacobianMethod::Exact,
             max_reduced_chi_squared: 100.0,
+            frequency_window: 2.0,
         }
     }
 }
@@ -494,6 +499,82 @@ impl Default for FitOptions {
 /// Least kinetic-energy share a mode must have in a measurement's coordinates to be its
 /// match: below it, the measurement names a motion no mode left makes.
 const MIN_SHARE: f64 = 0.1;
+
+/// The cost of a pair the assignment must not make (a mode outside the frequency window,
+/// or with too small a share): above any sum of allowed costs (each within
+/// [−1, ln window]), so that the assignment makes as few of them as it can, and finite, so
+/// that the assignment's arithmetic stays exact enough to compare.
+const FORBIDDEN: f64 = 1e6;
+
+/// The assignment of each row of `cost` (no more rows than columns) to a distinct column
+/// that minimises the sum of their costs: the Hungarian method (Kuhn–Munkres) with
+/// potentials, O(rows² · columns). Costs must be finite (the matcher's are). Row `i` goes
+/// to column `result[i]`.
+fn assign(cost: &DMatrix<f64>) -> Vec<usize> {
+    let (rows, columns) = cost.shape();
+    // 1-based, index 0 a virtual column: `owner[j]` is the row (1-based, 0 for none) that
+    // holds column j, `u` and `v` the row and column potentials (dual variables), with
+    // cost − u − v ≥ 0 everywhere and 0 on the assigned pairs
+    let mut u = vec![0.0; rows + 1];
+    let mut v = vec![0.0; columns + 1];
+    let mut owner = vec![0usize; columns + 1];
+    let mut previous = vec![0usize; columns + 1];
+    for row in 1..=rows {
+        // a shortest augmenting path (reduced costs as lengths) from this row to a free
+        // column, Dijkstra-like; `slack[j]` is the shortest distance to column j so far
+        owner[0] = row;
+        let mut column = 0;
+        let mut slack = vec![f64::INFINITY; columns + 1];
+        let mut visited = vec![false; columns + 1];
+        loop {
+            visited[column] = true;
+            let i = owner[column];
+            let mut delta = f64::INFINITY;
+            let mut next = 0;
+            for j in 1..=columns {
+                if visited[j] {
+                    continue;
+                }
+                let reduced = cost[(i - 1, j - 1)] - u[i] - v[j];
+                if reduced < slack[j] {
+                    slack[j] = reduced;
+                    previous[j] = column;
+                }
+                if slack[j] < delta {
+                    delta = slack[j];
+                    next = j;
+                }
+            }
+            for j in 0..=columns {
+                if visited[j] {
+                    u[owner[j]] += delta;
+                    v[j] -= delta;
+                } else {
+                    slack[j] -= delta;
+                }
+            }
+            column = next;
+            // a free column ends the path (with finite costs and rows ≤ columns an
+            // unvisited column is always found, and one of them is free)
+            if owner[column] == 0 {
+                break;
+            }
+        }
+        // flip the path: each column on it to the row before it
+        while column != 0 {
+            let before = previous[column];
+            owner[column] = owner[before];
+            column = before;
+        }
+    }
+    let mut chosen = vec![0; rows];
+    for (j, &i) in owner.iter().enumerate().skip(1) {
+        if i != 0 {
+            chosen[i - 1] = j - 1;
+        }
+    }
+    chosen
+}
 
 /// A measured mode's identity in the model: which mode it is, and its shape to follow it
 /// from one solution to the next.
@@ -607,16 +688,41 @@ impl MatchedModes {
         }
     }
 
-    /// The first match: each measured mode to the model mode with the largest share of
-    /// kinetic energy in the coordinates its label and shape name (or, for a family label,
-    /// the mode of that family with the largest share in its shape's coordinates), taken in
-    /// order of decreasing share less distance in log frequency (so that modes moving the
-    /// same coordinates go to the nearest frequencies), each model mode at most once. A
-    /// share below 10 % is no match.
+    /// The first match with the default frequency window
+    /// ([`FitOptions::frequency_window`]): see [`MatchedModes::by_label_within`].
     pub fn by_label(result: &StageResult, measured: &MeasuredModes) -> Result<Self, FitError> {
+        let window = FitOptions::default().frequency_window;
+        MatchedModes::by_label_within(result, measured, window)
+    }
+
+    /// The first match: all measured modes at once to distinct model modes, by optimal
+    /// assignment ([`assign`]). A measurement may match a mode that has at least 10 % of
+    /// its kinetic energy in the coordinates the measurement's label and shape name (for a
+    /// family label, a mode of that family, by its shape's coordinates) and whose frequency
+    /// is within a factor `window` of the measured one; among those the assignment
+    /// minimises the sum of |ln(f_model/f_measured)| less the share (a mode e times off in
+    /// frequency needs a share larger by 1, so that modes moving the same coordinates, in
+    /// and out of phase, go to the nearest frequencies). Taking the measurements one at a
+    /// time, best first, let one take the mode another needed, and then report the other
+    /// unmatched; all at once, neither their order nor a crossing can do that. A
+    /// measurement that no mode left can match is an error naming its line.
+    pub fn by_label_within(
+        result: &StageResult,
+        measured: &MeasuredModes,
+        window: f64,
+    ) -> Result<Self, FitError> {
         let modes = &result.modes.modes;
         let coordinates = &result.modes.coordinates;
         let families: Vec<String> = modes.iter().map(|m| result.mode_family(m)).collect();
+        let describe = |k: usize| {
+            format!(
+                "mode {} ({} {}, {:.4} Hz)",
+                k + 1,
+                modes[k].label,
+                families[k],
+                modes[k].hz
+            )
+        };
         let catalogue = || {
             modes
                 .iter()
@@ -625,11 +731,28 @@ impl MatchedModes {
                 .collect::<Vec<_>>()
                 .join(", ")
         };
+        if !(window.is_finite() && window > 1.0) {
+            return Err(FitError::File {
+                path: measured.path.clone(),
+                message: format!("the frequency window must be a factor above 1, got {window}"),
+            });
+        }
+        if measured.modes.len() > modes.len() {
+            return Err(FitError::File {
+                path: measured.path.clone(),
+                message: format!(
+                    "{} measured modes, but the model has {} modes: each measurement is a different mode",
+                    measured.modes.len(),
+                    modes.len()
+                ),
+            });
+        }
         let is_family = |label: &str| families.iter().any(|f| f == label);
-        // every (measurement, candidate mode) pair with the mode's kinetic-energy share in
-        // the measurement's coordinates (its label's and its shape's) and its distance in
-        // log frequency
-        let mut pairs: Vec<(usize, usize, f64, f64)> = Vec::new();
+        // per measurement and model mode: the mode's kinetic-energy share in the
+        // measurement's coordinates, and whether it may be its match at all
+        let mut share = DMatrix::zeros(measured.modes.len(), modes.len());
+        let mut allowed = DMatrix::from_element(measured.modes.len(), modes.len(), false);
+        let mut cost = DMatrix::from_element(measured.modes.len(), modes.len(), FORBIDDEN);
         for (row, mm) in measured.modes.iter().enumerate() {
             let unmatched = |message: String| FitError::Unmatched {
                 path: measured.path.clone(),
@@ -662,55 +785,77 @@ impl MatchedModes {
                     }
                 }
             }
+            // each coordinate once, whatever the order it is named in (the label's own
+            // coordinate repeated in the shape was counted twice when not adjacent)
+            columns.sort_unstable();
             columns.dedup();
             for k in (0..modes.len()).filter(|&k| !family || families[k] == label) {
-                let share: f64 = columns
+                let s: f64 = columns
                     .iter()
                     .map(|&c| modes[k].energy_fractions.get(c).copied().unwrap_or(0.0))
                     .sum();
                 let distance = (modes[k].hz.abs() / mm.hz).ln().abs();
-                pairs.push((row, k, share, distance));
-            }
-        }
-        // best scores first: the share less the distance in log frequency (a mode e times
-        // off in frequency needs a share larger by 1), so that modes moving the same
-        // coordinates (in phase, out of phase) go to the nearest frequencies
-        pairs.sort_by(|a, b| {
-            (b.2 - b.3)
-                .total_cmp(&(a.2 - a.3))
-                .then(a.0.cmp(&b.0))
-                .then(a.1.cmp(&b.1))
-        });
-        let mut chosen: Vec<Option<(usize, f64)>> = vec![None; measured.modes.len()];
-        for &(row, k, share, _) in &pairs {
-            if chosen[row].is_none() && !chosen.iter().flatten().any(|(taken, _)| *taken == k) {
-                chosen[row] = Some((k, share));
-            }
-        }
-        let mut indices: Vec<usize> = Vec::with_capacity(measured.modes.len());
-        for (row, mm) in measured.modes.iter().enumerate() {
-            match chosen[row] {
-                Some((k, share)) if share >= MIN_SHARE => indices.push(k),
-                found => {
-                    return Err(FitError::Unmatched {
-                        path: measured.path.clone(),
-                        line: mm.line,
-                        message: format!(
-                            "no model mode left that moves {}{} (largest share {:.0} %, need {:.0} %; modes: {})",
-                            mm.label,
-                            if mm.shape.is_empty() {
-                                String::new()
-                            } else {
-                                format!(" / {}", mm.shape.join("+"))
-                            },
-                            100.0 * found.map_or(0.0, |f| f.1),
-                            100.0 * MIN_SHARE,
-                            catalogue()
-                        ),
-                    });
+                share[(row, k)] = s;
+                // a non-finite distance (a mode at 0 Hz) is never within the window
+                allowed[(row, k)] = s >= MIN_SHARE && distance <= window.ln();
+                if allowed[(row, k)] {
+                    cost[(row, k)] = distance - s;
                 }
             }
         }
+        let chosen = assign(&cost);
+        // a measurement the assignment could only give a forbidden pair: no mode it may
+        // match, or every such mode another measurement's
+        for (row, mm) in measured.modes.iter().enumerate() {
+            if allowed[(row, chosen[row])] {
+                continue;
+            }
+            let what = if mm.shape.is_empty() {
+                mm.label.clone()
+            } else {
+                format!("{} / {}", mm.label, mm.shape.join("+"))
+            };
+            let window_text = pendkit_expr::number_text(window);
+            let hz_text = pendkit_expr::number_text(mm.hz);
+            let candidates: Vec<usize> = (0..modes.len()).filter(|&k| allowed[(row, k)]).collect();
+            let message = if candidates.is_empty() {
+                // the mode that moves it most, wherever it is, says what is wrong
+                let best = (0..modes.len())
+                    .max_by(|&a, &b| share[(row, a)].total_cmp(&share[(row, b)]))
+                    .filter(|&k| share[(row, k)] > 0.0);
+                format!(
+                    "no model mode within a factor {window_text} of {hz_text} Hz moves {what} (at least {:.0} % of its kinetic energy){}",
+                    100.0 * MIN_SHARE,
+                    best.map_or_else(String::new, |k| format!(
+                        "; the one that moves it most is {} with {:.0} %",
+                        describe(k),
+                        100.0 * share[(row, k)]
+                    ))
+                )
+            } else {
+                let taken: Vec<String> = candidates
+                    .iter()
+                    .filter_map(|&k| {
+                        let other = chosen.iter().position(|&c| c == k)?;
+                        Some(format!(
+                            "{} by line {}",
+                            describe(k),
+                            measured.modes[other].line
+                        ))
+                    })
+                    .collect();
+                format!(
+                    "no model mode left that moves {what} within a factor {window_text} of {hz_text} Hz: each one that does is another measurement's ({}); a mode is measured once",
+                    taken.join(", ")
+                )
+            };
+            return Err(FitError::Unmatched {
+                path: measured.path.clone(),
+                line: mm.line,
+                message,
+            });
+        }
+        let indices = chosen;
         let overlaps = vec![1.0; indices.len()];
         Ok(MatchedModes::from_indices(result, indices, overlaps))
     }
@@ -1212,7 +1357,7 @@ pub fn fit(
     first
         .check_stable()
         .map_err(|e| FitError::Start(Box::new(e)))?;
-    let matched = MatchedModes::by_label(&first, measured)?;
+    let matched = MatchedModes::by_label_within(&first, measured, options.frequency_window)?;
     let mut state = evaluate(&start, &matched, &first)?;
     let mut solves = 1;
     let scale = scales(&start);
