@@ -116,9 +116,12 @@ pub enum FitError {
     Start(Box<Error>),
     /// The fit did not converge.
     #[error(
-        "the fit did not converge in {iterations} iterations (chi^2 = {chi_squared:.6e}, last values: {values}; damping {damping:.1e})"
+        "{}: the fit did not converge in {iterations} iterations (chi^2 = {chi_squared:.6e}, last values: {values}; damping {damping:.1e})",
+        .path.display()
     )]
     NotConverged {
+        /// The measured modes file fitted to.
+        path: PathBuf,
         /// Iterations made.
         iterations: usize,
         /// χ² at the last accepted values.
@@ -184,8 +187,15 @@ pub struct MeasuredTf {
     pub points: Vec<TfPoint>,
 }
 
+/// `text` without a UTF-8 byte-order mark (which spreadsheet programs write at the start
+/// of a CSV file, and which made line 1's label or number unreadable).
+fn without_bom(text: &str) -> &str {
+    text.strip_prefix('\u{feff}').unwrap_or(text)
+}
+
 /// The data lines of a CSV measurements file: (line number, fields), comments and blank
-/// lines skipped, a header starting with `header` skipped.
+/// lines skipped, a header starting with `header` skipped. Line ends may be LF or CRLF,
+/// and fields may have spaces around them.
 fn data_lines<'a>(text: &'a str, header: &str) -> Vec<(usize, Vec<&'a str>)> {
     let mut lines = Vec::new();
     for (k, raw) in text.lines().enumerate() {
@@ -260,6 +270,7 @@ impl MeasuredModes {
 
     /// Parses the text of a measured modes file read from `path`.
     pub fn parse(path: &Path, text: &str) -> Result<MeasuredModes, FitError> {
+        let text = without_bom(text);
         let modes = data_lines(text, "label")
             .into_iter()
             .map(|(line, fields)| MeasuredMode::from_fields(path, line, &fields))
@@ -346,6 +357,7 @@ impl MeasuredTf {
 
     /// Parses the text of a measured transfer-function file read from `path`.
     pub fn parse(path: &Path, text: &str) -> Result<MeasuredTf, FitError> {
+        let text = without_bom(text);
         let at = line_error(path);
         let data = data_lines(text, "freq_hz");
         let first_data = data.first().map(|(line, _)| *line);
@@ -1383,6 +1395,7 @@ pub fn fit(
         if converged || iterations > options.max_iterations {
             if !converged {
                 return Err(not_converged(
+                    measured,
                     free,
                     &state,
                     iterations - 1,
@@ -1439,7 +1452,7 @@ pub fn fit(
         }
         damping = Some(lambda);
         if !accepted {
-            return Err(not_converged(free, &state, iterations, lambda));
+            return Err(not_converged(measured, free, &state, iterations, lambda));
         }
     }
 }
@@ -1483,9 +1496,34 @@ fn start_values(case: &Case, free: &[String]) -> Result<Vec<f64>, Error> {
         if !value.is_finite() {
             return Err(FitError::NotFinite(format!("start value of '{name}'")).into());
         }
+        refuse_count(case, name, value)?;
         start.push(value);
     }
     Ok(start)
+}
+
+/// Refuses a free parameter `name` (at `value`) that the model takes only at whole or
+/// listed values (a count such as `n_beads`, a switch such as `allowed = [0, 1]`): a fit
+/// moves every parameter continuously, and such a parameter failed later with a Jacobian's
+/// error about a step of −2e-6. A value a millionth away (the sensitivities' step) that the
+/// model refuses is the sign; the parameters' own domains, checked on build, give the
+/// same refusal a continuous parameter's start could only meet at its domain's edge.
+fn refuse_count(case: &Case, name: &str, value: f64) -> Result<(), Error> {
+    let nearby = value + 1e-6 * value.abs().max(1.0);
+    let probe = case
+        .clone()
+        .with_sets(&[format!("{name}={nearby}")])
+        .and_then(|c| c.build());
+    match probe {
+        Ok(_) => Ok(()),
+        Err(e) => Err(FitError::Parameter {
+            name: name.to_string(),
+            message: format!(
+                "{name} is a count or a switch (the model refuses {name} = {nearby}: {e}): counts and switches cannot be fitted; fix it at a value instead"
+            ),
+        }
+        .into()),
+    }
 }
 
 /// The fit's state at `values`: the solution `result`'s |TF| at `tf_freqs` (when `tf` is
@@ -1626,9 +1664,17 @@ fn determined_directions(
     (s_max, determined, c)
 }
 
-/// The fit stopped without converging after `iterations`, at `state` with damping `damping`.
-fn not_converged(free: &[String], state: &State, iterations: usize, damping: f64) -> Error {
+/// The fit to `measured` stopped without converging after `iterations`, at `state` with
+/// damping `damping`.
+fn not_converged(
+    measured: &MeasuredModes,
+    free: &[String],
+    state: &State,
+    iterations: usize,
+    damping: f64,
+) -> Error {
     FitError::NotConverged {
+        path: measured.path.clone(),
         iterations,
         chi_squared: state.chi_squared,
         values: sets(free, &state.values).join(" "),

@@ -311,12 +311,12 @@ fn fits_that_cannot_be_made_say_why() {
             &["m1"],
             "measured.csv:3: no model mode left that moves x3",
         ),
-        // a count has no derivative: the exact Jacobian says which and why
+        // a count cannot be fitted: refused by name before the fit (it was the exact
+        // Jacobian's error about its step)
         (
             "x3,0.4328,0.001\ny3,0.4681,0.001\npitch3,0.4919,0.001\n",
             &["m1", "n_beads"],
-            "sensitivity: the fit's exact Jacobian: 'n_beads' has no derivative: the model \
-             refuses n_beads = ",
+            "free parameter 'n_beads': n_beads is a count or a switch",
         ),
     ];
     for (text, free, expected) in cases {
@@ -339,8 +339,9 @@ fn a_fit_out_of_iterations_says_so_with_its_last_state() {
     let err = fit(&case, &measured, None, &names(&["m1"]), &options).unwrap_err();
     assert!(matches!(err, Error::Fit(FitError::NotConverged { .. })));
     let message = err.to_string();
+    // the file fitted to is named (it was not)
     assert!(
-        message.contains("did not converge") && message.contains("m1="),
+        message.starts_with("synthetic.csv: the fit did not converge") && message.contains("m1="),
         "{message}"
     );
 }
@@ -738,4 +739,48 @@ fn duplicated_measurements_never_share_a_mode() {
         message.starts_with("measured.csv:3: no model mode"),
         "{message}"
     );
+}
+
+/// Old failure: a UTF-8 byte-order mark (which spreadsheet programs write) broke line 1
+/// of the measurement file. It, CRLF line ends and spaces around the fields are accepted.
+#[test]
+fn a_byte_order_mark_crlf_and_spaces_are_accepted() {
+    let clean = MeasuredModes::parse(
+        Path::new("m.csv"),
+        "label,hz,sigma_hz,shape\nx3,0.4328,0.001,x3+x2\ny3,0.4681,0.001\n",
+    )
+    .unwrap();
+    let windows = MeasuredModes::parse(
+        Path::new("m.csv"),
+        "\u{feff}label , hz , sigma_hz , shape\r\n x3 , 0.4328 ,0.001 , x3 + x2 \r\n\ty3,\t0.4681, 0.001\r\n",
+    )
+    .unwrap();
+    assert_eq!(windows, clean);
+    // without a header the mark sat in front of the first label
+    let first = MeasuredModes::parse(Path::new("m.csv"), "\u{feff}x3,0.4328,0.001\r\n").unwrap();
+    assert_eq!(first.modes[0].label, "x3");
+    let tf = pendkit::fit::MeasuredTf::parse(
+        Path::new("tf.csv"),
+        "\u{feff}# input = x00\r\n# output = x3\r\n 1 , 2 , 0.1 \r\n",
+    )
+    .unwrap();
+    assert_eq!((tf.input.as_str(), tf.points[0].abs), ("x00", 2.0));
+}
+
+/// Old failure: `--free n_beads` (a count) or a switch failed with the exact Jacobian's
+/// error about a step of −2e-6; it is refused by name before the fit starts.
+#[test]
+fn counts_and_switches_are_refused_by_name() {
+    let modes = "x3,0.4328,0.001\ny3,0.4681,0.001\npitch3,0.4919,0.001\n";
+    for free in [["m1", "n_beads"], ["wire_terms_early", "m1"]] {
+        let message = fit_error(modes, &free);
+        let name = free.iter().find(|n| **n != "m1").unwrap();
+        let expected =
+            format!("free parameter '{name}': {name} is a count or a switch (the model refuses");
+        assert!(message.starts_with(&expected), "{message}");
+        assert!(
+            message.contains("counts and switches cannot be fitted"),
+            "{message}"
+        );
+    }
 }
