@@ -58,6 +58,7 @@
 use std::path::{Path, PathBuf};
 
 use nalgebra::{DMatrix, DVector};
+use pendkit_params::Domain;
 use pendkit_system::Stage;
 
 use crate::{Case, Error, StageResult, run_stage};
@@ -1373,7 +1374,7 @@ pub fn fit(
     let mut state = evaluate(&start, &matched, &first)?;
     let mut solves = 1;
     let scale = scales(&start);
-    let units = parameter_units(case, free)?;
+    let (units, domains) = parameter_declarations(case, free)?;
     let sigma = sigmas(measured, tf);
     let mut damping: Option<f64> = None;
     let mut iterations = 0;
@@ -1431,7 +1432,8 @@ pub fn fit(
                 .values
                 .iter()
                 .zip(delta.iter().zip(&scale))
-                .map(|(x, (d, sc))| x + d * sc)
+                .zip(&domains)
+                .map(|((&x, (d, sc)), domain)| within(*domain, x, x + d * sc))
                 .collect();
             solves += 1;
             let candidate = solve(case, free, &trial, stage).and_then(|result| {
@@ -1608,14 +1610,58 @@ fn jacobian(
     Ok((jacobian, solves))
 }
 
-/// The unit each of the `free` parameters of `case`'s model declares.
-fn parameter_units(case: &Case, free: &[String]) -> Result<Vec<Option<String>>, Error> {
+/// The unit and the domain each of the `free` parameters of `case`'s model declares.
+fn parameter_declarations(
+    case: &Case,
+    free: &[String],
+) -> Result<(Vec<Option<String>>, Vec<Option<Domain>>), Error> {
     let defaults = pendkit_model::Defaults::of(&*case.model)?;
-    let units: Vec<Option<String>> = free
+    let units = free
         .iter()
         .map(|name| defaults.params.unit(name).map(str::to_string))
         .collect();
-    Ok(units)
+    let domains = free
+        .iter()
+        .map(|name| defaults.params.domain(name))
+        .collect();
+    Ok((units, domains))
+}
+
+/// How far toward the edge of its domain one step may take a parameter: nine tenths of
+/// the way, so that a parameter the data drive toward 0 (a length, a mass) approaches it
+/// in a few shrinking steps instead of leaving the domain in one.
+const TOWARD_EDGE: f64 = 0.9;
+
+/// The value a step from `from` toward `to` takes a parameter with `domain` to: `to`
+/// itself inside the domain, else nine tenths of the way from `from` to the edge it
+/// crosses (the Gauss–Newton step of a length 1.9 times too long, −1.8 of it, would
+/// otherwise make it negative, a value the model refuses and the fit could only back away
+/// from by damping every parameter's step).
+fn within(domain: Option<Domain>, from: f64, to: f64) -> f64 {
+    let Some(domain) = domain else {
+        return to;
+    };
+    if domain.contains(to) {
+        return to;
+    }
+    let edge = match domain {
+        Domain::Positive | Domain::NonNegative => 0.0,
+        Domain::Between(low, high) => {
+            if to <= low {
+                low
+            } else {
+                high
+            }
+        }
+        Domain::Finite => return to,
+    };
+    let shortened = from + TOWARD_EDGE * (edge - from);
+    // a start on the edge itself (0 of a `>= 0` parameter) cannot move past it
+    if domain.contains(shortened) {
+        shortened
+    } else {
+        from
+    }
 }
 
 /// The σ of every measurement, in the order of the residuals: the modes, then the |TF|
