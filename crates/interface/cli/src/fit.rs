@@ -50,6 +50,9 @@ pub struct Args {
     /// then the worst residuals on stderr, and the exit status is 3.
     #[arg(long = "max-reduced-chi2", value_name = "X", default_value_t = 100.0)]
     max_reduced_chi2: f64,
+    /// A measurement matches only a model mode within this factor of its frequency.
+    #[arg(long = "match-window", value_name = "FACTOR", default_value_t = 2.0)]
+    match_window: f64,
     /// Write the fitted case file (TOML) here.
     #[arg(long, value_name = "FILE")]
     out: Option<PathBuf>,
@@ -60,6 +63,19 @@ pub struct Args {
 
 /// Runs the command and returns what it prints.
 pub fn run(a: Args) -> Result<String, CliError> {
+    // said in the flags' terms, before anything is read
+    if a.max_reduced_chi2.is_nan() || a.max_reduced_chi2 <= 0.0 {
+        return Err(CliError::usage(format!(
+            "--max-reduced-chi2 must be positive, got {}",
+            a.max_reduced_chi2
+        )));
+    }
+    if !(a.match_window.is_finite() && a.match_window > 1.0) {
+        return Err(CliError::usage(format!(
+            "--match-window must be a factor above 1, got {}",
+            a.match_window
+        )));
+    }
     let case = Case::open(&a.model)?.with_sets(&a.sets)?;
     let measured = MeasuredModes::read(&a.modes).map_err(pendkit::Error::from)?;
     let tf = match &a.tf {
@@ -70,6 +86,7 @@ pub fn run(a: Args) -> Result<String, CliError> {
         stage: a.stage.unwrap_or(DEFAULT_STAGE),
         jacobian: a.jacobian,
         max_reduced_chi_squared: a.max_reduced_chi2,
+        frequency_window: a.match_window,
         ..FitOptions::default()
     };
     let result = fit(&case, &measured, tf.as_ref(), &a.free, &options)?;

@@ -247,6 +247,24 @@ fn fit_that_cannot_explain_its_data_exits_3_naming_the_worst_residuals() {
         "1e12",
     ]);
     assert_eq!(status, Some(0), "{stderr}");
+    // thresholds that cannot judge are refused in the flags' terms
+    for (flag, value, expected) in [
+        (
+            "--max-reduced-chi2",
+            "0",
+            "error: --max-reduced-chi2 must be positive, got 0",
+        ),
+        (
+            "--match-window",
+            "0.5",
+            "error: --match-window must be a factor above 1, got 0.5",
+        ),
+    ] {
+        let (status, _, stderr) =
+            pendkit_status(&["fit", "quad", "--modes", path, "--free", "m1", flag, value]);
+        assert_eq!(status, Some(1));
+        assert!(stderr.starts_with(expected), "{stderr}");
+    }
     let _ = std::fs::remove_dir_all(&dir);
 }
 
