@@ -685,6 +685,131 @@ pub(crate) fn all_shapes(result: &StageResult) -> DMatrix<f64> {
     })
 }
 
+/// The model coordinates (indices, each once, whatever the order they are named in) that
+/// the measurement `mm`'s label and shape name, and the family its label names if it is
+/// one (then only that family's modes may match); or why they cannot be found.
+/// `families` holds each mode's family.
+fn measured_columns(
+    result: &StageResult,
+    families: &[String],
+    mm: &MeasuredMode,
+) -> Result<(Option<String>, Vec<usize>), String> {
+    let coordinates = &result.modes.coordinates;
+    let label = result.unalias(&mm.label);
+    let family = families.contains(&label) && !coordinates.contains(&label);
+    let mut names: Vec<&str> = mm.shape.iter().map(String::as_str).collect();
+    if !family {
+        names.push(&mm.label);
+    }
+    if names.is_empty() {
+        return Err(format!(
+            "label '{}' is a mode family: give the shape column (the coordinates the mode mostly moves, joined by '+')",
+            mm.label
+        ));
+    }
+    let mut columns = Vec::with_capacity(names.len());
+    for c in names {
+        let native = result.unalias(c);
+        match coordinates.iter().position(|x| *x == native) {
+            Some(k) => columns.push(k),
+            None => {
+                let catalogue: Vec<String> = result
+                    .modes
+                    .modes
+                    .iter()
+                    .zip(families)
+                    .map(|(m, f)| format!("{} {} {:.4} Hz", m.label, f, m.hz))
+                    .collect();
+                return Err(format!(
+                    "'{c}' is neither a variable of the model nor a mode family (variables: {}; modes: {})",
+                    coordinates.join(" "),
+                    catalogue.join(", ")
+                ));
+            }
+        }
+    }
+    // each coordinate once: the label's own coordinate named again in the shape was
+    // counted twice when the two were not adjacent, and the shape's order changed the match
+    columns.sort_unstable();
+    columns.dedup();
+    Ok((family.then_some(label), columns))
+}
+
+/// The first match's measurement × mode tables and the assignment made from them.
+struct Pairs {
+    /// Each mode's kinetic-energy share in each measurement's coordinates.
+    share: DMatrix<f64>,
+    /// Whether the mode may be the measurement's match (share and frequency window).
+    allowed: DMatrix<bool>,
+    /// Each measurement's mode.
+    chosen: Vec<usize>,
+}
+
+impl Pairs {
+    /// Why measurement `row` has no mode: none within the frequency `window` moves its
+    /// coordinates enough (then the mode that moves them most, wherever it is), or every
+    /// one that does is another measurement's (then which, by line).
+    fn why_unmatched(
+        &self,
+        result: &StageResult,
+        families: &[String],
+        measured: &MeasuredModes,
+        row: usize,
+        window: f64,
+    ) -> String {
+        let modes = &result.modes.modes;
+        let describe = |k: usize| {
+            format!(
+                "mode {} ({} {}, {:.4} Hz)",
+                k + 1,
+                modes[k].label,
+                families[k],
+                modes[k].hz
+            )
+        };
+        let mm = &measured.modes[row];
+        let what = if mm.shape.is_empty() {
+            mm.label.clone()
+        } else {
+            format!("{} / {}", mm.label, mm.shape.join("+"))
+        };
+        let window = pendkit_expr::number_text(window);
+        let hz = pendkit_expr::number_text(mm.hz);
+        let candidates: Vec<usize> = (0..modes.len())
+            .filter(|&k| self.allowed[(row, k)])
+            .collect();
+        if candidates.is_empty() {
+            let best = (0..modes.len())
+                .max_by(|&a, &b| self.share[(row, a)].total_cmp(&self.share[(row, b)]))
+                .filter(|&k| self.share[(row, k)] > 0.0);
+            return format!(
+                "no model mode within a factor {window} of {hz} Hz moves {what} (at least {:.0} % of its kinetic energy){}",
+                100.0 * MIN_SHARE,
+                best.map_or_else(String::new, |k| format!(
+                    "; the one that moves it most is {} with {:.0} %",
+                    describe(k),
+                    100.0 * self.share[(row, k)]
+                ))
+            );
+        }
+        let taken: Vec<String> = candidates
+            .iter()
+            .filter_map(|&k| {
+                let other = self.chosen.iter().position(|&c| c == k)?;
+                Some(format!(
+                    "{} by line {}",
+                    describe(k),
+                    measured.modes[other].line
+                ))
+            })
+            .collect();
+        format!(
+            "no model mode left that moves {what} within a factor {window} of {hz} Hz: each one that does is another measurement's ({}); a mode is measured once",
+            taken.join(", ")
+        )
+    }
+}
+
 impl MatchedModes {
     fn from_indices(result: &StageResult, indices: Vec<usize>, overlaps: Vec<f64>) -> Self {
         let modes = &result.modes.modes;
@@ -725,150 +850,67 @@ impl MatchedModes {
         window: f64,
     ) -> Result<Self, FitError> {
         let modes = &result.modes.modes;
-        let coordinates = &result.modes.coordinates;
-        let families: Vec<String> = modes.iter().map(|m| result.mode_family(m)).collect();
-        let describe = |k: usize| {
-            format!(
-                "mode {} ({} {}, {:.4} Hz)",
-                k + 1,
-                modes[k].label,
-                families[k],
-                modes[k].hz
-            )
-        };
-        let catalogue = || {
-            modes
-                .iter()
-                .zip(&families)
-                .map(|(m, f)| format!("{} {} {:.4} Hz", m.label, f, m.hz))
-                .collect::<Vec<_>>()
-                .join(", ")
+        let file_error = |message: String| FitError::File {
+            path: measured.path.clone(),
+            message,
         };
         if !(window.is_finite() && window > 1.0) {
-            return Err(FitError::File {
-                path: measured.path.clone(),
-                message: format!("the frequency window must be a factor above 1, got {window}"),
-            });
+            return Err(file_error(format!(
+                "the frequency window must be a factor above 1, got {window}"
+            )));
         }
         if measured.modes.len() > modes.len() {
-            return Err(FitError::File {
-                path: measured.path.clone(),
-                message: format!(
-                    "{} measured modes, but the model has {} modes: each measurement is a different mode",
-                    measured.modes.len(),
-                    modes.len()
-                ),
-            });
+            return Err(file_error(format!(
+                "{} measured modes, but the model has {} modes: each measurement is a different mode",
+                measured.modes.len(),
+                modes.len()
+            )));
         }
-        let is_family = |label: &str| families.iter().any(|f| f == label);
+        let families: Vec<String> = modes.iter().map(|m| result.mode_family(m)).collect();
         // per measurement and model mode: the mode's kinetic-energy share in the
-        // measurement's coordinates, and whether it may be its match at all
-        let mut share = DMatrix::zeros(measured.modes.len(), modes.len());
-        let mut allowed = DMatrix::from_element(measured.modes.len(), modes.len(), false);
+        // measurement's coordinates, whether it may be its match at all, and the cost
+        let mut pairs = Pairs {
+            share: DMatrix::zeros(measured.modes.len(), modes.len()),
+            allowed: DMatrix::from_element(measured.modes.len(), modes.len(), false),
+            chosen: Vec::new(),
+        };
         let mut cost = DMatrix::from_element(measured.modes.len(), modes.len(), FORBIDDEN);
         for (row, mm) in measured.modes.iter().enumerate() {
-            let unmatched = |message: String| FitError::Unmatched {
-                path: measured.path.clone(),
-                line: mm.line,
-                message,
-            };
-            let label = result.unalias(&mm.label);
-            let family = is_family(&label) && !coordinates.contains(&label);
-            let mut names: Vec<&str> = mm.shape.iter().map(String::as_str).collect();
-            if !family {
-                names.push(&mm.label);
-            }
-            if names.is_empty() {
-                return Err(unmatched(format!(
-                    "label '{}' is a mode family: give the shape column (the coordinates the mode mostly moves, joined by '+')",
-                    mm.label
-                )));
-            }
-            let mut columns = Vec::with_capacity(names.len());
-            for c in names {
-                let native = result.unalias(c);
-                match coordinates.iter().position(|x| *x == native) {
-                    Some(k) => columns.push(k),
-                    None => {
-                        return Err(unmatched(format!(
-                            "'{c}' is neither a variable of the model nor a mode family (variables: {}; modes: {})",
-                            coordinates.join(" "),
-                            catalogue()
-                        )));
-                    }
-                }
-            }
-            // each coordinate once, whatever the order it is named in (the label's own
-            // coordinate repeated in the shape was counted twice when not adjacent)
-            columns.sort_unstable();
-            columns.dedup();
-            for k in (0..modes.len()).filter(|&k| !family || families[k] == label) {
-                let s: f64 = columns
+            let (family, columns) =
+                measured_columns(result, &families, mm).map_err(|message| FitError::Unmatched {
+                    path: measured.path.clone(),
+                    line: mm.line,
+                    message,
+                })?;
+            for k in (0..modes.len()).filter(|&k| family.as_ref().is_none_or(|f| families[k] == *f))
+            {
+                let share: f64 = columns
                     .iter()
                     .map(|&c| modes[k].energy_fractions.get(c).copied().unwrap_or(0.0))
                     .sum();
                 let distance = (modes[k].hz.abs() / mm.hz).ln().abs();
-                share[(row, k)] = s;
+                pairs.share[(row, k)] = share;
                 // a non-finite distance (a mode at 0 Hz) is never within the window
-                allowed[(row, k)] = s >= MIN_SHARE && distance <= window.ln();
-                if allowed[(row, k)] {
-                    cost[(row, k)] = distance - s;
+                let allowed = share >= MIN_SHARE && distance <= window.ln();
+                pairs.allowed[(row, k)] = allowed;
+                if allowed {
+                    cost[(row, k)] = distance - share;
                 }
             }
         }
-        let chosen = assign(&cost);
+        pairs.chosen = assign(&cost);
         // a measurement the assignment could only give a forbidden pair: no mode it may
         // match, or every such mode another measurement's
-        for (row, mm) in measured.modes.iter().enumerate() {
-            if allowed[(row, chosen[row])] {
-                continue;
-            }
-            let what = if mm.shape.is_empty() {
-                mm.label.clone()
-            } else {
-                format!("{} / {}", mm.label, mm.shape.join("+"))
-            };
-            let window_text = pendkit_expr::number_text(window);
-            let hz_text = pendkit_expr::number_text(mm.hz);
-            let candidates: Vec<usize> = (0..modes.len()).filter(|&k| allowed[(row, k)]).collect();
-            let message = if candidates.is_empty() {
-                // the mode that moves it most, wherever it is, says what is wrong
-                let best = (0..modes.len())
-                    .max_by(|&a, &b| share[(row, a)].total_cmp(&share[(row, b)]))
-                    .filter(|&k| share[(row, k)] > 0.0);
-                format!(
-                    "no model mode within a factor {window_text} of {hz_text} Hz moves {what} (at least {:.0} % of its kinetic energy){}",
-                    100.0 * MIN_SHARE,
-                    best.map_or_else(String::new, |k| format!(
-                        "; the one that moves it most is {} with {:.0} %",
-                        describe(k),
-                        100.0 * share[(row, k)]
-                    ))
-                )
-            } else {
-                let taken: Vec<String> = candidates
-                    .iter()
-                    .filter_map(|&k| {
-                        let other = chosen.iter().position(|&c| c == k)?;
-                        Some(format!(
-                            "{} by line {}",
-                            describe(k),
-                            measured.modes[other].line
-                        ))
-                    })
-                    .collect();
-                format!(
-                    "no model mode left that moves {what} within a factor {window_text} of {hz_text} Hz: each one that does is another measurement's ({}); a mode is measured once",
-                    taken.join(", ")
-                )
-            };
+        if let Some(row) =
+            (0..measured.modes.len()).find(|&row| !pairs.allowed[(row, pairs.chosen[row])])
+        {
             return Err(FitError::Unmatched {
                 path: measured.path.clone(),
-                line: mm.line,
-                message,
+                line: measured.modes[row].line,
+                message: pairs.why_unmatched(result, &families, measured, row, window),
             });
         }
-        let indices = chosen;
+        let indices = pairs.chosen;
         let overlaps = vec![1.0; indices.len()];
         Ok(MatchedModes::from_indices(result, indices, overlaps))
     }
@@ -1340,16 +1382,7 @@ pub fn fit(
     free: &[String],
     options: &FitOptions,
 ) -> Result<FitResult, Error> {
-    let threshold = options.max_reduced_chi_squared;
-    // NaN would make every verdict false, 0 every fit with noise a failure
-    if threshold.is_nan() || threshold <= 0.0 {
-        return Err(Error::Argument {
-            function: "fit",
-            argument: "options.max_reduced_chi_squared",
-            expected: "positive".into(),
-            given: threshold.to_string(),
-        });
-    }
+    check_options(options)?;
     let start = start_values(case, free)?;
     let n_data = measured.modes.len() + tf.map_or(0, |t| t.points.len());
     if n_data <= free.len() {
@@ -1374,7 +1407,7 @@ pub fn fit(
     let mut state = evaluate(&start, &matched, &first)?;
     let mut solves = 1;
     let scale = scales(&start);
-    let (units, domains) = parameter_declarations(case, free)?;
+    let Declarations { units, domains } = parameter_declarations(case, free)?;
     let sigma = sigmas(measured, tf);
     let mut damping: Option<f64> = None;
     let mut iterations = 0;
@@ -1428,13 +1461,7 @@ pub fn fit(
             for (&i, ci) in determined.iter().zip(&c) {
                 delta -= v_t.row(i).transpose() * (s[i] * ci / (s[i] * s[i] + lambda));
             }
-            let trial: Vec<f64> = state
-                .values
-                .iter()
-                .zip(delta.iter().zip(&scale))
-                .zip(&domains)
-                .map(|((&x, (d, sc)), domain)| within(*domain, x, x + d * sc))
-                .collect();
+            let trial = stepped(&state.values, &delta, &scale, &domains);
             solves += 1;
             let candidate = solve(case, free, &trial, stage).and_then(|result| {
                 result.check_stable()?;
@@ -1457,6 +1484,34 @@ pub fn fit(
             return Err(not_converged(measured, free, &state, iterations, lambda));
         }
     }
+}
+
+/// Refuses options that cannot judge a fit or match a measurement.
+fn check_options(options: &FitOptions) -> Result<(), Error> {
+    let refuse = |argument, expected: &str, given: f64| Error::Argument {
+        function: "fit",
+        argument,
+        expected: expected.into(),
+        given: given.to_string(),
+    };
+    let threshold = options.max_reduced_chi_squared;
+    // NaN would make every verdict false, 0 every fit with noise a failure
+    if threshold.is_nan() || threshold <= 0.0 {
+        return Err(refuse(
+            "options.max_reduced_chi_squared",
+            "positive",
+            threshold,
+        ));
+    }
+    let window = options.frequency_window;
+    if !(window.is_finite() && window > 1.0) {
+        return Err(refuse(
+            "options.frequency_window",
+            "a factor above 1",
+            window,
+        ));
+    }
+    Ok(())
 }
 
 /// The start values of the `free` parameters of `case`: each a parameter of its model, read
@@ -1610,21 +1665,41 @@ fn jacobian(
     Ok((jacobian, solves))
 }
 
+/// What the model declares of each free parameter: its unit and its domain.
+struct Declarations {
+    units: Vec<Option<String>>,
+    domains: Vec<Option<Domain>>,
+}
+
 /// The unit and the domain each of the `free` parameters of `case`'s model declares.
-fn parameter_declarations(
-    case: &Case,
-    free: &[String],
-) -> Result<(Vec<Option<String>>, Vec<Option<Domain>>), Error> {
+fn parameter_declarations(case: &Case, free: &[String]) -> Result<Declarations, Error> {
     let defaults = pendkit_model::Defaults::of(&*case.model)?;
-    let units = free
+    Ok(Declarations {
+        units: free
+            .iter()
+            .map(|name| defaults.params.unit(name).map(str::to_string))
+            .collect(),
+        domains: free
+            .iter()
+            .map(|name| defaults.params.domain(name))
+            .collect(),
+    })
+}
+
+/// The parameters `values` after the step `delta` in relative units (times `scale`), each
+/// kept inside its domain ([`within`]).
+fn stepped(
+    values: &[f64],
+    delta: &DVector<f64>,
+    scale: &[f64],
+    domains: &[Option<Domain>],
+) -> Vec<f64> {
+    values
         .iter()
-        .map(|name| defaults.params.unit(name).map(str::to_string))
-        .collect();
-    let domains = free
-        .iter()
-        .map(|name| defaults.params.domain(name))
-        .collect();
-    Ok((units, domains))
+        .zip(delta.iter().zip(scale))
+        .zip(domains)
+        .map(|((&x, (d, sc)), domain)| within(*domain, x, x + d * sc))
+        .collect()
 }
 
 /// How far toward the edge of its domain one step may take a parameter: nine tenths of
