@@ -191,7 +191,7 @@ fn table(case: &Case, stage: Stage, r: &FitResult, tf: Option<&MeasuredTf>) -> S
     let mut out = String::new();
     let _ = writeln!(
         out,
-        "{} ({}), stage {}: {} modes{} fitted with {} free parameters in {} iterations ({} model solutions, {})",
+        "{} ({}), stage {}: {} modes{} fitted with {} free parameters in {} iterations{} ({} model solutions, {})",
         case.name,
         case.model.name(),
         stage,
@@ -204,6 +204,11 @@ fn table(case: &Case, stage: Stage, r: &FitResult, tf: Option<&MeasuredTf>) -> S
         )),
         r.parameters.len(),
         r.iterations,
+        match r.restarts {
+            0 => String::new(),
+            1 => ", restarted once".to_string(),
+            n => format!(", restarted {n} times"),
+        },
         r.solves,
         match r.jacobian {
             pendkit::fit::JacobianMethod::Exact => "exact Jacobian",

@@ -1250,6 +1250,10 @@ pub struct FitResult {
     /// Model solutions made (an exact Jacobian counts as one, plus four per free parameter
     /// for its |TF| rows).
     pub solves: usize,
+    /// How many times the fit started again from where it had got to, its measurements
+    /// matched afresh (0 when the first descent converged and explains the data); the
+    /// iterations and solutions count every start.
+    pub restarts: usize,
     /// How the Jacobian was computed.
     pub jacobian: JacobianMethod,
 }
@@ -1354,14 +1358,19 @@ fn residual_error(measured: &MeasuredModes, tf: Option<&MeasuredTf>, i: usize, r
 /// What is fitted to what: the measurements, the free parameters, their start values,
 /// scales and units, and how the Jacobian was computed.
 struct Problem<'a> {
+    case: &'a Case,
+    options: &'a FitOptions,
     measured: &'a MeasuredModes,
     tf: Option<&'a MeasuredTf>,
     free: &'a [String],
     start: Vec<f64>,
     scale: Vec<f64>,
     units: Vec<Option<String>>,
-    jacobian: JacobianMethod,
-    max_reduced_chi_squared: f64,
+    domains: Vec<Option<Domain>>,
+    /// The σ of every measurement, modes then |TF| points.
+    sigma: Vec<f64>,
+    /// The |TF| points' frequencies (Hz).
+    tf_freqs: Vec<f64>,
 }
 
 /// One point of the fit: the solution, its matched modes and residuals.
@@ -1392,31 +1401,127 @@ pub fn fit(
         }
         .into());
     }
-    let stage = options.stage;
-    let tf_freqs: Vec<f64> =
-        tf.map_or_else(Vec::new, |t| t.points.iter().map(|p| p.freq_hz).collect());
-    let evaluate = |values: &[f64], matched: &MatchedModes, result: &StageResult| {
-        state_at(measured, tf, &tf_freqs, values, matched, result)
-    };
-
-    let first = solve(case, free, &start, stage).map_err(|e| FitError::Start(Box::new(e)))?;
-    first
-        .check_stable()
-        .map_err(|e| FitError::Start(Box::new(e)))?;
-    let matched = MatchedModes::by_label_within(&first, measured, options.frequency_window)?;
-    let mut state = evaluate(&start, &matched, &first)?;
-    let mut solves = 1;
-    let scale = scales(&start);
     let Declarations { units, domains } = parameter_declarations(case, free)?;
-    let sigma = sigmas(measured, tf);
+    let problem = Problem {
+        case,
+        options,
+        measured,
+        tf,
+        free,
+        scale: scales(&start),
+        start,
+        units,
+        domains,
+        sigma: sigmas(measured, tf),
+        tf_freqs: tf.map_or_else(Vec::new, |t| t.points.iter().map(|p| p.freq_hz).collect()),
+    };
+    let mut counts = (0, 0);
+    let mut outcome = descend(&problem, &problem.start, &mut counts, true)?;
+    // Restarts: a descent that stalls, or ends where it cannot explain the data, starts
+    // again from where it got to, with its measurements matched afresh there and the
+    // damping reset. Followed by overlap across large steps, a mode can be taken for
+    // another that crosses it; re-matched by label the match is right again. On the quad,
+    // 20 free parameters 20 % off, 24 noise-free modes: 26 of 30 sign patterns converged
+    // at once, 29 with the restarts (the last one ends in a minimum with χ²/dof 10⁴).
+    for restart in 1..=RESTARTS {
+        let values = match &outcome {
+            Outcome::Converged(result) if result.explains_data => break,
+            Outcome::Converged(result) => result.parameters.iter().map(|p| p.value).collect(),
+            Outcome::Stalled { state, .. } => state.values.clone(),
+        };
+        let Ok(next) = descend(&problem, &values, &mut counts, false) else {
+            // a start the model or the matcher refuses: what the last descent found stands
+            break;
+        };
+        outcome = match (outcome, next) {
+            // a converged fit is kept unless a later one fits better
+            (Outcome::Converged(old), Outcome::Converged(new))
+                if old.chi_squared <= new.chi_squared =>
+            {
+                Outcome::Converged(old)
+            }
+            (Outcome::Converged(old), Outcome::Stalled { .. }) => Outcome::Converged(old),
+            (_, next) => next,
+        };
+        if let Outcome::Converged(result) = &mut outcome {
+            result.restarts = restart;
+        }
+    }
+    match outcome {
+        Outcome::Converged(mut result) => {
+            (result.iterations, result.solves) = counts;
+            Ok(result)
+        }
+        Outcome::Stalled { state, damping } => Err(not_converged(
+            measured,
+            problem.free,
+            &state,
+            counts.0,
+            damping,
+        )),
+    }
+}
+
+/// How many times a fit that stalls or cannot explain its data starts again from where it
+/// got to (see [`fit`]); each start may take [`FitOptions::max_iterations`].
+const RESTARTS: usize = 3;
+
+/// How one descent ended: converged, or stalled at `state` (out of iterations, or no step
+/// that lowers χ²) with Levenberg's damping at `damping`.
+enum Outcome {
+    Converged(FitResult),
+    Stalled { state: State, damping: f64 },
+}
+
+/// One Levenberg–Marquardt descent of `problem` from `values`, its measurements matched by
+/// label there; adds its (iterations, solves) to `counts`. An error at the start names the
+/// start values as such when `first` (the user's start), not when a restart's.
+fn descend(
+    problem: &Problem,
+    values: &[f64],
+    counts: &mut (usize, usize),
+    first: bool,
+) -> Result<Outcome, Error> {
+    let Problem {
+        case,
+        options,
+        measured,
+        tf,
+        free,
+        ..
+    } = *problem;
+    let stage = options.stage;
+    let evaluate = |values: &[f64], matched: &MatchedModes, result: &StageResult| {
+        state_at(measured, tf, &problem.tf_freqs, values, matched, result)
+    };
+    let at_start = |e: Error| -> Error {
+        if first {
+            FitError::Start(Box::new(e)).into()
+        } else {
+            e
+        }
+    };
+    let solution = solve(case, free, values, stage).map_err(at_start)?;
+    solution.check_stable().map_err(at_start)?;
+    counts.1 += 1;
+    let matched = MatchedModes::by_label_within(&solution, measured, options.frequency_window)?;
+    let mut state = evaluate(values, &matched, &solution)?;
+    let n_data = problem.sigma.len();
     let mut damping: Option<f64> = None;
     let mut iterations = 0;
     loop {
         // the weighted Jacobian in relative parameter units: rows / σ, columns × scale
-        let (jacobian, jacobian_solves) = jacobian(case, options, free, &state, tf, &tf_freqs)?;
-        solves += jacobian_solves;
+        let (jacobian, jacobian_solves) =
+            jacobian(case, options, free, &state, tf, &problem.tf_freqs)?;
+        counts.1 += jacobian_solves;
         iterations += 1;
-        let svd = weighted_svd(&jacobian, &sigma, &scale, n_data, free.len())?;
+        let svd = weighted_svd(
+            &jacobian,
+            &problem.sigma,
+            &problem.scale,
+            n_data,
+            free.len(),
+        )?;
         let (Some(u), Some(v_t)) = (svd.u.as_ref(), svd.v_t.as_ref()) else {
             return Err(FitError::NotFinite("the SVD of the Jacobian".into()).into());
         };
@@ -1427,32 +1532,13 @@ pub fn fit(
         let gain: f64 = c.iter().map(|x| x * x).sum();
         let converged = gain <= 1e-9 * state.chi_squared.max(1.0);
         if converged || iterations > options.max_iterations {
+            counts.0 += iterations - usize::from(!converged);
             if !converged {
-                return Err(not_converged(
-                    measured,
-                    free,
-                    &state,
-                    iterations - 1,
-                    damping.unwrap_or(0.0),
-                ));
+                let damping = damping.unwrap_or(0.0);
+                return Ok(Outcome::Stalled { state, damping });
             }
-            let problem = Problem {
-                measured,
-                tf,
-                free,
-                start,
-                scale,
-                units,
-                jacobian: options.jacobian,
-                max_reduced_chi_squared: options.max_reduced_chi_squared,
-            };
-            return Ok(finish(
-                &problem,
-                &state,
-                &svd,
-                &determined,
-                (iterations, solves),
-            ));
+            let result = finish(problem, &state, &svd, &determined, *counts);
+            return Ok(Outcome::Converged(result));
         }
         let mut lambda = damping.unwrap_or(1e-3 * s_max * s_max);
         let mut accepted = false;
@@ -1461,8 +1547,8 @@ pub fn fit(
             for (&i, ci) in determined.iter().zip(&c) {
                 delta -= v_t.row(i).transpose() * (s[i] * ci / (s[i] * s[i] + lambda));
             }
-            let trial = stepped(&state.values, &delta, &scale, &domains);
-            solves += 1;
+            let trial = stepped(&state.values, &delta, &problem.scale, &problem.domains);
+            counts.1 += 1;
             let candidate = solve(case, free, &trial, stage).and_then(|result| {
                 result.check_stable()?;
                 let matched = state.matched.follow(&result)?;
@@ -1481,7 +1567,11 @@ pub fn fit(
         }
         damping = Some(lambda);
         if !accepted {
-            return Err(not_converged(measured, free, &state, iterations, lambda));
+            counts.0 += iterations;
+            return Ok(Outcome::Stalled {
+                state,
+                damping: lambda,
+            });
         }
     }
 }
@@ -1868,15 +1958,16 @@ fn finish(
     counts: (usize, usize),
 ) -> FitResult {
     let Problem {
+        options,
         measured,
         tf,
         free,
         start,
         scale,
         units,
-        jacobian,
-        max_reduced_chi_squared,
+        ..
     } = problem;
+    let max_reduced_chi_squared = &options.max_reduced_chi_squared;
     let (iterations, solves) = counts;
     let n = free.len();
     let s = &svd.singular_values;
@@ -1962,6 +2053,7 @@ fn finish(
         undetermined,
         iterations,
         solves,
-        jacobian: *jacobian,
+        restarts: 0,
+        jacobian: options.jacobian,
     }
 }
