@@ -15,12 +15,13 @@
 //! - `shape` (optional): more coordinates the mode mostly moves, joined by `+`
 //!   (`yaw1+yaw3`); needed with a family label.
 //!
-//! Each measurement is matched to the model mode (at the start values) with the largest
-//! share of kinetic energy in its label's and shape's coordinates less the distance in log
-//! frequency |ln(f_model/f_measured)|, not by order (modes that move the same coordinates go
-//! to the nearest frequencies), and each model mode is matched once ([`MatchedModes::by_label`]). From then on each matched mode is
-//! followed by the overlap of its shape ([`MatchedModes::follow`]), so that modes that cross
-//! in frequency keep their identity.
+//! All measurements are matched at once to distinct model modes (at the start values) by
+//! optimal assignment: a mode with at least 10 % of its kinetic energy in the coordinates
+//! a measurement's label and shape name (each once, in any order), within a factor
+//! [`FitOptions::frequency_window`] in frequency, the sum of the distances in log
+//! frequency less the shares as small as it can be ([`MatchedModes::by_label_within`]).
+//! From then on each matched mode is followed by the overlap of its shape
+//! ([`MatchedModes::follow`]), so that modes that cross in frequency keep their identity.
 //!
 //! # Measured transfer-function file
 //!
@@ -40,6 +41,13 @@
 //! square roots of the diagonal of the covariance (JᵀWJ)⁺ on the determined directions,
 //! *not* scaled by χ²/dof: they are what the stated σ imply; the reduced χ² says whether
 //! the σ and the model agree with the scatter.
+//!
+//! A step that would leave a parameter's declared domain stops nine tenths of the way to
+//! its edge. A descent that stalls, or ends where it cannot explain its data, starts again
+//! from where it got to, its measurements matched afresh (up to three times). The result's
+//! verdict, [`FitResult::explains_data`], is χ²/dof ≤
+//! [`FitOptions::max_reduced_chi_squared`]: a fit that misses its data by more determines
+//! nothing.
 //!
 //! # The Jacobian
 //!
@@ -834,7 +842,7 @@ impl MatchedModes {
     }
 
     /// The first match: all measured modes at once to distinct model modes, by optimal
-    /// assignment ([`assign`]). A measurement may match a mode that has at least 10 % of
+    /// assignment (the Hungarian method). A measurement may match a mode that has at least 10 % of
     /// its kinetic energy in the coordinates the measurement's label and shape name (for a
     /// family label, a mode of that family, by its shape's coordinates) and whose frequency
     /// is within a factor `window` of the measured one; among those the assignment
