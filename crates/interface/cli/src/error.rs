@@ -37,7 +37,24 @@ pub enum CliError {
     /// Standard output could not be written (not a closed pipe, which is no error).
     #[error("cannot write the output to stdout: {0}")]
     Stdout(std::io::Error),
+    /// A fit that ran but does not explain its data: its results (`output`) are printed
+    /// as a success's would be, then `message`, and the exit status is
+    /// [`EXIT_UNEXPLAINED`].
+    #[error("{message}")]
+    Unexplained {
+        /// What the command prints.
+        output: String,
+        /// The verdict, naming the worst residuals.
+        message: String,
+    },
 }
+
+/// The exit status of a command that failed (docs/cli.md, "Exit statuses and errors").
+pub const EXIT_FAILURE: u8 = 1;
+
+/// The exit status of a fit that does not explain its data: its results are printed, but
+/// a script must not take them for a determination.
+pub const EXIT_UNEXPLAINED: u8 = 3;
 
 impl From<pendkit::export::FileError> for CliError {
     fn from(e: pendkit::export::FileError) -> Self {
@@ -70,6 +87,14 @@ fn in_flag_terms(e: &pendkit::Error) -> String {
 }
 
 impl CliError {
+    /// The exit status this error ends the program with.
+    pub fn exit_status(&self) -> u8 {
+        match self {
+            CliError::Unexplained { .. } => EXIT_UNEXPLAINED,
+            _ => EXIT_FAILURE,
+        }
+    }
+
     /// A usage error from anything printable.
     pub fn usage(message: impl Into<String>) -> Self {
         CliError::Usage(message.into())

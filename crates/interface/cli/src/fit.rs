@@ -46,6 +46,13 @@ pub struct Args {
     /// re-solved model).
     #[arg(long, value_name = "METHOD", default_value = "exact")]
     jacobian: pendkit::fit::JacobianMethod,
+    /// Above this chi^2/dof the fit does not explain its data: the results are printed,
+    /// then the worst residuals on stderr, and the exit status is 3.
+    #[arg(long = "max-reduced-chi2", value_name = "X", default_value_t = 100.0)]
+    max_reduced_chi2: f64,
+    /// A measurement matches only a model mode within this factor of its frequency.
+    #[arg(long = "match-window", value_name = "FACTOR", default_value_t = 2.0)]
+    match_window: f64,
     /// Write the fitted case file (TOML) here.
     #[arg(long, value_name = "FILE")]
     out: Option<PathBuf>,
@@ -56,6 +63,19 @@ pub struct Args {
 
 /// Runs the command and returns what it prints.
 pub fn run(a: Args) -> Result<String, CliError> {
+    // said in the flags' terms, before anything is read
+    if a.max_reduced_chi2.is_nan() || a.max_reduced_chi2 <= 0.0 {
+        return Err(CliError::usage(format!(
+            "--max-reduced-chi2 must be positive, got {}",
+            a.max_reduced_chi2
+        )));
+    }
+    if !(a.match_window.is_finite() && a.match_window > 1.0) {
+        return Err(CliError::usage(format!(
+            "--match-window must be a factor above 1, got {}",
+            a.match_window
+        )));
+    }
     let case = Case::open(&a.model)?.with_sets(&a.sets)?;
     let measured = MeasuredModes::read(&a.modes).map_err(pendkit::Error::from)?;
     let tf = match &a.tf {
@@ -65,6 +85,8 @@ pub fn run(a: Args) -> Result<String, CliError> {
     let options = FitOptions {
         stage: a.stage.unwrap_or(DEFAULT_STAGE),
         jacobian: a.jacobian,
+        max_reduced_chi_squared: a.max_reduced_chi2,
+        frequency_window: a.match_window,
         ..FitOptions::default()
     };
     let result = fit(&case, &measured, tf.as_ref(), &a.free, &options)?;
@@ -82,13 +104,55 @@ pub fn run(a: Args) -> Result<String, CliError> {
             "fit": result,
             "written": written,
         });
-        return Ok(serde_json::to_string_pretty(&out).unwrap_or_default() + "\n");
+        let text = serde_json::to_string_pretty(&out).unwrap_or_default() + "\n";
+        return with_verdict(text, &result, &a);
     }
     let mut out = table(&case, options.stage, &result, tf.as_ref());
     if let Some(path) = written {
         let _ = writeln!(out, "\nwrote {}", path.display());
     }
-    Ok(out)
+    with_verdict(out, &result, &a)
+}
+
+/// How many of the largest residuals the verdict names.
+const WORST_NAMED: usize = 3;
+
+/// The printed results `output`, or, when the fit does not explain its data, the error
+/// that prints them and then names the worst residuals (exit status 3): a script must not
+/// go on with a fit whose numbers look right and are not.
+fn with_verdict(output: String, r: &FitResult, a: &Args) -> Result<String, CliError> {
+    if r.explains_data {
+        return Ok(output);
+    }
+    let at = |path: &Path, line: usize| format!("{}:{line}", path.display());
+    // (what, where, (m - f)/σ) of every measurement, largest |(m - f)/σ| first
+    let mut residuals: Vec<(String, String, f64)> = r
+        .modes
+        .iter()
+        .map(|m| (m.label.clone(), at(&a.modes, m.line), m.normalized))
+        .collect();
+    if let Some(tf) = &a.tf {
+        residuals.extend(r.tf.iter().map(|t| {
+            let what = format!("|TF| at {} Hz", sci(t.freq_hz, 4, 0));
+            (what, at(tf, t.line), t.normalized)
+        }));
+    }
+    residuals.sort_by(|x, y| y.2.abs().total_cmp(&x.2.abs()));
+    let worst: Vec<String> = residuals
+        .iter()
+        .take(WORST_NAMED)
+        .map(|(what, place, n)| format!("{what} ({place}) {}", normalized(*n).trim()))
+        .collect();
+    Err(CliError::Unexplained {
+        output,
+        message: format!(
+            "the fit does not explain its data: chi^2/dof = {} is above {} (--max-reduced-chi2); worst residuals (m-f)/s: {}",
+            r.reduced_chi_squared
+                .map_or_else(|| "-".to_string(), |x| sci(x, 3, 0)),
+            pendkit::expr::number_text(r.max_reduced_chi_squared),
+            worst.join(", ")
+        ),
+    })
 }
 
 /// What the written case file names as its model: the bundled model's name, or the
@@ -127,7 +191,7 @@ fn table(case: &Case, stage: Stage, r: &FitResult, tf: Option<&MeasuredTf>) -> S
     let mut out = String::new();
     let _ = writeln!(
         out,
-        "{} ({}), stage {}: {} modes{} fitted with {} free parameters in {} iterations ({} model solutions, {})",
+        "{} ({}), stage {}: {} modes{} fitted with {} free parameters in {} iterations{} ({} model solutions, {})",
         case.name,
         case.model.name(),
         stage,
@@ -140,6 +204,11 @@ fn table(case: &Case, stage: Stage, r: &FitResult, tf: Option<&MeasuredTf>) -> S
         )),
         r.parameters.len(),
         r.iterations,
+        match r.restarts {
+            0 => String::new(),
+            1 => ", restarted once".to_string(),
+            n => format!(", restarted {n} times"),
+        },
         r.solves,
         match r.jacobian {
             pendkit::fit::JacobianMethod::Exact => "exact Jacobian",
@@ -242,7 +311,20 @@ fn residual_tables(out: &mut String, r: &FitResult) {
 /// Whether every parameter is determined (the singular values' range), or the
 /// combinations that are not.
 fn determination(out: &mut String, r: &FitResult) {
+    if !r.explains_data {
+        // a fit that misses its data determines nothing, whatever the singular values say
+        let _ = writeln!(
+            out,
+            "\nthe parameters are not determined: the fit does not explain its data (chi^2/dof {} above {}); the values are the model's best compromise and the uncertainties do not hold",
+            r.reduced_chi_squared
+                .map_or_else(|| "-".to_string(), |x| sci(x, 3, 0)),
+            pendkit::expr::number_text(r.max_reduced_chi_squared),
+        );
+    }
     if r.undetermined.is_empty() {
+        if !r.explains_data {
+            return;
+        }
         let _ = writeln!(
             out,
             "\nevery parameter is determined (singular values {} to {})",

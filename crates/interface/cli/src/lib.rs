@@ -250,11 +250,23 @@ pub fn main() -> ExitCode {
         eprintln!("error: interrupted");
         std::process::exit(130);
     });
-    match run(cli).and_then(output::print) {
+    let printed = match run(cli) {
+        Ok(output) => output::print(output),
+        // results whose verdict fails (a fit that does not explain its data): printed in
+        // full, then the verdict as the error line
+        Err(CliError::Unexplained { output, message }) => {
+            output::print(Output::Text(output)).and(Err(CliError::Unexplained {
+                output: String::new(),
+                message,
+            }))
+        }
+        Err(e) => Err(e),
+    };
+    match printed {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e}");
-            ExitCode::FAILURE
+            ExitCode::from(e.exit_status())
         }
     }
 }

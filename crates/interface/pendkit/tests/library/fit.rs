@@ -40,9 +40,14 @@ impl Normal {
 /// Gaussian noise of that σ.
 fn synthetic(sets: &[&str], relative_sigma: f64, seed: u64) -> MeasuredModes {
     let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
-    let case = Case::model("quad").unwrap().with_sets(&sets).unwrap();
+    synthetic_modes(&sets, relative_sigma, Some(seed))
+}
+
+/// [`synthetic`], with the noise from `seed`, or none.
+fn synthetic_modes(sets: &[String], relative_sigma: f64, seed: Option<u64>) -> MeasuredModes {
+    let case = Case::model("quad").unwrap().with_sets(sets).unwrap();
     let r = run_stage(case.build().unwrap().0, Stage::S2).unwrap();
-    let mut rng = Normal(seed);
+    let mut rng = seed.map(Normal);
     let modes = r
         .modes
         .modes
@@ -54,7 +59,7 @@ fn synthetic(sets: &[&str], relative_sigma: f64, seed: u64) -> MeasuredModes {
             let sigma = relative_sigma * m.hz;
             MeasuredMode {
                 label: m.label.clone(),
-                hz: m.hz + sigma * rng.sample(),
+                hz: m.hz + sigma * rng.as_mut().map_or(0.0, Normal::sample),
                 sigma_hz: sigma,
                 shape: order[..3]
                     .iter()
@@ -121,6 +126,8 @@ fn recovers_five_quad_parameters_and_leaves_a_loss_angle_undetermined() {
     assert_eq!(result.dof, 19);
     let reduced = result.reduced_chi_squared.unwrap();
     assert!((0.285..2.306).contains(&reduced), "χ²/dof = {reduced}");
+    assert!(result.explains_data);
+    assert_eq!(result.max_reduced_chi_squared, 100.0);
     // every measured mode is matched to the mode it was generated from
     for (m, r) in measured.modes.iter().zip(&result.modes) {
         assert_eq!(m.label, r.model_label);
@@ -302,18 +309,19 @@ fn fits_that_cannot_be_made_say_why() {
             "measured.csv:2: label 'Y' is a mode family",
         ),
         // x3 moves mostly in modes 1 and 7 (64 % and 26 %): a third x3 finds no mode left
-        // with a tenth of its energy there
+        // with a tenth of its energy there within a factor 2 of it (the third was at 2 Hz,
+        // which the frequency window now refuses with its own message)
         (
-            "x3,0.4328,0.001\nx3,0.98,0.001\nx3,2,0.001\n",
+            "x3,0.4328,0.001\nx3,0.98,0.001\nx3,0.9,0.001\n",
             &["m1"],
             "measured.csv:3: no model mode left that moves x3",
         ),
-        // a count has no derivative: the exact Jacobian says which and why
+        // a count cannot be fitted: refused by name before the fit (it was the exact
+        // Jacobian's error about its step)
         (
             "x3,0.4328,0.001\ny3,0.4681,0.001\npitch3,0.4919,0.001\n",
             &["m1", "n_beads"],
-            "sensitivity: the fit's exact Jacobian: 'n_beads' has no derivative: the model \
-             refuses n_beads = ",
+            "free parameter 'n_beads': n_beads is a count or a switch",
         ),
     ];
     for (text, free, expected) in cases {
@@ -336,8 +344,9 @@ fn a_fit_out_of_iterations_says_so_with_its_last_state() {
     let err = fit(&case, &measured, None, &names(&["m1"]), &options).unwrap_err();
     assert!(matches!(err, Error::Fit(FitError::NotConverged { .. })));
     let message = err.to_string();
+    // the file fitted to is named (it was not)
     assert!(
-        message.contains("did not converge") && message.contains("m1="),
+        message.starts_with("synthetic.csv: the fit did not converge") && message.contains("m1="),
         "{message}"
     );
 }
@@ -592,4 +601,229 @@ fn match_modes_follows_each_mode_across_a_crossing() {
     let triple = run_stage(Case::model("triple").unwrap().build().unwrap().0, Stage::S2).unwrap();
     let e = triple.match_modes(&nominal).unwrap_err().to_string();
     assert!(e.contains("reference"), "{e}");
+}
+
+/// Old failure: a fit that could not explain its data (χ²/dof 1.6·10⁷ with a duplicated
+/// measurement, 2.4·10⁵ in a wrong minimum) returned its values like any other, and the
+/// command printed "every parameter is determined" and exited 0. The result now carries
+/// the verdict.
+#[test]
+fn a_fit_that_cannot_explain_its_data_says_so_in_its_result() {
+    let mut measured = synthetic(&[], 2e-4, 21);
+    // z2 measured 10 % high: no UIM mass puts it there and keeps the other modes
+    let z2 = measured.modes.iter_mut().find(|m| m.label == "z2").unwrap();
+    z2.hz *= 1.1;
+    let case = Case::model("quad").unwrap();
+    let free = names(&["m1"]);
+    let result = fit(&case, &measured, None, &free, &FitOptions::default()).unwrap();
+    let reduced = result.reduced_chi_squared.unwrap();
+    assert!(reduced > 100.0, "χ²/dof = {reduced}");
+    assert!(!result.explains_data);
+    // the worst residual is z2's, and it names its line
+    let worst = result
+        .modes
+        .iter()
+        .max_by(|a, b| a.normalized.abs().total_cmp(&b.normalized.abs()))
+        .unwrap();
+    assert_eq!((worst.label.as_str(), worst.line), ("z2", worst.mode + 1));
+    // judged by a threshold above its χ²/dof, the same fit explains its data
+    let lenient = FitOptions {
+        max_reduced_chi_squared: 2.0 * reduced,
+        ..FitOptions::default()
+    };
+    let again = fit(&case, &measured, None, &free, &lenient).unwrap();
+    assert!(again.explains_data);
+    assert_eq!(again.parameters, result.parameters);
+    // a threshold that is not positive cannot judge anything
+    for bad in [0.0, -1.0, f64::NAN] {
+        let options = FitOptions {
+            max_reduced_chi_squared: bad,
+            ..FitOptions::default()
+        };
+        let e = fit(&case, &measured, None, &free, &options).unwrap_err();
+        assert!(e.to_string().contains("max_reduced_chi_squared"), "{e}");
+    }
+}
+
+/// Old failures: the shape column's order changed which mode a measurement matched
+/// (`columns.dedup()` removed only adjacent duplicates, so the label's own coordinate
+/// named again in the shape counted twice or once by where it stood); and measurements
+/// were matched one at a time, best first, so that one could take the mode another
+/// needed. Now the coordinates are a set and all measurements are assigned at once.
+#[test]
+fn matching_ignores_the_order_of_the_shape_column() {
+    let case = Case::model("quad").unwrap();
+    let solution = run_stage(case.build().unwrap().0, Stage::S2).unwrap();
+    let measured = synthetic(&[], 1e-4, 3);
+    let reference = MatchedModes::by_label(&solution, &measured).unwrap();
+    // every measured mode is its own model mode
+    assert_eq!(reference.indices, (0..24).collect::<Vec<_>>());
+    // the shape reversed, and with the label's coordinate named again at each place
+    for place in 0..=3 {
+        let mut shuffled = measured.clone();
+        for m in &mut shuffled.modes {
+            m.shape.reverse();
+            m.shape.insert(place.min(m.shape.len()), m.label.clone());
+        }
+        let matched = MatchedModes::by_label(&solution, &shuffled).unwrap();
+        assert_eq!(matched.indices, reference.indices, "label at {place}");
+    }
+}
+
+/// Old failure: no frequency check paired a 50 Hz measurement with the 8.76 Hz mode
+/// that moves z2 (and a 0.67 Hz one with a 2.5 Hz mode). A mode more than a factor 2
+/// (`FitOptions::frequency_window`) away cannot match: the error names the line and the
+/// mode that moves the coordinate most.
+#[test]
+fn a_measurement_far_from_every_mode_that_moves_it_is_refused_by_line() {
+    let message = fit_error("x3,0.4328,0.001\ny3,0.4681,0.001\nz2,50,0.1\n", &["m1"]);
+    assert!(
+        message.starts_with(
+            "measured.csv:3: no model mode within a factor 2 of 50 Hz moves z2 (at least 10 % \
+             of its kinetic energy); the one that moves it most is mode 23 (z2 V, 8.7621 Hz)"
+        ),
+        "{message}"
+    );
+    // a wider window, asked for, lets it match (and the fit then fails its verdict)
+    let measured = MeasuredModes::parse(
+        Path::new("measured.csv"),
+        "x3,0.4328,0.001\ny3,0.4681,0.001\nz2,50,0.1\n",
+    )
+    .unwrap();
+    let options = FitOptions {
+        frequency_window: 10.0,
+        ..FitOptions::default()
+    };
+    let case = Case::model("quad").unwrap();
+    let result = fit(&case, &measured, None, &names(&["m1"]), &options).unwrap();
+    assert!(!result.explains_data);
+}
+
+/// Old failure: a duplicated measurement under a family label matched a second mode with
+/// under 10 % share, or both copies went for one mode. Now the two copies go to two
+/// different modes, each with its share, or the second is refused naming the mode the
+/// first took.
+#[test]
+fn duplicated_measurements_never_share_a_mode() {
+    let case = Case::model("quad").unwrap();
+    let solution = run_stage(case.build().unwrap().0, Stage::S2).unwrap();
+    for duplicate in ["pitch2", "yaw1", "x3"] {
+        // half the modes (all 24 and a copy are more measurements than modes: refused)
+        let mut measured = synthetic(&[], 1e-4, 3);
+        measured.modes.retain(|m| m.hz < 3.1);
+        let copy = measured
+            .modes
+            .iter()
+            .find(|m| m.label == duplicate)
+            .unwrap()
+            .clone();
+        measured.modes.push(MeasuredMode { line: 99, ..copy });
+        match MatchedModes::by_label(&solution, &measured) {
+            Ok(matched) => {
+                let mut indices = matched.indices.clone();
+                indices.sort_unstable();
+                indices.dedup();
+                assert_eq!(indices.len(), measured.modes.len(), "{duplicate}");
+            }
+            Err(e) => {
+                let message = e.to_string();
+                assert!(
+                    message.starts_with("synthetic.csv:")
+                        && message.contains("a mode is measured once"),
+                    "{message}"
+                );
+            }
+        }
+    }
+    // a family label twice: the yaw mode that moves yaw1 most, then no other
+    let message = fit_error(
+        "x3,0.4328,0.001\nY,3.05,0.001,yaw1\nY,3.05,0.001,yaw1\n",
+        &["m1"],
+    );
+    assert!(
+        message.starts_with("measured.csv:3: no model mode"),
+        "{message}"
+    );
+}
+
+/// Old failure: a UTF-8 byte-order mark (which spreadsheet programs write) broke line 1
+/// of the measurement file. It, CRLF line ends and spaces around the fields are accepted.
+#[test]
+fn a_byte_order_mark_crlf_and_spaces_are_accepted() {
+    let clean = MeasuredModes::parse(
+        Path::new("m.csv"),
+        "label,hz,sigma_hz,shape\nx3,0.4328,0.001,x3+x2\ny3,0.4681,0.001\n",
+    )
+    .unwrap();
+    let windows = MeasuredModes::parse(
+        Path::new("m.csv"),
+        "\u{feff}label , hz , sigma_hz , shape\r\n x3 , 0.4328 ,0.001 , x3 + x2 \r\n\ty3,\t0.4681, 0.001\r\n",
+    )
+    .unwrap();
+    assert_eq!(windows, clean);
+    // without a header the mark sat in front of the first label
+    let first = MeasuredModes::parse(Path::new("m.csv"), "\u{feff}x3,0.4328,0.001\r\n").unwrap();
+    assert_eq!(first.modes[0].label, "x3");
+    let tf = pendkit::fit::MeasuredTf::parse(
+        Path::new("tf.csv"),
+        "\u{feff}# input = x00\r\n# output = x3\r\n 1 , 2 , 0.1 \r\n",
+    )
+    .unwrap();
+    assert_eq!((tf.input.as_str(), tf.points[0].abs), ("x00", 2.0));
+}
+
+/// Old failure: `--free n_beads` (a count) or a switch failed with the exact Jacobian's
+/// error about a step of −2e-6; it is refused by name before the fit starts.
+#[test]
+fn counts_and_switches_are_refused_by_name() {
+    let modes = "x3,0.4328,0.001\ny3,0.4681,0.001\npitch3,0.4919,0.001\n";
+    for free in [["m1", "n_beads"], ["wire_terms_early", "m1"]] {
+        let message = fit_error(modes, &free);
+        let name = free.iter().find(|n| **n != "m1").unwrap();
+        let expected =
+            format!("free parameter '{name}': {name} is a count or a switch (the model refuses");
+        assert!(message.starts_with(&expected), "{message}");
+        assert!(
+            message.contains("counts and switches cannot be fitted"),
+            "{message}"
+        );
+    }
+}
+
+/// Old failure: fitting 20 quad parameters (stage lengths, blade frequencies, break-offs,
+/// masses, two pitch inertias) from 20 % away to its 24 noise-free modes stalled for some
+/// sign patterns of the offsets ("did not converge in 50 iterations", χ² 10⁷): modes
+/// followed by overlap across large steps had been taken for others. This pattern now
+/// converges to the truth after restarting from where the descent stalled, its
+/// measurements matched again by label.
+#[test]
+fn a_stalled_twenty_parameter_fit_restarts_and_converges() {
+    let free = names(&[
+        "ln", "l1", "l2", "l3", "ufcn", "ufc1", "ufc2", "dm", "dn", "d0", "d1", "d2", "d3", "d4",
+        "mn", "m1", "m2", "m3", "Iny", "I1y",
+    ]);
+    let signs = "+---+-+-+++-----+---";
+    let case = Case::model("quad").unwrap();
+    let (_, resolved) = case.build().unwrap();
+    let truth: Vec<f64> = free
+        .iter()
+        .zip(signs.chars())
+        .map(|(n, sign)| resolved.get(n).unwrap() * if sign == '+' { 1.2 } else { 0.8 })
+        .collect();
+    let sets: Vec<String> = free
+        .iter()
+        .zip(&truth)
+        .map(|(n, v)| format!("{n}={v}"))
+        .collect();
+    let measured = synthetic_modes(&sets, 1e-4, None);
+    let result = fit(&case, &measured, None, &free, &FitOptions::default()).unwrap();
+    assert!(
+        result.restarts >= 1,
+        "converged without a restart: {}",
+        result.iterations
+    );
+    assert!(result.explains_data);
+    for (p, t) in result.parameters.iter().zip(&truth) {
+        assert!((p.value - t).abs() <= 1e-5 * t.abs(), "{p:?} against {t}");
+    }
 }
