@@ -239,17 +239,11 @@ fn snippet(out: &mut String, kind: &str, schema: &pendkit::energy::InstanceSchem
 /// output (or the error, one line on stderr) and returns the exit code. Every element kind
 /// linked into the calling binary is available to it.
 ///
-/// SIGINT and SIGTERM remove the output files being written (their temporary files) and
-/// exit with status 130: an interrupted command leaves no half-written file.
+/// Once a command starts writing a file, SIGINT and SIGTERM remove the output files being
+/// written (their temporary files) and exit with status 130: an interrupted command leaves
+/// no half-written file (`output::clean_up_on_interrupt`).
 pub fn main() -> ExitCode {
     let cli = Cli::parse();
-    // Not fatal if it cannot be installed (another handler in an embedding program): the
-    // files are then still whole or absent, but a stray `.NAME.PID-N.tmp` may remain.
-    let _ = ctrlc::set_handler(|| {
-        pendkit::export::remove_temporaries();
-        eprintln!("error: interrupted");
-        std::process::exit(130);
-    });
     let printed = match run(cli) {
         Ok(output) => output::print(output),
         // results whose verdict fails (a fit that does not explain its data): printed in

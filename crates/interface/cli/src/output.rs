@@ -54,11 +54,29 @@ pub fn print(output: Output) -> Result<(), CliError> {
     }
 }
 
+/// From the first call on, SIGINT and SIGTERM remove the temporary files of the outputs
+/// being written and exit with status 130 (`error: interrupted`). Installed by every path
+/// that writes a file, when it first does, not at start: the handler is a thread, which a
+/// command that writes no file (most runs) should not pay for at start-up. Not fatal if it
+/// cannot be installed (another handler in an embedding program): files are still whole or
+/// absent, but a stray `.NAME.PID-N.tmp` may remain after an interrupt.
+pub fn clean_up_on_interrupt() {
+    static INSTALLED: std::sync::Once = std::sync::Once::new();
+    INSTALLED.call_once(|| {
+        let _ = ctrlc::set_handler(|| {
+            pendkit::export::remove_temporaries();
+            eprintln!("error: interrupted");
+            std::process::exit(130);
+        });
+    });
+}
+
 /// Writes `bytes` to the file `path` whole or not at all, replacing an existing file:
 /// every output file of the command line other than figures (which go through
 /// `plotting::save`, the same helper underneath) and state-space exports (`pendkit ss`,
 /// ditto).
 pub fn write_file(path: &Path, bytes: &[u8]) -> Result<(), CliError> {
+    clean_up_on_interrupt();
     pendkit::export::write_bytes_whole(path, bytes).map_err(CliError::from)
 }
 
@@ -75,6 +93,7 @@ impl OutputDir {
     /// Creates the folder (and its missing parents, as `mkdir -p`), or takes the existing
     /// one. An error names the folder.
     pub fn create(path: &Path) -> Result<OutputDir, CliError> {
+        clean_up_on_interrupt();
         let existed = path.is_dir();
         std::fs::create_dir_all(path).map_err(|source| CliError::Write {
             path: path.to_path_buf(),

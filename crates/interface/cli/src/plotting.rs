@@ -220,6 +220,7 @@ pub fn mode_shape(run: &Run, number: usize) -> Result<ModeShapePlot, CliError> {
 /// an existing file: every command's figures go through here. A failed write reads as any
 /// other output file's (`cannot write 'PATH': reason`).
 pub fn save(figure: &impl pendkit_plot::Figure, path: &std::path::Path) -> Result<(), CliError> {
+    crate::output::clean_up_on_interrupt();
     figure.render(path).map_err(|e| match e {
         pendkit_plot::PlotError::Io { path, source } => CliError::Write { path, source },
         other => CliError::Plot(other),

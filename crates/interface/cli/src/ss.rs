@@ -29,6 +29,7 @@ pub fn run(a: Args) -> Result<String, CliError> {
     let run = a.args.run_lossy()?;
     let damping_frequency = a.damping_frequency;
     let provenance = run.provenance()?;
+    crate::output::clean_up_on_interrupt();
     let named = run.result.write_state_space(
         &a.out,
         damping_frequency,
