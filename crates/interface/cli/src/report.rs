@@ -110,7 +110,8 @@ h1{font-size:1.6em}h2{border-bottom:1px solid #ccc;padding-bottom:.2em;margin-to
 table{border-collapse:collapse;margin:1em 0;font-size:.9em}th,td{border:1px solid #ddd;padding:.25em .6em;text-align:left}\
 th{background:#f3f3f3}td{font-variant-numeric:tabular-nums}figure{margin:1.5em 0}figure svg{max-width:100%;height:auto;display:block}\
 figcaption{font-size:.9em;color:#555}.verdict{font-weight:bold;padding:.5em 1em;display:inline-block}\
-.stable{background:#e6f4e6;color:#1a5e1a}.unstable{background:#fbe4e4;color:#8a1c1c}nav a{margin-right:1em}";
+.stable{background:#e6f4e6;color:#1a5e1a}.unstable{background:#fbe4e4;color:#8a1c1c}\
+.neutral{background:#fdf3d8;color:#6b4e00}nav a{margin-right:1em}";
 
 /// Runs the command and returns what it prints.
 pub fn run(a: Args) -> Result<String, CliError> {
@@ -415,7 +416,17 @@ fn stability_section(page: &mut Page, run: &Run, allow_unstable: bool) -> bool {
     page.section("stability", "Stability");
     let verdict = run.result.stability();
     let stable = verdict.is_ok();
+    let neutral = run.neutral_notes();
     let text = match verdict {
+        Ok(()) if !neutral.is_empty() => format!(
+            "Neutral: every mode has ω² ≥ 0, but {} {} zero (a neutral direction: nothing resists it, and a steady force along it has no finite response).",
+            neutral.len(),
+            if neutral.len() == 1 {
+                "mode's is"
+            } else {
+                "modes' are"
+            }
+        ),
         Ok(()) => "Stable: every mode has ω² ≥ 0.".to_string(),
         Err(e) if allow_unstable => format!(
             "Unstable: {e}. Transfer functions and noise below are those of the linearisation (--allow-unstable)."
@@ -424,12 +435,22 @@ fn stability_section(page: &mut Page, run: &Run, allow_unstable: bool) -> bool {
             "Unstable: {e}. Transfer functions and noise are not computed (--allow-unstable computes those of the linearisation)."
         ),
     };
+    let class = match (stable, neutral.is_empty()) {
+        (false, _) => "unstable",
+        (true, false) => "neutral",
+        (true, true) => "stable",
+    };
     let _ = writeln!(
         page.html,
-        "<p class=\"verdict {}\">{}</p>",
-        if stable { "stable" } else { "unstable" },
+        "<p class=\"verdict {class}\">{}</p>",
         escape(&text)
     );
+    // each neutral direction with what moves in it and how to remove it, here and on
+    // stderr beside the file written (as `modes` prints them beside its table)
+    for note in &neutral {
+        let _ = writeln!(page.html, "<p>{}</p>", escape(note));
+        eprintln!("{note}");
+    }
     page.end_section();
     stable
 }

@@ -331,6 +331,11 @@ fn step_run(
         .map(|(v, x)| format!("{}={}", v.name, fixed_or_sci(*x)))
         .collect::<Vec<_>>()
         .join(", ");
+    // a step's numbers with a neutral direction say so, with the step's values
+    for note in run.neutral_notes() {
+        let note = note.strip_prefix("note: ").unwrap_or(&note);
+        eprintln!("note: at {step_name}: {note}");
+    }
     Ok((values, run, step_name))
 }
 

@@ -217,5 +217,35 @@ fn table(model: &str, question: &Question, result: &Tradeoff, tolerance: f64) ->
     for s in &result.skipped {
         let _ = writeln!(out, "skipped {}: {}", s.variant, s.reason);
     }
+    // a variant with a neutral direction answers with a mode at 0 Hz (and a response
+    // that grows toward 0 Hz): said beside the table, as `modes` says it beside its own
+    for r in result.rows.iter().filter(|r| !r.neutral_modes.is_empty()) {
+        let _ = writeln!(
+            out,
+            "neutral {}: mode{} {} {} neutral (nothing in this variant resists {}): `pendkit modes` of it says which coordinates move and how to remove {}",
+            r.variant,
+            if r.neutral_modes.len() == 1 { "" } else { "s" },
+            r.neutral_modes
+                .iter()
+                .map(ToString::to_string)
+                .collect::<Vec<_>>()
+                .join(", "),
+            if r.neutral_modes.len() == 1 {
+                "is"
+            } else {
+                "are"
+            },
+            if r.neutral_modes.len() == 1 {
+                "it"
+            } else {
+                "them"
+            },
+            if r.neutral_modes.len() == 1 {
+                "it"
+            } else {
+                "them"
+            },
+        );
+    }
     out
 }

@@ -446,6 +446,21 @@ pub struct Row {
     pub runs: usize,
     /// Errors against the reference.
     pub errors: Errors,
+    /// The numbers (from 1, ascending frequency) of the variant's modes below the search
+    /// limit that are neutral directions (ω² zero within its rounding: nothing in that
+    /// variant resists them), whose errors above are those of a mode at 0 Hz.
+    pub neutral_modes: Vec<usize>,
+}
+
+/// The numbers (from 1) of `answer`'s neutral modes.
+fn neutral_modes(answer: &Answer) -> Vec<usize> {
+    answer
+        .modes
+        .iter()
+        .enumerate()
+        .filter(|(_, m)| m.omega_squared == 0.0)
+        .map(|(i, _)| i + 1)
+        .collect()
 }
 
 /// A variant that could not answer, and why.
@@ -662,19 +677,20 @@ pub fn tradeoff(
                 seconds,
                 runs,
                 errors: Errors::zero(question.input.is_some()),
+                neutral_modes: neutral_modes(&answer),
             });
             reference = Some(answer);
             continue;
         };
-        match outcome
-            .map_err(|e| e.to_string())
-            .and_then(|(a, s, n)| Ok((compare(reference_answer, &a, top)?, s, n)))
-        {
-            Ok((errors, seconds, runs)) => rows.push(Row {
+        match outcome.map_err(|e| e.to_string()).and_then(|(a, s, n)| {
+            Ok((compare(reference_answer, &a, top)?, s, n, neutral_modes(&a)))
+        }) {
+            Ok((errors, seconds, runs, neutral_modes)) => rows.push(Row {
                 variant: name,
                 seconds,
                 runs,
                 errors,
+                neutral_modes,
             }),
             Err(reason) => skipped.push(Skipped {
                 variant: name,

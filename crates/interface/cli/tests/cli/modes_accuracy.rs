@@ -79,6 +79,8 @@ fn every_command_on_a_neutral_model_names_the_neutral_direction() {
     std::fs::write(
         &file,
         r#"name = "plane"
+[parameters]
+m = { value = 10, unit = "kg", description = "the body's mass" }
 [materials.steel]
 youngs_modulus = 200e9
 poisson_ratio = 0.29
@@ -89,7 +91,7 @@ coordinates = "0"
 driven = true
 [bodies.top]
 coordinates = "1"
-mass = 10
+mass = "m"
 inertia = [0.1, 0.1, 0.1]
 [stages.top]
 from = "support"
@@ -114,4 +116,62 @@ wires = { upper = { at = [0, 0.1, 0], mirror = "y" }, lower = { at = [0, 0.1, 0]
             "{args:?}: {stderr}"
         );
     }
+    // a sweep says it at each step that has one, with the step's values
+    let (ok, _, stderr) = pendkit(&[
+        "sweep",
+        file,
+        "--stage",
+        "1a",
+        "--vary",
+        "m=10:20:2",
+        "--tf",
+        "x0:x1",
+        "--freqs",
+        "1",
+    ]);
+    assert!(ok, "{stderr}");
+    for step in ["m=10", "m=20"] {
+        assert!(
+            stderr.contains(&format!("note: at {step}: mode 1 {note}")),
+            "{step}: {stderr}"
+        );
+    }
+    // the report's stability verdict says "neutral", not "stable", and names the mode
+    let report = dir.join("report");
+    let (ok, _, stderr) = pendkit(&[
+        "report",
+        file,
+        "--stage",
+        "1a",
+        "--out",
+        report.to_str().unwrap(),
+    ]);
+    assert!(ok && stderr.contains(note), "{stderr}");
+    let html = std::fs::read_to_string(report.join("index.html")).unwrap();
+    assert!(
+        html.contains("class=\"verdict neutral\">Neutral:") && html.contains(note),
+        "the report's verdict"
+    );
+    // the trade-off chart names the variants that have one (stages 0B and 1A here; from
+    // 1B on, wire bending resists the pitch)
+    let chart = dir.join("tradeoff");
+    let (ok, stdout, stderr) = pendkit(&[
+        "tradeoff",
+        file,
+        "--output",
+        "x1",
+        "--out",
+        chart.to_str().unwrap(),
+    ]);
+    assert!(ok, "{stderr}");
+    let neutral: Vec<&str> = stdout
+        .lines()
+        .filter(|l| l.starts_with("neutral "))
+        .collect();
+    assert_eq!(neutral.len(), 2, "{stdout}");
+    assert!(
+        neutral[0].starts_with("neutral plane s0B: mode 1 is neutral")
+            && neutral[1].starts_with("neutral plane s1A: mode 1 is neutral"),
+        "{stdout}"
+    );
 }
