@@ -286,7 +286,9 @@ def suspension(
     - ``method``: ``"tf"`` (default) evaluates pendkit's exact transfer functions, with the
       model's structural and viscous damping, at each frequency Finesse solves;
       ``"state_space"`` uses the rational response of ``Result.state_space`` (damping made
-      viscous at ``damping_frequency``, Hz: exact there and for viscous damping only).
+      viscous at ``damping_frequency``, Hz: exact there and for viscous damping only; the
+      ``gnd`` inputs then lack the damping force of the support's own velocity, a relative
+      1e-6 at 2 Hz for quad-aligo, as docs/cli.md's ``ss`` says).
 
     Couplings that are zero at every frequency (blocks the model decouples, e.g. yaw from z
     in a symmetric quad) are left out. Bad names raise ``ValueError`` naming the argument.
