@@ -7,9 +7,16 @@ pygwinc counts them), runs both budgets, and prints the suspension term and the 
 strain noise of each side by side; ``--plot FILE`` draws pendkit's budget with pygwinc's
 plotting.
 
+The drop-in takes the settings of ``ifo.Suspension`` (masses, lengths, fibre geometry,
+materials, temperature; a setting it cannot take is an error naming it). The budget runs to
+5 kHz, above the fibres' first violin mode (490 Hz), which pendkit's bead-free quad does not
+have: the drop-in says so with a ``pendkit.gwinc.ViolinModeWarning`` on stderr, and its
+term falls below pygwinc's from about 250 Hz up (``--beads N`` gives the fibres N beads,
+and violin modes, at some cost in time).
+
 Needs pygwinc (``pip install gwinc``) and pendkit (``pip install ./crates/interface/python``):
 
-    python examples/python/gwinc_budget.py [--points 1000] [--plot budget.png]
+    python examples/python/gwinc_budget.py [--points 1000] [--plot budget.png] [--beads 20]
 """
 
 import argparse
@@ -31,11 +38,13 @@ class PendkitSuspensionThermal(nb.Noise):
     name = "SuspensionThermal"
     style = dict(label="Suspension Thermal (pendkit quad)", color="#0d75f8")
 
+    sets = []  # pendkit overrides after the mapped Suspension settings (--beads)
+
     @nb.precomp(sustf=precomp_suspension)
     def calc(self, sustf):
         # one suspension's displacement PSD (m²/Hz) times the four test masses of the arms,
         # as pygwinc's SuspensionThermal adds its stages (abs(n) * 4)
-        return 4 * suspension_thermal(self.freq, self.ifo.Suspension, sustf)
+        return 4 * suspension_thermal(self.freq, self.ifo.Suspension, sustf, set=self.sets)
 
 
 class aLIGOWithPendkit(aLIGO):
@@ -52,7 +61,10 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--points", type=int, default=1000, help="log-spaced frequencies")
     parser.add_argument("--plot", help="write pendkit's budget figure to this file")
+    parser.add_argument("--beads", type=int, default=0,
+                        help="violin-mode beads per fibre (pendkit's n_beads; default 0)")
     args = parser.parse_args()
+    PendkitSuspensionThermal.sets = [f"n_beads={args.beads}"] if args.beads else []
 
     freq = np.logspace(np.log10(5.0), np.log10(5000.0), args.points)  # Hz
     reference = gwinc.load_budget("aLIGO", freq=freq)

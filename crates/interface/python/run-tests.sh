@@ -18,7 +18,7 @@ venv="${PENDKIT_PY_VENV:-$target/python-venv}"
 if [ ! -x "$venv/bin/python" ]; then
     "${PYTHON:-python3}" -m venv "$venv"
 fi
-packages=(maturin numpy pytest control "dask[distributed]")
+packages=(maturin numpy pytest control "dask[distributed]" "finesse==3.0.2; python_version >= '3.11'" "finesse-ligo==1.0.15; python_version >= '3.11'")
 if [ "${PENDKIT_PY_GWINC:-1}" != 0 ]; then
     packages+=("gwinc==0.6.2")
 fi
