@@ -53,6 +53,13 @@ pub struct Args {
     /// A measurement matches only a model mode within this factor of its frequency.
     #[arg(long = "match-window", value_name = "FACTOR", default_value_t = 2.0)]
     match_window: f64,
+    /// Fit from N starts: the case's values and N-1 others a few per cent from them (a
+    /// fixed pattern per start, up to 20 %); the lowest chi^2 is the result.
+    #[arg(long, value_name = "N", default_value_t = 1)]
+    starts: usize,
+    /// When no start explains the data, try up to N more starts, one at a time.
+    #[arg(long = "more-starts", value_name = "N", default_value_t = 4)]
+    more_starts: usize,
     /// Write the fitted case file (TOML) here.
     #[arg(long, value_name = "FILE")]
     out: Option<PathBuf>,
@@ -87,6 +94,8 @@ pub fn run(a: Args) -> Result<String, CliError> {
         jacobian: a.jacobian,
         max_reduced_chi_squared: a.max_reduced_chi2,
         frequency_window: a.match_window,
+        starts: a.starts,
+        more_starts: a.more_starts,
         ..FitOptions::default()
     };
     let result = fit(&case, &measured, tf.as_ref(), &a.free, &options)?;
@@ -143,10 +152,29 @@ fn with_verdict(output: String, r: &FitResult, a: &Args) -> Result<String, CliEr
         .take(WORST_NAMED)
         .map(|(what, place, n)| format!("{what} ({place}) {}", normalized(*n).trim()))
         .collect();
+    // what the model lacks, from the sensitivities: the parameters whose freeing would
+    // lower chi^2 most (to first order)
+    let help = if r.would_help.is_empty() {
+        String::new()
+    } else {
+        format!(
+            "; freeing {} would help most (chi^2/dof to first order: {})",
+            r.would_help
+                .iter()
+                .map(|h| h.parameter.as_str())
+                .collect::<Vec<_>>()
+                .join(", "),
+            r.would_help
+                .iter()
+                .map(|h| format!("{} {}", h.parameter, sci(h.reduced_chi_squared, 2, 0)))
+                .collect::<Vec<_>>()
+                .join(", ")
+        )
+    };
     Err(CliError::Unexplained {
         output,
         message: format!(
-            "the fit does not explain its data: chi^2/dof = {} is above {} (--max-reduced-chi2); worst residuals (m-f)/s: {}",
+            "the fit does not explain its data: chi^2/dof = {} is above {} (--max-reduced-chi2); worst residuals (m-f)/s: {}{help}",
             r.reduced_chi_squared
                 .map_or_else(|| "-".to_string(), |x| sci(x, 3, 0)),
             pendkit::expr::number_text(r.max_reduced_chi_squared),
@@ -191,7 +219,7 @@ fn table(case: &Case, stage: Stage, r: &FitResult, tf: Option<&MeasuredTf>) -> S
     let mut out = String::new();
     let _ = writeln!(
         out,
-        "{} ({}), stage {}: {} modes{} fitted with {} free parameters in {} iterations{} ({} model solutions, {})",
+        "{} ({}), stage {}: {} modes{} fitted with {} free parameters in {} iterations{}{} ({} model solutions, {})",
         case.name,
         case.model.name(),
         stage,
@@ -208,6 +236,10 @@ fn table(case: &Case, stage: Stage, r: &FitResult, tf: Option<&MeasuredTf>) -> S
             0 => String::new(),
             1 => ", restarted once".to_string(),
             n => format!(", restarted {n} times"),
+        },
+        match r.starts {
+            1 => String::new(),
+            n => format!(", the best of {n} starts"),
         },
         r.solves,
         match r.jacobian {

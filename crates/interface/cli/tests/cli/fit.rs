@@ -227,6 +227,12 @@ fn fit_that_cannot_explain_its_data_exits_3_naming_the_worst_residuals() {
             && stderr.contains(&expected),
         "{stderr}"
     );
+    // and what would help: the library's first-order estimate (tested against a refit in
+    // the library's tests), named on the same line
+    assert!(
+        stderr.contains("; freeing Y3, ") && stderr.contains("would help most"),
+        "{stderr}"
+    );
     assert_eq!(stderr.lines().count(), 1, "{stderr}");
     // the JSON carries the verdict too, and exits the same way
     let (status, stdout, _) =

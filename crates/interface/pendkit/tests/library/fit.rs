@@ -45,7 +45,17 @@ fn synthetic(sets: &[&str], relative_sigma: f64, seed: u64) -> MeasuredModes {
 
 /// [`synthetic`], with the noise from `seed`, or none.
 fn synthetic_modes(sets: &[String], relative_sigma: f64, seed: Option<u64>) -> MeasuredModes {
-    let case = Case::model("quad").unwrap().with_sets(sets).unwrap();
+    synthetic_modes_of("quad", sets, relative_sigma, seed)
+}
+
+/// [`synthetic_modes`] of a bundled `model`.
+fn synthetic_modes_of(
+    model: &str,
+    sets: &[String],
+    relative_sigma: f64,
+    seed: Option<u64>,
+) -> MeasuredModes {
+    let case = Case::model(model).unwrap().with_sets(sets).unwrap();
     let r = run_stage(case.build().unwrap().0, Stage::S2).unwrap();
     let mut rng = seed.map(Normal);
     let modes = r
@@ -619,6 +629,38 @@ fn a_fit_that_cannot_explain_its_data_says_so_in_its_result() {
     let reduced = result.reduced_chi_squared.unwrap();
     assert!(reduced > 100.0, "χ²/dof = {reduced}");
     assert!(!result.explains_data);
+    // no start explains the data: the four more starts were all tried
+    assert_eq!(result.starts, 5);
+    // what would help, best first: a first-order estimate that a refit with the named
+    // parameter freed as well (a second, nonlinear route) confirms to 1 % (the estimate
+    // is linear in the new parameter's step; the refit's step here is small)
+    assert!(!result.would_help.is_empty() && result.would_help.len() <= 3);
+    assert!(
+        result
+            .would_help
+            .windows(2)
+            .all(|w| w[0].reduced_chi_squared <= w[1].reduced_chi_squared)
+    );
+    let best = &result.would_help[0];
+    assert!(best.reduced_chi_squared < reduced);
+    let refit = fit(
+        &case,
+        &measured,
+        None,
+        &names(&["m1", &best.parameter]),
+        &FitOptions {
+            more_starts: 0,
+            ..FitOptions::default()
+        },
+    )
+    .unwrap();
+    let refit_reduced = refit.reduced_chi_squared.unwrap();
+    assert!(
+        (refit_reduced / best.reduced_chi_squared - 1.0).abs() < 0.01,
+        "{} predicted {}, refit {refit_reduced}",
+        best.parameter,
+        best.reduced_chi_squared
+    );
     // the worst residual is z2's, and it names its line
     let worst = result
         .modes
@@ -632,8 +674,14 @@ fn a_fit_that_cannot_explain_its_data_says_so_in_its_result() {
         ..FitOptions::default()
     };
     let again = fit(&case, &measured, None, &free, &lenient).unwrap();
-    assert!(again.explains_data);
-    assert_eq!(again.parameters, result.parameters);
+    assert!(again.explains_data && again.starts == 1);
+    let strict_once = FitOptions {
+        more_starts: 0,
+        ..FitOptions::default()
+    };
+    let once = fit(&case, &measured, None, &free, &strict_once).unwrap();
+    assert!(!once.explains_data);
+    assert_eq!(again.parameters, once.parameters);
     // a threshold that is not positive cannot judge anything
     for bad in [0.0, -1.0, f64::NAN] {
         let options = FitOptions {
@@ -825,5 +873,122 @@ fn a_stalled_twenty_parameter_fit_restarts_and_converges() {
     assert!(result.explains_data);
     for (p, t) in result.parameters.iter().zip(&truth) {
         assert!((p.value - t).abs() <= 1e-5 * t.abs(), "{p:?} against {t}");
+    }
+}
+
+/// The sign patterns of `benches/benches/fit_starts.rs` (SplitMix64 from seed 2026, one
+/// sign per free parameter, patterns in order): pattern `k` of `n` parameters.
+fn bench_pattern(k: usize, n: usize) -> Vec<bool> {
+    let mut state: u64 = 2026;
+    let mut next = || {
+        state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = state;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        (z ^ (z >> 31)) & 1 == 1
+    };
+    let mut signs = Vec::new();
+    for _ in 0..=k {
+        signs = (0..n).map(|_| next()).collect();
+    }
+    signs
+}
+
+/// Issue 35: a 24-mode fit of 20 quad parameters (18 modes, 15 parameters of the triple)
+/// from a start 20 % away, for sign patterns of the offsets where one descent from the
+/// start stalls (the quad's pattern 5 of the bench `fit_starts`, also from four more
+/// starts; the triple's 19) or ends in a wrong minimum that passes for a fit (χ²/dof 3.8
+/// and 14 on noise-free data: the quad's 18 and 44, also from four starts). The bench
+/// measures all 80 patterns of each model (80 of 80 to the truth, docs/fitting.md); the
+/// test keeps the hardest, since each costs seconds in a test build. From eight starts (the case's values and seven moved by up to ±20 %, the best kept)
+/// each converges to the truth: every parameter within 1e-4 of it, the truth being a
+/// solve of the model at the offset values (noise-free, σ = 1e-4 f; a converged fit is
+/// within 1e-6 of it, the tolerance leaves room for the weakest-determined direction).
+#[test]
+fn fits_from_twenty_percent_away_converge_to_the_truth_from_eight_starts() {
+    let quad = names(&[
+        "ln", "l1", "l2", "l3", "ufcn", "ufc1", "ufc2", "dm", "dn", "d0", "d1", "d2", "d3", "d4",
+        "mn", "m1", "m2", "m3", "Iny", "I1y",
+    ]);
+    let triple = names(&[
+        "l1", "l2", "l3", "ufc1", "ufc2", "d0", "d1", "d2", "d3", "d4", "m1", "m2", "m3", "I1y",
+        "I2y",
+    ]);
+    let options = FitOptions {
+        starts: 8,
+        ..FitOptions::default()
+    };
+    for (model, free, patterns) in [
+        ("quad", &quad, &[5, 18, 44][..]),
+        ("triple", &triple, &[19][..]),
+    ] {
+        let case = Case::model(model).unwrap();
+        let (_, resolved) = case.build().unwrap();
+        for &k in patterns {
+            let truth: Vec<f64> = free
+                .iter()
+                .zip(bench_pattern(k, free.len()))
+                .map(|(n, up)| resolved.get(n).unwrap() * if up { 1.2 } else { 0.8 })
+                .collect();
+            let sets: Vec<String> = free
+                .iter()
+                .zip(&truth)
+                .map(|(n, v)| format!("{n}={v}"))
+                .collect();
+            let measured = synthetic_modes_of(model, &sets, 1e-4, None);
+            let result = fit(&case, &measured, None, free, &options).unwrap();
+            for (p, t) in result.parameters.iter().zip(&truth) {
+                assert!(
+                    (p.value - t).abs() <= 1e-4 * t.abs(),
+                    "{model} pattern {k}: {} = {} against {t}",
+                    p.name,
+                    p.value
+                );
+            }
+            assert!(result.explains_data && result.starts == 8, "{model} {k}");
+        }
+    }
+}
+
+/// A fit whose first start explains its data tries no more starts; one that does not
+/// explain it tries `more_starts` more, one at a time, and says how many it tried.
+#[test]
+fn more_starts_only_when_the_fit_does_not_explain_its_data() {
+    let quad = names(&[
+        "ln", "l1", "l2", "l3", "ufcn", "ufc1", "ufc2", "dm", "dn", "d0", "d1", "d2", "d3", "d4",
+        "mn", "m1", "m2", "m3", "Iny", "I1y",
+    ]);
+    let case = Case::model("quad").unwrap();
+    let (_, resolved) = case.build().unwrap();
+    // pattern 0 converges from the start; pattern 6 ends at chi^2/dof 3.5e4 from it
+    for (k, tried_at_least) in [(0, 1), (6, 2)] {
+        let sets: Vec<String> = quad
+            .iter()
+            .zip(bench_pattern(k, quad.len()))
+            .map(|(n, up)| {
+                format!(
+                    "{n}={}",
+                    resolved.get(n).unwrap() * if up { 1.2 } else { 0.8 }
+                )
+            })
+            .collect();
+        let measured = synthetic_modes_of("quad", &sets, 1e-4, None);
+        let result = fit(&case, &measured, None, &quad, &FitOptions::default()).unwrap();
+        if k == 0 {
+            assert_eq!(result.starts, 1);
+        } else {
+            assert!(
+                result.starts >= tried_at_least && result.starts <= 5,
+                "{}",
+                result.starts
+            );
+        }
+        let none = FitOptions {
+            more_starts: 0,
+            ..FitOptions::default()
+        };
+        let single = fit(&case, &measured, None, &quad, &none).unwrap();
+        assert_eq!(single.starts, 1);
+        assert_eq!(single.explains_data, k == 0, "pattern {k}");
     }
 }
