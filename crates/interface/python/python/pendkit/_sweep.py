@@ -149,18 +149,22 @@ def sweep(
 
     # the first points here, timed, until CALIBRATION_SECONDS have gone: 1, 2, 4, ... points
     parts: List[Tuple[int, npt.NDArray[Any], List[Tuple[int, str]]]] = []
-    done, batch, spent, cost = 0, 1, 0.0, 0.0
+    done, batch, spent = 0, 1, 0.0
+    costs: List[float] = []
     while done < n and spent < CALIBRATION_SECONDS:
         block = table[done:done + batch]
         start = time.perf_counter()
         rows, failed = _run_chunk(model, names, block, kind, kwargs)
         elapsed = time.perf_counter() - start
         parts.append((done, rows, failed))
-        # the last (largest) batch: the first point also pays for warming caches
-        cost = elapsed / len(block)
+        costs.append(elapsed / len(block))
         done += len(block)
         spent += elapsed
         batch *= 2
+    # a point's cost: the least of the batches' (other work on the machine only adds to a
+    # batch's time), the first batch left out when there are others (its point also warms
+    # the caches)
+    cost = min(costs[1:] or costs) if costs else 0.0
     size = max(1, math.ceil(CHUNK_SECONDS / cost)) if cost > 0 else n
     starts = list(range(done, n, size))
     blocks = [table[s:s + size] for s in starts]
