@@ -275,8 +275,9 @@ struct Model {
     case: Case,
 }
 
-/// A stage given as `"0a"` … `"2"` (any object whose `str()` is one), or stage 2, the
-/// complete model, when none is given (as the command line).
+/// A stage given as a name, `"0a"` … `"2"`, or an integer (`2`, numpy's too), or stage 2,
+/// the complete model, when none is given (as the command line); any other type is a
+/// `TypeError` naming `stage`.
 fn stage_or_complete(stage: Option<&Bound<'_, PyAny>>) -> PyResult<Stage> {
     match stage {
         None => Ok(Stage::S2),
