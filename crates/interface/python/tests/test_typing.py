@@ -1,7 +1,8 @@
 """The type stubs are complete: mypy checks the documented code (the Python blocks of the
 README and of docs/python.md) and every example in examples/python against them, and
 rejects a call the stubs do not allow (so the check can fail: a keyword the package does
-not take, a wrong type)."""
+not take, a wrong type); stubtest compares the stubs with the compiled core; and the
+documented use runs."""
 
 import re
 import subprocess
@@ -78,3 +79,14 @@ def test_the_stubs_match_the_compiled_core(tmp_path):
          "pendkit._sweep"],
         capture_output=True, text=True, cwd=tmp_path)
     assert done.returncode == 0, done.stdout + done.stderr
+
+
+def test_the_documented_use_runs(monkeypatch):
+    # docs/python.md's first block, as a user runs it from the repository's root (its fit
+    # reads examples/python/measured.csv); the sweeps block needs a running scheduler
+    monkeypatch.chdir(REPO)
+    code = python_blocks(REPO / "docs" / "python.md")[0]
+    scope: dict = {}
+    exec(compile(code, "docs/python.md", "exec"), scope)
+    assert scope["hz"].shape == (200, 24)
+    assert {p["name"] for p in scope["fit"]["parameters"]} == {"m1", "l1"}
