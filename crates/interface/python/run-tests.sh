@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Tests of pendkit's Python package: makes a venv (target/python-venv, or $PENDKIT_PY_VENV),
-# installs maturin, numpy, pytest, python-control, Dask distributed and pygwinc 0.6.2 from
-# PyPI, pip-installs the package from this folder (a build with the `python` profile: thin
+# installs maturin, numpy, pytest, mypy, python-control, Dask distributed, pygwinc 0.6.2 and
+# (on Python 3.11 and later) Finesse 3.0.2 with finesse-ligo 1.0.15
+# from PyPI, pip-installs the package from this folder (a build with the `python` profile: thin
 # LTO), builds the `pendkit` command line the tests compare with, and runs pytest.
 #
 #   crates/interface/python/run-tests.sh [pytest arguments...]
@@ -18,7 +19,7 @@ venv="${PENDKIT_PY_VENV:-$target/python-venv}"
 if [ ! -x "$venv/bin/python" ]; then
     "${PYTHON:-python3}" -m venv "$venv"
 fi
-packages=(maturin numpy pytest control "dask[distributed]" "finesse==3.0.2; python_version >= '3.11'" "finesse-ligo==1.0.15; python_version >= '3.11'")
+packages=(maturin numpy pytest mypy control "dask[distributed]" "finesse==3.0.2; python_version >= '3.11'" "finesse-ligo==1.0.15; python_version >= '3.11'")
 if [ "${PENDKIT_PY_GWINC:-1}" != 0 ]; then
     packages+=("gwinc==0.6.2")
 fi

@@ -4,29 +4,31 @@
 //!
 //! The physics is all in the `pendkit` crate: each method here parses its arguments as the
 //! command line does (`crates/interface/cli/src/common.rs`), calls the same library function, and
-//! converts the answer to numpy. Errors are `pendkit.PendkitError` (a `ValueError`) with the
-//! library's one-line message, the line the command line prints after `error: `.
+//! converts the answer to numpy, or to the result classes of `pendkit/_results.py` (plain
+//! Python dataclasses, so that they pickle and compare by value). Errors are
+//! `pendkit.PendkitError` (a `ValueError`, defined in the module `pendkit` so that it
+//! pickles) with the library's one-line message, the line the command line prints after
+//! `error: `; an argument of the wrong type is a `TypeError` naming it.
 
 use std::fmt::Display;
 use std::path::Path;
 use std::sync::Arc;
 
 use numpy::ndarray::Array2;
-use numpy::{
-    Complex64, IntoPyArray, PyArray1, PyArray2, PyArrayDyn, PyArrayMethods, PyUntypedArrayMethods,
-};
+use numpy::{Complex64, IntoPyArray, PyArray1, PyArrayDyn, PyArrayMethods, PyUntypedArrayMethods};
+use pendkit::Override;
 use pendkit::params::Resolved;
 use pendkit::stage::NamedStateSpace;
 use pendkit::stage::RunOptions;
 use pendkit::stage::run_stage_with;
 use pendkit::{Case, Error, NoiseOptions, Stage, StageResult};
 use pyo3::create_exception;
-use pyo3::exceptions::{PyImportError, PyValueError};
+use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyList, PyString, PyTuple};
+use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyString, PyTuple};
 
 create_exception!(
-    _pendkit,
+    pendkit,
     PendkitError,
     PyValueError,
     "A pendkit error: bad input (model, parameter, name, frequency) or a failed calculation; \
@@ -38,9 +40,213 @@ fn error(e: impl Display) -> PyErr {
     PendkitError::new_err(e.to_string())
 }
 
+/// A `TypeError` with `message` (which names the argument).
+fn type_error(message: String) -> PyErr {
+    PyTypeError::new_err(message)
+}
+
+/// The name of `v`'s type, for messages (`list`, `numpy.ndarray`).
+fn type_name(v: &Bound<'_, PyAny>) -> String {
+    let t = v.get_type();
+    let name = t
+        .name()
+        .map(|n| n.to_string())
+        .unwrap_or_else(|_| "?".into());
+    match t.module().map(|m| m.to_string()) {
+        Ok(module) if module != "builtins" => format!("{module}.{name}"),
+        _ => name,
+    }
+}
+
+/// A `pendkit._results` object of class `$class` with the fields `"name": value`.
+macro_rules! result {
+    ($py:expr, $class:literal, { $($field:literal : $value:expr),* $(,)? }) => {{
+        let kw = PyDict::new($py);
+        $( kw.set_item($field, $value)?; )*
+        make($py, $class, &kw)
+    }};
+}
+
+/// A real number as its `f64` (exactly the value, no decimal text in between): a Python
+/// `int` or `float`, any `numbers.Real` (numpy's integer and floating scalars, `Fraction`)
+/// or a numpy 0-d array of an integer or floating type; `None` for anything else (a `bool`
+/// too). `place` names the argument in the error of a value no `f64` holds.
+fn real_number(v: &Bound<'_, PyAny>, place: &str) -> PyResult<Option<f64>> {
+    if v.is_instance_of::<PyBool>() {
+        return Ok(None);
+    }
+    let py = v.py();
+    let real = if v.is_instance_of::<PyFloat>() || v.is_instance_of::<PyInt>() {
+        true
+    } else {
+        let numpy = py.import("numpy")?;
+        if v.is_instance(&numpy.getattr("bool_")?)? {
+            false
+        } else if v.is_instance(&py.import("numbers")?.getattr("Real")?)? {
+            true
+        } else if v.is_instance(&numpy.getattr("ndarray")?)? {
+            v.getattr("ndim")?.extract::<usize>()? == 0
+                && "fiu".contains(
+                    v.getattr("dtype")?
+                        .getattr("kind")?
+                        .extract::<String>()?
+                        .as_str(),
+                )
+        } else {
+            false
+        }
+    };
+    if !real {
+        return Ok(None);
+    }
+    v.extract::<f64>()
+        .map(Some)
+        .map_err(|e| error(format!("{place}: {e}")))
+}
+
+/// Python's spelling of a number that is not finite (`nan`, `inf`, `-inf`), else the
+/// shortest text that reads back as the same `f64`.
+fn number_text(x: f64) -> String {
+    if x.is_nan() {
+        "nan".into()
+    } else if x.is_infinite() {
+        if x > 0.0 { "inf" } else { "-inf" }.into()
+    } else {
+        pendkit::expr::number_text(x)
+    }
+}
+
+/// An override from `NAME` (a parameter or `damping.<tag>.<field>`) and a Python value: an
+/// expression string as the command line's `--set NAME=EXPR`, or a real number, taken as
+/// its `f64` (`Override::value`). `place` (`set['m3']`) names it in the errors: a `TypeError`
+/// for any other type, a `PendkitError` for a number that is not finite.
+fn override_from(name: &str, value: &Bound<'_, PyAny>, place: &str) -> PyResult<Override> {
+    if value.is_instance_of::<PyString>() {
+        let text: String = value.extract()?;
+        return Override::parse(&format!("{name}={text}")).map_err(error);
+    }
+    let Some(x) = real_number(value, place)? else {
+        return Err(type_error(format!(
+            "{place}: expected a real number or an expression string, got {}",
+            type_name(value)
+        )));
+    };
+    if !x.is_finite() {
+        return Err(error(format!(
+            "{place}: value {} is not finite",
+            number_text(x)
+        )));
+    }
+    // the name read as the command line reads it (trimmed, `damping.<tag>.<field>`)
+    Ok(
+        match Override::parse(&format!("{name}=0")).map_err(error)? {
+            Override::Damping { tag, field, .. } => {
+                Override::damping(tag, field, pendkit::expr::number_text(x))
+            }
+            other => Override::value(other.key(), x),
+        },
+    )
+}
+
+/// The overrides of a `set` argument: a dict `{name: value}` (values as `override_from`
+/// takes them) or a sequence of `NAME=EXPR` strings.
+fn overrides_from(set: Option<&Bound<'_, PyAny>>) -> PyResult<Vec<Override>> {
+    let Some(set) = set else {
+        return Ok(Vec::new());
+    };
+    if set.is_none() {
+        return Ok(Vec::new());
+    }
+    let expected = "set: expected a dict {name: value} or a list of 'NAME=EXPR' strings";
+    if let Ok(dict) = set.cast::<PyDict>() {
+        return dict
+            .iter()
+            .map(|(k, v)| {
+                let name: String = k.extract().map_err(|_| {
+                    type_error(format!(
+                        "set: the keys are parameter names (str), got {}",
+                        type_name(&k)
+                    ))
+                })?;
+                override_from(&name, &v, &format!("set['{name}']"))
+            })
+            .collect();
+    }
+    if set.is_instance_of::<PyString>() {
+        return Err(type_error(format!("{expected}, got one str")));
+    }
+    let items = set
+        .try_iter()
+        .map_err(|_| type_error(format!("{expected}, got {}", type_name(set))))?;
+    items
+        .enumerate()
+        .map(|(k, item)| {
+            let item = item?;
+            let text: String = item.extract().map_err(|_| {
+                type_error(format!(
+                    "set[{k}]: expected a 'NAME=EXPR' string, got {}",
+                    type_name(&item)
+                ))
+            })?;
+            Override::parse(&text).map_err(error)
+        })
+        .collect()
+}
+
+/// An override as the command line's `NAME=EXPR` text (a number as the shortest text that
+/// reads back as the same `f64`).
+fn override_text(o: &Override) -> String {
+    match o {
+        Override::Value { name, value } => format!("{name}={}", number_text(*value)),
+        Override::Expression { name, expression } => format!("{name}={expression}"),
+        Override::Damping {
+            tag,
+            field,
+            expression,
+        } => format!("damping.{tag}.{field}={expression}"),
+    }
+}
+
+/// An override as the case gets it: a number as the shortest text that reads back as the
+/// same `f64` (the same value; `Parameter.definition` then shows `45`, where the library's
+/// `Override::value` would write `4.5e1`).
+fn applied(o: &Override) -> Override {
+    match o {
+        Override::Value { name, value } if value.is_finite() => {
+            Override::expression(name.clone(), pendkit::expr::number_text(*value))
+        }
+        other => other.clone(),
+    }
+}
+
+/// What an override sets, for comparing models: a number (a value, or an expression that
+/// is one number literal) or the expression's text.
+#[derive(Clone, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+enum Setting {
+    /// The bits of the number (-0 as 0).
+    Number(u64),
+    /// The expression, trimmed.
+    Text(String),
+}
+
+impl Setting {
+    fn of(o: &Override) -> Setting {
+        let number = |x: f64| Setting::Number((x + 0.0).to_bits());
+        match o {
+            Override::Value { value, .. } => number(*value),
+            Override::Expression { expression, .. } | Override::Damping { expression, .. } => {
+                match pendkit::expr::number_literal(expression) {
+                    Ok(x) => number(x),
+                    Err(_) => Setting::Text(expression.trim().to_string()),
+                }
+            }
+        }
+    }
+}
+
 /// Where a model's case comes from, kept so that the model can be rebuilt in another
 /// process (pickling).
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
 enum Source {
     /// A bundled model, by name.
     Bundled(String),
@@ -52,107 +258,108 @@ enum Source {
 ///
 /// `Model(spec, set=None)`: `spec` is a bundled model name (`"quad"`, see
 /// `pendkit.models()`) or the path of a case file (`.toml`); `set` overrides parameters,
-/// as a dict `{"d4": 0.01, "m3": "scale(1.1)"}` or a list of `"NAME=EXPR"` strings, applied
+/// as a dict `{"d4": 0.01, "m3": "scale(1.1)"}` (a real number, numpy's too, is taken as
+/// its exact value, a string as an expression) or a list of `"NAME=EXPR"` strings, applied
 /// in order after the case file's own (`damping.<tag>.<field>` sets a damping field), as
 /// the command line's `--set`.
 ///
 /// Models pickle (by model name or case-file text, and the overrides), so they can be
-/// sent to worker processes and Dask clusters.
+/// sent to worker processes and Dask clusters, and compare by value: the same model name
+/// (or case file path and text) and the same overrides, in any order.
 #[pyclass(module = "pendkit._pendkit", frozen)]
 struct Model {
     source: Source,
-    sets: Vec<String>,
+    overrides: Vec<Override>,
+    /// The case as its source gives it, before `overrides`.
+    base: Case,
     case: Case,
 }
 
-/// `NAME=EXPR` strings from a dict (values as `str()` gives them: Python's `repr` of a
-/// float reads back exactly) or a sequence of strings.
-fn set_strings(set: Option<&Bound<'_, PyAny>>) -> PyResult<Vec<String>> {
-    let Some(set) = set else {
-        return Ok(Vec::new());
-    };
-    if set.is_none() {
-        return Ok(Vec::new());
-    }
-    if let Ok(dict) = set.cast::<PyDict>() {
-        return dict
-            .iter()
-            .map(|(k, v)| {
-                let name: String = k.str()?.extract()?;
-                let value = if v.is_instance_of::<PyString>() {
-                    v.extract::<String>()?
-                } else {
-                    v.repr()?.extract::<String>()?
-                };
-                Ok(format!("{name}={value}"))
-            })
-            .collect();
-    }
-    if set.is_instance_of::<PyString>() {
-        return Err(error(
-            "set: expected a dict {name: value} or a list of 'NAME=EXPR' strings, not one string",
-        ));
-    }
-    let items = set.try_iter().map_err(|_| {
-        error("set: expected a dict {name: value} or a list of 'NAME=EXPR' strings")
-    })?;
-    items
-        .map(|item| {
-            item?
-                .extract::<String>()
-                .map_err(|_| error("set: each item of the list must be a 'NAME=EXPR' string"))
-        })
-        .collect()
-}
-
-/// A stage given as `"0a"` … `"2"` (any object whose `str()` is one), or stage 2, the
-/// complete model, when none is given (as the command line).
+/// A stage given as a name, `"0a"` … `"2"`, or an integer (`2`, numpy's too), or stage 2,
+/// the complete model, when none is given (as the command line); any other type is a
+/// `TypeError` naming `stage`.
 fn stage_or_complete(stage: Option<&Bound<'_, PyAny>>) -> PyResult<Stage> {
     match stage {
         None => Ok(Stage::S2),
-        Some(s) => s
-            .str()?
-            .extract::<String>()?
-            .parse::<Stage>()
-            .map_err(error),
+        Some(s) if s.is_none() => Ok(Stage::S2),
+        Some(s) => {
+            // a name ("1b"), or an integer (2, numpy's too) for the stages that are one
+            let text = if s.is_instance_of::<PyString>() {
+                s.extract::<String>()?
+            } else if !s.is_instance_of::<PyBool>() && s.hasattr("__index__")? {
+                s.call_method0("__index__")?.str()?.extract::<String>()?
+            } else {
+                return Err(type_error(format!(
+                    "stage: expected a stage name (\"0a\", \"0b\", \"1a\", \"1b\", \"2\"), got {}",
+                    type_name(s)
+                )));
+            };
+            text.parse::<Stage>().map_err(error)
+        }
     }
 }
 
-/// A path given as a str or an os.PathLike.
-fn fspath(path: &Bound<'_, PyAny>) -> PyResult<String> {
+/// A path given as a str or an os.PathLike; `place` names the argument in the error.
+fn fspath(path: &Bound<'_, PyAny>, place: &str) -> PyResult<String> {
     path.py()
         .import("os")?
         .call_method1("fspath", (path,))
         .and_then(|p| p.extract::<String>())
-        .map_err(|_| error("expected a path (str or os.PathLike)"))
+        .map_err(|_| {
+            type_error(format!(
+                "{place}: expected a path (str or os.PathLike), got {}",
+                type_name(path)
+            ))
+        })
 }
 
 /// Measured modes from a CSV file's path, or from a list of `(label, hz, sigma_hz[,
 /// shape])` tuples (checked as a file's lines are; the errors name item k, from 0, `modes:k+1`).
 fn measured_modes(modes: &Bound<'_, PyAny>) -> PyResult<pendkit::fit::MeasuredModes> {
     if modes.is_instance_of::<PyString>() || modes.hasattr("__fspath__")? {
-        return pendkit::fit::MeasuredModes::read(Path::new(&fspath(modes)?)).map_err(error);
+        return pendkit::fit::MeasuredModes::read(Path::new(&fspath(modes, "modes")?))
+            .map_err(error);
     }
     let mut rows: Vec<Vec<String>> = Vec::new();
     for item in modes.try_iter().map_err(|_| {
-        error("modes: expected a file path or a list of (label, hz, sigma_hz[, shape]) tuples")
+        type_error(format!(
+            "modes: expected a file path or a list of (label, hz, sigma_hz[, shape]) tuples, got {}",
+            type_name(modes)
+        ))
     })? {
         let item = item?;
         let k = rows.len();
         // a str is iterable too: its characters would pass for fields
         if item.is_instance_of::<PyString>() {
-            return Err(error(format!(
+            return Err(type_error(format!(
                 "modes[{k}]: expected a tuple (label, hz, sigma_hz[, shape]), got a str"
             )));
         }
         let fields: Vec<String> = item
             .try_iter()
             .map_err(|_| {
-                error(format!(
-                    "modes[{k}]: expected a tuple (label, hz, sigma_hz[, shape])"
+                type_error(format!(
+                    "modes[{k}]: expected a tuple (label, hz, sigma_hz[, shape]), got {}",
+                    type_name(&item)
                 ))
             })?
-            .map(|f| f.and_then(|f| f.str()?.extract::<String>()))
+            .enumerate()
+            .map(|(j, f)| {
+                let f = f?;
+                // hz and sigma_hz: a number as its exact f64's shortest text, a string as
+                // a file's field
+                if (j == 1 || j == 2) && !f.is_instance_of::<PyString>() {
+                    let place = format!("modes[{k}][{j}]");
+                    return match real_number(&f, &place)? {
+                        Some(x) => Ok(number_text(x)),
+                        None => Err(type_error(format!(
+                            "{place}: expected a real number (Hz), got {}",
+                            type_name(&f)
+                        ))),
+                    };
+                }
+                f.str()?.extract::<String>()
+            })
             .collect::<PyResult<_>>()?;
         rows.push(fields);
     }
@@ -161,13 +368,30 @@ fn measured_modes(modes: &Bound<'_, PyAny>) -> PyResult<pendkit::fit::MeasuredMo
 }
 
 impl Model {
-    fn open(source: Source, sets: Vec<String>) -> Result<Model, Error> {
-        let case = match &source {
+    fn open(source: Source, overrides: Vec<Override>) -> Result<Model, Error> {
+        let base = match &source {
             Source::Bundled(name) => Case::model(name)?,
             Source::CaseFile { path, text } => Case::from_text(Path::new(path), text)?,
-        }
-        .with_sets(&sets)?;
-        Ok(Model { source, sets, case })
+        };
+        let case = base.clone().with(overrides.iter().map(applied))?;
+        Ok(Model {
+            source,
+            overrides,
+            base,
+            case,
+        })
+    }
+
+    /// What makes two models equal: the source and the overrides by what they set, in
+    /// any order (each is given at most once).
+    fn identity(&self) -> (&Source, Vec<(String, Setting)>) {
+        let mut settings: Vec<(String, Setting)> = self
+            .overrides
+            .iter()
+            .map(|o| (o.key(), Setting::of(o)))
+            .collect();
+        settings.sort();
+        (&self.source, settings)
     }
 }
 
@@ -188,9 +412,14 @@ impl Model {
                 .import("os")?
                 .call_method1("fspath", (spec,))
                 .and_then(|p| p.extract::<String>())
-                .map_err(|_| error("spec: expected a model name or a case-file path"))?,
+                .map_err(|_| {
+                    type_error(format!(
+                        "spec: expected a model name or a case-file path (str or os.PathLike), got {}",
+                        type_name(spec)
+                    ))
+                })?,
         };
-        let sets = set_strings(set)?;
+        let overrides = overrides_from(set)?;
         let path = Path::new(&spec);
         let source = match _case_text {
             Some(text) => Source::CaseFile { path: spec, text },
@@ -206,16 +435,25 @@ impl Model {
             }
             None => Source::Bundled(spec),
         };
-        Model::open(source, sets).map_err(error)
+        Model::open(source, overrides).map_err(error)
     }
 
-    /// The arguments that rebuild this model in another process (pickle).
+    /// The arguments that rebuild this model in another process (pickle): the overrides
+    /// as a dict, numbers as floats (exact), expressions as strings.
     fn __getnewargs_ex__<'py>(
         &self,
         py: Python<'py>,
     ) -> PyResult<(Bound<'py, PyTuple>, Bound<'py, PyDict>)> {
         let kwargs = PyDict::new(py);
-        kwargs.set_item("set", PyList::new(py, &self.sets)?)?;
+        let set = PyDict::new(py);
+        for o in &self.overrides {
+            match o {
+                Override::Value { name, value } => set.set_item(name, value)?,
+                Override::Expression { name, expression } => set.set_item(name, expression)?,
+                Override::Damping { expression, .. } => set.set_item(o.key(), expression)?,
+            }
+        }
+        kwargs.set_item("set", set)?;
         let spec = match &self.source {
             Source::Bundled(name) => name.clone(),
             Source::CaseFile { path, text } => {
@@ -231,11 +469,22 @@ impl Model {
             Source::Bundled(name) => name,
             Source::CaseFile { path, .. } => path,
         };
-        if self.sets.is_empty() {
+        if self.overrides.is_empty() {
             format!("pendkit.Model({spec:?})")
         } else {
-            format!("pendkit.Model({spec:?}, set={:?})", self.sets)
+            format!("pendkit.Model({spec:?}, set={:?})", self.sets())
         }
+    }
+
+    fn __eq__(&self, other: &Self) -> bool {
+        self.identity() == other.identity()
+    }
+
+    fn __hash__(&self) -> u64 {
+        use std::hash::{Hash, Hasher};
+        let mut hasher = std::collections::hash_map::DefaultHasher::new();
+        self.identity().hash(&mut hasher);
+        hasher.finish()
     }
 
     /// Case name: the model name, or the case file's stem.
@@ -259,26 +508,29 @@ impl Model {
     /// The overrides given to this model, as `NAME=EXPR` strings in order.
     #[getter]
     fn sets(&self) -> Vec<String> {
-        self.sets.clone()
+        self.overrides.iter().map(override_text).collect()
     }
 
     /// This model with more overrides (applied after this model's own): a dict or a list
     /// of `NAME=EXPR` strings.
     fn with_set(&self, set: &Bound<'_, PyAny>) -> PyResult<Model> {
-        let mut sets = self.sets.clone();
-        sets.extend(set_strings(Some(set))?);
-        Model::open(self.source.clone(), sets).map_err(error)
+        let mut overrides = self.overrides.clone();
+        overrides.extend(overrides_from(Some(set))?);
+        Model::open(self.source.clone(), overrides).map_err(error)
     }
 
     /// Every numeric parameter as resolved (with the overrides): a list of `Parameter`
     /// (name, value, unit, definition, overridden).
-    fn parameters(&self, py: Python<'_>) -> PyResult<Vec<Parameter>> {
+    fn parameters<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyAny>>> {
         let case = &self.case;
         py.detach(|| {
             let (_, resolved) = case.build()?;
             parameters(case, &resolved)
         })
-        .map_err(error)
+        .map_err(error)?
+        .into_iter()
+        .map(|p| p.into_python(py))
+        .collect()
     }
 
     /// Fits the parameters named in `free` (a list of names) to measured mode frequencies,
@@ -307,13 +559,13 @@ impl Model {
         let stage = stage_or_complete(stage)?;
         let jacobian: pendkit::fit::JacobianMethod = jacobian
             .parse()
-            .map_err(|e: String| PyValueError::new_err(e))?;
+            .map_err(|e: String| error(format!("jacobian: {e}")))?;
         let measured = measured_modes(modes)?;
         let tf = match tf {
             None => None,
-            Some(path) => {
-                Some(pendkit::fit::MeasuredTf::read(Path::new(&fspath(path)?)).map_err(error)?)
-            }
+            Some(path) => Some(
+                pendkit::fit::MeasuredTf::read(Path::new(&fspath(path, "tf")?)).map_err(error)?,
+            ),
         };
         let case = self.case.clone();
         let options = pendkit::fit::FitOptions {
@@ -338,9 +590,10 @@ impl Model {
     /// `"2"`, the complete model, as the command line): equilibrium, matrices and every
     /// normal mode. Returns a `Result`.
     #[pyo3(signature = (stage = None))]
-    fn run(&self, py: Python<'_>, stage: Option<&Bound<'_, PyAny>>) -> PyResult<StageRun> {
+    fn run(slf: &Bound<'_, Self>, stage: Option<&Bound<'_, PyAny>>) -> PyResult<StageRun> {
+        let py = slf.py();
         let stage = stage_or_complete(stage)?;
-        let case = self.case.clone();
+        let case = slf.get().case.clone();
         let run = py
             .detach(move || -> std::result::Result<Run, Error> {
                 let (system, resolved) = case.build()?;
@@ -353,7 +606,10 @@ impl Model {
                 })
             })
             .map_err(error)?;
-        Ok(StageRun { run: Arc::new(run) })
+        Ok(StageRun {
+            run: Arc::new(run),
+            model: slf.clone().unbind(),
+        })
     }
 
     /// Derivatives with respect to the parameters at `stage` (default `"2"`), as
@@ -366,18 +622,18 @@ impl Model {
     /// every parameter, even where the exact route is open. Returns a `Sensitivities`.
     #[pyo3(signature = (stage = None, *, modes = true, tf = None, noise = None, freqs = None, parameters = None, allow_unstable = false, differences = false))]
     #[allow(clippy::too_many_arguments)]
-    fn sensitivities(
+    fn sensitivities<'py>(
         &self,
-        py: Python<'_>,
-        stage: Option<&Bound<'_, PyAny>>,
+        py: Python<'py>,
+        stage: Option<&Bound<'py, PyAny>>,
         modes: bool,
         tf: Option<(String, String)>,
         noise: Option<String>,
-        freqs: Option<&Bound<'_, PyAny>>,
+        freqs: Option<&Bound<'py, PyAny>>,
         parameters: Option<Vec<String>>,
         allow_unstable: bool,
         differences: bool,
-    ) -> PyResult<Sensitivities> {
+    ) -> PyResult<Bound<'py, PyAny>> {
         let stage = stage_or_complete(stage)?;
         let freqs = match freqs {
             Some(f) => frequencies(f)?,
@@ -416,61 +672,22 @@ impl Model {
         };
         let (tf_abs, dtf_abs_dp) = pair(&s.tf_abs)?;
         let (noise_asd, dnoise_asd_dp) = pair(&s.noise_asd)?;
-        Ok(Sensitivities {
-            values: PyArray1::from_slice(py, &s.values).unbind(),
-            modes_hz: PyArray1::from_slice(py, &s.modes_hz).unbind(),
-            dfdp: rows(&s.dfdp, np)?,
-            freqs: PyArray1::from_slice(py, &request.freqs).unbind(),
-            parameters: s.parameters,
-            units: s.units,
-            mode_labels: s.mode_labels,
-            tf_abs,
-            dtf_abs_dp,
-            noise_asd,
-            dnoise_asd_dp,
-            not_differentiable: s.not_differentiable,
-            exact: s.exact,
-            warning: s.warning,
+        result!(py, "Sensitivities", {
+            "parameters": s.parameters,
+            "values": PyArray1::from_slice(py, &s.values),
+            "units": s.units,
+            "modes_hz": PyArray1::from_slice(py, &s.modes_hz),
+            "mode_labels": s.mode_labels,
+            "dfdp": rows(&s.dfdp, np)?,
+            "freqs": PyArray1::from_slice(py, &request.freqs),
+            "tf_abs": tf_abs,
+            "dtf_abs_dp": dtf_abs_dp,
+            "noise_asd": noise_asd,
+            "dnoise_asd_dp": dnoise_asd_dp,
+            "not_differentiable": s.not_differentiable,
+            "exact": s.exact,
+            "warning": s.warning,
         })
-    }
-}
-
-/// Derivatives of a stage's answers with respect to the parameters (`Model.sensitivities`):
-/// `parameters`, `values`, `units` (the columns), `modes_hz` and `mode_labels` (the rows of
-/// `dfdp`), `dfdp` (modes × parameters, Hz per unit of the parameter; no rows when the
-/// modes were not asked for), `freqs` (Hz), `tf_abs` and `dtf_abs_dp` (frequencies ×
-/// parameters), `noise_asd` and `dnoise_asd_dp` (None unless asked for),
-/// `not_differentiable` ((name, why) of switches and counts left out), `exact` (per
-/// parameter: its mode sensitivities differentiated exactly by dual numbers and the
-/// implicit function theorem, or exactly 0 for a parameter nothing or only the loss angles
-/// read, else by differences of the stage's matrices; the |H| and
-/// noise sensitivities are always differenced) and `warning`.
-#[pyclass(module = "pendkit._pendkit", frozen, get_all)]
-struct Sensitivities {
-    parameters: Vec<String>,
-    values: Py<PyArray1<f64>>,
-    units: Vec<String>,
-    modes_hz: Py<PyArray1<f64>>,
-    mode_labels: Vec<String>,
-    dfdp: Py<PyArray2<f64>>,
-    freqs: Py<PyArray1<f64>>,
-    tf_abs: Option<Py<PyArray1<f64>>>,
-    dtf_abs_dp: Option<Py<PyArray2<f64>>>,
-    noise_asd: Option<Py<PyArray1<f64>>>,
-    dnoise_asd_dp: Option<Py<PyArray2<f64>>>,
-    not_differentiable: Vec<(String, String)>,
-    exact: Vec<bool>,
-    warning: Option<String>,
-}
-
-#[pymethods]
-impl Sensitivities {
-    fn __repr__(&self) -> String {
-        format!(
-            "<pendkit.Sensitivities: {} modes × {} parameters>",
-            self.mode_labels.len(),
-            self.parameters.len()
-        )
     }
 }
 
@@ -489,10 +706,7 @@ fn parameters(case: &Case, resolved: &Resolved) -> std::result::Result<Vec<Param
         .collect())
 }
 
-/// One parameter as resolved: `name`, `value` (in `unit`), `unit` (SI; empty for a pure
-/// number), `definition` (the expression: the model's default or the override) and
-/// `overridden` (whether an override set it).
-#[pyclass(module = "pendkit._pendkit", frozen, get_all)]
+/// One parameter as resolved (`pendkit.Parameter`).
 struct Parameter {
     name: String,
     value: f64,
@@ -501,18 +715,27 @@ struct Parameter {
     overridden: bool,
 }
 
-#[pymethods]
 impl Parameter {
-    fn __repr__(&self) -> String {
-        format!(
-            "Parameter(name={:?}, value={:?}, unit={:?}, definition={:?}, overridden={})",
-            self.name,
-            self.value,
-            self.unit,
-            self.definition,
-            if self.overridden { "True" } else { "False" }
-        )
+    fn into_python(self, py: Python<'_>) -> PyResult<Bound<'_, PyAny>> {
+        let kw = PyDict::new(py);
+        kw.set_item("name", self.name)?;
+        kw.set_item("value", self.value)?;
+        kw.set_item("unit", self.unit)?;
+        kw.set_item("definition", self.definition)?;
+        kw.set_item("overridden", self.overridden)?;
+        make(py, "Parameter", &kw)
     }
+}
+
+/// An object of the result class `class` of `pendkit._results` made with `kwargs`.
+fn make<'py>(
+    py: Python<'py>,
+    class: &str,
+    kwargs: &Bound<'py, PyDict>,
+) -> PyResult<Bound<'py, PyAny>> {
+    py.import("pendkit._results")?
+        .getattr(class)?
+        .call((), Some(kwargs))
 }
 
 /// One run of a stage.
@@ -607,13 +830,39 @@ fn frequencies(freqs: &Bound<'_, PyAny>) -> PyResult<Vec<f64>> {
 
 /// The result of running one stage of a model: equilibrium, matrices and normal modes, from
 /// which transfer functions, thermal noise and the state space are computed.
+///
+/// A result pickles as its model and stage, and is computed again when unpickled (pendkit
+/// is deterministic: the same numbers); two results are equal when their models and stages
+/// are.
 #[pyclass(module = "pendkit._pendkit", name = "Result", frozen)]
 struct StageRun {
     run: Arc<Run>,
+    /// The model that was run.
+    model: Py<Model>,
 }
 
 #[pymethods]
 impl StageRun {
+    /// `Model.run` of the model, with the stage: what rebuilds this result (pickle).
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, (&'static str,))> {
+        Ok((
+            self.model.bind(py).getattr("run")?,
+            (self.run.stage.name(),),
+        ))
+    }
+
+    fn __eq__(&self, other: &Self) -> bool {
+        self.run.stage == other.run.stage
+            && self.model.get().identity() == other.model.get().identity()
+    }
+
+    fn __hash__(&self) -> u64 {
+        use std::hash::{Hash, Hasher};
+        let mut hasher = std::collections::hash_map::DefaultHasher::new();
+        (self.run.stage.name(), self.model.get().identity()).hash(&mut hasher);
+        hasher.finish()
+    }
+
     fn __repr__(&self) -> String {
         format!(
             "<pendkit.Result {} ({}), stage {}: {} modes>",
@@ -649,8 +898,12 @@ impl StageRun {
     }
 
     /// The parameters this run resolved (as `Model.parameters()`).
-    fn parameters(&self) -> PyResult<Vec<Parameter>> {
-        parameters(&self.run.case, &self.run.resolved).map_err(error)
+    fn parameters<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyAny>>> {
+        parameters(&self.run.case, &self.run.resolved)
+            .map_err(error)?
+            .into_iter()
+            .map(|p| p.into_python(py))
+            .collect()
     }
 
     /// Equilibrium value of every coordinate (m or rad), by name (in `naming`, e.g.
@@ -674,7 +927,7 @@ impl StageRun {
     /// ω², mass-normalised shapes and kinetic-energy fractions, and the labels, families
     /// and coordinate names (in `naming`, e.g. `"ligo"`, or the model's own names).
     #[pyo3(signature = (naming = None))]
-    fn modes(&self, py: Python<'_>, naming: Option<&str>) -> PyResult<Modes> {
+    fn modes<'py>(&self, py: Python<'py>, naming: Option<&str>) -> PyResult<Bound<'py, PyAny>> {
         let scheme = self.run.scheme(naming)?;
         let r = &self.run.result;
         let list = &r.modes.modes;
@@ -686,48 +939,53 @@ impl StageRun {
             .into_pyarray(py)
             .unbind()
         };
-        Ok(Modes {
-            frequencies: PyArray1::from_iter(py, list.iter().map(|m| m.hz)).unbind(),
-            omega_squared: PyArray1::from_iter(py, list.iter().map(|m| m.omega_squared)).unbind(),
-            stable: PyArray1::from_iter(py, list.iter().map(|m| m.is_stable())).unbind(),
-            labels: list
-                .iter()
-                .map(|m| self.run.coord(scheme, &m.label))
-                .collect(),
-            families: list.iter().map(|m| r.mode_family(m)).collect(),
-            coordinates: r
-                .modes
-                .coordinates
-                .iter()
-                .map(|c| self.run.coord(scheme, c))
-                .collect(),
-            coordinate_units: r
-                .modes
-                .coordinates
-                .iter()
-                .map(|c| r.coordinate_unit(c).unwrap_or_default().to_string())
-                .collect(),
-            shapes: rows(&|m| &m.vector),
-            energy_fractions: rows(&|m| &m.energy_fractions),
+        let labels: Vec<String> = list
+            .iter()
+            .map(|m| self.run.coord(scheme, &m.label))
+            .collect();
+        let families: Vec<String> = list.iter().map(|m| r.mode_family(m)).collect();
+        let coordinates: Vec<String> = r
+            .modes
+            .coordinates
+            .iter()
+            .map(|c| self.run.coord(scheme, c))
+            .collect();
+        let coordinate_units: Vec<String> = r
+            .modes
+            .coordinates
+            .iter()
+            .map(|c| r.coordinate_unit(c).unwrap_or_default().to_string())
+            .collect();
+        result!(py, "Modes", {
+            "frequencies": PyArray1::from_iter(py, list.iter().map(|m| m.hz)),
+            "omega_squared": PyArray1::from_iter(py, list.iter().map(|m| m.omega_squared)),
+            "stable": PyArray1::from_iter(py, list.iter().map(|m| m.is_stable())),
+            "labels": labels,
+            "families": families,
+            "coordinates": coordinates,
+            "coordinate_units": coordinate_units,
+            "shapes": rows(&|m| &m.vector),
+            "energy_fractions": rows(&|m| &m.energy_fractions),
         })
     }
 
     /// The stability verdict: a `Stability` (stable, the message naming the first growing
     /// mode, the indices of the unstable modes). An unstable mode has ω² < 0.
-    fn stability(&self) -> Stability {
+    fn stability<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let r = &self.run.result;
-        Stability {
-            stable: r.stability().is_ok(),
-            message: r.stability().err().map(|e| e.to_string()),
-            unstable_modes: r
-                .modes
-                .modes
-                .iter()
-                .enumerate()
-                .filter(|(_, m)| !m.is_stable())
-                .map(|(i, _)| i)
-                .collect(),
-        }
+        let unstable: Vec<usize> = r
+            .modes
+            .modes
+            .iter()
+            .enumerate()
+            .filter(|(_, m)| !m.is_stable())
+            .map(|(i, _)| i)
+            .collect();
+        result!(py, "Stability", {
+            "stable": r.stability().is_ok(),
+            "message": r.stability().err().map(|e| e.to_string()),
+            "unstable_modes": unstable,
+        })
     }
 
     /// Raises `PendkitError` with the command line's message if the equilibrium is
@@ -785,13 +1043,13 @@ impl StageRun {
     /// a `Noise` with the PSD (m²/Hz or rad²/Hz) and ASD (m/√Hz or rad/√Hz) and their
     /// breakdown by damping tag (dicts of numpy arrays, adding up to the PSD).
     #[pyo3(signature = (output, freqs, *, full = false))]
-    fn noise(
+    fn noise<'py>(
         &self,
-        py: Python<'_>,
+        py: Python<'py>,
         output: &str,
-        freqs: &Bound<'_, PyAny>,
+        freqs: &Bound<'py, PyAny>,
         full: bool,
-    ) -> PyResult<Noise> {
+    ) -> PyResult<Bound<'py, PyAny>> {
         self.run.check_lossy()?;
         let freqs = frequencies(freqs)?;
         let run = &self.run;
@@ -810,14 +1068,14 @@ impl StageRun {
         for (tag, asd) in noise.asd_by_tag() {
             asd_by_tag.set_item(tag, asd.into_pyarray(py))?;
         }
-        Ok(Noise {
-            unit: format!("{}/√Hz", run.result.output_unit(output).unwrap_or_default()),
-            temperature: run.result.system.temperature,
-            freqs: freqs.into_pyarray(py).unbind(),
-            psd: PyArray1::from_slice(py, noise.psd()).unbind(),
-            asd: noise.asd().into_pyarray(py).unbind(),
-            psd_by_tag: psd_by_tag.unbind(),
-            asd_by_tag: asd_by_tag.unbind(),
+        result!(py, "Noise", {
+            "freqs": freqs.into_pyarray(py),
+            "psd": PyArray1::from_slice(py, noise.psd()),
+            "asd": noise.asd().into_pyarray(py),
+            "psd_by_tag": psd_by_tag,
+            "asd_by_tag": asd_by_tag,
+            "unit": format!("{}/√Hz", run.result.output_unit(output).unwrap_or_default()),
+            "temperature": run.result.system.temperature,
         })
     }
 
@@ -826,7 +1084,8 @@ impl StageRun {
     /// from forces; without the damping force of the support's velocity. `inputs` and
     /// `outputs` select (and order) columns and rows by name (default: all); names are those
     /// of the state space in `naming` (inputs: support parameters then `force:<variable>`;
-    /// outputs: variables then `force:<parameter>`). Returns a `StateSpace`.
+    /// outputs: variables then `force:<parameter>`, and any state, e.g. the velocity
+    /// `x0_dot`). Returns a `StateSpace`.
     #[pyo3(signature = (inputs = None, outputs = None, *, damping_frequency = 1.0, naming = None))]
     fn state_space<'py>(
         &self,
@@ -835,14 +1094,31 @@ impl StageRun {
         outputs: Option<Vec<String>>,
         damping_frequency: f64,
         naming: Option<&str>,
-    ) -> PyResult<StateSpace> {
+    ) -> PyResult<Bound<'py, PyAny>> {
         self.run.check_lossy()?;
         let scheme = self.run.scheme(naming)?;
         let run = &self.run;
         let named = py
             .detach(|| run.result.named_state_space(damping_frequency, scheme))
             .map_err(error)?;
-        StateSpace::select(py, named, inputs, outputs)
+        state_space(py, &named, inputs, outputs)
+    }
+
+    /// `state_space(...)` as a python-control `StateSpace` (`StateSpace.to_control`): its
+    /// inputs, outputs and states named as valid identifiers (`force:x0` → `force_x0`),
+    /// the system named `name`. Needs python-control.
+    #[pyo3(signature = (inputs = None, outputs = None, *, damping_frequency = 1.0, naming = None, name = None))]
+    fn to_control<'py>(
+        &self,
+        py: Python<'py>,
+        inputs: Option<Vec<String>>,
+        outputs: Option<Vec<String>>,
+        damping_frequency: f64,
+        naming: Option<&str>,
+        name: Option<String>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        self.state_space(py, inputs, outputs, damping_frequency, naming)?
+            .call_method1("to_control", (name,))
     }
 }
 
@@ -854,109 +1130,11 @@ fn solver(full: bool) -> pendkit::Solver {
     }
 }
 
-/// Normal modes, ascending in ω²: `frequencies` (Hz; minus the growth rate for an unstable
-/// mode), `omega_squared` (rad²/s²), `stable` (bool per mode), `labels` (dominant
-/// coordinate), `families` (degree-of-freedom family), `coordinates` and
-/// `coordinate_units` (the columns of the next two), `shapes` (modes × coordinates,
-/// mass-normalised, m or rad) and `energy_fractions` (modes × coordinates, rows sum to 1).
-#[pyclass(module = "pendkit._pendkit", frozen, get_all)]
-struct Modes {
-    frequencies: Py<PyArray1<f64>>,
-    omega_squared: Py<PyArray1<f64>>,
-    stable: Py<PyArray1<bool>>,
-    labels: Vec<String>,
-    families: Vec<String>,
-    coordinates: Vec<String>,
-    coordinate_units: Vec<String>,
-    shapes: Py<PyArray2<f64>>,
-    energy_fractions: Py<PyArray2<f64>>,
-}
-
-#[pymethods]
-impl Modes {
-    fn __len__(&self) -> usize {
-        self.labels.len()
-    }
-
-    fn __repr__(&self) -> String {
-        format!(
-            "<pendkit.Modes: {} modes over {} coordinates>",
-            self.labels.len(),
-            self.coordinates.len()
-        )
-    }
-}
-
-/// Thermal noise: `freqs` (Hz), `psd` (one-sided, m²/Hz or rad²/Hz), `asd` (m/√Hz or
-/// rad/√Hz, `unit`), `psd_by_tag` and `asd_by_tag` (dicts tag → numpy array; the PSDs add
-/// up to `psd`), `temperature` (K).
-#[pyclass(module = "pendkit._pendkit", frozen, get_all)]
-struct Noise {
-    freqs: Py<PyArray1<f64>>,
-    psd: Py<PyArray1<f64>>,
-    asd: Py<PyArray1<f64>>,
-    psd_by_tag: Py<PyDict>,
-    asd_by_tag: Py<PyDict>,
-    unit: String,
-    temperature: f64,
-}
-
-#[pymethods]
-impl Noise {
-    fn __repr__(&self, py: Python<'_>) -> String {
-        format!(
-            "<pendkit.Noise: {} frequencies, {} tags, ASD in {}>",
-            self.freqs.bind(py).len(),
-            self.psd_by_tag.bind(py).len(),
-            self.unit
-        )
-    }
-}
-
-/// The stability verdict: `stable` (no mode with ω² < 0), `message` (the command line's
-/// one-line error naming the first growing mode, or None) and `unstable_modes` (indices
-/// into `Result.modes()`).
-#[pyclass(module = "pendkit._pendkit", frozen, get_all)]
-struct Stability {
-    stable: bool,
-    message: Option<String>,
-    unstable_modes: Vec<usize>,
-}
-
-#[pymethods]
-impl Stability {
-    fn __bool__(&self) -> bool {
-        self.stable
-    }
-
-    fn __repr__(&self) -> String {
-        match &self.message {
-            None => "Stability(stable=True)".into(),
-            Some(m) => format!("Stability(stable=False, message={m:?})"),
-        }
-    }
-}
-
-/// A state space ẋ = A x + B u, y = C x + D u: `A`, `B`, `C`, `D` (numpy), the names
-/// `states`, `inputs`, `outputs` and their SI units, and `damping_frequency` (Hz).
-/// `to_control()` makes a python-control `StateSpace` with the same names.
-#[pyclass(module = "pendkit._pendkit", frozen, get_all)]
-struct StateSpace {
-    #[pyo3(name = "A")]
-    a: Py<PyArray2<f64>>,
-    #[pyo3(name = "B")]
-    b: Py<PyArray2<f64>>,
-    #[pyo3(name = "C")]
-    c: Py<PyArray2<f64>>,
-    #[pyo3(name = "D")]
-    d: Py<PyArray2<f64>>,
-    states: Vec<String>,
-    inputs: Vec<String>,
-    outputs: Vec<String>,
-    state_units: Vec<String>,
-    input_units: Vec<String>,
-    output_units: Vec<String>,
-    damping_frequency: f64,
+/// A row of the state space's output matrices: an output, or a state read directly.
+#[derive(Clone, Copy)]
+enum Row {
+    Output(usize),
+    State(usize),
 }
 
 /// Indices of `wanted` in `names` (all of them when `None`), or an error listing the
@@ -978,67 +1156,267 @@ fn pick(what: &str, names: &[String], wanted: Option<Vec<String>>) -> PyResult<V
     }
 }
 
-impl StateSpace {
-    fn select(
-        py: Python<'_>,
-        named: NamedStateSpace,
-        inputs: Option<Vec<String>>,
-        outputs: Option<Vec<String>>,
-    ) -> PyResult<StateSpace> {
-        let ss = &named.state_space;
-        let cols = pick("an input", &ss.inputs, inputs)?;
-        let rows = pick("an output", &ss.outputs, outputs)?;
-        let n = ss.a.nrows();
-        let matrix = |r: usize, c: usize, f: &dyn Fn(usize, usize) -> f64| {
-            Array2::from_shape_fn((r, c), |(i, j)| f(i, j))
-                .into_pyarray(py)
-                .unbind()
-        };
-        let take = |names: &[String], idx: &[usize]| -> Vec<String> {
-            idx.iter().map(|&k| names[k].clone()).collect()
-        };
-        Ok(StateSpace {
-            a: matrix(n, n, &|i, j| ss.a[(i, j)]),
-            b: matrix(n, cols.len(), &|i, j| ss.b[(i, cols[j])]),
-            c: matrix(rows.len(), n, &|i, j| ss.c[(rows[i], j)]),
-            d: matrix(rows.len(), cols.len(), &|i, j| ss.d[(rows[i], cols[j])]),
-            states: ss.states.clone(),
-            inputs: take(&ss.inputs, &cols),
-            outputs: take(&ss.outputs, &rows),
-            state_units: named.state_units.clone(),
-            input_units: take(&named.input_units, &cols),
-            output_units: take(&named.output_units, &rows),
-            damping_frequency: ss.damping_frequency,
-        })
+/// The rows of `wanted`: outputs, or states (all the outputs when `None`).
+fn pick_rows(
+    outputs: &[String],
+    states: &[String],
+    wanted: Option<Vec<String>>,
+) -> PyResult<Vec<Row>> {
+    match wanted {
+        None => Ok((0..outputs.len()).map(Row::Output).collect()),
+        Some(list) => list
+            .iter()
+            .map(|w| {
+                if let Some(k) = outputs.iter().position(|n| n == w) {
+                    Ok(Row::Output(k))
+                } else if let Some(k) = states.iter().position(|n| n == w) {
+                    Ok(Row::State(k))
+                } else {
+                    Err(error(format!(
+                        "'{w}': not an output of the state space (valid: {}, or a state: {})",
+                        outputs.join(" "),
+                        states.join(" ")
+                    )))
+                }
+            })
+            .collect(),
     }
 }
 
-#[pymethods]
-impl StateSpace {
-    /// A python-control `StateSpace` (`control.ss`) with these matrices and names; needs
-    /// python-control (`pip install control`).
-    fn to_control<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let control = py.import("control").map_err(|e| {
-            PyImportError::new_err(format!(
-                "to_control needs python-control (pip install control): {e}"
-            ))
-        })?;
-        let kwargs = PyDict::new(py);
-        kwargs.set_item("states", &self.states)?;
-        kwargs.set_item("inputs", &self.inputs)?;
-        kwargs.set_item("outputs", &self.outputs)?;
-        control.call_method("ss", (&self.a, &self.b, &self.c, &self.d), Some(&kwargs))
-    }
+/// A `pendkit.StateSpace` of `named`'s `inputs` and `outputs` (outputs or states), in the
+/// order given (all of them when `None`).
+fn state_space<'py>(
+    py: Python<'py>,
+    named: &NamedStateSpace,
+    inputs: Option<Vec<String>>,
+    outputs: Option<Vec<String>>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let ss = &named.state_space;
+    let cols = pick("an input", &ss.inputs, inputs)?;
+    let rows = pick_rows(&ss.outputs, &ss.states, outputs)?;
+    let n = ss.a.nrows();
+    let matrix = |r: usize, c: usize, f: &dyn Fn(usize, usize) -> f64| {
+        Array2::from_shape_fn((r, c), |(i, j)| f(i, j)).into_pyarray(py)
+    };
+    let c_row = |row: Row, j: usize| match row {
+        Row::Output(k) => ss.c[(k, j)],
+        Row::State(k) => f64::from(u8::from(k == j)),
+    };
+    let d_row = |row: Row, j: usize| match row {
+        Row::Output(k) => ss.d[(k, cols[j])],
+        Row::State(_) => 0.0,
+    };
+    let take = |names: &[String], idx: &[usize]| -> Vec<String> {
+        idx.iter().map(|&k| names[k].clone()).collect()
+    };
+    let row_names = |output_names: &[String], state_names: &[String]| -> Vec<String> {
+        rows.iter()
+            .map(|row| match *row {
+                Row::Output(k) => output_names[k].clone(),
+                Row::State(k) => state_names[k].clone(),
+            })
+            .collect()
+    };
+    result!(py, "StateSpace", {
+        "A": matrix(n, n, &|i, j| ss.a[(i, j)]),
+        "B": matrix(n, cols.len(), &|i, j| ss.b[(i, cols[j])]),
+        "C": matrix(rows.len(), n, &|i, j| c_row(rows[i], j)),
+        "D": matrix(rows.len(), cols.len(), &|i, j| d_row(rows[i], j)),
+        "states": ss.states.clone(),
+        "inputs": take(&ss.inputs, &cols),
+        "outputs": row_names(&ss.outputs, &ss.states),
+        "state_units": named.state_units.clone(),
+        "input_units": take(&named.input_units, &cols),
+        "output_units": row_names(&named.output_units, &named.state_units),
+        "damping_frequency": ss.damping_frequency,
+    })
+}
 
-    fn __repr__(&self) -> String {
-        format!(
-            "<pendkit.StateSpace: {} states, {} inputs, {} outputs, damping viscous at {} Hz>",
-            self.states.len(),
-            self.inputs.len(),
-            self.outputs.len(),
-            self.damping_frequency
-        )
+/// What a sweep computes at each point (`pendkit.sweep`'s `what`).
+enum SweepWhat {
+    /// Every mode's frequency (Hz).
+    Modes,
+    /// The transfer function from `input` to `output` at `freqs` (complex).
+    Tf {
+        input: String,
+        output: String,
+        freqs: Vec<f64>,
+    },
+    /// The thermal-noise ASD of `output` at `freqs`.
+    Noise { output: String, freqs: Vec<f64> },
+}
+
+/// One sweep point's row.
+enum SweepRow {
+    Real(Vec<f64>),
+    Complex(Vec<Complex64>),
+}
+
+/// One sweep point: `model` with `names` set to `values`, run to `stage`, and `what` of it,
+/// by the same calls as `Model.with_set`, `Model.run` and `Result.modes`, `.tf` or
+/// `.noise(...).asd` (the same numbers).
+fn sweep_point(
+    model: &Model,
+    names: &[String],
+    values: &[f64],
+    stage: Stage,
+    what: &SweepWhat,
+) -> Result<SweepRow, Error> {
+    let point = names
+        .iter()
+        .zip(values)
+        .map(|(name, &value)| Override::value(name.clone(), value));
+    let overrides: Vec<Override> = model.overrides.iter().cloned().chain(point).collect();
+    // as `Model::open` applies them (`Model.with_set`)
+    let case = model.base.clone().with(overrides.iter().map(applied))?;
+    let (system, _) = case.build()?;
+    let result = run_stage_with(system, stage, &RunOptions::default(), None)?;
+    if !matches!(what, SweepWhat::Modes) && stage == Stage::S0A {
+        return Err(Error::StageTooEarly);
     }
+    Ok(match what {
+        SweepWhat::Modes => SweepRow::Real(result.modes.modes.iter().map(|m| m.hz).collect()),
+        SweepWhat::Tf {
+            input,
+            output,
+            freqs,
+        } => SweepRow::Complex(
+            result
+                .transfer_with(input, output, freqs, solver(false))?
+                .iter()
+                .map(|z| Complex64::new(z.re, z.im))
+                .collect(),
+        ),
+        SweepWhat::Noise { output, freqs } => {
+            let options = NoiseOptions {
+                solver: solver(false),
+                per_term: false,
+            };
+            SweepRow::Real(result.noise_with(output, freqs, &options)?.asd())
+        }
+    })
+}
+
+/// A numpy array of `rows`, `n_columns` wide, with `nan` in the rows that are `None`.
+fn sweep_table<'py, T: numpy::Element + Copy>(
+    py: Python<'py>,
+    rows: &[Option<&Vec<T>>],
+    n_columns: usize,
+    nan: T,
+) -> Bound<'py, PyAny> {
+    Array2::from_shape_fn((rows.len(), n_columns), |(i, j)| match rows[i] {
+        Some(row) => row[j],
+        None => nan,
+    })
+    .into_pyarray(py)
+    .into_any()
+}
+
+/// A sweep chunk's rows and failures (row, message).
+type SweepChunk<'py> = (Bound<'py, PyAny>, Vec<(usize, String)>);
+
+/// The points of one chunk of a sweep (`pendkit.sweep`, which documents it), with the GIL
+/// released: `values` (points × names) sets `names` on `model`, each point runs `stage`
+/// and computes `what` (`"modes"`, `"tf"` with `input`, `output` and `freqs`, or
+/// `"noise"` with `output` and `freqs`). Returns (the rows as an array, NaN where a point
+/// failed, and the failures as (row, message)).
+#[pyfunction]
+#[pyo3(signature = (model, names, values, what, *, input = None, output = None, freqs = None, stage = None))]
+#[allow(clippy::too_many_arguments)]
+fn _sweep_chunk<'py>(
+    py: Python<'py>,
+    model: &Bound<'py, Model>,
+    names: Vec<String>,
+    values: numpy::PyReadonlyArray2<'py, f64>,
+    what: &str,
+    input: Option<String>,
+    output: Option<String>,
+    freqs: Option<&Bound<'py, PyAny>>,
+    stage: Option<&Bound<'py, PyAny>>,
+) -> PyResult<SweepChunk<'py>> {
+    let stage = stage_or_complete(stage)?;
+    let needs = |x: Option<String>, name: &str| {
+        x.ok_or_else(|| error(format!("what: '{what}' needs {name}")))
+    };
+    let grid = |f: Option<&Bound<'py, PyAny>>| match f {
+        Some(f) => frequencies(f),
+        None => Err(error(format!("what: '{what}' needs freqs"))),
+    };
+    let what = match what {
+        "modes" => SweepWhat::Modes,
+        "tf" => SweepWhat::Tf {
+            input: needs(input, "an input")?,
+            output: needs(output, "an output")?,
+            freqs: grid(freqs)?,
+        },
+        "noise" => SweepWhat::Noise {
+            output: needs(output, "an output")?,
+            freqs: grid(freqs)?,
+        },
+        other => {
+            return Err(error(format!("what: '{other}' is not modes, tf or noise")));
+        }
+    };
+    let values = values.as_array();
+    if values.ncols() != names.len() {
+        return Err(error(format!(
+            "values: {} columns for {} names",
+            values.ncols(),
+            names.len()
+        )));
+    }
+    let model = model.get();
+    let rows: Vec<Result<SweepRow, String>> = py.detach(|| {
+        values
+            .rows()
+            .into_iter()
+            .map(|point| {
+                let point: Vec<f64> = point.iter().copied().collect();
+                sweep_point(model, &names, &point, stage, &what).map_err(|e| e.to_string())
+            })
+            .collect()
+    });
+    let mut errors: Vec<(usize, String)> = Vec::new();
+    let width = match &what {
+        SweepWhat::Modes => rows
+            .iter()
+            .find_map(|r| match r {
+                Ok(SweepRow::Real(v)) => Some(v.len()),
+                _ => None,
+            })
+            .unwrap_or(0),
+        SweepWhat::Tf { freqs, .. } | SweepWhat::Noise { freqs, .. } => freqs.len(),
+    };
+    let mut real: Vec<Option<&Vec<f64>>> = Vec::new();
+    let mut complex: Vec<Option<&Vec<Complex64>>> = Vec::new();
+    for (i, row) in rows.iter().enumerate() {
+        match row {
+            Err(message) => {
+                errors.push((i, message.clone()));
+                real.push(None);
+                complex.push(None);
+            }
+            Ok(SweepRow::Real(v)) if v.len() != width => {
+                errors.push((
+                    i,
+                    format!(
+                        "{} modes, where the sweep's first point has {width}",
+                        v.len()
+                    ),
+                ));
+                real.push(None);
+            }
+            Ok(SweepRow::Real(v)) => real.push(Some(v)),
+            Ok(SweepRow::Complex(v)) => complex.push(Some(v)),
+        }
+    }
+    let table = match what {
+        SweepWhat::Tf { .. } => {
+            sweep_table(py, &complex, width, Complex64::new(f64::NAN, f64::NAN))
+        }
+        _ => sweep_table(py, &real, width, f64::NAN),
+    };
+    Ok((table, errors))
 }
 
 /// The bundled models as (name, one-line summary) pairs.
@@ -1064,14 +1442,21 @@ fn _pendkit(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("PendkitError", m.py().get_type::<PendkitError>())?;
     m.add("__version__", pendkit::VERSION)?;
     m.add_class::<Model>()?;
-    m.add_class::<Parameter>()?;
     m.add_class::<StageRun>()?;
-    m.add_class::<Modes>()?;
-    m.add_class::<Noise>()?;
-    m.add_class::<Stability>()?;
-    m.add_class::<StateSpace>()?;
-    m.add_class::<Sensitivities>()?;
+    // the result types are Python classes (pendkit/_results.py), here under their names too
+    let results = m.py().import("pendkit._results")?;
+    for class in [
+        "Modes",
+        "Noise",
+        "Parameter",
+        "Sensitivities",
+        "Stability",
+        "StateSpace",
+    ] {
+        m.add(class, results.getattr(class)?)?;
+    }
     m.add_function(wrap_pyfunction!(models, m)?)?;
     m.add_function(wrap_pyfunction!(log_grid, m)?)?;
+    m.add_function(wrap_pyfunction!(_sweep_chunk, m)?)?;
     Ok(())
 }

@@ -57,3 +57,14 @@ def parse_csv(text):
     header = lines[0].split(",")
     rows = [[float(x) for x in line.split(",")] for line in lines[1:]]
     return header, [list(col) for col in zip(*rows)]
+
+
+@pytest.fixture(scope="session")
+def dask_client():
+    """A Dask client of a LocalCluster of two worker processes, one thread each, shared by
+    the tests that need one (a cluster takes a few seconds to start)."""
+    distributed = pytest.importorskip("distributed")
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as cluster, \
+            distributed.Client(cluster) as client:
+        yield client

@@ -77,7 +77,7 @@ def test_measured_modes_as_tuples_are_rows_not_text():
         model.fit(good + [("#x3", 0.98, 0.001)], ["m1"])
     with pytest.raises(PendkitError, match=r"^modes:1: 'x3,y3' is neither a variable"):
         model.fit([("x3,y3", 0.43, 0.001)] + good, ["m1"])
-    with pytest.raises(PendkitError, match=r"^modes\[1\]: expected a tuple .* got a str$"):
+    with pytest.raises(TypeError, match=r"^modes\[1\]: expected a tuple .* got a str$"):
         model.fit([good[0], "y3,0.4681,0.001"], ["m1"])
     with pytest.raises(PendkitError, match=r"^modes:2: sigma_hz = 1e-300 is below the rounding"):
         model.fit([good[0], ("y3", 0.4681, 1e-300)], ["m1"])

@@ -14,27 +14,35 @@ computes) and returned as numpy arrays::
     h = result.tf("x00", "x3", f)              # complex, m/m
     noise = result.noise("x3", f)              # noise.asd (m/√Hz), noise.asd_by_tag
     ss = result.state_space(["force:x3"], ["x3"]).to_control()
+    hz = pendkit.sweep(quad, {"m3": np.linspace(39, 41, 200)})   # (200, 24), Hz
 
 Errors raise :class:`PendkitError` (a ``ValueError``) with the command line's one-line
-message. Models pickle, so they can go to worker processes and Dask clusters.
+message; a wrong type raises ``TypeError`` naming the argument. Models, results and
+errors pickle, so they go to worker processes and Dask clusters; :func:`sweep` runs a
+whole sweep in threads or on a Dask cluster.
 :func:`pendkit.gwinc.suspension_thermal` is a drop-in for pygwinc's suspension thermal
-noise.
+noise; :mod:`pendkit.finesse` (import it explicitly: it loads Finesse) makes Finesse 3
+suspension components from pendkit models (docs/finesse.md).
 """
 
 from ._pendkit import (
     Model,
-    Modes,
-    Noise,
-    Parameter,
     PendkitError,
     Result,
-    Sensitivities,
-    Stability,
-    StateSpace,
     __version__,
     log_grid,
     models,
 )
+from ._results import (
+    Modes,
+    Noise,
+    Parameter,
+    Sensitivities,
+    Stability,
+    StateSpace,
+    control_name,
+)
+from ._sweep import sweep
 
 __all__ = [
     "Model",
@@ -47,6 +55,8 @@ __all__ = [
     "Stability",
     "StateSpace",
     "__version__",
+    "control_name",
     "log_grid",
     "models",
+    "sweep",
 ]

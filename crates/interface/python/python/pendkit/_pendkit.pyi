@@ -1,45 +1,74 @@
 """Type stubs of pendkit's compiled core (crates/interface/python/src/lib.rs)."""
 
 import os
-from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
+from typing import Any, Dict, List, Literal, Mapping, Optional, Sequence, Tuple, Union, final
 
 import numpy as np
 import numpy.typing as npt
 
-__version__: str
+from ._results import Modes as Modes
+from ._results import Noise as Noise
+from ._results import Parameter as Parameter
+from ._results import Sensitivities as Sensitivities
+from ._results import Stability as Stability
+from ._results import StateSpace as StateSpace
 
-Sets = Union[Mapping[str, Union[float, int, str]], Sequence[str], None]
-Frequencies = npt.ArrayLike
+__version__: str
+__all__ = [
+    "Model",
+    "Modes",
+    "Noise",
+    "Parameter",
+    "PendkitError",
+    "Result",
+    "Sensitivities",
+    "Stability",
+    "StateSpace",
+    "__version__",
+    "_sweep_chunk",
+    "log_grid",
+    "models",
+]
+
+_Number = Union[float, int, np.integer[Any], np.floating[Any], npt.NDArray[Any]]
+"""A real number: a Python int or float, a numpy integer or floating scalar, or a 0-d
+array of one."""
+_Sets = Union[Mapping[str, Union[_Number, str]], Sequence[str], None]
+_Frequencies = npt.ArrayLike
+_Stage = Union[str, int, np.integer[Any], None]
 
 class PendkitError(ValueError):
-    """Bad input or a failed calculation; the message is the command line's one line."""
+    """Bad input or a failed calculation; the message is the command line's one line.
+    `pendkit.PendkitError`; it pickles with its message."""
 
 def models() -> List[Tuple[str, str]]:
     """The bundled models as (name, one-line summary) pairs."""
 
-def log_grid(start: float, stop: float, n: int) -> npt.NDArray[np.float64]:
+def log_grid(
+    start: _Number, stop: _Number, n: Union[int, np.integer[Any]]
+) -> npt.NDArray[np.float64]:
     """`n` log-spaced frequencies from `start` to `stop` (Hz), both included."""
 
-class Parameter:
-    """One resolved parameter."""
-
-    name: str
-    value: float
-    """Value in `unit`."""
-    unit: str
-    """SI unit; empty for a pure number."""
-    definition: str
-    """The expression: the model's default or the override."""
-    overridden: bool
-
+@final
 class Model:
     """A bundled model or a case file, with parameter overrides."""
 
-    def __init__(
-        self, spec: Union[str, os.PathLike[str]], set: Sets = None
-    ) -> None:
+    def __new__(
+        cls,
+        spec: Union[str, os.PathLike[str]],
+        set: _Sets = None,
+        *,
+        _case_text: Optional[str] = None,
+    ) -> "Model":
         """`spec`: a bundled model name or a case-file path (.toml); `set`: overrides as a
-        dict {name: value or expression} or a list of "NAME=EXPR" strings."""
+        dict {name: value or expression} (a real number is taken as its exact value) or a
+        list of "NAME=EXPR" strings."""
+    def __eq__(self, other: object, /) -> bool:
+        """The same model name (or case-file path and text) and the same overrides, in any
+        order."""
+    def __hash__(self) -> int: ...
+    def __getnewargs_ex__(self) -> Tuple[Tuple[str], Dict[str, Any]]:
+        """What rebuilds the model in another process (pickle)."""
     @property
     def name(self) -> str:
         """Case name: the model name or the case file's stem."""
@@ -51,30 +80,31 @@ class Model:
     @property
     def sets(self) -> List[str]:
         """The overrides, as "NAME=EXPR" strings in order."""
-    def with_set(self, set: Sets) -> "Model":
+    def with_set(self, set: _Sets) -> "Model":
         """This model with more overrides applied after its own."""
     def parameters(self) -> List[Parameter]:
         """Every numeric parameter as resolved."""
     def fit(
         self,
         modes: Union[str, "os.PathLike[str]", Sequence[Tuple[Any, ...]]],
-        free: List[str],
+        free: Sequence[str],
         *,
         tf: Union[str, "os.PathLike[str]", None] = None,
-        stage: Union[str, int, None] = None,
+        stage: _Stage = None,
+        jacobian: Literal["exact", "differences"] = "exact",
     ) -> Dict[str, Any]:
         """Fits the `free` parameters to measured modes (a CSV path or (label, hz,
         sigma_hz[, shape]) tuples), as `pendkit fit`; a dict of the result."""
-    def run(self, stage: Union[str, int, None] = None) -> "Result":
+    def run(self, stage: _Stage = None) -> "Result":
         """Builds the model and runs a stage ("0a", "0b", "1a", "1b", "2"; default "2")."""
     def sensitivities(
         self,
-        stage: Union[str, int, None] = None,
+        stage: _Stage = None,
         *,
         modes: bool = True,
         tf: Optional[Tuple[str, str]] = None,
         noise: Optional[str] = None,
-        freqs: Optional[Frequencies] = None,
+        freqs: Optional[_Frequencies] = None,
         parameters: Optional[Sequence[str]] = None,
         allow_unstable: bool = False,
         differences: bool = False,
@@ -82,102 +112,15 @@ class Model:
         """Derivatives of the mode frequencies (and of |H| of `tf` and the noise ASD of
         `noise` at `freqs`, Hz) with respect to the parameters, as `pendkit sensitivity`."""
 
-class Sensitivities:
-    """Derivatives of a stage's answers with respect to the parameters."""
-
-    parameters: List[str]
-    """The columns."""
-    values: npt.NDArray[np.float64]
-    """The parameters' values, in `units`."""
-    units: List[str]
-    modes_hz: npt.NDArray[np.float64]
-    """The rows of `dfdp` (Hz)."""
-    mode_labels: List[str]
-    dfdp: npt.NDArray[np.float64]
-    """modes × parameters, Hz per unit of the parameter."""
-    freqs: npt.NDArray[np.float64]
-    """Hz (the rows of `dtf_abs_dp` and `dnoise_asd_dp`)."""
-    tf_abs: Optional[npt.NDArray[np.float64]]
-    dtf_abs_dp: Optional[npt.NDArray[np.float64]]
-    """frequencies × parameters."""
-    noise_asd: Optional[npt.NDArray[np.float64]]
-    """m/√Hz or rad/√Hz."""
-    dnoise_asd_dp: Optional[npt.NDArray[np.float64]]
-    """frequencies × parameters."""
-    not_differentiable: List[Tuple[str, str]]
-    """Switches and counts left out, with why."""
-    exact: List[bool]
-    """Per parameter: exact (dual numbers, implicit function theorem) or differenced."""
-    warning: Optional[str]
-
-class Modes:
-    """Normal modes ascending in ω²."""
-
-    frequencies: npt.NDArray[np.float64]
-    """Hz; minus the growth rate for an unstable mode."""
-    omega_squared: npt.NDArray[np.float64]
-    """rad²/s²; negative for an unstable mode."""
-    stable: npt.NDArray[np.bool_]
-    labels: List[str]
-    """Dominant coordinate of each mode."""
-    families: List[str]
-    """Degree-of-freedom family of each mode (L, T, V, R, P, Y, violin, other)."""
-    coordinates: List[str]
-    """Columns of `shapes` and `energy_fractions`."""
-    coordinate_units: List[str]
-    shapes: npt.NDArray[np.float64]
-    """Modes × coordinates, mass-normalised (vᵀ M v = 1), m or rad."""
-    energy_fractions: npt.NDArray[np.float64]
-    """Modes × coordinates kinetic-energy fractions; rows sum to 1."""
-    def __len__(self) -> int: ...
-
-class Noise:
-    """Thermal noise at one output."""
-
-    freqs: npt.NDArray[np.float64]
-    """Hz."""
-    psd: npt.NDArray[np.float64]
-    """One-sided PSD, m²/Hz or rad²/Hz."""
-    asd: npt.NDArray[np.float64]
-    """ASD, m/√Hz or rad/√Hz (`unit`)."""
-    psd_by_tag: Dict[str, npt.NDArray[np.float64]]
-    """PSD share of each damping tag; they add up to `psd`."""
-    asd_by_tag: Dict[str, npt.NDArray[np.float64]]
-    unit: str
-    temperature: float
-    """K."""
-
-class Stability:
-    """The stability verdict."""
-
-    stable: bool
-    message: Optional[str]
-    """The command line's one-line error naming the first growing mode."""
-    unstable_modes: List[int]
-    """Indices into `Result.modes()`."""
-    def __bool__(self) -> bool: ...
-
-class StateSpace:
-    """ẋ = A x + B u, y = C x + D u, with names and SI units."""
-
-    A: npt.NDArray[np.float64]
-    B: npt.NDArray[np.float64]
-    C: npt.NDArray[np.float64]
-    D: npt.NDArray[np.float64]
-    states: List[str]
-    inputs: List[str]
-    outputs: List[str]
-    state_units: List[str]
-    input_units: List[str]
-    output_units: List[str]
-    damping_frequency: float
-    """Hz at which damping is represented as viscous."""
-    def to_control(self) -> Any:
-        """A python-control StateSpace with the same matrices and names."""
-
+@final
 class Result:
-    """One stage of one model: equilibrium, matrices and normal modes."""
+    """One stage of one model: equilibrium, matrices and normal modes. Pickles as its model
+    and stage (computed again when unpickled); equal when the models and stages are."""
 
+    def __eq__(self, other: object, /) -> bool: ...
+    def __hash__(self) -> int: ...
+    def __reduce__(self) -> Tuple[Any, Tuple[str]]:
+        """`Model.run` of the model, with the stage (pickle)."""
     @property
     def stage(self) -> str: ...
     @property
@@ -197,17 +140,42 @@ class Result:
     def standard_transfer_functions(self) -> List[Tuple[str, str]]: ...
     def transfer_unit(self, input: str, output: str) -> str: ...
     def tf(
-        self, input: str, output: str, freqs: Frequencies, *, full: bool = False
+        self, input: str, output: str, freqs: _Frequencies, *, full: bool = False
     ) -> npt.NDArray[np.complex128]:
         """Transfer function from `input` to `output` at `freqs` (Hz)."""
-    def noise(self, output: str, freqs: Frequencies, *, full: bool = False) -> Noise:
+    def noise(self, output: str, freqs: _Frequencies, *, full: bool = False) -> Noise:
         """Thermal noise of a displacement output at `freqs` (Hz)."""
     def state_space(
         self,
         inputs: Optional[Sequence[str]] = None,
         outputs: Optional[Sequence[str]] = None,
         *,
-        damping_frequency: float = 1.0,
+        damping_frequency: _Number = 1.0,
         naming: Optional[str] = None,
     ) -> StateSpace:
-        """State space with damping viscous at `damping_frequency` (Hz)."""
+        """State space with damping viscous at `damping_frequency` (Hz); `outputs` are
+        outputs or states (`x0_dot`, a velocity)."""
+    def to_control(
+        self,
+        inputs: Optional[Sequence[str]] = None,
+        outputs: Optional[Sequence[str]] = None,
+        *,
+        damping_frequency: _Number = 1.0,
+        naming: Optional[str] = None,
+        name: Optional[str] = None,
+    ) -> Any:
+        """`state_space(...).to_control(name)`: a python-control StateSpace whose signals
+        and states are named as valid identifiers (`force:x0` → `force_x0`)."""
+
+def _sweep_chunk(
+    model: Model,
+    names: List[str],
+    values: npt.NDArray[np.float64],
+    what: str,
+    *,
+    input: Optional[str] = None,
+    output: Optional[str] = None,
+    freqs: Optional[_Frequencies] = None,
+    stage: _Stage = None,
+) -> Tuple[npt.NDArray[Any], List[Tuple[int, str]]]:
+    """One chunk of `pendkit.sweep`: the rows (NaN where a point failed) and the failures."""
