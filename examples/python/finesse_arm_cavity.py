@@ -84,7 +84,7 @@ def ligo_plant():
     """finesse-ligo's damped quad L3 torque-to-pitch ZPK, or None (finesse_ligo 1.0.15
     does not import with Finesse 3.0.2, so its data file is read directly)."""
     spec = importlib.util.find_spec("finesse_ligo")
-    if spec is None:
+    if spec is None or not spec.submodule_search_locations:
         return None
     import h5py
 

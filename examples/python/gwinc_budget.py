@@ -38,7 +38,7 @@ class PendkitSuspensionThermal(nb.Noise):
     name = "SuspensionThermal"
     style = dict(label="Suspension Thermal (pendkit quad)", color="#0d75f8")
 
-    sets = []  # pendkit overrides after the mapped Suspension settings (--beads)
+    sets: list[str] = []  # pendkit overrides after the mapped Suspension settings (--beads)
 
     @nb.precomp(sustf=precomp_suspension)
     def calc(self, sustf):

@@ -19,7 +19,7 @@ CONFIG = """\
 [mypy]
 check_untyped_defs = True
 warn_unused_ignores = True
-[mypy-control.*,dask.*,distributed.*,gwinc.*,matplotlib.*]
+[mypy-control.*,dask.*,distributed.*,gwinc.*,matplotlib.*,finesse.*,h5py.*]
 ignore_missing_imports = True
 follow_imports = skip
 """
