@@ -543,10 +543,17 @@ impl Model {
     /// (combinations), `iterations`, `solves`, `jacobian` (how the Jacobian was computed:
     /// `"exact"`, the default — the modes' rows exact, the |TF| rows from the same
     /// sensitivities — or `"differences"`, central differences of the re-solved model, as
-    /// `jacobian=` asks), and
+    /// `jacobian=` asks), `starts` (how many starts were tried: `starts=` of them, and up to
+    /// `more_starts=` more when none explains the data, as `--starts` and `--more-starts`
+    /// do), `would_help` (when the fit does not explain its data: the parameters whose
+    /// freeing would lower χ² most), and
     /// `case_file` (the text of the fitted case file when the model is a bundled one, else
     /// None).
-    #[pyo3(signature = (modes, free, *, tf = None, stage = None, jacobian = "exact"))]
+    #[pyo3(signature = (modes, free, *, tf = None, stage = None, jacobian = "exact", starts = 1, more_starts = 4))]
+    #[expect(
+        clippy::too_many_arguments,
+        reason = "Python's keyword arguments, each one option of `pendkit fit`"
+    )]
     fn fit<'py>(
         &self,
         py: Python<'py>,
@@ -555,6 +562,8 @@ impl Model {
         tf: Option<&Bound<'py, PyAny>>,
         stage: Option<&Bound<'py, PyAny>>,
         jacobian: &str,
+        starts: usize,
+        more_starts: usize,
     ) -> PyResult<Bound<'py, PyAny>> {
         let stage = stage_or_complete(stage)?;
         let jacobian: pendkit::fit::JacobianMethod = jacobian
@@ -571,6 +580,8 @@ impl Model {
         let options = pendkit::fit::FitOptions {
             stage,
             jacobian,
+            starts,
+            more_starts,
             ..pendkit::fit::FitOptions::default()
         };
         let result = py

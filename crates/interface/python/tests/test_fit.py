@@ -57,6 +57,15 @@ def test_fit_agrees_with_the_command_line_and_recovers_the_truth(cli, tmp_path):
         assert p["value"] == q["value"] and p["uncertainty"] == q["uncertainty"]
     with pytest.raises(ValueError, match="not a Jacobian method"):
         pendkit.Model("quad").fit(path, free, jacobian="adjoint")
+    # more starts: the command line's numbers with the same options, and how many it tried
+    started = pendkit.Model("quad").fit(path, free, starts=3, more_starts=0)
+    reference = json.loads(
+        cli("fit", "quad", "--modes", str(path), "--free", ",".join(free), "--starts", "3",
+            "--more-starts", "0", "--json")
+    )["fit"]
+    assert started["starts"] == reference["starts"] == 3
+    for p, q in zip(started["parameters"], reference["parameters"]):
+        assert p["value"] == q["value"] and p["uncertainty"] == q["uncertainty"]
 
 
 def test_bad_measurements_raise_the_command_lines_message(cli, tmp_path):

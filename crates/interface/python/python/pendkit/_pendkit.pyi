@@ -92,9 +92,12 @@ class Model:
         tf: Union[str, "os.PathLike[str]", None] = None,
         stage: _Stage = None,
         jacobian: Literal["exact", "differences"] = "exact",
+        starts: int = 1,
+        more_starts: int = 4,
     ) -> Dict[str, Any]:
         """Fits the `free` parameters to measured modes (a CSV path or (label, hz,
-        sigma_hz[, shape]) tuples), as `pendkit fit`; a dict of the result."""
+        sigma_hz[, shape]) tuples), as `pendkit fit` (`starts`, `more_starts` as
+        `--starts`, `--more-starts`); a dict of the result."""
     def run(self, stage: _Stage = None) -> "Result":
         """Builds the model and runs a stage ("0a", "0b", "1a", "1b", "2"; default "2")."""
     def sensitivities(
