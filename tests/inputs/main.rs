@@ -10,5 +10,6 @@ mod case_text;
 mod element_instances;
 mod errors;
 mod input_checks;
+mod limits;
 mod no_silent_nonsense;
 mod scenes;

@@ -230,6 +230,13 @@ impl<S: Real> SystemBuilder<S> {
                 name: name.to_string(),
             });
         }
+        // counted as they come, so that a model past the limit stops growing at it
+        pendkit_limits::COORDINATES
+            .check(self.system.coords.len() + 1)
+            .map_err(|e| BuildError::Invalid {
+                item: format!("coordinate '{name}'"),
+                message: e.to_string(),
+            })?;
         check_finite(
             format_args!("coordinate '{name}'"),
             "start value",
@@ -424,6 +431,12 @@ impl<S: Real> SystemBuilder<S> {
                 name: spec.name,
             });
         }
+        pendkit_limits::WIRES
+            .check(self.system.wires.len() + 1)
+            .map_err(|e| BuildError::Invalid {
+                item: item.clone(),
+                message: e.to_string(),
+            })?;
         for end in &spec.ends {
             self.check_end_body(&item, end.body)?;
             if let EndDirection::Explicit(v) = &end.direction

@@ -275,7 +275,12 @@ impl<S: BuildScalar> Ctx<'_, S> {
 
     /// The points of `p` (m): the base points, each mirror doubling the list (the mirrored
     /// copies follow the originals, so `mirror = ["x", "y"]` gives (+,+), (−,+), (+,−), (−,−)).
+    /// At most [`pendkit_limits::WIRES_PER_SET`] of them, counted before any is made (a
+    /// file's sets are counted when it is read; a description made in code is counted here).
     pub fn points(&self, p: &Points) -> Result<Vec<Vector3<S>>, BuildError> {
+        pendkit_limits::WIRES_PER_SET
+            .check(crate::damping::point_count(p))
+            .map_err(|e| invalid(&p.at, e.to_string()))?;
         let mut out = p
             .base
             .iter()

@@ -61,6 +61,21 @@ pub enum AssemblyError {
         /// The coordinate it acts on.
         coordinate: String,
     },
+    /// Newton's method stopped making progress: over its last iterations neither the
+    /// energy fell beyond its rounding nor the largest residual by half.
+    #[error(
+        "equilibrium search stalled: no progress in the last {window} of {iterations} iterations, residual force {residual:.3e} on '{coordinate}' (no minimum the search reaches from the start, or none double precision resolves)"
+    )]
+    Stalled {
+        /// Iterations done.
+        iterations: usize,
+        /// Iterations without progress.
+        window: usize,
+        /// Largest residual force or torque (N or N m).
+        residual: f64,
+        /// The coordinate it acts on.
+        coordinate: String,
+    },
     /// The search ran away: the potential has no minimum near the start.
     #[error(
         "equilibrium search ran away: '{coordinate}' reached {value:.4e} (is the model supported, is the start position near the equilibrium?)"
