@@ -12,4 +12,5 @@ mod errors;
 mod input_checks;
 mod limits;
 mod no_silent_nonsense;
+mod out_of_range;
 mod scenes;

@@ -356,7 +356,7 @@ fn finite_difference_stiffness(r: &StageResult) -> DMatrix<f64> {
     }
     terms.extend(extra_terms(system, ExtraPhase::BeforeEquilibrium, None).expect("extra"));
     terms.extend(extra_terms(system, ExtraPhase::AfterEquilibrium, Some(&x0)).expect("extra"));
-    terms.extend(constraint_terms(system, &x0));
+    terms.extend(constraint_terms(system, &x0).expect("constraints"));
     let layout = &r.assembled.layout;
     let unknowns: Vec<usize> = layout
         .variables

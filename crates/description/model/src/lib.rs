@@ -1250,13 +1250,15 @@ impl TangentChunk {
                 message: format!("the chunk has {} parameters", self.parameters.len()),
             });
         };
+        // the chunk has at most TANGENT_CHUNK parameters, so `k` is a direction
+        let direction = pendkit_params::Direction::new(k)?;
         let mut lost = self.build.lost.iter();
         if let Some((_, why)) = lost.find(|(directions, _)| directions >> k & 1 == 1) {
             return Err(why.clone());
         }
         let mut finite = true;
         let mut along = |x: &ChunkDual| {
-            let x = pendkit_params::chunk_direction(x, k);
+            let x = pendkit_params::chunk_direction(x, direction);
             finite &= x.eps.is_finite();
             x
         };

@@ -151,7 +151,7 @@ pub struct Generator {
     /// The count the file was written for.
     pub default: usize,
     /// Writes the file for a count: its text and its tree.
-    pub write: fn(usize) -> Written,
+    pub write: fn(usize) -> Result<Written, FileError>,
     /// The bundled model's one-line summary (the written file's says how many).
     pub summary: &'static str,
 }
@@ -235,7 +235,7 @@ impl Suspension {
         generator: Generator,
         library: &dyn Library,
     ) -> Result<Suspension, FileError> {
-        let Written { source, root } = (generator.write)(generator.default).named(name);
+        let Written { source, root } = (generator.write)(generator.default)?.named(name);
         let mut s = Suspension::from_tree(source, root, library)?;
         s.summary = generator.summary.to_string();
         s.generator = Some(generator);
@@ -316,12 +316,13 @@ impl Suspension {
         if n == g.default {
             return Ok(std::borrow::Cow::Borrowed(&self.spec));
         }
-        let Written { source, root } = (g.write)(n).named(&self.source_name);
-        // the description only: the damping and the parameters are the bundled file's
-        let other = read_spec(&source, root, &NoLibrary).map_err(|e| BuildError::Invalid {
+        let generated = |e: FileError| BuildError::Invalid {
             item: format!("generated {} with {n} {}", self.name, g.parameter),
             message: e.to_string(),
-        })?;
+        };
+        let Written { source, root } = (g.write)(n).map_err(generated)?.named(&self.source_name);
+        // the description only: the damping and the parameters are the bundled file's
+        let other = read_spec(&source, root, &NoLibrary).map_err(generated)?;
         Ok(std::borrow::Cow::Owned(other))
     }
 

@@ -277,7 +277,8 @@ impl Assembled {
     /// How far `point` (m, body coordinates) on body `body` of `system` moves along
     /// `direction` (lab axes, normalised here) per unit of every unknown (variables, then
     /// floats) and every parameter coordinate: the linearised geometry at this equilibrium.
-    /// `None` when a weight is not finite or the body index is out of range.
+    /// `None` when a weight is not finite, the body index is out of range, or `system` has
+    /// fewer coordinates than this assembly's (a different model).
     pub fn point_weights(
         &self,
         system: &System,
@@ -291,11 +292,18 @@ impl Assembled {
             .frame
             .try_jacobian(&self.equilibrium.coords, point)
             .ok()?;
+        let layout = &self.layout;
+        let all = layout.variables.iter().chain(&layout.floats);
+        if all
+            .chain(&layout.parameters)
+            .any(|&g| g >= jac.position.ncols())
+        {
+            return None;
+        }
         let d = direction.normalize();
         let along = |ids: &mut dyn Iterator<Item = &usize>| {
             DVector::from_vec(ids.map(|&g| jac.position.column(g).dot(&d)).collect())
         };
-        let layout = &self.layout;
         let weights = PointWeights {
             unknowns: along(&mut layout.variables.iter().chain(&layout.floats)),
             parameters: along(&mut layout.parameters.iter()),
@@ -557,7 +565,7 @@ fn finish(
             let count = plugins.len();
             evaluator.extend(plugins);
             evaluator.extend(extra_terms(system, ExtraPhase::AfterEquilibrium, Some(x))?);
-            evaluator.extend(constraint_terms(system, x));
+            evaluator.extend(constraint_terms(system, x)?);
             Ok(count)
         },
     )?;
