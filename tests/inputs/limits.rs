@@ -239,7 +239,7 @@ fn point_mass() -> (SystemBuilder, [usize; 2]) {
 }
 
 #[test]
-fn a_builder_stops_at_the_wire_and_coordinate_limits() {
+fn a_builder_stops_at_the_wire_body_and_coordinate_limits() {
     let (mut b, [support, bob]) = point_mass();
     let hinge = |body| WireEnd {
         body,
@@ -271,6 +271,20 @@ fn a_builder_stops_at_the_wire_and_coordinate_limits() {
         e,
         format!(
             "wire 'w{limit}': {} wires in one model: more than the limit of {limit} (set PENDKIT_MAX_WIRES to raise it)",
+            limit + 1
+        )
+    );
+    let (mut b, _) = point_mass();
+    let limit = pendkit_limits::BODIES.default;
+    // the support and the mass so far; massless frames at the origin cost least
+    for k in 2..limit {
+        b.body(BodySpec::new(format!("frame{k}"))).unwrap();
+    }
+    let e = b.body(BodySpec::new("one_more")).unwrap_err().to_string();
+    assert_eq!(
+        e,
+        format!(
+            "body 'one_more': {} bodies in one model: more than the limit of {limit} (set PENDKIT_MAX_BODIES to raise it)",
             limit + 1
         )
     );

@@ -4,6 +4,7 @@
 //! Each module is one group of tests (a file of its own), with what it checks in its own
 //! documentation.
 
+mod body_validity;
 mod builder;
 mod bundled_files;
 mod case_text;

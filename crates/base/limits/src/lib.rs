@@ -84,6 +84,18 @@ pub static WIRES: Limit = Limit {
     setting: OnceLock::new(),
 };
 
+/// Bodies of a whole model, violin beads and their joints included: checked as each is
+/// added.
+pub static BODIES: Limit = Limit {
+    what: "bodies in one model",
+    variable: "PENDKIT_MAX_BODIES",
+    default: 10_000,
+    why: "each body with mass is a gravity term at every Newton step, and a free one six \
+          coordinates; four fibres with 200 beads each are 1 600 bodies (a bead and its \
+          joint per bead)",
+    setting: OnceLock::new(),
+};
+
 /// Coordinates (variables, floats and driven parameters) of a whole model: checked as
 /// each is added.
 pub static COORDINATES: Limit = Limit {
@@ -152,10 +164,11 @@ pub static MEASURED_ROWS: Limit = Limit {
 };
 
 /// Every limit, in the order docs/checks-and-refusals.md lists them.
-pub static ALL: [&Limit; 9] = [
+pub static ALL: [&Limit; 10] = [
     &FILE_BYTES,
     &WIRES_PER_SET,
     &WIRES,
+    &BODIES,
     &COORDINATES,
     &INCLUDED_FILES,
     &SWEEP_STEPS,

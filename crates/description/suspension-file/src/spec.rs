@@ -693,6 +693,8 @@ fn name_scheme(scheme: String, node: &Node, at: At) -> Result<NameSchemeFile, Fi
                 alias.value.type_name()
             )));
         };
+        // an alias is addressed as a body is (`M3@x,y,z/dx,dy,dz`)
+        pendkit_model::check_body_name(alias).map_err(|e| body_at.error(e.to_string()))?;
         bodies.push((
             Located {
                 value: body,
@@ -792,6 +794,7 @@ fn material(name: String, node: &Node, at: At) -> Result<MaterialSpec, FileError
 }
 
 fn coordinate(name: String, node: &Node, at: At) -> Result<CoordinateSpec, FileError> {
+    pendkit_model::check_coordinate_name(&name).map_err(|e| at.error(e.to_string()))?;
     let kind_of = |text: &str, at: &At| match text {
         "variable" => Ok(CoordKind::Variable),
         "float" => Ok(CoordKind::Float),
@@ -831,6 +834,8 @@ fn vector3(f: &mut Fields, key: &'static str) -> Result<Option<Located<Vec<Ex>>>
 }
 
 fn body(name: String, node: &Node, at: At) -> Result<BodyFile, FileError> {
+    // a body a signal cannot address is refused where it is written
+    pendkit_model::check_body_name(&name).map_err(|e| at.error(e.to_string()))?;
     let mut f = Fields::of(node, at.clone())?;
     let dof = body_dof(&mut f)?;
     let inertia = match f.node("inertia") {
@@ -884,6 +889,15 @@ fn body(name: String, node: &Node, at: At) -> Result<BodyFile, FileError> {
     }
     if let (Some(d), None) = (&b.dof, &b.coordinates) {
         return Err(d.at.error("`dof` goes with `coordinates`"));
+    }
+    // the suffix makes the coordinates' names (`x<suffix>` ... `roll<suffix>`)
+    if let Some(c) = &b.coordinates {
+        pendkit_model::check_coordinate_name(&format!("x{}", c.value)).map_err(|_| {
+            c.at.error(format!(
+                "'{}' does not make usable coordinate names (x{0} ... roll{0}): a suffix holds only letters, digits, '_' and '.'",
+                c.value
+            ))
+        })?;
     }
     Ok(b)
 }
