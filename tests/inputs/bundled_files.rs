@@ -208,7 +208,11 @@ fn the_chain_is_its_generators_file() {
             std::env::temp_dir().join(format!("pendkit-bundled-chain-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let path = dir.join(format!("chain-{n}.toml"));
-        std::fs::write(&path, &pendkit::suspension::generate::chain(n).source.text).unwrap();
+        std::fs::write(
+            &path,
+            &pendkit::suspension::generate::chain(n).unwrap().source.text,
+        )
+        .unwrap();
         let (written, _) = Case::open(path.to_str().unwrap()).unwrap().build().unwrap();
         let _ = std::fs::remove_dir_all(&dir);
         // six coordinates per body and six of the support (driven)

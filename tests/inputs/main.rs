@@ -4,11 +4,14 @@
 //! Each module is one group of tests (a file of its own), with what it checks in its own
 //! documentation.
 
+mod body_validity;
 mod builder;
 mod bundled_files;
 mod case_text;
 mod element_instances;
 mod errors;
 mod input_checks;
+mod limits;
 mod no_silent_nonsense;
+mod out_of_range;
 mod scenes;

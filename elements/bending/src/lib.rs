@@ -83,15 +83,22 @@ pub struct BeamEnergy<D> {
 pub type SharedBeam<C = f64> = Option<(Arc<WireBeam<C>>, Arc<LocalFrames>)>;
 
 /// The beam of wire number `index` of `reference.system`, from `shared` if another kind
-/// already built it around this reference, else built now and put there.
+/// already built it around this reference, else built now and put there;
+/// [`EnergyError::Index`] for a wire the system does not have.
 pub fn shared_beam<C: Constant>(
     reference: &Reference<C>,
     shared: &SharedBodies,
     index: usize,
 ) -> Result<Arc<SharedBeam<C>>, EnergyError> {
+    let wires = &reference.system.wires;
+    let wire = wires.get(index).ok_or_else(|| EnergyError::Index {
+        item: "shared_beam".into(),
+        what: "wire",
+        index,
+        len: wires.len(),
+    })?;
     shared.get_or_try_insert(index, || {
-        let wire = &reference.system.wires[index];
-        let frames = shared.frames(reference.system, &[wire.ends[0].body, wire.ends[1].body]);
+        let frames = shared.frames(reference.system, &[wire.ends[0].body, wire.ends[1].body])?;
         Ok(WireBeam::new(reference, wire, &frames)?.map(|beam| (Arc::new(beam), frames)))
     })
 }
@@ -129,7 +136,7 @@ pub fn beam_terms(
         shared,
         kind,
         part,
-        |label, tag, off, frames, beam| Ok(Term::part(label, kind, tag, frames, beam, part, off)),
+        |label, tag, off, frames, beam| Term::part(label, kind, tag, frames, beam, part, off),
     )
 }
 
@@ -177,7 +184,7 @@ impl<C: Constant> WireBeam<C> {
             element: wire.name.clone(),
             message,
         };
-        let directions = reference.wire_end_directions(wire);
+        let directions = reference.wire_end_directions(wire)?;
         let ei = [
             sec.youngs_modulus * sec.moment_1,
             sec.youngs_modulus * sec.moment_2,
@@ -186,8 +193,8 @@ impl<C: Constant> WireBeam<C> {
             return Ok(None);
         }
         // a tension within rounding of the stretch (k l ε) is zero, not compression
-        let rounding = 1e-12 * (wire.stiffness * reference.wire_length(wire)).re();
-        let tension = match reference.wire_tension(wire) {
+        let rounding = 1e-12 * (wire.stiffness * reference.wire_length(wire)?).re();
+        let tension = match reference.wire_tension(wire)? {
             t if t.re().abs() <= rounding => C::from(0.0),
             t => t,
         };
@@ -200,8 +207,8 @@ impl<C: Constant> WireBeam<C> {
         let section = if (ei[0] - ei[1]).is_exactly_zero() {
             Section::Round { ei: ei[0] }
         } else {
-            let rotation = reference.frame(wire.ends[0].body).rotation.map(|v| v.re());
-            let [p0, p1] = reference.wire_points(wire).map(|p| p.map(|v| v.re()));
+            let rotation = reference.frame(wire.ends[0].body)?.rotation.map(|v| v.re());
+            let [p0, p1] = reference.wire_points(wire)?.map(|p| p.map(|v| v.re()));
             let chord = (p1 - p0).normalize();
             let axis = rotation * sec.principal_axis.map(|v| v.re());
             if (axis - chord * axis.dot(&chord)).norm() < 1e-6 * axis.norm() {
@@ -551,6 +558,19 @@ mod tests {
         let u = Dual64::from(u).derivative();
         let s = u * (u * u.cosh() / u.sinh() - 1.0) / (u - (u / 2.0).tanh() * 2.0);
         (s.re, s.eps)
+    }
+
+    #[test]
+    fn a_beam_of_a_wire_the_model_lacks_is_an_error() {
+        let (system, x) = hanging_fibre();
+        let reference = Reference::new(&system, &x);
+        let shared = SharedBodies::new();
+        assert!(shared_beam(&reference, &shared, 0).unwrap().is_some());
+        let e = shared_beam(&reference, &shared, 1).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "shared_beam: wire index 1 is out of range (the system has 1)"
+        );
     }
 
     #[test]

@@ -174,8 +174,8 @@ impl Element for WireTorsion {
         let system = reference.system;
         let mut terms = Vec::new();
         for wire in system.wires.iter().filter(|w| reference.keeps_wire(w)) {
-            let local = shared.frames(system, &[wire.ends[0].body, wire.ends[1].body]);
-            if let Some(energy) = torsion_energy(reference, wire, &local) {
+            let local = shared.frames(system, &[wire.ends[0].body, wire.ends[1].body])?;
+            if let Some(energy) = torsion_energy(reference, wire, &local)? {
                 let label = pendkit_energy::term_label("wire-torsion", &wire.name);
                 let tag = wire.tags.torsion.clone();
                 terms.push(Term::on_frames(label, "wire-torsion", tag, local, energy));
@@ -191,8 +191,8 @@ impl Element for WireTorsion {
         let system = reference.system;
         let mut terms = Vec::new();
         for wire in system.wires.iter().filter(|w| reference.keeps_wire(w)) {
-            let local = shared.frames(system, &[wire.ends[0].body, wire.ends[1].body]);
-            if let Some(energy) = torsion_energy(reference, wire, &local) {
+            let local = shared.frames(system, &[wire.ends[0].body, wire.ends[1].body])?;
+            if let Some(energy) = torsion_energy(reference, wire, &local)? {
                 let label = pendkit_energy::term_label("wire-torsion", &wire.name);
                 let tag = wire.tags.torsion.clone();
                 terms.push(TangentTerm::on_frames(
@@ -209,30 +209,32 @@ impl Element for WireTorsion {
 }
 
 /// The twist energy of `wire` on the frames `local`, built around `reference`; `None` for
-/// a wire with neither torsion constant nor polar moment.
+/// a wire with neither torsion constant nor polar moment; an error for a wire on a body the
+/// system does not have.
 fn torsion_energy<S: Constant>(
     reference: &Reference<S>,
     wire: &Wire<S>,
     local: &LocalFrames,
-) -> Option<TorsionEnergy<S>> {
+) -> Result<Option<TorsionEnergy<S>>, EnergyError> {
     let s = &wire.section;
     if (s.shear_modulus * s.torsion_constant).is_exactly_zero() && s.polar_moment.is_exactly_zero()
     {
-        return None;
+        return Ok(None);
     }
-    let l = reference.wire_length(wire);
-    let tension = reference.wire_tension(wire);
+    let l = reference.wire_length(wire)?;
+    let tension = reference.wire_tension(wire)?;
     let unloaded = s.shear_modulus * s.torsion_constant / l;
     let stiffening = if s.area.re() > 0.0 {
         tension * s.polar_moment / s.area / l
     } else {
         S::from(0.0)
     };
-    let rotation = |k: usize| reference.frame(wire.ends[k].body).rotation;
-    Some(TorsionEnergy {
+    let rotation =
+        |k: usize| -> Result<_, EnergyError> { Ok(reference.frame(wire.ends[k].body)?.rotation) };
+    Ok(Some(TorsionEnergy {
         frames: [local.frames[0].clone(), local.frames[1].clone()],
         points: [wire.ends[0].point, wire.ends[1].point],
-        reference_relative: tr_mul(&rotation(0), &rotation(1)),
+        reference_relative: tr_mul(&rotation(0)?, &rotation(1)?),
         stiffness: unloaded + stiffening,
         stiffness_unloaded: unloaded,
         reference: local
@@ -240,7 +242,7 @@ fn torsion_energy<S: Constant>(
             .iter()
             .map(|&g| reference.coords[g].re())
             .collect(),
-    })
+    }))
 }
 
 pendkit_energy::register_element!(WireTorsion);

@@ -202,7 +202,7 @@ mod tests {
     #[test]
     fn chain_file_is_the_generators() {
         let file = Bundled.file("chain").unwrap();
-        assert_eq!(file.text, chain(CHAIN.default).source.text);
+        assert_eq!(file.text, chain(CHAIN.default).unwrap().source.text);
     }
 
     /// Each bundled model read from its packed tree is the model its text reads as: the same

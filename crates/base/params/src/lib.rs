@@ -26,7 +26,7 @@ use crate::names::NameMap;
 
 pub use domain::Domain;
 pub use resolve::Resolved;
-pub use tangent::{ChunkDual, TANGENT_CHUNK, Tangent, Values, chunk_direction};
+pub use tangent::{ChunkDual, Direction, TANGENT_CHUNK, Tangent, Values, chunk_direction};
 
 /// How a parameter is defined.
 #[derive(Debug, Clone, PartialEq)]

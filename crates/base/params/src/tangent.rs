@@ -176,9 +176,37 @@ impl<S: DualNum<Primitive = f64> + Copy> Values<S> for Tangent<S> {
     }
 }
 
+/// One of the [`TANGENT_CHUNK`] directions of a [`ChunkDual`]: an index checked once, when
+/// it is made, so that reading every number of a model along it needs no check.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Direction(usize);
+
+impl Direction {
+    /// Direction `k` (the k-th seed), or [`ParamError::Seeds`] if `k` is not below
+    /// [`TANGENT_CHUNK`].
+    pub fn new(k: usize) -> Result<Direction, ParamError> {
+        if k < TANGENT_CHUNK {
+            Ok(Direction(k))
+        } else {
+            Err(ParamError::Seeds {
+                why: format!(
+                    "direction {k} is out of range: a chunk has {TANGENT_CHUNK} (0 to {})",
+                    TANGENT_CHUNK - 1
+                ),
+            })
+        }
+    }
+
+    /// Its index, below [`TANGENT_CHUNK`].
+    pub fn index(self) -> usize {
+        self.0
+    }
+}
+
 /// Direction `k` of a chunk's number as a one-direction dual number (its derivative with
 /// respect to the k-th seed).
-pub fn chunk_direction(x: &ChunkDual, k: usize) -> Dual64 {
+pub fn chunk_direction(x: &ChunkDual, k: Direction) -> Dual64 {
     let Derivative(eps) = &x.eps;
-    Dual64::new(x.re, eps.as_ref().map_or(0.0, |v| v[k]))
+    // a `Direction` is below TANGENT_CHUNK, the length of every chunk's vector
+    Dual64::new(x.re, eps.as_ref().map_or(0.0, |v| v[k.0]))
 }

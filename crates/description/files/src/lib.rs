@@ -47,8 +47,8 @@ pub enum FileError {
     Read {
         /// The file.
         path: PathBuf,
-        /// The underlying error.
-        source: std::io::Error,
+        /// Why it was not read (missing, not a regular file, past the size limit).
+        source: pendkit_limits::ReadError,
     },
     /// The text is not a valid case file.
     #[error("{message}")]
@@ -256,9 +256,10 @@ pub fn is_case_file(text: &str) -> bool {
     toml::de::DeTable::parse(text).is_ok_and(|table| table.get_ref().contains_key("model"))
 }
 
-/// Reads and parses a case file.
+/// Reads and parses a case file (read only if it is a regular file within
+/// [`pendkit_limits::FILE_BYTES`]).
 pub fn read_case(path: &Path) -> Result<CaseFile, FileError> {
-    let text = std::fs::read_to_string(path).map_err(|source| FileError::Read {
+    let text = pendkit_limits::read_text(path).map_err(|source| FileError::Read {
         path: path.to_path_buf(),
         source,
     })?;

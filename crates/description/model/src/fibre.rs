@@ -296,7 +296,8 @@ pub fn fibre_inverse_radius(
     );
     format!(
         "({ends}/{neck_radius}^{p1} + {middle}/{middle_radius}^{p1})/({ends}/{neck_radius}^{power} + {middle}/{middle_radius}^{power})",
-        p1 = power + 1
+        // a u64, so that no `power` overflows (2 and 4 are the ones used)
+        p1 = u64::from(power) + 1
     )
 }
 

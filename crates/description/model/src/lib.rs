@@ -230,6 +230,14 @@ impl<S: Real> SystemBuilder<S> {
                 name: name.to_string(),
             });
         }
+        check_coordinate_name(name)?;
+        // counted as they come, so that a model past the limit stops growing at it
+        pendkit_limits::COORDINATES
+            .check(self.system.coords.len() + 1)
+            .map_err(|e| BuildError::Invalid {
+                item: format!("coordinate '{name}'"),
+                message: e.to_string(),
+            })?;
         check_finite(
             format_args!("coordinate '{name}'"),
             "start value",
@@ -319,6 +327,7 @@ impl<S: Real> SystemBuilder<S> {
 
     /// Adds a body, checking its pose expressions and mass properties.
     pub fn body(&mut self, spec: BodySpec<S>) -> Result<BodyId, BuildError> {
+        check_body_name(&spec.name)?;
         let item = format!("body '{}'", spec.name);
         if self.body_ids.contains_key(&spec.name) {
             return Err(BuildError::Duplicate {
@@ -326,6 +335,12 @@ impl<S: Real> SystemBuilder<S> {
                 name: spec.name,
             });
         }
+        pendkit_limits::BODIES
+            .check(self.system.bodies.len() + 1)
+            .map_err(|e| BuildError::Invalid {
+                item: item.clone(),
+                message: e.to_string(),
+            })?;
         // every check reads the real part: the derivatives follow the same model
         let mass = spec.mass.re();
         check_finite(&item, "mass", mass, "kg")?;
@@ -424,6 +439,12 @@ impl<S: Real> SystemBuilder<S> {
                 name: spec.name,
             });
         }
+        pendkit_limits::WIRES
+            .check(self.system.wires.len() + 1)
+            .map_err(|e| BuildError::Invalid {
+                item: item.clone(),
+                message: e.to_string(),
+            })?;
         for end in &spec.ends {
             self.check_end_body(&item, end.body)?;
             if let EndDirection::Explicit(v) = &end.direction
@@ -697,6 +718,8 @@ impl<S: Real> SystemBuilder<S> {
     ) -> Result<(), BuildError> {
         let mut names = self.system.name_schemes.remove(scheme).unwrap_or_default();
         for &(body, alias) in bodies {
+            // an alias is addressed as the body is (`L3@x,y,z/dx,dy,dz`)
+            check_body_name(alias)?;
             let id = self
                 .body_ids
                 .get(body)
@@ -886,7 +909,21 @@ fn check_shape(item: &str, shape: &Shape) -> Result<(), BuildError> {
 }
 
 /// Inertia must be symmetric and either zero (a point mass) or positive definite.
-fn check_inertia(item: &str, inertia: &Matrix3<f64>) -> Result<(), BuildError> {
+/// Relative tolerance of the triangle inequality of principal moments of inertia
+/// ([`check_inertia`]): the largest may exceed the sum of the other two by this fraction of
+/// itself. A thin plate has I₃ = I₁ + I₂ exactly, and moments written with six significant
+/// digits (C's `%g`, a spreadsheet's default) can break that equality by up to 1.5e-6 of
+/// I₃; 1e-5 keeps them, while the mistakes the check is for (a moment mistyped or swapped,
+/// m r² written for every axis of a disc) break it by percents.
+pub const INERTIA_TRIANGLE_TOLERANCE: f64 = 1e-5;
+
+/// Checks an inertia tensor (kg m², about the centre of mass) of the body `item` names:
+/// finite, symmetric, positive definite (or zero: a point mass), and its principal moments
+/// satisfying the triangle inequality I_a ≤ I_b + I_c for every order (within
+/// [`INERTIA_TRIANGLE_TOLERANCE`]), which every rigid body's do: I_a + I_b − I_c = 2 ∫ ρ c²
+/// dV ≥ 0, c the coordinate along the third axis. One line naming the body, the moments and
+/// their unit otherwise.
+pub fn check_inertia(item: &str, inertia: &Matrix3<f64>) -> Result<(), BuildError> {
     if inertia.iter().any(|v| !v.is_finite()) {
         return Err(BuildError::Invalid {
             item: item.to_string(),
@@ -903,7 +940,14 @@ fn check_inertia(item: &str, inertia: &Matrix3<f64>) -> Result<(), BuildError> {
             message: "inertia tensor is not symmetric".into(),
         });
     }
-    let moments = inertia.symmetric_eigenvalues();
+    // a diagonal tensor (how files write most bodies) is its own principal moments: no
+    // eigen-solve in a build that the sensitivities repeat for every parameter
+    let off_diagonal = inertia[(0, 1)] != 0.0 || inertia[(0, 2)] != 0.0 || inertia[(1, 2)] != 0.0;
+    let moments = if off_diagonal {
+        inertia.symmetric_eigenvalues()
+    } else {
+        inertia.diagonal()
+    };
     if moments.iter().any(|&m| m <= 0.0) {
         return Err(BuildError::Invalid {
             item: item.to_string(),
@@ -913,7 +957,60 @@ fn check_inertia(item: &str, inertia: &Matrix3<f64>) -> Result<(), BuildError> {
             ),
         });
     }
+    let mut m = [moments[0], moments[1], moments[2]];
+    m.sort_by(f64::total_cmp);
+    if m[2] - (m[0] + m[1]) > INERTIA_TRIANGLE_TOLERANCE * m[2] {
+        return Err(BuildError::Invalid {
+            item: item.to_string(),
+            message: format!(
+                "principal moments of inertia {}, {}, {} kg m^2 break the triangle inequality: {} > {} + {} (no rigid body has one moment larger than the other two together; a thin plate has them equal)",
+                number_text(m[0]),
+                number_text(m[1]),
+                number_text(m[2]),
+                number_text(m[2]),
+                number_text(m[0]),
+                number_text(m[1])
+            ),
+        });
+    }
     Ok(())
+}
+
+/// A body's name (or a naming scheme's alias of one) must be one a point signal,
+/// `<body>@x,y,z/dx,dy,dz`, can address: not empty, without `@` (which ends the body's
+/// name), `:` (the `force:` prefix, and `--tf IN:OUT`), surrounding spaces (a file's
+/// signals are trimmed) or control characters (errors are one line).
+pub fn check_body_name(name: &str) -> Result<(), BuildError> {
+    let why = if name.is_empty() {
+        "a body needs a name"
+    } else if name.contains('@') {
+        "'@' ends a body's name in a point signal (<body>@x,y,z/dx,dy,dz), so no signal could address it"
+    } else if name.contains(':') {
+        "':' separates `force:` and `--tf IN:OUT` from the name, so no signal could address it"
+    } else if name.trim() != name {
+        "spaces around it are trimmed from a point signal's body, so no signal could address it"
+    } else if name.chars().any(char::is_control) {
+        "it holds a control character"
+    } else {
+        return Ok(());
+    };
+    Err(BuildError::Invalid {
+        item: format!("body name {name:?}"),
+        message: why.into(),
+    })
+}
+
+/// A coordinate's name must be one an expression can hold (a signal `0.5*x3 + z3`, an
+/// extra term, a pose): a letter or `_`, then letters, digits, `_` or `.`, and neither `pi`
+/// nor a function's name ([`pendkit_expr::is_symbol_name`]).
+pub fn check_coordinate_name(name: &str) -> Result<(), BuildError> {
+    if pendkit_expr::is_symbol_name(name) {
+        return Ok(());
+    }
+    Err(BuildError::Invalid {
+        item: format!("coordinate name {name:?}"),
+        message: "signals and expressions write coordinates by name, so it must start with a letter or '_' and hold only letters, digits, '_' and '.' (and be neither pi nor a function's name)".into(),
+    })
 }
 
 /// A model: default parameters and a function that builds a [`System`] from resolved
@@ -1237,13 +1334,15 @@ impl TangentChunk {
                 message: format!("the chunk has {} parameters", self.parameters.len()),
             });
         };
+        // the chunk has at most TANGENT_CHUNK parameters, so `k` is a direction
+        let direction = pendkit_params::Direction::new(k)?;
         let mut lost = self.build.lost.iter();
         if let Some((_, why)) = lost.find(|(directions, _)| directions >> k & 1 == 1) {
             return Err(why.clone());
         }
         let mut finite = true;
         let mut along = |x: &ChunkDual| {
-            let x = pendkit_params::chunk_direction(x, k);
+            let x = pendkit_params::chunk_direction(x, direction);
             finite &= x.eps.is_finite();
             x
         };

@@ -275,7 +275,12 @@ impl<S: BuildScalar> Ctx<'_, S> {
 
     /// The points of `p` (m): the base points, each mirror doubling the list (the mirrored
     /// copies follow the originals, so `mirror = ["x", "y"]` gives (+,+), (−,+), (+,−), (−,−)).
+    /// At most [`pendkit_limits::WIRES_PER_SET`] of them, counted before any is made (a
+    /// file's sets are counted when it is read; a description made in code is counted here).
     pub fn points(&self, p: &Points) -> Result<Vec<Vector3<S>>, BuildError> {
+        pendkit_limits::WIRES_PER_SET
+            .check(crate::damping::point_count(p))
+            .map_err(|e| invalid(&p.at, e.to_string()))?;
         let mut out = p
             .base
             .iter()
@@ -1746,21 +1751,31 @@ fn mass_properties<S: BuildScalar>(
         None => S::from(0.0),
     };
     spec = spec.mass(mass);
-    match &body.inertia {
-        None => {}
+    let inertia = match &body.inertia {
+        None => None,
         Some(Inertia::Diagonal(d)) => {
             let v = ctx.vec3(d)?;
-            spec = spec.inertia_diag(v.x, v.y, v.z);
+            let zero = S::from(0.0);
+            Some((
+                Matrix3::new(v.x, zero, zero, zero, v.y, zero, zero, zero, v.z),
+                &d.at,
+            ))
         }
-        Some(Inertia::Tensor(_, rows)) => {
+        Some(Inertia::Tensor(at, rows)) => {
             let mut m = Matrix3::from_element(S::from(0.0));
             for (i, row) in rows.iter().enumerate() {
                 for (j, ex) in row.iter().enumerate() {
                     m[(i, j)] = ctx.eval(ex)?;
                 }
             }
-            spec = spec.inertia(m);
+            Some((m, at))
         }
+    };
+    if let Some((m, at)) = inertia {
+        // checked here as well as by the builder, so that the error is at the field
+        pendkit_model::check_inertia(&format!("body '{}'", body.name), &m.map(|v| v.re()))
+            .map_err(|e| invalid(at, e.to_string()))?;
+        spec = spec.inertia(m);
     }
     if let Some(c) = &body.centre_of_mass {
         spec = spec.centre_of_mass(ctx.vec3(c)?);

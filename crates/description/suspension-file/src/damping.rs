@@ -87,9 +87,14 @@ pub fn find_material<'s>(
         })
 }
 
-/// Number of points a [`Points`] spreads to.
+/// Number of points a [`Points`] spreads to (each mirror doubling the list), `usize::MAX`
+/// when that overflows (a hand-made [`Points`] with 64 mirrors: the build refuses it).
 pub fn point_count(p: &Points) -> usize {
-    p.base.len() << p.mirror.len()
+    u32::try_from(p.mirror.len())
+        .ok()
+        .and_then(|k| 1usize.checked_shl(k))
+        .and_then(|copies| p.base.len().checked_mul(copies))
+        .unwrap_or(usize::MAX)
 }
 
 /// The constants of `m` the thermoelastic loss needs (density, specific heat,
@@ -280,7 +285,9 @@ fn nominal_tension(spec: &Spec, hanging: &Hanging, stage: &StageFile, set: &Wire
         .filter_map(|b| bodies.get(b))
         .filter_map(|b| b.mass.as_ref().map(Ex::paren))
         .collect();
-    let wires: usize = stage.wire_sets().map(|s| point_count(&s.lower)).sum();
+    let wires = stage
+        .wire_sets()
+        .fold(0usize, |n, s| n.saturating_add(point_count(&s.lower)));
     let gravity = spec
         .gravity
         .as_ref()

@@ -3,6 +3,7 @@
 //! the bundled `chain` rewrites itself for its parameter `n_stages`). Written with
 //! [`Writer`], so a generated file comes with its tree and is read without a parser.
 
+use crate::source::FileError;
 use crate::writer::{Item, Writer, Written};
 
 /// Largest number of chain stages: 1200 variables, where the dense eigen-solves already take
@@ -78,8 +79,15 @@ fn strs(items: &[&str]) -> Item {
 /// four vertical 0.6 m steel wires (the double pendulum's) at (±a, ±b), `d_top` above its
 /// centre of mass to the body above and `d_bottom` below it to the body below. Exactly
 /// symmetric (every wire vertical, bodies level and centred on the z axis), so the stiffness
-/// splits into the x–pitch, y–roll, z and yaw blocks with exact zeros between them.
-pub fn chain(n: usize) -> Written {
+/// splits into the x–pitch, y–roll, z and yaw blocks with exact zeros between them. `n`
+/// from 1 to [`MAX_CHAIN_STAGES`], or an error saying so (before anything is written).
+pub fn chain(n: usize) -> Result<Written, FileError> {
+    if !(1..=MAX_CHAIN_STAGES).contains(&n) {
+        return Err(FileError::file(
+            "chain",
+            format!("{n} stages: a chain has 1 to {MAX_CHAIN_STAGES}"),
+        ));
+    }
     let mut w = Writer::new();
     w.comment(&format!(
         "{n}-stage chain, written by `pendkit chain-file {n}`: a suspension
@@ -160,7 +168,7 @@ whose size is a parameter of its generator, for scaling benchmarks (6 variables 
         w.entry("material", Item::str("steel"));
         w.entry("tags", Item::str("wire"));
     }
-    w.finish(&format!("chain-{n}.toml"))
+    Ok(w.finish(&format!("chain-{n}.toml")))
 }
 
 #[cfg(all(test, feature = "toml"))]
@@ -172,7 +180,7 @@ mod tests {
     #[test]
     fn the_written_tree_is_what_the_text_says() {
         use pendkit_model::{Overrides, build_with};
-        let written = chain(3);
+        let written = chain(3).unwrap();
         let from_text =
             crate::Suspension::from_text("c.toml", &written.source.text, &crate::NoLibrary)
                 .unwrap();

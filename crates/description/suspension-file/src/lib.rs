@@ -151,7 +151,7 @@ pub struct Generator {
     /// The count the file was written for.
     pub default: usize,
     /// Writes the file for a count: its text and its tree.
-    pub write: fn(usize) -> Written,
+    pub write: fn(usize) -> Result<Written, FileError>,
     /// The bundled model's one-line summary (the written file's says how many).
     pub summary: &'static str,
 }
@@ -187,7 +187,7 @@ impl Suspension {
     #[cfg(feature = "toml")]
     pub fn load(path: &Path, library: &dyn Library) -> Result<Suspension, FileError> {
         let name = path.display().to_string();
-        let text = std::fs::read_to_string(path)
+        let text = pendkit_limits::read_text(path)
             .map_err(|e| FileError::file(&name, format!("cannot read: {e}")))?;
         Suspension::from_source(Source::new(name, Some(path), text), library)
     }
@@ -235,7 +235,7 @@ impl Suspension {
         generator: Generator,
         library: &dyn Library,
     ) -> Result<Suspension, FileError> {
-        let Written { source, root } = (generator.write)(generator.default).named(name);
+        let Written { source, root } = (generator.write)(generator.default)?.named(name);
         let mut s = Suspension::from_tree(source, root, library)?;
         s.summary = generator.summary.to_string();
         s.generator = Some(generator);
@@ -316,12 +316,13 @@ impl Suspension {
         if n == g.default {
             return Ok(std::borrow::Cow::Borrowed(&self.spec));
         }
-        let Written { source, root } = (g.write)(n).named(&self.source_name);
-        // the description only: the damping and the parameters are the bundled file's
-        let other = read_spec(&source, root, &NoLibrary).map_err(|e| BuildError::Invalid {
+        let generated = |e: FileError| BuildError::Invalid {
             item: format!("generated {} with {n} {}", self.name, g.parameter),
             message: e.to_string(),
-        })?;
+        };
+        let Written { source, root } = (g.write)(n).map_err(generated)?.named(&self.source_name);
+        // the description only: the damping and the parameters are the bundled file's
+        let other = read_spec(&source, root, &NoLibrary).map_err(generated)?;
         Ok(std::borrow::Cow::Owned(other))
     }
 
@@ -414,18 +415,43 @@ pub(crate) fn read_spec(
     root: Node,
     library: &dyn Library,
 ) -> Result<Spec, FileError> {
-    read_scene(source, root, library, &mut Vec::new())
+    read_scene(source, root, library, &mut Vec::new(), &mut 0)
+}
+
+/// Deepest nesting of `extends` and `[[include]]` a suspension may have: every file in the
+/// chain is read recursively, and no suspension needs more than a few levels (the bundled
+/// `arm-cavity` has 4). Not raisable: the recursion's stack, not time, is what it guards.
+pub const MAX_FILE_DEPTH: usize = 32;
+
+/// Counts the file about to be read at `at`, `chain` the files that lead to it: refused
+/// past [`MAX_FILE_DEPTH`] levels, or past [`pendkit_limits::INCLUDED_FILES`] files read
+/// for one suspension (`read`, counted over every branch: includes nest, and a file that
+/// includes another twice, which includes another twice, ... would read 2^depth files).
+fn count_file(at: &At, chain: &[String], read: &mut usize) -> Result<(), FileError> {
+    if chain.len() >= MAX_FILE_DEPTH {
+        return Err(at.error(format!(
+            "`extends` and includes nested {} deep: at most {MAX_FILE_DEPTH} ({})",
+            chain.len() + 1,
+            chain.join(" -> ")
+        )));
+    }
+    *read += 1;
+    pendkit_limits::INCLUDED_FILES
+        .check(*read)
+        .map_err(|e| at.error(e.to_string()))
 }
 
 /// [`read_spec`] of a file reached through `chain` (the files that extend or include it, in
-/// order: a file met again goes round in a circle).
+/// order: a file met again goes round in a circle); `read` counts the files read so far for
+/// the whole suspension ([`count_file`]).
 fn read_scene(
     source: &Arc<Source>,
     root: Node,
     library: &dyn Library,
     chain: &mut Vec<String>,
+    read: &mut usize,
 ) -> Result<Spec, FileError> {
-    let mut root = load_tree(source, root, library, chain)?;
+    let mut root = load_tree(source, root, library, chain, read)?;
     let includes = scene::take_includes(&mut root)?;
     let at = At {
         origin: root.origin.clone(),
@@ -441,6 +467,7 @@ fn read_scene(
             origin: include.model.at.origin.clone(),
             path: include.model.at.path.clone(),
         };
+        count_file(&include.model.at, chain, read)?;
         let (sub_source, sub_root) = open(&include.model.value, &at, library)?;
         if chain.contains(&sub_source.name) {
             return Err(include.model.at.error(format!(
@@ -451,7 +478,7 @@ fn read_scene(
         }
         // each include starts from this file's chain: two includes of one file are fine
         let mut sub_chain = chain.clone();
-        let mut sub = read_scene(&sub_source, sub_root, library, &mut sub_chain)?;
+        let mut sub = read_scene(&sub_source, sub_root, library, &mut sub_chain, read)?;
         scene::Prefix(&include.prefix.value).spec(&mut sub)?;
         assembled.add(sub, include)?;
     }
@@ -525,6 +552,7 @@ fn load_tree(
     mut node: Node,
     library: &dyn Library,
     chain: &mut Vec<String>,
+    read: &mut usize,
 ) -> Result<Node, FileError> {
     if chain.contains(&source.name) {
         chain.push(source.name.clone());
@@ -547,8 +575,9 @@ fn load_tree(
     let Value::Str(target) = &extends.value else {
         return Err(at.error("expected the name of a file or of a bundled model"));
     };
+    count_file(&at, chain, read)?;
     let (base_source, base) = open(target, &at, library)?;
-    let mut base = load_tree(&base_source, base, library, chain)?;
+    let mut base = load_tree(&base_source, base, library, chain, read)?;
     let Value::Table(base_table) = &mut base.value else {
         return Ok(node);
     };
@@ -600,7 +629,7 @@ fn carry_entries(base: &mut tree::Table, child: &mut tree::Table, key: &str, id:
 /// The file at `path` that an `extends` at `at` names, read.
 #[cfg(feature = "toml")]
 fn read_beside(path: &Path, at: &At) -> Result<(Arc<Source>, Node), FileError> {
-    let text = std::fs::read_to_string(path)
+    let text = pendkit_limits::read_text(path)
         .map_err(|e| at.error(format!("cannot read {}: {e}", path.display())))?;
     let source = Source::new(path.display().to_string(), Some(path), text);
     let root = tree::parse(&source)?;

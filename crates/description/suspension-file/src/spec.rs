@@ -2,6 +2,7 @@
 //! field keeps its place; nothing here evaluates an expression (that is the build's job, with
 //! the parameters' values).
 
+use pendkit_limits::WIRES_PER_SET;
 use pendkit_model::beads::BeadJoints;
 use pendkit_model::schema::{self, DAMPING_FIELDS, Domain, Field};
 use pendkit_system::{CoordKind, Stage};
@@ -263,8 +264,11 @@ pub enum Names {
 }
 
 impl Names {
-    /// The names of `count` parts.
+    /// The names of `count` parts (at most [`WIRES_PER_SET`], checked before any is made).
     pub fn expand(&self, count: usize, at: &At) -> Result<Vec<String>, FileError> {
+        WIRES_PER_SET
+            .check(count)
+            .map_err(|e| at.error(e.to_string()))?;
         match self {
             Names::Prefix(p) if count == 1 => Ok(vec![p.clone()]),
             Names::Prefix(p) => Ok((1..=count).map(|k| format!("{p}{k}")).collect()),
@@ -689,6 +693,8 @@ fn name_scheme(scheme: String, node: &Node, at: At) -> Result<NameSchemeFile, Fi
                 alias.value.type_name()
             )));
         };
+        // an alias is addressed as a body is (`M3@x,y,z/dx,dy,dz`)
+        pendkit_model::check_body_name(alias).map_err(|e| body_at.error(e.to_string()))?;
         bodies.push((
             Located {
                 value: body,
@@ -788,6 +794,7 @@ fn material(name: String, node: &Node, at: At) -> Result<MaterialSpec, FileError
 }
 
 fn coordinate(name: String, node: &Node, at: At) -> Result<CoordinateSpec, FileError> {
+    pendkit_model::check_coordinate_name(&name).map_err(|e| at.error(e.to_string()))?;
     let kind_of = |text: &str, at: &At| match text {
         "variable" => Ok(CoordKind::Variable),
         "float" => Ok(CoordKind::Float),
@@ -827,6 +834,8 @@ fn vector3(f: &mut Fields, key: &'static str) -> Result<Option<Located<Vec<Ex>>>
 }
 
 fn body(name: String, node: &Node, at: At) -> Result<BodyFile, FileError> {
+    // a body a signal cannot address is refused where it is written
+    pendkit_model::check_body_name(&name).map_err(|e| at.error(e.to_string()))?;
     let mut f = Fields::of(node, at.clone())?;
     let dof = body_dof(&mut f)?;
     let inertia = match f.node("inertia") {
@@ -880,6 +889,15 @@ fn body(name: String, node: &Node, at: At) -> Result<BodyFile, FileError> {
     }
     if let (Some(d), None) = (&b.dof, &b.coordinates) {
         return Err(d.at.error("`dof` goes with `coordinates`"));
+    }
+    // the suffix makes the coordinates' names (`x<suffix>` ... `roll<suffix>`)
+    if let Some(c) = &b.coordinates {
+        pendkit_model::check_coordinate_name(&format!("x{}", c.value)).map_err(|_| {
+            c.at.error(format!(
+                "'{}' does not make usable coordinate names (x{0} ... roll{0}): a suffix holds only letters, digits, '_' and '.'",
+                c.value
+            ))
+        })?;
     }
     Ok(b)
 }
@@ -971,6 +989,10 @@ fn points(node: &Node, at: At) -> Result<Points, FileError> {
         let Value::Array(items) = &list.value else {
             return Err(list_at.error("expected an array of [x, y, z] points"));
         };
+        // counted before any point is read
+        WIRES_PER_SET
+            .check(items.len())
+            .map_err(|e| list_at.error(e.to_string()))?;
         for (i, item) in items.iter().enumerate() {
             let item_at = At {
                 origin: item.origin.clone(),
@@ -984,23 +1006,7 @@ fn points(node: &Node, at: At) -> Result<Points, FileError> {
     }
     let mirror = match f.strings("mirror")? {
         None => Vec::new(),
-        Some(list) => {
-            // "xy" is short for ["x", "y"]
-            let letters: Vec<String> = if list.value.len() == 1 && list.value[0].len() > 1 {
-                list.value[0].chars().map(String::from).collect()
-            } else {
-                list.value.clone()
-            };
-            letters
-                .iter()
-                .map(|a| {
-                    ["x", "y", "z"].iter().position(|n| n == a).ok_or_else(|| {
-                        list.at
-                            .error(format!("cannot mirror across '{a}' (x, y or z)"))
-                    })
-                })
-                .collect::<Result<_, _>>()?
-        }
+        Some(list) => mirror_axes(&list, base.len())?,
     };
     let p = Points {
         at,
@@ -1012,6 +1018,38 @@ fn points(node: &Node, at: At) -> Result<Points, FileError> {
     };
     f.finish()?;
     Ok(p)
+}
+
+/// The axes of a `mirror` list (0 x, 1 y, 2 z), each given once, for `base` points: the
+/// points they make counted before any is made.
+fn mirror_axes(list: &Located<Vec<String>>, base: usize) -> Result<Vec<usize>, FileError> {
+    // "xy" is short for ["x", "y"]
+    let letters: Vec<String> = if list.value.len() == 1 && list.value[0].chars().count() > 1 {
+        list.value[0].chars().map(String::from).collect()
+    } else {
+        list.value.clone()
+    };
+    let mut axes: Vec<usize> = Vec::with_capacity(3);
+    for a in &letters {
+        let axis = ["x", "y", "z"].iter().position(|n| n == a).ok_or_else(|| {
+            list.at
+                .error(format!("cannot mirror across '{a}' (x, y or z)"))
+        })?;
+        // a second mirror across an axis copies every point onto one already there: wires
+        // (or springs) that coincide pair by pair, never what a file means
+        if axes.contains(&axis) {
+            return Err(list.at.error(format!(
+                "'{a}' is given twice: mirroring across an axis again puts every point on one already there (mirror across each axis once)"
+            )));
+        }
+        axes.push(axis);
+    }
+    // each mirror doubles the list
+    let count = base.checked_mul(1 << axes.len());
+    WIRES_PER_SET
+        .check_counted(count)
+        .map_err(|e| list.at.error(e.to_string()))?;
+    Ok(axes)
 }
 
 fn names(f: &mut Fields, default: String) -> Result<Names, FileError> {

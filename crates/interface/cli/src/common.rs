@@ -277,9 +277,14 @@ fn frequency(text: &str, place: &str) -> Result<f64, CliError> {
 }
 
 impl GridArgs {
-    /// The frequencies (Hz), each finite and positive.
+    /// The frequencies (Hz), each finite and positive, at most
+    /// [`pendkit_limits::FREQUENCY_POINTS`] of them (counted before they are read).
     pub fn frequencies(&self) -> Result<Vec<f64>, CliError> {
+        let too_many = |what: String| move |source| CliError::Limit { what, source };
         if let Some(list) = &self.freqs {
+            pendkit_limits::FREQUENCY_POINTS
+                .check(list.split(',').count())
+                .map_err(too_many("--freqs".into()))?;
             let freqs = list
                 .split(',')
                 .map(|t| frequency(t, "--freqs"))
@@ -287,7 +292,7 @@ impl GridArgs {
             return Ok(freqs);
         }
         if let Some(path) = &self.freqs_file {
-            let text = std::fs::read_to_string(path).map_err(|source| CliError::Read {
+            let text = pendkit_limits::read_text(path).map_err(|source| CliError::Input {
                 path: path.clone(),
                 source,
             })?;
@@ -301,6 +306,11 @@ impl GridArgs {
                     let place = format!("--freqs-file {} line {}", path.display(), n + 1);
                     freqs.push(frequency(item, &place)?);
                 }
+                // checked as the list grows: a file within the size limit may still hold
+                // millions of numbers
+                pendkit_limits::FREQUENCY_POINTS
+                    .check(freqs.len())
+                    .map_err(too_many(format!("--freqs-file {}", path.display())))?;
             }
             if freqs.is_empty() {
                 return Err(CliError::usage(format!(
@@ -317,6 +327,9 @@ impl GridArgs {
                 )));
             }
         }
+        pendkit_limits::FREQUENCY_POINTS
+            .check(self.points)
+            .map_err(too_many("--points".into()))?;
         Ok(pendkit::log_grid(self.from, self.to, self.points)?)
     }
 }

@@ -26,6 +26,24 @@ pub enum CliError {
         /// The underlying error.
         source: std::io::Error,
     },
+    /// An input file was not read: missing, not a regular file, or past the size limit
+    /// ([`pendkit_limits::read_text`]).
+    #[error("cannot read '{}': {source}", .path.display())]
+    Input {
+        /// The file.
+        path: PathBuf,
+        /// Why it was not read.
+        source: pendkit_limits::ReadError,
+    },
+    /// A limit of [`pendkit_limits`] passed, or its variable set wrongly: `what` names the
+    /// option or file at fault.
+    #[error("{what}: {source}")]
+    Limit {
+        /// The option or file at fault (`--vary`, `--freqs-file grid.txt`).
+        what: String,
+        /// The limit and how to raise it.
+        source: pendkit_limits::LimitError,
+    },
     /// A file could not be written.
     #[error("cannot write '{}': {source}", .path.display())]
     Write {

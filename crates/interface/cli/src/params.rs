@@ -80,16 +80,10 @@ pub struct ChainArgs {
 /// The text of an N-stage chain suspension file.
 pub fn chain_file(a: ChainArgs) -> Result<String, CliError> {
     let max = pendkit::suspension::generate::MAX_CHAIN_STAGES;
-    if !(1..=max).contains(&a.stages) {
-        return Err(CliError::usage(format!(
-            "chain-file: {} stages; give 1 to {max}",
-            a.stages
-        )));
-    }
-    Ok(pendkit::suspension::generate::chain(a.stages)
-        .source
-        .text
-        .clone())
+    let written = pendkit::suspension::generate::chain(a.stages).map_err(|_| {
+        CliError::usage(format!("chain-file: {} stages; give 1 to {max}", a.stages))
+    })?;
+    Ok(written.source.text.clone())
 }
 
 /// Arguments of `pendkit model-file`.

@@ -2,6 +2,7 @@
 //! values, as CSV against the swept values, with the modes tracked from step to step by
 //! the overlap of their shapes (so a mode keeps its number and label through a crossing).
 
+use std::collections::HashMap;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -25,7 +26,8 @@ pub struct Args {
     args: ModelArgs,
     /// A parameter and its values: NAME=START:STOP:N (N evenly spaced values, ends
     /// included), or NAME=START:STOP:N:log (log-spaced). Repeatable: every combination,
-    /// the last --vary changing fastest; at most 100000 steps in all.
+    /// the last --vary changing fastest; at most 10000 steps in all
+    /// (PENDKIT_MAX_SWEEP_STEPS raises it).
     #[arg(long = "vary", required = true, value_name = "NAME=START:STOP:N")]
     vary: Vec<String>,
     /// The normal modes at every step, tracked by shape. Unstable steps are data here:
@@ -60,11 +62,8 @@ pub struct Vary {
     pub values: Vec<f64>,
 }
 
-/// Most steps of a sweep, all `--vary` combined: each step is a whole run (build,
-/// equilibrium, modes), so more is a mistake, not a calculation.
-pub const MAX_STEPS: usize = 100_000;
-
-/// Parses `NAME=START:STOP:N[:log]` (1 ≤ N ≤ [`MAX_STEPS`]).
+/// Parses `NAME=START:STOP:N[:log]` (1 ≤ N ≤ [`pendkit_limits::SWEEP_STEPS`], checked
+/// before the values are made).
 pub fn parse_vary(text: &str) -> Result<Vary, CliError> {
     let bad = |why: &str| {
         CliError::usage(format!(
@@ -85,12 +84,13 @@ pub fn parse_vary(text: &str) -> Result<Vary, CliError> {
     let n: usize = parts[2]
         .parse()
         .ok()
-        .filter(|&n| (1..=MAX_STEPS).contains(&n))
-        .ok_or_else(|| {
-            bad(&format!(
-                "N '{}' is not a whole number from 1 to {MAX_STEPS}",
-                parts[2]
-            ))
+        .filter(|&n| n >= 1)
+        .ok_or_else(|| bad(&format!("N '{}' is not a whole number from 1 up", parts[2])))?;
+    pendkit_limits::SWEEP_STEPS
+        .check(n)
+        .map_err(|source| CliError::Limit {
+            what: format!("--vary '{text}'"),
+            source,
         })?;
     if log && !(start > 0.0 && stop > 0.0) {
         return Err(bad("log spacing needs START and STOP > 0"));
@@ -122,32 +122,63 @@ pub fn parse_vary(text: &str) -> Result<Vary, CliError> {
     })
 }
 
-/// The grid points (one value per swept parameter), the last parameter changing fastest.
-fn grid(varies: &[Vary]) -> Vec<Vec<usize>> {
-    let mut points = vec![Vec::new()];
-    for v in varies {
-        points = points
-            .into_iter()
-            .flat_map(|p| {
-                (0..v.values.len()).map(move |k| {
-                    let mut q = p.clone();
-                    q.push(k);
-                    q
-                })
-            })
-            .collect();
-    }
-    points
+/// The steps of a sweep: every combination of the swept values, the last parameter
+/// changing fastest. A step is its index; its point (one value index per swept parameter)
+/// and its neighbours are computed from it, not stored.
+struct Grid {
+    /// The number of values of each swept parameter.
+    sizes: Vec<usize>,
+    /// How far apart in index two steps are that differ by one value of each parameter.
+    strides: Vec<usize>,
+    /// The number of steps (checked against [`pendkit_limits::SWEEP_STEPS`]).
+    len: usize,
 }
 
-/// The point a grid point's modes are matched to: one step back along the last parameter
-/// that is not at its first value (so neighbours always differ by one step of one
-/// parameter). `None` for the first point.
-fn predecessor(points: &[Vec<usize>], point: &[usize]) -> Option<usize> {
-    let d = point.iter().rposition(|&k| k > 0)?;
-    let mut previous = point.to_vec();
-    previous[d] -= 1;
-    points.iter().position(|p| *p == previous)
+impl Grid {
+    /// The grid of `varies`, each with at least one value, whose product of sizes has
+    /// been checked to fit.
+    fn new(varies: &[Vary]) -> Grid {
+        let sizes: Vec<usize> = varies.iter().map(|v| v.values.len()).collect();
+        let mut strides = vec![1; sizes.len()];
+        for d in (0..sizes.len().saturating_sub(1)).rev() {
+            strides[d] = strides[d + 1] * sizes[d + 1];
+        }
+        let len = sizes.iter().product();
+        Grid {
+            sizes,
+            strides,
+            len,
+        }
+    }
+
+    /// The value index of each swept parameter at step `index`.
+    fn point(&self, index: usize) -> Vec<usize> {
+        self.sizes
+            .iter()
+            .zip(&self.strides)
+            .map(|(&size, &stride)| index / stride % size)
+            .collect()
+    }
+
+    /// The step a step's modes are matched to: one step back along the last parameter
+    /// that is not at its first value (so neighbours always differ by one step of one
+    /// parameter). `None` for the first step.
+    fn predecessor(&self, index: usize) -> Option<usize> {
+        let d = self.point(index).iter().rposition(|&k| k > 0)?;
+        Some(index - self.strides[d])
+    }
+
+    /// The last step whose predecessor is `index` (`None`: no step continues it), after
+    /// which its modes are no longer needed. The steps continuing it are one value further
+    /// along a parameter at or after its last that is not at its first value (the
+    /// parameters after that are at their first); the furthest is along the first such.
+    fn last_use(&self, index: usize) -> Option<usize> {
+        let point = self.point(index);
+        let from = point.iter().rposition(|&k| k > 0).unwrap_or(0);
+        (from..point.len())
+            .find(|&d| point[d] + 1 < self.sizes[d])
+            .map(|d| index + self.strides[d])
+    }
 }
 
 /// The modes of one step, for tracking.
@@ -234,9 +265,13 @@ pub fn run(a: Args) -> Result<String, CliError> {
     } else {
         Vec::new()
     };
-    let points = grid(&varies);
+    let grid = Grid::new(&varies);
+    if lossy {
+        // the table's size is known before the first step: one row per step and frequency
+        check_rows(grid.len.checked_mul(freqs.len()))?;
+    }
     let progress = Progress::new(
-        Some(points.len() as u64),
+        Some(grid.len as u64),
         format!(
             "sweep {}",
             varies
@@ -247,7 +282,6 @@ pub fn run(a: Args) -> Result<String, CliError> {
         ),
     );
     let mut out = String::new();
-    let mut header_written = false;
     let mut table = ModeTable::default();
     // for the response figures: (step name, response)
     let mut curves: Vec<(String, Vec<(f64, f64)>)> = Vec::new();
@@ -255,20 +289,26 @@ pub fn run(a: Args) -> Result<String, CliError> {
     let mut x_unit = String::new();
     // per step of a modes sweep: whether the equilibrium is unstable there
     let mut unstable: Vec<bool> = Vec::new();
-    for point in &points {
-        let (values, run, step_name) = step_run(&a, &varies, point)?;
+    for index in 0..grid.len {
+        let (values, run, step_name) = step_run(&a, &varies, &grid.point(index))?;
         unstable.push(is_unstable(&run));
-        if !header_written {
+        if index == 0 {
             (x_unit, unit) = write_header(&mut out, &a, &varies, &run, tf.as_ref());
-            header_written = true;
         }
         if a.modes {
-            table.add(&a, &points, point, &run, &values, &step_name)?;
+            if index == 0 {
+                // the table's size is known after the first step: one row per step and mode
+                check_rows(grid.len.checked_mul(run.result.modes.modes.len()))?;
+            }
+            table.add(&a, (&grid, index, &step_name), &run, &values, &mut out)?;
         } else {
             let prefix: String = values.iter().map(|x| csv(*x) + ",").collect();
             let response = step_response(&a, &run, tf.as_ref(), &freqs)?;
             write_response_rows(&mut out, &prefix, &freqs, &response, a.noise.is_some());
-            curves.push((step_name, response));
+            // kept only for the figure: a sweep without one holds no response
+            if a.plot.is_some() {
+                curves.push((step_name, response));
+            }
         }
         progress.step();
     }
@@ -339,37 +379,80 @@ fn step_run(
     Ok((values, run, step_name))
 }
 
-/// A modes sweep's table as it grows: each step's modes, their tracked ids, the rows, which
-/// tracked modes `--family` keeps, and the series of the figure.
+/// Checks the rows a sweep's table will have (`None`: more than a `usize` holds) against
+/// [`pendkit_limits::SWEEP_ROWS`]: the table is held in memory until the sweep ends.
+fn check_rows(rows: Option<usize>) -> Result<(), CliError> {
+    pendkit_limits::SWEEP_ROWS
+        .check_counted(rows)
+        .map_err(|source| CliError::Limit {
+            what: "sweep".into(),
+            source,
+        })
+}
+
+/// A modes sweep's table as it grows: the modes of the steps still to be continued, the
+/// rows, which tracked modes `--family` keeps, and the series of the figure.
 #[derive(Default)]
 struct ModeTable {
-    steps: Vec<StepModes>,
-    /// Per step: the tracked id of each of its modes, in the step's order.
-    ids: Vec<Vec<usize>>,
-    /// (tracked id, CSV line).
-    rows: Vec<(usize, String)>,
+    /// By step index: its modes and the tracked id of each, in the step's order; a step
+    /// is dropped once the last step that continues it has been matched to it (a sweep
+    /// holds a few steps' shapes and mass matrices, not all of them).
+    live: HashMap<usize, (StepModes, Vec<usize>)>,
+    /// The labels and families of the first step's modes: the tracked modes' names.
+    first: (Vec<String>, Vec<String>),
+    /// The labels, families and tracked ids of the last step's modes.
+    last: (Vec<String>, Vec<String>, Vec<usize>),
+    /// With `--family`: the CSV lines (text, and each line's tracked id and end), written
+    /// at the end when it is known which tracked modes the family keeps; without, the
+    /// lines go to the output as they come.
+    rows: (String, Vec<(usize, usize)>),
     /// Per tracked id: of the `--family` at some step (every mode without one).
     in_family: Vec<bool>,
-    /// Per tracked id: (series name, swept values, frequencies), over one `--vary`.
+    /// Per tracked id: (series name, swept values, frequencies), over one `--vary`, with
+    /// `--plot`.
     series: Vec<(String, Vec<f64>, Vec<f64>)>,
 }
 
 impl ModeTable {
-    /// The modes of `run`, the step `point` at the swept `values`, tracked from the steps
-    /// before.
+    /// The modes of `run`, the step `index` of `grid` (named `step_name`) at the swept
+    /// `values`, tracked from the steps before; its rows go to `out` (or are kept, with
+    /// `--family`).
     fn add(
         &mut self,
         a: &Args,
-        points: &[Vec<usize>],
-        point: &[usize],
+        (grid, index, step_name): (&Grid, usize, &str),
         run: &Run,
         values: &[f64],
-        step_name: &str,
+        out: &mut String,
     ) -> Result<(), CliError> {
         let modes = StepModes::of(run);
-        let (step_ids, overlaps) = track(points, point, &self.steps, &self.ids, &modes, step_name)?;
+        let previous = grid.predecessor(index);
+        // the first step numbers its modes in its own order
+        let (step_ids, overlaps) = match previous {
+            None => (
+                (0..modes.frequencies.len()).collect::<Vec<_>>(),
+                vec![1.0; modes.frequencies.len()],
+            ),
+            Some(q) => {
+                let (old, ids) = self.live.get(&q).ok_or_else(|| {
+                    CliError::usage(format!(
+                        "sweep: the modes of the step before {step_name} were not kept (a bug in pendkit: please report it)"
+                    ))
+                })?;
+                track(old, ids, &modes, step_name)?
+            }
+        };
+        // the step before is done with when this was the last step to continue it
+        if let Some(q) = previous
+            && grid.last_use(q) == Some(index)
+        {
+            self.live.remove(&q);
+        }
+        if index == 0 {
+            self.first = (modes.labels.clone(), modes.families.clone());
+        }
         let prefix: String = values.iter().map(|x| csv(*x) + ",").collect();
-        let first = self.steps.first().unwrap_or(&modes);
+        let first = &self.first;
         let mut order: Vec<(usize, usize)> = step_ids
             .iter()
             .copied()
@@ -385,55 +468,72 @@ impl ModeTable {
                 self.in_family.resize(id + 1, false);
             }
             self.in_family[id] |= a.family.as_ref().is_none_or(|f| modes.families[j] == *f);
-            self.rows.push((
-                id,
-                format!(
-                    "{prefix}{},{},{},{},{},{}\n",
-                    id + 1,
-                    first.labels[id],
-                    first.families[id],
-                    csv(modes.frequencies[j]),
-                    modes.labels[j],
-                    fixed(overlaps[j], 6, 0)
-                ),
-            ));
-            if values.len() == 1 {
-                extend_series(&mut self.series, id, first, values[0], modes.frequencies[j]);
+            // a step's modes are as many as the first step's (checked by `track`)
+            let (label, family) = (&first.0[id], &first.1[id]);
+            let target = if a.family.is_some() {
+                &mut self.rows.0
+            } else {
+                &mut *out
+            };
+            let _ = writeln!(
+                target,
+                "{prefix}{},{label},{family},{},{},{}",
+                id + 1,
+                csv(modes.frequencies[j]),
+                modes.labels[j],
+                fixed(overlaps[j], 6, 0)
+            );
+            if a.family.is_some() {
+                self.rows.1.push((id, self.rows.0.len()));
+            }
+            if a.plot.is_some() && values.len() == 1 {
+                let name = format!("{} {label} ({family})", id + 1);
+                extend_series(&mut self.series, id, name, values[0], modes.frequencies[j]);
             }
         }
-        self.steps.push(modes);
-        self.ids.push(step_ids);
+        self.last = (
+            modes.labels.clone(),
+            modes.families.clone(),
+            step_ids.clone(),
+        );
+        if grid.last_use(index).is_some() {
+            self.live.insert(index, (modes, step_ids));
+        }
         Ok(())
     }
 
-    /// The rows of the modes `--family` keeps, in step order.
+    /// The rows of the modes `--family` keeps, in step order (without `--family` they are
+    /// written already).
     fn write(&self, out: &mut String) {
-        for (id, line) in &self.rows {
-            if self.in_family[*id] {
-                out.push_str(line);
+        let (text, ends) = &self.rows;
+        let mut start = 0;
+        for &(id, end) in ends {
+            if self.in_family[id] {
+                out.push_str(&text[start..end]);
             }
+            start = end;
         }
     }
 
     /// The figure's series of the modes `--family` keeps, each named at its first and
     /// last steps.
     fn series(self) -> Vec<(String, Vec<f64>, Vec<f64>)> {
-        let (steps, ids, in_family) = (self.steps, self.ids, self.in_family);
+        let (last, in_family) = (self.last, self.in_family);
         self.series
             .into_iter()
             .enumerate()
             .filter(|(id, _)| in_family.get(*id).copied().unwrap_or(false))
-            .map(|(id, (name, x, y))| (last_label(&steps, &ids, id, name), x, y))
+            .map(|(id, (name, x, y))| (last_label(&last, id, name), x, y))
             .collect()
     }
 }
 
 /// Adds mode `id`'s frequency `hz` at swept value `x` to its series of the mode figure,
-/// named after the mode at the first step (`first`).
+/// called `name` (after the mode at the first step).
 fn extend_series(
     mode_series: &mut Vec<(String, Vec<f64>, Vec<f64>)>,
     id: usize,
-    first: &StepModes,
+    name: String,
     x: f64,
     hz: f64,
 ) {
@@ -441,7 +541,7 @@ fn extend_series(
         mode_series.resize(id + 1, (String::new(), Vec::new(), Vec::new()));
     }
     let series = &mut mode_series[id];
-    series.0 = format!("{} {} ({})", id + 1, first.labels[id], first.families[id]);
+    series.0 = name;
     series.1.push(x);
     series.2.push(hz);
 }
@@ -464,38 +564,25 @@ fn write_response_rows(
     }
 }
 
-/// The tracked id of each of `modes` (the step `point`, named `step_name`) and its overlap
-/// with the mode it continues: in the step's own order where a line of the grid starts,
-/// else matched by shape to the modes of the step before it (`steps`, their ids `ids`).
+/// The tracked id of each of `modes` (the step named `step_name`) and its overlap with the
+/// mode it continues: matched by shape to the modes of the step before it (`old`, their
+/// tracked ids `ids`).
 fn track(
-    points: &[Vec<usize>],
-    point: &[usize],
-    steps: &[StepModes],
-    ids: &[Vec<usize>],
+    old: &StepModes,
+    ids: &[usize],
     modes: &StepModes,
     step_name: &str,
 ) -> Result<(Vec<usize>, Vec<f64>), CliError> {
-    Ok(match predecessor(points, point) {
-        None => (
-            (0..modes.frequencies.len()).collect::<Vec<_>>(),
-            vec![1.0; modes.frequencies.len()],
-        ),
-        Some(q) => {
-            let old = &steps[q];
-            if old.shapes.nrows() != modes.shapes.nrows()
-                || old.shapes.ncols() != modes.shapes.ncols()
-            {
-                return Err(CliError::usage(format!(
-                    "sweep: the model's variables change at {step_name}; modes can only be tracked over a fixed set of variables"
-                )));
-            }
-            let matched = match_modes(&old.shapes, &old.mass, &modes.shapes, &modes.mass)?;
-            (
-                matched.iter().map(|&(i, _)| ids[q][i]).collect(),
-                matched.iter().map(|&(_, o)| o).collect(),
-            )
-        }
-    })
+    if old.shapes.nrows() != modes.shapes.nrows() || old.shapes.ncols() != modes.shapes.ncols() {
+        return Err(CliError::usage(format!(
+            "sweep: the model's variables change at {step_name}; modes can only be tracked over a fixed set of variables"
+        )));
+    }
+    let matched = match_modes(&old.shapes, &old.mass, &modes.shapes, &modes.mass)?;
+    Ok((
+        matched.iter().map(|&(i, _)| ids[i]).collect(),
+        matched.iter().map(|&(_, o)| o).collect(),
+    ))
 }
 
 /// What the sweep is for at one step, at every frequency: the noise ASD (with 0 beside it)
@@ -523,24 +610,26 @@ fn step_response(
     })
 }
 
-/// Refuses a sweep the table could not state truthfully: more than [`MAX_STEPS`] steps, a
-/// parameter swept twice or swept and also set, or a mode plot over more than one
-/// parameter.
+/// Refuses a sweep the table could not state truthfully or that is past its limit: more
+/// than [`pendkit_limits::SWEEP_STEPS`] steps, a parameter swept twice or swept and also
+/// set, or a mode plot over more than one parameter.
 fn check_varies(a: &Args, varies: &[Vary]) -> Result<(), CliError> {
     let steps = varies
         .iter()
-        .try_fold(1usize, |n, v| n.checked_mul(v.values.len()))
-        .filter(|&n| n <= MAX_STEPS);
-    if steps.is_none() {
-        return Err(CliError::usage(format!(
-            "--vary: {} combinations in all; at most {MAX_STEPS} steps",
-            varies
-                .iter()
-                .map(|v| v.values.len().to_string())
-                .collect::<Vec<_>>()
-                .join(" x ")
-        )));
-    }
+        .try_fold(1usize, |n, v| n.checked_mul(v.values.len()));
+    pendkit_limits::SWEEP_STEPS
+        .check_counted(steps)
+        .map_err(|source| CliError::Limit {
+            what: format!(
+                "--vary: {} combinations in all",
+                varies
+                    .iter()
+                    .map(|v| v.values.len().to_string())
+                    .collect::<Vec<_>>()
+                    .join(" x ")
+            ),
+            source,
+        })?;
     // a parameter swept twice, or swept and also set, would take only the last value
     // given while the table's columns claim the others
     for (k, v) in varies.iter().enumerate() {
@@ -692,12 +781,14 @@ fn fixed_or_sci(x: f64) -> String {
 }
 
 /// A mode series' name (`id label (family)` at the first step) with the label and family
-/// at the last step added when they differ: `1 itm_x3 (L) → itm_pitch3 (P)`.
-fn last_label(steps: &[StepModes], ids: &[Vec<usize>], id: usize, name: String) -> String {
-    let last = steps.last().zip(ids.last()).and_then(|(step, ids)| {
-        let j = ids.iter().position(|&i| i == id)?;
-        Some(format!("{} ({})", step.labels[j], step.families[j]))
-    });
+/// at the last step (`last`: its labels, families and tracked ids) added when they differ:
+/// `1 itm_x3 (L) → itm_pitch3 (P)`.
+fn last_label(last: &(Vec<String>, Vec<String>, Vec<usize>), id: usize, name: String) -> String {
+    let (labels, families, ids) = last;
+    let last = ids
+        .iter()
+        .position(|&i| i == id)
+        .map(|j| format!("{} ({})", labels[j], families[j]));
     match last {
         Some(end) if !name.ends_with(&end) => format!("{name} → {end}"),
         _ => name,
@@ -889,20 +980,47 @@ mod tests {
                 values: vec![1.0, 2.0],
             },
         ];
-        let points = grid(&varies);
-        assert_eq!(points.len(), 6);
-        assert_eq!(points[1], vec![0, 1]);
-        for (p, point) in points.iter().enumerate().skip(1) {
-            let q = predecessor(&points, point).unwrap();
+        let grid = Grid::new(&varies);
+        assert_eq!(grid.len, 6);
+        assert_eq!(grid.point(1), vec![0, 1]);
+        assert_eq!(grid.point(4), vec![2, 0]);
+        for p in 1..grid.len {
+            let q = grid.predecessor(p).unwrap();
             assert!(q < p);
-            let steps: usize = point
+            let steps: usize = grid
+                .point(p)
                 .iter()
-                .zip(&points[q])
+                .zip(&grid.point(q))
                 .map(|(a, b)| a.abs_diff(*b))
                 .sum();
-            assert_eq!(steps, 1, "{point:?} from {:?}", points[q]);
+            assert_eq!(steps, 1, "{:?} from {:?}", grid.point(p), grid.point(q));
         }
-        assert_eq!(predecessor(&points, &points[0]), None);
+        assert_eq!(grid.predecessor(0), None);
+    }
+
+    #[test]
+    fn a_step_is_kept_exactly_until_the_last_step_that_continues_it() {
+        let vary = |n: usize| Vary {
+            name: "p".into(),
+            values: vec![0.0; n],
+        };
+        for sizes in [
+            vec![5],
+            vec![3, 2],
+            vec![2, 3, 4],
+            vec![1, 4],
+            vec![4, 1, 3],
+        ] {
+            let varies: Vec<Vary> = sizes.iter().map(|&n| vary(n)).collect();
+            let grid = Grid::new(&varies);
+            for q in 0..grid.len {
+                // every later step, asked whom it continues
+                let last = (0..grid.len)
+                    .filter(|&p| grid.predecessor(p) == Some(q))
+                    .max();
+                assert_eq!(grid.last_use(q), last, "{sizes:?} step {q}");
+            }
+        }
     }
 
     #[test]

@@ -202,7 +202,7 @@ pub enum Error {
     },
     /// A frequency grid that cannot be made.
     #[error(
-        "frequency grid from {} Hz to {} Hz with {n} points: need 1e-9 <= from <= to <= 1e9 (Hz, finite) and 1 to 1000000 points",
+        "frequency grid from {} Hz to {} Hz with {n} points: need 1e-9 <= from <= to <= 1e9 (Hz, finite) and at least 1 point",
         pendkit_expr::number_text(*from),
         pendkit_expr::number_text(*to)
     )]
@@ -405,10 +405,11 @@ impl Case {
     /// Reads a case file (TOML; see [`files`]), or a suspension file (a `.toml` without a
     /// top-level `model`; see [`suspension`]) as a case of that model with its defaults. A
     /// case file's `model` may itself be a suspension file's path, relative to the case
-    /// file's folder.
+    /// file's folder. Files are read only if they are regular files within
+    /// [`pendkit_limits::FILE_BYTES`].
     #[cfg(feature = "files")]
     pub fn from_file(path: &Path) -> Result<Case, Error> {
-        let text = std::fs::read_to_string(path).map_err(|source| Error::Case {
+        let text = pendkit_limits::read_text(path).map_err(|source| Error::Case {
             path: path.to_path_buf(),
             message: source.to_string(),
         })?;
@@ -443,7 +444,7 @@ impl Case {
         let model = if file.model.ends_with(".toml") {
             let folder = path.parent().unwrap_or_else(|| Path::new(""));
             let model_path = folder.join(&file.model);
-            let model_text = std::fs::read_to_string(&model_path).map_err(|e| {
+            let model_text = pendkit_limits::read_text(&model_path).map_err(|e| {
                 err(format!(
                     "model '{}': cannot read: {e}",
                     model_path.display()
@@ -627,13 +628,17 @@ impl Case {
 }
 
 /// `n` log-spaced frequencies from `from` to `to` (Hz): finite, 1e-9 Hz ≤ from ≤ to ≤
-/// 1e9 Hz ([`pendkit_dynamics::validate`]), 1 ≤ n ≤ 1 000 000.
+/// 1e9 Hz ([`pendkit_dynamics::validate`]), 1 ≤ n ≤ [`pendkit_limits::FREQUENCY_POINTS`]
+/// (checked before the grid is made).
 pub fn log_grid(from: f64, to: f64, n: usize) -> Result<Vec<f64>, Error> {
-    use pendkit_dynamics::validate::{MAX_FREQUENCY, MAX_POINTS, MIN_FREQUENCY};
+    use pendkit_dynamics::validate::{MAX_FREQUENCY, MIN_FREQUENCY};
     let in_range = |f: f64| f.is_finite() && (MIN_FREQUENCY..=MAX_FREQUENCY).contains(&f);
-    if !in_range(from) || !in_range(to) || to < from || n == 0 || n > MAX_POINTS {
+    if !in_range(from) || !in_range(to) || to < from || n == 0 {
         return Err(Error::Grid { from, to, n });
     }
+    pendkit_limits::FREQUENCY_POINTS
+        .check(n)
+        .map_err(DynamicsError::TooManyPoints)?;
     if n == 1 {
         return Ok(vec![from]);
     }

@@ -18,10 +18,11 @@ type Loaded = HashMap<(PathBuf, String), Weak<Suspension>>;
 static LOADED: LazyLock<Mutex<Loaded>> = LazyLock::new(|| Mutex::new(HashMap::new()));
 
 /// The suspension file at `path` as a model; its `extends` may name files beside it or
-/// bundled models. Errors name the file, the line and the field.
+/// bundled models. Errors name the file, the line and the field. The file is read only if
+/// it is a regular file within [`pendkit_limits::FILE_BYTES`].
 pub fn load_suspension(path: &Path) -> Result<Arc<dyn Model>, Error> {
     let name = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|e| {
+    let text = pendkit_limits::read_text(path).map_err(|e| {
         Error::from(pendkit_suspension::FileError::file(
             &name,
             format!("cannot read: {e}"),

@@ -425,7 +425,7 @@ impl Model {
             Some(text) => Source::CaseFile { path: spec, text },
             // the rule of `Case::open`: a `.toml` name or an existing file is a case file
             None if spec.ends_with(".toml") || path.is_file() => {
-                let text = std::fs::read_to_string(path).map_err(|e| {
+                let text = pendkit_limits::read_text(path).map_err(|e| {
                     error(Error::Case {
                         path: path.to_path_buf(),
                         message: e.to_string(),

@@ -214,6 +214,7 @@ pub(crate) fn newton(
     let mut trial = x.clone();
 
     let mut iteration = 0;
+    let mut stall = Stall::default();
     loop {
         evaluator.evaluate(&x, false);
         gradient_sums(evaluator, &slot, &mut ev);
@@ -255,6 +256,16 @@ pub(crate) fn newton(
         if n == 0 || at_rounding {
             return Ok(equilibrium(x, ev.energy));
         }
+        // a search that no longer moves ends now, not after the iteration limit: each
+        // iteration costs the whole model's Hessian
+        if stall.stalled(ev.energy, max_residual, energy_rounding(&ev)) {
+            return Err(AssemblyError::Stalled {
+                iterations: iteration,
+                window: STALL_WINDOW,
+                residual: max_residual,
+                coordinate: name(worst),
+            });
+        }
         evaluator.evaluate(&x, true);
         hessian_sum(evaluator, &slot, &mut ev);
         let forces_ok = max_residual <= options.force_tolerance * ev.force_scale;
@@ -270,7 +281,7 @@ pub(crate) fn newton(
         // rounding of the energy itself; a pure Newton step is then taken as it is.
         let slope = ev.gradient.dot(&dx);
         let mut alpha = 1.0;
-        let rounding = 1e-13 * ev.energy.abs().max(ev.force_scale * 1e-3);
+        let rounding = energy_rounding(&ev);
         if !(newton && -slope < rounding) {
             loop {
                 trial.copy_from_slice(&x);
@@ -297,6 +308,41 @@ pub(crate) fn newton(
             }
         }
         iteration += 1;
+    }
+}
+
+/// The rounding of the total energy (J) at an evaluation: a change below it is no change.
+fn energy_rounding(ev: &Evaluation) -> f64 {
+    1e-13 * ev.energy.abs().max(ev.force_scale * 1e-3)
+}
+
+/// Iterations without progress after which the search stops ([`Stall`]).
+const STALL_WINDOW: usize = 10;
+
+/// The energies and largest residuals of the last [`STALL_WINDOW`] + 1 iterations: the
+/// search has stalled when, over the window, the energy fell by no more than its rounding
+/// and the largest residual not by half. A converging search does one or the other every
+/// few iterations (the energy falls while far off, the residual falls quadratically near
+/// the minimum); one that has stopped moving (a body hung from one point far off its
+/// centre of mass, whose minimum double precision does not resolve to the tolerance) would
+/// otherwise run to the iteration limit, each iteration costing the whole model's Hessian.
+#[derive(Default)]
+struct Stall {
+    history: std::collections::VecDeque<(f64, f64)>,
+}
+
+impl Stall {
+    /// Records an iteration's `energy` (J) and largest residual (N or N m), `rounding` the
+    /// energy's rounding now; true when the window shows no progress.
+    fn stalled(&mut self, energy: f64, residual: f64, rounding: f64) -> bool {
+        self.history.push_back((energy, residual));
+        if self.history.len() <= STALL_WINDOW {
+            return false;
+        }
+        let Some((energy_before, residual_before)) = self.history.pop_front() else {
+            return false;
+        };
+        energy_before - energy <= rounding && residual > 0.5 * residual_before
     }
 }
 

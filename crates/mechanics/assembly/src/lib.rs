@@ -61,6 +61,21 @@ pub enum AssemblyError {
         /// The coordinate it acts on.
         coordinate: String,
     },
+    /// Newton's method stopped making progress: over its last iterations neither the
+    /// energy fell beyond its rounding nor the largest residual by half.
+    #[error(
+        "equilibrium search stalled: no progress in the last {window} of {iterations} iterations, residual force {residual:.3e} on '{coordinate}' (no minimum the search reaches from the start, or none double precision resolves)"
+    )]
+    Stalled {
+        /// Iterations done.
+        iterations: usize,
+        /// Iterations without progress.
+        window: usize,
+        /// Largest residual force or torque (N or N m).
+        residual: f64,
+        /// The coordinate it acts on.
+        coordinate: String,
+    },
     /// The search ran away: the potential has no minimum near the start.
     #[error(
         "equilibrium search ran away: '{coordinate}' reached {value:.4e} (is the model supported, is the start position near the equilibrium?)"
@@ -262,7 +277,8 @@ impl Assembled {
     /// How far `point` (m, body coordinates) on body `body` of `system` moves along
     /// `direction` (lab axes, normalised here) per unit of every unknown (variables, then
     /// floats) and every parameter coordinate: the linearised geometry at this equilibrium.
-    /// `None` when a weight is not finite or the body index is out of range.
+    /// `None` when a weight is not finite, the body index is out of range, or `system` has
+    /// fewer coordinates than this assembly's (a different model).
     pub fn point_weights(
         &self,
         system: &System,
@@ -276,11 +292,18 @@ impl Assembled {
             .frame
             .try_jacobian(&self.equilibrium.coords, point)
             .ok()?;
+        let layout = &self.layout;
+        let all = layout.variables.iter().chain(&layout.floats);
+        if all
+            .chain(&layout.parameters)
+            .any(|&g| g >= jac.position.ncols())
+        {
+            return None;
+        }
         let d = direction.normalize();
         let along = |ids: &mut dyn Iterator<Item = &usize>| {
             DVector::from_vec(ids.map(|&g| jac.position.column(g).dot(&d)).collect())
         };
-        let layout = &self.layout;
         let weights = PointWeights {
             unknowns: along(&mut layout.variables.iter().chain(&layout.floats)),
             parameters: along(&mut layout.parameters.iter()),
@@ -542,7 +565,7 @@ fn finish(
             let count = plugins.len();
             evaluator.extend(plugins);
             evaluator.extend(extra_terms(system, ExtraPhase::AfterEquilibrium, Some(x))?);
-            evaluator.extend(constraint_terms(system, x));
+            evaluator.extend(constraint_terms(system, x)?);
             Ok(count)
         },
     )?;

@@ -114,7 +114,8 @@ pub fn in_parallel_with<W, T: Send, E: Send>(
     };
     let next = AtomicUsize::new(0);
     let first_error = AtomicUsize::new(usize::MAX);
-    let finished: Mutex<Vec<(usize, Result<T, E>)>> = Mutex::new(Vec::with_capacity(n));
+    // grown as the pieces finish, not reserved for `n` up front (any `n` is a valid count)
+    let finished: Mutex<Vec<(usize, Result<T, E>)>> = Mutex::new(Vec::new());
     // each worker takes the next j until none is left: the pieces' costs may differ widely
     pool.scope(|scope| {
         for _ in 0..threads.min(n) {
@@ -141,18 +142,16 @@ pub fn in_parallel_with<W, T: Send, E: Send>(
             });
         }
     });
-    let mut slots: Vec<Option<Result<T, E>>> = (0..n).map(|_| None).collect();
-    for (j, result) in finished
+    let mut finished = finished
         .into_inner()
-        .unwrap_or_else(PoisonError::into_inner)
-    {
-        slots[j] = Some(result);
-    }
+        .unwrap_or_else(PoisonError::into_inner);
+    finished.sort_unstable_by_key(|(j, _)| *j);
     let mut mine = scratch();
-    let mut out = Vec::with_capacity(n);
-    for (j, slot) in slots.into_iter().enumerate() {
-        match slot {
-            Some(result) => out.push(result?),
+    let mut out = Vec::with_capacity(finished.len());
+    let mut pieces = finished.into_iter().peekable();
+    for j in 0..n {
+        match pieces.next_if(|(k, _)| *k == j) {
+            Some((_, result)) => out.push(result?),
             // not started, which only follows an error of a smaller j (returned above);
             // done here rather than assumed
             None => out.push(work(&mut mine, j)?),

@@ -95,9 +95,10 @@ pub enum DynamicsError {
         /// k l0 / |T| = l0 / |l − l0|.
         ratio: f64,
     },
-    /// A frequency grid with more points than allowed.
-    #[error("{0} frequencies: at most 1000000 points per grid")]
-    TooManyPoints(usize),
+    /// A frequency grid with more points than [`pendkit_limits::FREQUENCY_POINTS`] allows
+    /// (or that limit's variable set wrongly).
+    #[error("frequency grid: {0}")]
+    TooManyPoints(pendkit_limits::LimitError),
     /// A damping multiplier that is not finite or has the wrong sign somewhere.
     #[error(
         "damping tag '{tag}' at {} Hz: multiplier {} {} {}i {problem}",

@@ -171,7 +171,8 @@ impl Stability {
             runaway_floats,
             neutral_floats,
             neutral,
-            directions: modes.coordinates.len() + floats,
+            // any count of floats is a count, never an overflow
+            directions: modes.coordinates.len().saturating_add(floats),
             inverted,
         }
     }

@@ -57,9 +57,6 @@ pub fn check_wire_stretch(system: &System, x_eq: &[f64]) -> Result<(), DynamicsE
     Ok(())
 }
 
-/// Most points a frequency grid may have.
-pub const MAX_POINTS: usize = 1_000_000;
-
 /// `f_hz` is finite and within [`MIN_FREQUENCY`], [`MAX_FREQUENCY`]; `what` names it in
 /// the error (e.g. "damping frequency").
 pub fn check_frequency(what: &'static str, f_hz: f64) -> Result<(), DynamicsError> {
@@ -71,11 +68,11 @@ pub fn check_frequency(what: &'static str, f_hz: f64) -> Result<(), DynamicsErro
 }
 
 /// Every frequency of `freqs` passes [`check_frequency`], and there are at most
-/// [`MAX_POINTS`] of them.
+/// [`pendkit_limits::FREQUENCY_POINTS`] of them.
 pub fn check_frequencies(freqs: &[f64]) -> Result<(), DynamicsError> {
-    if freqs.len() > MAX_POINTS {
-        return Err(DynamicsError::TooManyPoints(freqs.len()));
-    }
+    pendkit_limits::FREQUENCY_POINTS
+        .check(freqs.len())
+        .map_err(DynamicsError::TooManyPoints)?;
     freqs
         .iter()
         .try_for_each(|&f| check_frequency("frequency", f))

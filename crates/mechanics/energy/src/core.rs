@@ -105,33 +105,48 @@ impl Element for Gravity {
         "m g z of every massive body (lossless)"
     }
     fn terms(&self, reference: &Reference) -> Result<Vec<Term>, EnergyError> {
-        Ok(gravity_energies(reference, &new_frames(reference.system))
-            .map(|(label, local, energy)| {
-                Term::on_frames(label, "gravity", GRAVITY_TAG, local, energy)
+        gravity_energies(reference, &new_frames(reference.system))
+            .map(|term| {
+                let (label, local, energy) = term?;
+                Ok(Term::on_frames(
+                    label,
+                    "gravity",
+                    GRAVITY_TAG,
+                    local,
+                    energy,
+                ))
             })
-            .collect())
+            .collect()
     }
     fn tangent_terms(
         &self,
         reference: &Reference<Dual64>,
         shared: &SharedBodies,
     ) -> Result<Option<Vec<TangentTerm>>, EnergyError> {
-        Ok(Some(
-            gravity_energies(reference, &shared_frames(reference.system, shared))
-                .map(|(label, local, energy)| {
-                    TangentTerm::on_frames(label, "gravity", GRAVITY_TAG, local, energy)
-                })
-                .collect(),
-        ))
+        gravity_energies(reference, &shared_frames(reference.system, shared))
+            .map(|term| {
+                let (label, local, energy) = term?;
+                Ok(TangentTerm::on_frames(
+                    label,
+                    "gravity",
+                    GRAVITY_TAG,
+                    local,
+                    energy,
+                ))
+            })
+            .collect::<Result<_, _>>()
+            .map(Some)
     }
 }
 
 /// Where a kind's build takes the local frames of a set of bodies from.
-type FramesOf<'a> = dyn Fn(&[BodyId]) -> Arc<LocalFrames> + 'a;
+type FramesOf<'a> = dyn Fn(&[BodyId]) -> Result<Arc<LocalFrames>, EnergyError> + 'a;
 
 /// Local frames made anew (the `f64` terms).
-fn new_frames<S: Constant>(system: &System<S>) -> impl Fn(&[BodyId]) -> Arc<LocalFrames> + '_ {
-    move |bodies| Arc::new(LocalFrames::new(system, bodies))
+fn new_frames<S: Constant>(
+    system: &System<S>,
+) -> impl Fn(&[BodyId]) -> Result<Arc<LocalFrames>, EnergyError> + '_ {
+    move |bodies| LocalFrames::new(system, bodies).map(Arc::new)
 }
 
 /// Local frames shared by every term on the same bodies, and taken from another build of
@@ -139,7 +154,7 @@ fn new_frames<S: Constant>(system: &System<S>) -> impl Fn(&[BodyId]) -> Arc<Loca
 fn shared_frames<'a, S: Constant>(
     system: &'a System<S>,
     shared: &'a SharedBodies,
-) -> impl Fn(&[BodyId]) -> Arc<LocalFrames> + 'a {
+) -> impl Fn(&[BodyId]) -> Result<Arc<LocalFrames>, EnergyError> + 'a {
     move |bodies| shared.frames(system, bodies)
 }
 
@@ -148,19 +163,19 @@ fn shared_frames<'a, S: Constant>(
 fn gravity_energies<'r, S: Constant>(
     reference: &'r Reference<'_, S>,
     frames_of: &'r FramesOf<'r>,
-) -> impl Iterator<Item = (String, Arc<LocalFrames>, GravityEnergy<S>)> + 'r {
+) -> impl Iterator<Item = Result<(String, Arc<LocalFrames>, GravityEnergy<S>), EnergyError>> + 'r {
     let system = reference.system;
     (0..system.bodies.len())
         .filter(|&b| !system.bodies[b].mass.is_exactly_zero() && reference.keeps_body(b))
         .map(move |b| {
             let body = &system.bodies[b];
-            let local = frames_of(&[b]);
+            let local = frames_of(&[b])?;
             let energy = GravityEnergy {
                 frame: local.frames[0].clone(),
                 centre_of_mass: body.centre_of_mass,
                 weight: body.mass * system.gravity,
             };
-            (term_label("gravity", &body.name), local, energy)
+            Ok((term_label("gravity", &body.name), local, energy))
         })
 }
 
@@ -333,13 +348,13 @@ fn wire_stretch_energy<S: Constant>(
     wire: &Wire<S>,
     frames_of: &FramesOf,
 ) -> Result<(Arc<LocalFrames>, WireStretchEnergy<S>), EnergyError> {
-    let length = reference.wire_length(wire).re();
+    let length = reference.wire_length(wire)?.re();
     if length.is_nan() || length <= 0.0 {
         return Err(EnergyError::ZeroLengthWire {
             wire: wire.name.clone(),
         });
     }
-    let local = frames_of(&[wire.ends[0].body, wire.ends[1].body]);
+    let local = frames_of(&[wire.ends[0].body, wire.ends[1].body])?;
     let energy = WireStretchEnergy {
         frames: [local.frames[0].clone(), local.frames[1].clone()],
         points: [wire.ends[0].point, wire.ends[1].point],
@@ -629,22 +644,25 @@ impl Element for SpringKind {
         "six-axis spring ½ Δᵀ K Δ + fᵀ Δ between two attachment frames"
     }
     fn terms(&self, reference: &Reference) -> Result<Vec<Term>, EnergyError> {
-        Ok(spring_energies(reference, &new_frames(reference.system))
-            .map(|(label, tag, local, energy)| Term::on_frames(label, "spring", tag, local, energy))
-            .collect())
+        spring_energies(reference, &new_frames(reference.system))
+            .map(|term| {
+                let (label, tag, local, energy) = term?;
+                Ok(Term::on_frames(label, "spring", tag, local, energy))
+            })
+            .collect()
     }
     fn tangent_terms(
         &self,
         reference: &Reference<Dual64>,
         shared: &SharedBodies,
     ) -> Result<Option<Vec<TangentTerm>>, EnergyError> {
-        Ok(Some(
-            spring_energies(reference, &shared_frames(reference.system, shared))
-                .map(|(label, tag, local, energy)| {
-                    TangentTerm::on_frames(label, "spring", tag, local, energy)
-                })
-                .collect(),
-        ))
+        spring_energies(reference, &shared_frames(reference.system, shared))
+            .map(|term| {
+                let (label, tag, local, energy) = term?;
+                Ok(TangentTerm::on_frames(label, "spring", tag, local, energy))
+            })
+            .collect::<Result<_, _>>()
+            .map(Some)
     }
 }
 
@@ -653,14 +671,14 @@ impl Element for SpringKind {
 fn spring_energies<'r, S: Constant>(
     reference: &'r Reference<'_, S>,
     frames_of: &'r FramesOf<'r>,
-) -> impl Iterator<Item = (String, String, Arc<LocalFrames>, SpringEnergy<S>)> + 'r {
+) -> impl Iterator<Item = Result<SpringParts<S>, EnergyError>> + 'r {
     let system = reference.system;
     system
         .springs
         .iter()
         .filter(|s| reference.keeps_spring(s))
         .map(move |s| {
-            let local = frames_of(&[s.ends[0].body, s.ends[1].body]);
+            let local = frames_of(&[s.ends[0].body, s.ends[1].body])?;
             let energy = SpringEnergy {
                 frames: [local.frames[0].clone(), local.frames[1].clone()],
                 ends: s.ends.clone(),
@@ -671,9 +689,12 @@ fn spring_energies<'r, S: Constant>(
                 stiffness: s.stiffness,
                 preload: s.preload,
             };
-            (term_label("spring", &s.name), s.tag.clone(), local, energy)
+            Ok((term_label("spring", &s.name), s.tag.clone(), local, energy))
         })
 }
+
+/// A spring's term as [`spring_energies`] makes it: label, tag, frames and energy.
+type SpringParts<S> = (String, String, Arc<LocalFrames>, SpringEnergy<S>);
 
 crate::register_element!(Gravity);
 crate::register_element!(WireStretch);

@@ -112,8 +112,10 @@ impl<'a, S: Constant> Reference<'a, S> {
             || spring.ends.iter().any(|e| self.frame_moves(e.body))
     }
 
-    /// The frame (origin, m; rotation) of body `body` (one of the system's) here.
-    pub fn frame(&self, body: BodyId) -> &Frame<S> {
+    /// The frame (origin, m; rotation) of body `body` here, or [`EnergyError::Index`] for a
+    /// body the system does not have. (Coordinates too short for a body's pose give its
+    /// frame NaN entries, which the terms built on it report.)
+    pub fn frame(&self, body: BodyId) -> Result<&Frame<S>, EnergyError> {
         let frames = self.frames.get_or_init(|| {
             self.system
                 .bodies
@@ -121,44 +123,71 @@ impl<'a, S: Constant> Reference<'a, S> {
                 .map(|b| b.frame.eval(self.coords))
                 .collect()
         });
-        &frames[body]
+        frames.get(body).ok_or_else(|| EnergyError::Index {
+            item: "Reference::frame".into(),
+            what: "body",
+            index: body,
+            len: frames.len(),
+        })
     }
 
-    /// Lab positions (m) of the two attachment points of `wire`.
-    pub fn wire_points(&self, wire: &Wire<S>) -> [Vector3<S>; 2] {
-        wire.ends
-            .each_ref()
-            .map(|end| self.frame(end.body).point(&end.point))
+    /// The frame of the body at end `k` of `wire`, an error naming the wire for a body the
+    /// system does not have.
+    fn end_frame(&self, wire: &Wire<S>, k: usize) -> Result<&Frame<S>, EnergyError> {
+        self.frame(wire.ends[k].body).map_err(|e| match e {
+            EnergyError::Index {
+                what, index, len, ..
+            } => EnergyError::Index {
+                item: format!("wire '{}'", wire.name),
+                what,
+                index,
+                len,
+            },
+            e => e,
+        })
     }
 
-    /// Chord length (m) of `wire`.
-    pub fn wire_length(&self, wire: &Wire<S>) -> S {
-        let [p0, p1] = self.wire_points(wire);
-        norm(&(p1 - p0))
+    /// Lab positions (m) of the two attachment points of `wire`; an error for an end on a
+    /// body the system does not have.
+    pub fn wire_points(&self, wire: &Wire<S>) -> Result<[Vector3<S>; 2], EnergyError> {
+        let point = |k: usize| -> Result<Vector3<S>, EnergyError> {
+            Ok(self.end_frame(wire, k)?.point(&wire.ends[k].point))
+        };
+        Ok([point(0)?, point(1)?])
     }
 
-    /// Static tension (N) of `wire`: k (l - l0).
-    pub fn wire_tension(&self, wire: &Wire<S>) -> S {
-        wire.stiffness * (self.wire_length(wire) - wire.unstretched_length)
+    /// Chord length (m) of `wire` (errors as [`Reference::wire_points`]).
+    pub fn wire_length(&self, wire: &Wire<S>) -> Result<S, EnergyError> {
+        let [p0, p1] = self.wire_points(wire)?;
+        Ok(norm(&(p1 - p0)))
+    }
+
+    /// Static tension (N) of `wire`: k (l - l0) (errors as [`Reference::wire_points`]).
+    pub fn wire_tension(&self, wire: &Wire<S>) -> Result<S, EnergyError> {
+        Ok(wire.stiffness * (self.wire_length(wire)? - wire.unstretched_length))
     }
 
     /// Clamp direction of each end in that end's body coordinates, pointing into the wire;
     /// `Auto` ends get the direction of the chord here (straight wire); hinged ends give
-    /// `None`.
-    pub fn wire_end_directions(&self, wire: &Wire<S>) -> [Option<Vector3<S>>; 2] {
-        let [p0, p1] = self.wire_points(wire);
+    /// `None` (errors as [`Reference::wire_points`]).
+    pub fn wire_end_directions(
+        &self,
+        wire: &Wire<S>,
+    ) -> Result<[Option<Vector3<S>>; 2], EnergyError> {
+        let [p0, p1] = self.wire_points(wire)?;
         let chord = p1 - p0;
         let chord = chord / norm(&chord);
-        std::array::from_fn(|k| {
+        let direction = |k: usize| -> Result<Option<Vector3<S>>, EnergyError> {
             let end = &wire.ends[k];
-            let rotation = self.frame(end.body).rotation;
+            let rotation = self.end_frame(wire, k)?.rotation;
             let into_wire = if k == 0 { chord } else { -chord };
-            match &end.direction {
+            Ok(match &end.direction {
                 EndDirection::Hinged => None,
                 EndDirection::Auto => Some(tr_mul_vec(&rotation, &into_wire)),
                 EndDirection::Explicit(v) => Some(v / norm(v)),
-            }
-        })
+            })
+        };
+        Ok([direction(0)?, direction(1)?])
     }
 }
 
@@ -251,19 +280,27 @@ impl SharedBodies {
     }
 
     /// The frames of `bodies` of `system` over one local vector, shared by every term on
-    /// the same bodies (a wire's torsion and beam).
-    pub fn frames<S: Constant>(&self, system: &System<S>, bodies: &[BodyId]) -> Arc<LocalFrames> {
+    /// the same bodies (a wire's torsion and beam); [`EnergyError::Index`] for a body the
+    /// system does not have.
+    pub fn frames<S: Constant>(
+        &self,
+        system: &System<S>,
+        bodies: &[BodyId],
+    ) -> Result<Arc<LocalFrames>, EnergyError> {
         let found = self
             .frames
             .borrow()
             .iter()
             .find(|f| f.bodies == bodies)
             .cloned();
-        found.unwrap_or_else(|| {
-            let frames = Arc::new(LocalFrames::new(system, bodies));
-            self.frames.borrow_mut().push(frames.clone());
-            frames
-        })
+        match found {
+            Some(frames) => Ok(frames),
+            None => {
+                let frames = Arc::new(LocalFrames::new(system, bodies)?);
+                self.frames.borrow_mut().push(frames.clone());
+                Ok(frames)
+            }
+        }
     }
 
     /// The body of type `T` with index `index`, built by `make` if nobody has yet.
@@ -430,24 +467,33 @@ pub struct LocalFrames {
 }
 
 impl LocalFrames {
-    /// Collects the frames of `bodies` of `system`.
-    pub fn new<S: Constant>(system: &System<S>, bodies: &[BodyId]) -> Self {
-        let mut coords: Vec<usize> = bodies
+    /// Collects the frames of `bodies` of `system`; [`EnergyError::Index`] for a body the
+    /// system does not have.
+    pub fn new<S: Constant>(system: &System<S>, bodies: &[BodyId]) -> Result<Self, EnergyError> {
+        let found = bodies
             .iter()
-            .flat_map(|&b| system.bodies[b].frame.var_list().iter().copied())
+            .map(|&b| {
+                system.bodies.get(b).ok_or_else(|| EnergyError::Index {
+                    item: "LocalFrames::new".into(),
+                    what: "body",
+                    index: b,
+                    len: system.bodies.len(),
+                })
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        let mut coords: Vec<usize> = found
+            .iter()
+            .flat_map(|b| b.frame.var_list().iter().copied())
             .collect();
         coords.sort_unstable();
         coords.dedup();
         // every variable of every frame is in `coords` by construction
         let local = |g: usize| coords.binary_search(&g).unwrap_or(0);
-        let frames = bodies
-            .iter()
-            .map(|&b| system.bodies[b].frame.remap(&local))
-            .collect();
-        LocalFrames {
+        let frames = found.iter().map(|b| b.frame.remap(&local)).collect();
+        Ok(LocalFrames {
             coords,
             frames,
             bodies: bodies.to_vec(),
-        }
+        })
     }
 }

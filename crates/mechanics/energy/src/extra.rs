@@ -20,12 +20,16 @@ impl Potential for ExpressionEnergy {
 }
 
 /// Terms for the user's extra potential terms of `phase`. After the equilibrium, the symbol
-/// `<coordinate>.eq` stands for that coordinate's equilibrium value `x_eq`.
+/// `<coordinate>.eq` stands for that coordinate's equilibrium value `x_eq`, a full
+/// coordinate vector ([`EnergyError::Length`] if shorter than the system's coordinates).
 pub fn extra_terms(
     system: &System,
     phase: ExtraPhase,
     x_eq: Option<&[f64]>,
 ) -> Result<Vec<Term>, EnergyError> {
+    if let Some(x) = x_eq {
+        check_full("extra_terms", system, x)?;
+    }
     system
         .extra_terms
         .iter()
@@ -78,15 +82,25 @@ impl Potential for ConstraintEnergy {
     }
 }
 
-/// The debugging constraint springs with non-zero stiffness, about the equilibrium `x_eq`.
-pub fn constraint_terms(system: &System, x_eq: &[f64]) -> Vec<Term> {
+/// The debugging constraint springs with non-zero stiffness, about the equilibrium `x_eq`
+/// (a full coordinate vector): [`EnergyError::Length`] if it is shorter than the system's
+/// coordinates, [`EnergyError::Index`] for a constraint on a coordinate the system does not
+/// have.
+pub fn constraint_terms(system: &System, x_eq: &[f64]) -> Result<Vec<Term>, EnergyError> {
+    check_full("constraint_terms", system, x_eq)?;
     system
         .constraint_stiffness
         .iter()
         .filter(|(_, k)| **k != 0.0)
         .map(|(&i, &k)| {
-            Term::new(
-                format!("constraint {}", system.coords[i].name),
+            let coordinate = system.coords.get(i).ok_or_else(|| EnergyError::Index {
+                item: "constraint".into(),
+                what: "coordinate",
+                index: i,
+                len: system.coords.len(),
+            })?;
+            Ok(Term::new(
+                format!("constraint {}", coordinate.name),
                 "constraint",
                 CONSTRAINT_TAG,
                 vec![i],
@@ -94,7 +108,20 @@ pub fn constraint_terms(system: &System, x_eq: &[f64]) -> Vec<Term> {
                     stiffness: k,
                     at: x_eq[i],
                 },
-            )
+            ))
         })
         .collect()
+}
+
+/// `x` holds a value for every coordinate of `system` (`function` names the caller).
+fn check_full(function: &'static str, system: &System, x: &[f64]) -> Result<(), EnergyError> {
+    if x.len() < system.coords.len() {
+        return Err(EnergyError::Length {
+            function,
+            argument: "x_eq",
+            expected: system.coords.len(),
+            given: x.len(),
+        });
+    }
+    Ok(())
 }

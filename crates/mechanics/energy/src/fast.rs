@@ -242,8 +242,9 @@ pub const MAX_PARTS: usize = 4;
 /// from their pose expressions. `energy` writes the energy of each part. Exact to rounding
 /// at any configuration; costs n(n+1)/2 evaluations, so kinds use it where no structure
 /// is exact. Needs second-order jets when Hessians are wanted. Returns false (nothing
-/// written) for more than [`MAX_PARTS`] parts, or frames whose `local` does not name one
-/// index per jet coordinate (or first-order jets when Hessians are wanted).
+/// written) for more than [`MAX_PARTS`] parts, frames whose `local` does not name one
+/// index per jet coordinate (or first-order jets when Hessians are wanted), or buffers of
+/// `out` too short for `parts` parts over `out.n` coordinates.
 pub fn hyper_dual_over_frames<const F: usize>(
     at: &JetPoint,
     parts: usize,
@@ -251,6 +252,19 @@ pub fn hyper_dual_over_frames<const F: usize>(
     mut energy: impl FnMut(&[Frame<HyperDual64>; F], &mut [HyperDual64]),
 ) -> bool {
     if parts > MAX_PARTS || at.frames.len() != F {
+        return false;
+    }
+    // checked once: then every write below is inside its buffer
+    let n = out.n;
+    let fits = |len: usize, per_part: Option<usize>| {
+        per_part
+            .and_then(|k| k.checked_mul(parts))
+            .is_some_and(|need| len >= need)
+    };
+    if !fits(out.values.len(), Some(1))
+        || !fits(out.gradients.len(), Some(n))
+        || (out.hessian && !fits(out.on.len(), n.checked_mul(n)))
+    {
         return false;
     }
     // checked once: then every position below is an index the jets have
@@ -261,7 +275,6 @@ pub fn hyper_dual_over_frames<const F: usize>(
     if !jets_fit {
         return false;
     }
-    let n = out.n;
     let mut e = [HyperDual64::from_re(0.0); MAX_PARTS];
     let frames_at = |i: Option<usize>, j: Option<usize>| {
         let mut frames: [Frame<HyperDual64>; F] = std::array::from_fn(|_| Frame::identity());
@@ -320,4 +333,48 @@ pub fn on_stack<'a, R>(
         4 => f(&[view(0), view(1), view(2), view(3)]),
         _ => return None,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_hyper_dual_fallback_declines_buffers_too_short_for_its_parts() {
+        // no frames, so every jet "fits": only the buffers' lengths stand between the
+        // routine and writing past them
+        let at = JetPoint {
+            x: &[0.0, 0.0],
+            frames: &[],
+        };
+        let mut scratch = Scratch::default();
+        let (mut values, mut gradients, mut scales, mut on, mut off) = (
+            vec![0.0; 1],
+            vec![0.0; 3],
+            vec![0.0; 4],
+            vec![0.0; 7],
+            vec![],
+        );
+        let mut out = Derivatives {
+            n: 2,
+            hessian: true,
+            values: &mut values,
+            gradients: &mut gradients,
+            force_scales: &mut scales,
+            on: &mut on,
+            off: &mut off,
+            off_form: OffForm::Same,
+            scratch: &mut scratch,
+        };
+        // two parts need 2 values, 4 gradient and 8 Hessian entries
+        assert!(!hyper_dual_over_frames::<0>(&at, 2, &mut out, |_, e| {
+            e.iter_mut().for_each(|v| *v = HyperDual64::from_re(1.0));
+        }));
+        assert!(out.values.iter().all(|&v| v == 0.0));
+        // one part fits, and is written
+        assert!(hyper_dual_over_frames::<0>(&at, 1, &mut out, |_, e| {
+            e[0] = HyperDual64::from_re(1.0);
+        }));
+        assert_eq!(out.values[0], 1.0);
+    }
 }

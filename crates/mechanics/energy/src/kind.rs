@@ -88,15 +88,19 @@ impl<C: Constant> InstanceAt<'_, C> {
     pub fn value(&self, name: &str) -> C {
         self.schema.value(self.element, name)
     }
-    /// Point `k` (m) in its body's coordinates.
+    /// Point `k` (m) in its body's coordinates: `k` below the schema's `points`, which the
+    /// instance was checked to have before it was offered (an index past the kind's own
+    /// schema is a mistake in the kind's code, not in its input).
     pub fn point(&self, k: usize) -> Vector3<C> {
         self.element.points[k]
     }
-    /// Body `k`'s frame at the reference configuration.
+    /// Body `k`'s frame at the reference configuration: `k` below the schema's `bodies`
+    /// (see [`InstanceAt::point`]).
     pub fn frame(&self, k: usize) -> &Frame<C> {
         self.frames[k]
     }
-    /// Point `k` (m) in lab coordinates at the reference configuration.
+    /// Point `k` (m) in lab coordinates at the reference configuration (see
+    /// [`InstanceAt::point`]).
     pub fn lab_point(&self, k: usize) -> Vector3<C> {
         self.frames[k].point(&self.element.points[k])
     }
@@ -176,6 +180,10 @@ impl<K: InstanceKind> TangentPotential for KindTerm<K, Dual64> {
     }
 }
 
+/// An instance as [`KindElement::instances`] makes it: the element, its local frames and
+/// its term.
+type InstanceParts<'r, K, C, F> = (&'r PluginElement<C>, F, KindTerm<K, C>);
+
 /// The [`Element`] of an [`InstanceKind`]: register it with
 /// [`register_kind!`](crate::register_kind).
 pub struct KindElement<K>(PhantomData<fn() -> K>);
@@ -186,10 +194,13 @@ impl<K: InstanceKind> KindElement<K> {
 
     /// Each instance of `K` in `reference`'s model, with the frames it reads and the
     /// instance `K` builds from it; `frames` gives the local frames of a list of bodies.
+    /// Each instance is checked against the kind's schema first (the assembly has checked
+    /// it already; a caller of [`Element::terms`] may not have), so that the point and
+    /// frame indices [`InstanceAt`] offers the kind are those its schema declares.
     fn instances<'r, C: Constant, F>(
         reference: &'r Reference<'r, C>,
-        frames: impl Fn(&[usize]) -> F + 'r,
-    ) -> impl Iterator<Item = (&'r PluginElement<C>, F, KindTerm<K, C>)> + 'r
+        frames: impl Fn(&[usize]) -> Result<F, EnergyError> + 'r,
+    ) -> impl Iterator<Item = Result<InstanceParts<'r, K, C, F>, EnergyError>> + 'r
     where
         F: AsRef<LocalFrames>,
     {
@@ -199,18 +210,27 @@ impl<K: InstanceKind> KindElement<K> {
             .iter()
             .filter(|e| e.kind == K::KIND)
             .map(move |e| {
+                K::SCHEMA.check(e).map_err(|m| EnergyError::Element {
+                    kind: K::KIND,
+                    element: e.name.clone(),
+                    message: m.message,
+                })?;
                 let at = InstanceAt {
                     element: e,
                     schema: &K::SCHEMA,
-                    frames: e.bodies.iter().map(|&b| reference.frame(b)).collect(),
+                    frames: e
+                        .bodies
+                        .iter()
+                        .map(|&b| reference.frame(b))
+                        .collect::<Result<_, _>>()?,
                 };
-                let local = frames(&e.bodies);
+                let local = frames(&e.bodies)?;
                 let term = KindTerm {
                     frames: local.as_ref().frames.clone(),
                     instance: K::instance(&at),
                     moves: at.moves(),
                 };
-                (e, local, term)
+                Ok((e, local, term))
             })
     }
 }
@@ -233,14 +253,13 @@ impl<K: InstanceKind> Element for KindElement<K> {
     }
     fn terms(&self, reference: &Reference) -> Result<Vec<Term>, EnergyError> {
         let system = reference.system;
-        Ok(
-            Self::instances(reference, |b| Box::new(LocalFrames::new(system, b)))
-                .map(|(e, local, term)| {
-                    let label = crate::term_label(K::KIND, &e.name);
-                    Term::on_frames(label, K::KIND, e.tag.clone(), *local, term)
-                })
-                .collect(),
-        )
+        Self::instances(reference, |b| LocalFrames::new(system, b).map(Box::new))
+            .map(|instance| {
+                let (e, local, term) = instance?;
+                let label = crate::term_label(K::KIND, &e.name);
+                Ok(Term::on_frames(label, K::KIND, e.tag.clone(), *local, term))
+            })
+            .collect()
     }
     fn tangent_terms(
         &self,
@@ -248,14 +267,20 @@ impl<K: InstanceKind> Element for KindElement<K> {
         shared: &SharedBodies,
     ) -> Result<Option<Vec<TangentTerm>>, EnergyError> {
         let system = reference.system;
-        Ok(Some(
-            Self::instances(reference, |b| shared.frames(system, b))
-                .map(|(e, local, term)| {
-                    let label = crate::term_label(K::KIND, &e.name);
-                    TangentTerm::on_frames(label, K::KIND, e.tag.clone(), local, term)
-                })
-                .collect(),
-        ))
+        Self::instances(reference, |b| shared.frames(system, b))
+            .map(|instance| {
+                let (e, local, term) = instance?;
+                let label = crate::term_label(K::KIND, &e.name);
+                Ok(TangentTerm::on_frames(
+                    label,
+                    K::KIND,
+                    e.tag.clone(),
+                    local,
+                    term,
+                ))
+            })
+            .collect::<Result<_, _>>()
+            .map(Some)
     }
 }
 
@@ -404,6 +429,44 @@ mod tests {
             0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.01, -0.02, 0.03, 0.1, -0.05, 0.2,
         ];
         (terms, x.to_vec())
+    }
+
+    #[test]
+    fn an_instance_that_misfits_its_schema_or_the_model_is_an_error_not_a_panic() {
+        type K = VerticalSpring<false, false>;
+        let mut system = System::free_bodies(&[("support", 0.0), ("mass", 10.0)]).unwrap();
+        let instance = PluginElement {
+            kind: K::KIND.into(),
+            name: "s".into(),
+            bodies: vec![0, 1],
+            // one point where the schema has two: `at.point(1)` would read past it
+            points: vec![Vector3::zeros()],
+            values: Default::default(),
+            tag: "s".into(),
+        };
+        system.plugin_elements.push(instance.clone());
+        let start = vec![0.0; 12];
+        let e = KindElement::<K>::NEW
+            .terms(&Reference::new(&system, &start))
+            .unwrap_err();
+        assert!(
+            e.to_string()
+                .starts_with("test-vertical-spring 's': needs 2 points, got 1"),
+            "{e}"
+        );
+        // a body the model does not have
+        system.plugin_elements[0] = PluginElement {
+            bodies: vec![0, 7],
+            points: vec![Vector3::zeros(); 2],
+            ..instance
+        };
+        let e = KindElement::<K>::NEW
+            .terms(&Reference::new(&system, &start))
+            .unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "Reference::frame: body index 7 is out of range (the system has 2)"
+        );
     }
 
     #[test]

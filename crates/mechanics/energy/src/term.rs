@@ -282,7 +282,7 @@ impl Term {
     }
 
     /// A term whose energy is part `part` of a shared body that reads the frames `frames`,
-    /// with the tension-off form `off`.
+    /// with the tension-off form `off`; a part the body does not have is an error.
     pub fn part<S: SharedPotential>(
         label: impl Into<String>,
         kind: &'static str,
@@ -291,15 +291,24 @@ impl Term {
         shared: Arc<S>,
         part: usize,
         off: PartOff,
-    ) -> Self {
-        Term {
-            label: label.into(),
+    ) -> Result<Self, EnergyError> {
+        let label = label.into();
+        if part >= shared.parts() {
+            return Err(EnergyError::Index {
+                item: format!("term '{label}'"),
+                what: "energy part",
+                index: part,
+                len: shared.parts(),
+            });
+        }
+        Ok(Term {
+            label,
             kind,
             tag: tag.into(),
             coords: frames.coords.clone(),
             body: Body::Part { shared, part, off },
             frames: Some(frames),
-        }
+        })
     }
 
     /// The frames the term reads, when it was built on them.
@@ -620,8 +629,24 @@ mod tests {
             body.clone(),
             0,
             PartOff::Unchanged,
+        )
+        .unwrap();
+        let product = Term::part(
+            "xy",
+            "b",
+            "t",
+            frames.clone(),
+            body.clone(),
+            1,
+            PartOff::Vanishes,
+        )
+        .unwrap();
+        // a part the body does not have is refused when the term is made
+        let e = Term::part("z", "c", "t", frames, body, 2, PartOff::Vanishes).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "term 'z': energy part index 2 is out of range (the system has 2)"
         );
-        let product = Term::part("xy", "b", "t", frames, body, 1, PartOff::Vanishes);
         let x = [2.0, 3.0];
         assert_eq!(square.energy(&x), Ok(4.0));
         assert_eq!(product.energy(&x), Ok(6.0));

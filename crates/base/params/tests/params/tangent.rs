@@ -98,8 +98,10 @@ fn several_seeds_at_once_follow_each_other_as_one_seed_does() {
         chunk.seeds().iter().map(|s| &**s).collect::<Vec<_>>(),
         seeds
     );
-    let along =
-        |name: &str, k: usize| pendkit_params::chunk_direction(&chunk.get(name).unwrap(), k);
+    let along = |name: &str, k: usize| {
+        let k = pendkit_params::Direction::new(k).unwrap();
+        pendkit_params::chunk_direction(&chunk.get(name).unwrap(), k)
+    };
     let (m, g, l) = (2.0, 9.81, 0.5);
     let close = |x: f64, want: f64| (x - want).abs() <= 1e-15 * want.abs();
     assert!(close(along("k", 0).eps, g / l), "{}", along("k", 0).eps);
@@ -116,11 +118,19 @@ fn several_seeds_at_once_follow_each_other_as_one_seed_does() {
         }
     }
     // directions past the seeds carry nothing
-    assert!(
-        chunk
-            .iter()
-            .all(|(_, v)| pendkit_params::chunk_direction(&v, 3).eps == 0.0)
+    assert!(chunk.iter().all(|(_, v)| along_v(&v, 3).eps == 0.0));
+    // and past the chunk there is no direction: an error, not an index out of bounds
+    let e = pendkit_params::Direction::new(pendkit_params::TANGENT_CHUNK).unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        "derivative seeds: direction 16 is out of range: a chunk has 16 (0 to 15)"
     );
+    assert!(pendkit_params::Direction::new(usize::MAX).is_err());
+}
+
+/// `x` along direction `k` (below the chunk).
+fn along_v(x: &pendkit_params::ChunkDual, k: usize) -> num_dual::Dual64 {
+    pendkit_params::chunk_direction(x, pendkit_params::Direction::new(k).unwrap())
 }
 
 #[test]

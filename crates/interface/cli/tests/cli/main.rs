@@ -7,6 +7,7 @@ mod common;
 mod cli;
 mod elements;
 mod fit;
+mod limits;
 mod modes_accuracy;
 mod optical_spring;
 mod outputs;

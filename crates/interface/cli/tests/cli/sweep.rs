@@ -16,24 +16,29 @@ fn rows(stdout: &str) -> Vec<Vec<String>> {
 #[test]
 fn tracked_modes_keep_their_labels_through_a_crossing() {
     // The rigid body's yaw mode depends on the yaw inertia I1z alone (its block is exactly
-    // decoupled from x-pitch, y-roll and bounce), so sweeping I1z from 0.1 to 2 kg m^2
-    // moves it from above the x-pitch and y-roll pendulum modes to below all of them:
-    // sorted by frequency, mode 4 at the start is mode 1 at the end. Tracked by shape, the
-    // yaw mode keeps its number and label at every step.
+    // decoupled from x-pitch, y-roll and bounce), so sweeping I1z from 0.72 to 1.28 kg m^2
+    // (with I1x = 1 and I1y = 0.3 kg m^2: every step a body, each moment at most the other
+    // two together) moves it from above the x-pitch and y-roll pendulum modes to below all
+    // of them: sorted by frequency, mode 4 at the start is mode 1 at the end. Tracked by
+    // shape, the yaw mode keeps its number and label at every step.
     let (ok, stdout, stderr) = pendkit(&[
         "sweep",
         "rigid-body",
         "--stage",
         "0a",
+        "--set",
+        "I1x=1",
+        "--set",
+        "I1y=0.3",
         "--vary",
-        "I1z=0.1:2:9",
+        "I1z=0.72:1.28:9",
         "--modes",
     ]);
     assert!(ok, "{stderr}");
     // no progress bar when stderr is not a terminal: only the sweep's stability summary
     assert_eq!(
         stderr,
-        "sweep: stable at every step: no instability for I1z from 0.1 to 2 kg m^2\n"
+        "sweep: stable at every step: no instability for I1z from 0.72 to 1.28 kg m^2\n"
     );
     assert_eq!(
         stdout.lines().next().unwrap(),

@@ -93,6 +93,7 @@ fn the_leaves_and_the_dynamics_stay_as_the_architecture_says() {
     // leaves: no other pendkit crate
     for leaf in [
         "pendkit-expr",
+        "pendkit-limits",
         "pendkit-rotations",
         "pendkit-source",
         "pendkit-export",
