@@ -47,7 +47,7 @@ impl PartialEq for Limit {
 impl Eq for Limit {}
 
 /// Bytes of one input file (a suspension file, a case file, a file it extends or includes,
-/// a frequency list, measured data), read only if it is a regular file of at most this
+/// a frequency list), read by [`read_text`] only if it is a regular file of at most this
 /// size.
 pub static FILE_BYTES: Limit = Limit {
     what: "bytes in one input file",
@@ -91,7 +91,7 @@ pub static BODIES: Limit = Limit {
     variable: "PENDKIT_MAX_BODIES",
     default: 10_000,
     why: "each body with mass is a gravity term at every Newton step, and a free one six \
-          coordinates; four fibres with 200 beads each are 1 600 bodies (a bead and its \
+          coordinates; quad-v5 with 200 beads per fibre has 1 611 bodies (a bead and its \
           joint per bead)",
     setting: OnceLock::new(),
 };
@@ -104,7 +104,7 @@ pub static COORDINATES: Limit = Limit {
     default: 10_000,
     why: "the equilibrium's Hessian and the modes' blocks are dense: 10 000 coordinates are \
           800 MB in one n x n matrix; the largest bundled model with 200 beads per fibre \
-          (quad-v5, n_beads = 200) has about 4 850",
+          (quad-v5, n_beads = 200) has 4 836",
     setting: OnceLock::new(),
 };
 
@@ -153,7 +153,8 @@ pub static FREQUENCY_POINTS: Limit = Limit {
     setting: OnceLock::new(),
 };
 
-/// Rows of one measured-data file (`fit`'s |TF| and mode tables).
+/// Rows of one measured-data file (`fit`'s |TF| and mode tables), for `fit`'s readers to
+/// check as they read (`fit` reads its files itself).
 pub static MEASURED_ROWS: Limit = Limit {
     what: "rows of measured data",
     variable: "PENDKIT_MAX_MEASURED_ROWS",
