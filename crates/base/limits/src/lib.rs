@@ -47,8 +47,8 @@ impl PartialEq for Limit {
 impl Eq for Limit {}
 
 /// Bytes of one input file (a suspension file, a case file, a file it extends or includes,
-/// a frequency list), read by [`read_text`] only if it is a regular file of at most this
-/// size.
+/// a frequency list, `fit`'s measured data), read by [`read_text`] only if it is a regular
+/// file of at most this size.
 pub static FILE_BYTES: Limit = Limit {
     what: "bytes in one input file",
     variable: "PENDKIT_MAX_FILE_BYTES",
@@ -153,8 +153,8 @@ pub static FREQUENCY_POINTS: Limit = Limit {
     setting: OnceLock::new(),
 };
 
-/// Rows of one measured-data file (`fit`'s |TF| and mode tables), for `fit`'s readers to
-/// check as they read (`fit` reads its files itself).
+/// Rows of one measured-data file (`fit`'s |TF| and mode tables), checked by `fit`'s readers
+/// before a row is parsed.
 pub static MEASURED_ROWS: Limit = Limit {
     what: "rows of measured data",
     variable: "PENDKIT_MAX_MEASURED_ROWS",

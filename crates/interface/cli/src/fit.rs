@@ -198,7 +198,7 @@ fn model_reference(spec: &str) -> Result<String, CliError> {
                 source,
             })
     };
-    let text = std::fs::read_to_string(path).map_err(|source| CliError::Read {
+    let text = pendkit_limits::read_text(path).map_err(|source| CliError::Input {
         path: path.to_path_buf(),
         source,
     })?;

@@ -264,10 +264,27 @@ fn line_error(path: &Path) -> impl Fn(usize, String) -> FitError + '_ {
     }
 }
 
+/// The text of a measured-data file: a regular file within the input-file size limit
+/// (`pendkit_limits::read_text`).
 fn read_text(path: &Path) -> Result<String, FitError> {
-    std::fs::read_to_string(path).map_err(|e| FitError::File {
+    pendkit_limits::read_text(path).map_err(|e| FitError::File {
         path: path.to_path_buf(),
         message: e.to_string(),
+    })
+}
+
+/// The data rows of a measured-data file within [`pendkit_limits::MEASURED_ROWS`]; past it
+/// (every row costs a model evaluation at every iteration), an error at the first row
+/// beyond.
+fn within_row_limit(path: &Path, rows: &[(usize, Vec<&str>)]) -> Result<(), FitError> {
+    let limit = &pendkit_limits::MEASURED_ROWS;
+    limit.check(rows.len()).map_err(|e| {
+        let max = limit.value().unwrap_or(0);
+        FitError::Line {
+            path: path.to_path_buf(),
+            line: rows.get(max).map_or(0, |row| row.0),
+            message: e.to_string(),
+        }
     })
 }
 
@@ -280,7 +297,9 @@ impl MeasuredModes {
     /// Parses the text of a measured modes file read from `path`.
     pub fn parse(path: &Path, text: &str) -> Result<MeasuredModes, FitError> {
         let text = without_bom(text);
-        let modes = data_lines(text, "label")
+        let rows = data_lines(text, "label");
+        within_row_limit(path, &rows)?;
+        let modes = rows
             .into_iter()
             .map(|(line, fields)| MeasuredMode::from_fields(path, line, &fields))
             .collect::<Result<Vec<_>, _>>()?;
@@ -369,6 +388,7 @@ impl MeasuredTf {
         let text = without_bom(text);
         let at = line_error(path);
         let data = data_lines(text, "freq_hz");
+        within_row_limit(path, &data)?;
         let first_data = data.first().map(|(line, _)| *line);
         // (value, line) of the `# input = ...` and `# output = ...` lines: each once, before
         // the data (a second one, or one among the points, is not silently obeyed)

@@ -992,3 +992,41 @@ fn more_starts_only_when_the_fit_does_not_explain_its_data() {
         assert_eq!(single.explains_data, k == 0, "pattern {k}");
     }
 }
+
+/// Issue 38: a measured-data file is read only if it is a regular file (a device such as
+/// /dev/zero was read until memory ran out), and its rows are counted before one is
+/// parsed: past `PENDKIT_MAX_MEASURED_ROWS` (10 000 by default) the file is refused at the
+/// first row beyond (a 100 000-row |TF| file made `fit` take 334 s).
+#[test]
+fn measured_files_are_bounded_before_they_are_read_or_parsed() {
+    let e = MeasuredModes::read(Path::new("/dev/zero")).unwrap_err();
+    assert!(e.to_string().contains("not a regular file"), "{e}");
+    let limit = pendkit_limits::MEASURED_ROWS.value().unwrap();
+    let mut modes = String::from("label,hz,sigma_hz\n");
+    let mut tf = String::from("# input = x00\n# output = x3\n");
+    for k in 0..=limit {
+        modes.push_str(&format!("x3,{},0.001\n", 0.4 + 1e-6 * k as f64));
+        tf.push_str(&format!("{},1,0.1\n", 1.0 + 1e-3 * k as f64));
+    }
+    let e = MeasuredModes::parse(Path::new("m.csv"), &modes).unwrap_err();
+    // the header is line 1, row k (from 0) line k + 2
+    let expected = format!("m.csv:{}: ", limit + 2);
+    assert!(
+        e.to_string().starts_with(&expected) && e.to_string().contains("PENDKIT_MAX_MEASURED_ROWS"),
+        "{e}"
+    );
+    let e = pendkit::fit::MeasuredTf::parse(Path::new("tf.csv"), &tf).unwrap_err();
+    assert!(
+        e.to_string()
+            .starts_with(&format!("tf.csv:{}: ", limit + 3)),
+        "{e}"
+    );
+    // at the limit, the rows are read (and then judged as measurements)
+    let at_limit: String = modes
+        .lines()
+        .take(limit + 1)
+        .map(|l| format!("{l}\n"))
+        .collect();
+    let e = MeasuredModes::parse(Path::new("m.csv"), &at_limit).map(|m| m.modes.len());
+    assert_eq!(e.unwrap(), limit);
+}
