@@ -14,9 +14,10 @@
 //! error in units of the stated uncertainty, the iterations, starts and solutions, and the
 //! time; then a summary. Not a criterion bench: it counts outcomes.
 
+use std::path::Path;
 use std::time::Instant;
 
-use pendkit::fit::{FitOptions, MeasuredMode, MeasuredModes, fit};
+use pendkit::fit::{FitOptions, MeasuredModes, fit};
 use pendkit::{Case, Stage, run_stage};
 
 /// SplitMix64: reproducible signs.
@@ -36,30 +37,7 @@ impl Signs {
 fn synthetic(model: &str, sets: &[String]) -> MeasuredModes {
     let case = Case::model(model).unwrap().with_sets(sets).unwrap();
     let r = run_stage(case.build().unwrap().0, Stage::S2).unwrap();
-    let modes = r
-        .modes
-        .modes
-        .iter()
-        .enumerate()
-        .map(|(k, m)| {
-            let mut order: Vec<usize> = (0..m.energy_fractions.len()).collect();
-            order.sort_by(|&a, &b| m.energy_fractions[b].total_cmp(&m.energy_fractions[a]));
-            MeasuredMode {
-                label: m.label.clone(),
-                hz: m.hz,
-                sigma_hz: 1e-4 * m.hz,
-                shape: order[..3]
-                    .iter()
-                    .map(|&c| r.modes.coordinates[c].clone())
-                    .collect(),
-                line: k + 2,
-            }
-        })
-        .collect();
-    MeasuredModes {
-        path: "synthetic.csv".into(),
-        modes,
-    }
+    MeasuredModes::of_modes(Path::new("synthetic.csv"), &r.modes, 1e-4)
 }
 
 fn main() {

@@ -10,6 +10,7 @@ mod bundled_files;
 mod case_text;
 mod element_instances;
 mod errors;
+mod fit_bounds;
 mod input_checks;
 mod limits;
 mod no_silent_nonsense;

@@ -125,7 +125,7 @@ pub enum FitError {
     Start(Box<Error>),
     /// The fit did not converge.
     #[error(
-        "{}: the fit did not converge in {iterations} iterations (chi^2 = {chi_squared:.6e}, last values: {values}; damping {damping:.1e})",
+        "{}: the fit did not converge in {iterations} iterations (chi^2 = {chi_squared:.6e}, last values: {values}; damping {damping:.1e}){at_edge}",
         .path.display()
     )]
     NotConverged {
@@ -139,6 +139,10 @@ pub enum FitError {
         values: String,
         /// Levenberg damping reached.
         damping: f64,
+        /// The free parameters pressed against the edge of their declared domain (the
+        /// data ask for a value outside it), as `"; d4 = 0.17 is at the edge of its domain
+        /// in (-0.17, 0.17): ..."`; empty when none is.
+        at_edge: String,
     },
     /// A model value that came out NaN or infinite.
     #[error("{0} is not finite")]
@@ -289,6 +293,39 @@ fn within_row_limit(path: &Path, rows: &[(usize, Vec<&str>)]) -> Result<(), FitE
 }
 
 impl MeasuredModes {
+    /// Every mode of `modes` as a noise-free measurement, as a commissioner would write
+    /// it: labelled by its dominant coordinate, its `shape` the three coordinates with the
+    /// largest shares of its kinetic energy, σ = `relative_sigma` × its frequency (Hz).
+    /// Rows are numbered from 2 (after a header) in the errors of `path`. For planning a
+    /// measurement (which parameters would the modes determine?) and for testing fits
+    /// against a model whose truth is known.
+    pub fn of_modes(path: &Path, modes: &pendkit_dynamics::Modes, relative_sigma: f64) -> Self {
+        let measured = modes
+            .modes
+            .iter()
+            .enumerate()
+            .map(|(k, m)| {
+                let mut order: Vec<usize> = (0..m.energy_fractions.len()).collect();
+                order.sort_by(|&a, &b| m.energy_fractions[b].total_cmp(&m.energy_fractions[a]));
+                MeasuredMode {
+                    label: m.label.clone(),
+                    hz: m.hz,
+                    sigma_hz: relative_sigma * m.hz,
+                    shape: order
+                        .iter()
+                        .take(3)
+                        .map(|&c| modes.coordinates[c].clone())
+                        .collect(),
+                    line: k + 2,
+                }
+            })
+            .collect();
+        MeasuredModes {
+            path: path.to_path_buf(),
+            modes: measured,
+        }
+    }
+
     /// Reads a measured modes file (see the [module documentation](self)).
     pub fn read(path: &Path) -> Result<MeasuredModes, FitError> {
         MeasuredModes::parse(path, &read_text(path)?)
@@ -1499,13 +1536,9 @@ pub fn fit(
             }
             Ok(*result)
         }
-        Outcome::Stalled { state, damping } => Err(not_converged(
-            measured,
-            problem.free,
-            &state,
-            counts.0,
-            damping,
-        )),
+        Outcome::Stalled { state, damping } => {
+            Err(not_converged(measured, &problem, &state, counts.0, damping))
+        }
     }
 }
 
@@ -2122,7 +2155,7 @@ fn determined_directions(
 /// damping `damping`.
 fn not_converged(
     measured: &MeasuredModes,
-    free: &[String],
+    problem: &Problem,
     state: &State,
     iterations: usize,
     damping: f64,
@@ -2131,10 +2164,47 @@ fn not_converged(
         path: measured.path.clone(),
         iterations,
         chi_squared: state.chi_squared,
-        values: sets(free, &state.values).join(" "),
+        values: sets(problem.free, &state.values).join(" "),
         damping,
+        at_edge: at_domain_edges(problem, &state.values),
     }
     .into()
+}
+
+/// The free parameters whose `values` sit on the edge of their declared domain (within a
+/// millionth of the edge or of the start value, whichever is larger): where a fit that
+/// steps nine tenths of the way to an edge each time ends when the data pull a parameter
+/// outside its domain (a break-off out of its body, a mass through zero). Each as `"; NAME
+/// = VALUE UNIT is at the edge of its domain DOMAIN: the data ask for a value outside
+/// it"`.
+fn at_domain_edges(problem: &Problem, values: &[f64]) -> String {
+    let mut said = String::new();
+    for (k, &value) in values.iter().enumerate() {
+        let Some(domain) = problem.domains[k] else {
+            continue;
+        };
+        let edges: &[f64] = match domain {
+            Domain::Positive | Domain::NonNegative => &[0.0],
+            Domain::Between(low, high) => &[low, high],
+            Domain::Finite => &[],
+        };
+        let tolerance = 1e-6 * problem.scale[k].abs();
+        if let Some(edge) = edges
+            .iter()
+            .find(|&&edge| (value - edge).abs() <= tolerance.max(1e-6 * edge.abs()))
+        {
+            let unit = match problem.units[k].as_deref() {
+                Some(unit) if !unit.is_empty() && unit != "-" => format!(" {unit}"),
+                _ => String::new(),
+            };
+            said.push_str(&format!(
+                "; {} = {edge}{unit} is at the edge of its domain {}: the data ask for a value outside it",
+                problem.free[k],
+                domain.describe()
+            ));
+        }
+    }
+    said
 }
 
 /// `a` above `b`.

@@ -234,7 +234,26 @@ fn negative_wire_radius_is_refused_not_read_as_its_absolute_value() {
         &["modes", "double-pendulum", "--set", "r_wire=-0.0005"],
         &["wire1", "positive"],
     );
-    refused(&["modes", "quad", "--set", "r1=0"], &["w1_1", "positive"]);
+    // the quad declares its radii positive: refused by the domain, before anything is
+    // built; a file that widens the domain meets the wire's own check
+    refused(
+        &["modes", "quad", "--set", "r1=0"],
+        &["parameter 'r1' = 0 m", "domain", "> 0"],
+    );
+    refused(
+        &["modes", &quad_with_finite(&["r1"]), "--set", "r1=0"],
+        &["w1_1", "positive"],
+    );
+}
+
+/// A suspension file extending the quad whose parameters `names` may take any finite
+/// value (their declared domains widened), so that what reads them is what checks them.
+fn quad_with_finite(names: &[&str]) -> String {
+    let mut text = "name = \"quad-unchecked\"\nextends = \"quad\"\n[parameters]\n".to_string();
+    for name in names {
+        text.push_str(&format!("{name} = {{ domain = \"finite\" }}\n"));
+    }
+    scratch_file(&format!("quad-finite-{}.toml", names.join("-")), &text)
 }
 
 #[test]
@@ -338,13 +357,23 @@ fn tradeoff_refuses_an_unstable_suspension_naming_the_growing_mode() {
 fn negative_or_zero_frequency_parameter_is_refused_not_squared_away() {
     // the quad's blade stiffness is ½ (2π ufc1)² m: a negative ufc1 would act as its
     // absolute value, a zero one leave a blade without stiffness
+    // (the quad declares both positive: a file that widens the domains meets the checks of
+    // what reads them)
+    let unchecked = quad_with_finite(&["ufc1", "m3"]);
     for v in ["-2.48", "0"] {
         refused(
-            &["modes", "quad", "--set", &format!("ufc1={v}")],
+            &["modes", &unchecked, "--set", &format!("ufc1={v}")],
             &["ufc1", "frequency must be positive"],
         );
+        refused(
+            &["modes", "quad", "--set", &format!("ufc1={v}")],
+            &["parameter 'ufc1'", "Hz", "must be positive"],
+        );
     }
-    refused(&["modes", "quad", "--set", "m3=-40"], &["negative mass"]);
+    refused(
+        &["modes", &unchecked, "--set", "m3=-40"],
+        &["negative mass"],
+    );
 }
 
 #[test]
@@ -513,7 +542,10 @@ fn wires_whose_stretch_is_lost_in_rounding_are_refused_not_read_as_neutral_modes
     }
     // a massless test mass leaves its fibres without tension: refused for the missing
     // inertia (what the user changed), not for the fibres' stiffness ratio
-    refused(&["modes", "quad", "--set", "m3=0"], &["x3", "no inertia"]);
+    refused(
+        &["modes", &quad_with_finite(&["m3"]), "--set", "m3=0"],
+        &["x3", "no inertia"],
+    );
     // r_wire × 1e4 (k l / T ≈ 4e10) still answers, stating its accuracy
     let (ok, stdout, stderr) = pendkit(&["modes", "double-pendulum", "--set", "r_wire=scale(1e4)"]);
     assert!(ok, "{stderr}");

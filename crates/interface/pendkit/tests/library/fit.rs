@@ -55,34 +55,28 @@ fn synthetic_modes_of(
     relative_sigma: f64,
     seed: Option<u64>,
 ) -> MeasuredModes {
-    let case = Case::model(model).unwrap().with_sets(sets).unwrap();
+    synthetic_modes_of_case(&Case::model(model).unwrap(), sets, relative_sigma, seed)
+}
+
+/// [`synthetic_modes`] of `case`: its modes as measurements
+/// ([`MeasuredModes::of_modes`]), each moved by Gaussian noise of its σ from `seed`.
+fn synthetic_modes_of_case(
+    case: &Case,
+    sets: &[String],
+    relative_sigma: f64,
+    seed: Option<u64>,
+) -> MeasuredModes {
+    let case = case.clone().with_sets(sets).unwrap();
     let r = run_stage(case.build().unwrap().0, Stage::S2).unwrap();
-    let mut rng = seed.map(Normal);
-    let modes = r
-        .modes
-        .modes
-        .iter()
-        .enumerate()
-        .map(|(k, m)| {
-            let mut order: Vec<usize> = (0..m.energy_fractions.len()).collect();
-            order.sort_by(|&a, &b| m.energy_fractions[b].total_cmp(&m.energy_fractions[a]));
-            let sigma = relative_sigma * m.hz;
-            MeasuredMode {
-                label: m.label.clone(),
-                hz: m.hz + sigma * rng.as_mut().map_or(0.0, Normal::sample),
-                sigma_hz: sigma,
-                shape: order[..3]
-                    .iter()
-                    .map(|&c| r.modes.coordinates[c].clone())
-                    .collect(),
-                line: k + 2,
-            }
-        })
-        .collect();
-    MeasuredModes {
-        path: "synthetic.csv".into(),
-        modes,
+    let mut measured =
+        MeasuredModes::of_modes(Path::new("synthetic.csv"), &r.modes, relative_sigma);
+    if let Some(seed) = seed {
+        let mut rng = Normal(seed);
+        for m in &mut measured.modes {
+            m.hz += m.sigma_hz * rng.sample();
+        }
     }
+    measured
 }
 
 fn names(list: &[&str]) -> Vec<String> {
