@@ -6,7 +6,10 @@
 //! of inertia (the negative pivots of an LDLᵀ factorisation of K − λ_max M, the classic
 //! Sturm-sequence check), and the iteration stops only when that many Ritz pairs below the
 //! bound have converged, or when the Krylov basis spans every variable (then the
-//! Rayleigh–Ritz step is the full eigenproblem).
+//! Rayleigh–Ritz step is the full eigenproblem). The same counts cut the spectrum below the
+//! bound into slices of at most [`SLICE_MODES`] modes (spectrum slicing), each searched
+//! with a shift inside it, so that modes far up (violin harmonics above the suspension
+//! modes) are found at the cost of their own slice and not of every bead mode below them.
 
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::ldlt::factor::LdltRegularization;
@@ -145,6 +148,112 @@ impl<'a> Inertia<'a> {
     }
 }
 
+/// How many eigenvalues of K_eff − λM (the floats eliminated) lie below λ: the negative
+/// pivots of the joint matrix less those of the float block.
+struct ModeCounter<'a> {
+    joint: Inertia<'a>,
+    float_negatives: Option<usize>,
+    k: &'a [f64],
+    m: &'a [f64],
+}
+
+impl ModeCounter<'_> {
+    /// Eigenvalues below `lambda` (rad²/s²); None where a pivot is exactly zero.
+    fn below(&mut self, lambda: f64) -> Option<usize> {
+        let values = self.joint.matrix.values(self.k, self.m, lambda);
+        self.joint
+            .negatives(&values)?
+            .checked_sub(self.float_negatives?)
+    }
+
+    /// A boundary near `lambda` with no eigenvalue within [`BOUNDARY_GAP`] of it (so that
+    /// a Ritz value, accurate to far better, cannot fall on the wrong side), and the count
+    /// below it: `lambda` itself or a point moved up by up to a few per mille.
+    fn clear_boundary(&mut self, lambda: f64) -> Option<(f64, usize)> {
+        (0..4).find_map(|attempt| {
+            let at = lambda * (1.0 + 1e-3 * attempt as f64);
+            let below = self.below(at * (1.0 - BOUNDARY_GAP))?;
+            (self.below(at * (1.0 + BOUNDARY_GAP))? == below).then_some((at, below))
+        })
+    }
+}
+
+/// Relative distance (in λ) a slice boundary keeps from every eigenvalue.
+const BOUNDARY_GAP: f64 = 1e-7;
+
+/// Most modes one shift-invert run looks for: a slice of the spectrum with more is cut in
+/// two. With one shift near zero, modes far up the spectrum (violin harmonics at 500 and
+/// 1000 Hz above suspension modes at 1 Hz) are tiny Ritz values among the many of the beads'
+/// higher modes, and the Krylov basis grew to nearly every variable before they converged
+/// (18 s for 40 beads per fibre); a shift inside each slice makes its modes the dominant
+/// ones.
+const SLICE_MODES: usize = 16;
+
+/// Most slices one bound is cut into: each costs a factorisation and a Krylov basis.
+const MAX_SLICES: usize = 64;
+
+/// A part of the spectrum searched with one shift: the eigenvalues λ (rad²/s²) in
+/// [`low`, `high`), `count` of them (None when the inertia could not count them: then the
+/// search runs until its basis spans every variable).
+struct Slice {
+    low: f64,
+    high: f64,
+    count: Option<usize>,
+}
+
+impl Slice {
+    /// The shift: just below zero for the lowest slice (its modes are the largest Ritz
+    /// values, well separated, and a neutral mode does not make the operator singular),
+    /// else the middle of the slice in frequency.
+    fn shift(&self, lambda_max: f64) -> f64 {
+        if self.low == f64::NEG_INFINITY {
+            -1e-6 * lambda_max
+        } else {
+            (0.5 * (self.low.sqrt() + self.high.sqrt())).powi(2)
+        }
+    }
+}
+
+/// The slices of [−∞, `lambda_max`) holding the `wanted` eigenvalues below it, at most
+/// [`SLICE_MODES`] each where the spectrum allows: the fullest slice is cut at its middle
+/// frequency (moved to a clear boundary) until none holds more, or a cut would not split it.
+fn plan_slices(counter: &mut ModeCounter<'_>, lambda_max: f64, wanted: usize) -> Vec<Slice> {
+    // boundaries in λ with the count below each; the first stands for −∞
+    let mut bounds: Vec<(f64, usize)> = vec![(0.0, 0), (lambda_max, wanted)];
+    let mut uncuttable: Vec<f64> = Vec::new();
+    while bounds.len() <= MAX_SLICES {
+        let fullest = bounds
+            .windows(2)
+            .enumerate()
+            .filter(|(_, w)| !uncuttable.contains(&w[0].0))
+            .map(|(i, w)| (i, w[1].1.saturating_sub(w[0].1)))
+            .filter(|&(_, count)| count > SLICE_MODES)
+            .max_by_key(|&(_, count)| count);
+        let Some((i, _)) = fullest else {
+            break;
+        };
+        let (low, high) = (bounds[i], bounds[i + 1]);
+        let middle = (0.5 * (low.0.sqrt() + high.0.sqrt())).powi(2);
+        match counter.clear_boundary(middle) {
+            // a cut strictly inside, with counts in order, that splits the slice
+            Some((at, below)) if at > low.0 && at < high.0 && below > low.1 && below < high.1 => {
+                bounds.insert(i + 1, (at, below));
+            }
+            _ => uncuttable.push(low.0),
+        }
+    }
+    bounds
+        .windows(2)
+        .enumerate()
+        .map(|(i, w)| Slice {
+            low: if i == 0 { f64::NEG_INFINITY } else { w[0].0 },
+            high: w[1].0,
+            count: Some(w[1].1 - w[0].1),
+        })
+        .filter(|slice| slice.count != Some(0))
+        .collect()
+}
+
 /// [`crate::EntryRounding`] for the variables' block of a matrix on the stage's pattern.
 struct PatternEntries<'a> {
     model: &'a StageModel,
@@ -205,12 +314,6 @@ impl StageModel {
 
     /// [`StageModel::modes_below`] with the rounding of the stiffness given by `rounding`
     /// (each mode's estimated error, and which modes are neutral).
-    #[expect(
-        clippy::too_many_lines,
-        reason = "one shift-invert block Lanczos run: the inertia counts, the factorised operator and \
-                  the basis Q, W, MQ are the shared state of the loop that grows the basis and runs \
-                  Rayleigh–Ritz, read in the order the algorithm takes its steps"
-    )]
     pub fn modes_below_with_rounding(
         &self,
         damping: &Damping,
@@ -239,36 +342,88 @@ impl StageModel {
         // the float block (inertia(joint) = inertia(Q) + inertia(K_eff − λ M))
         let joint = Unknowns::new(self, 0..n);
         let floats = Unknowns::new(self, nx..n);
-        let mut joint_inertia = Inertia::new(&joint)?;
-        let float_negatives = Inertia::new(&floats)?.negatives(&floats.values(&k, m, 0.0));
+        let mut counter = ModeCounter {
+            float_negatives: Inertia::new(&floats)?.negatives(&floats.values(&k, m, 0.0)),
+            joint: Inertia::new(&joint)?,
+            k: &k,
+            m,
+        };
         let wanted = (0..4).find_map(|attempt| {
             // a pivot exactly zero (an eigenvalue exactly at the bound): nudge the bound
-            let shift = lambda_max * (1.0 + 1e-12 * attempt as f64);
-            let below = joint_inertia.negatives(&joint.values(&k, m, shift))?;
-            below.checked_sub(float_negatives?)
+            counter.below(lambda_max * (1.0 + 1e-12 * attempt as f64))
         });
         // how many lie below zero, the same way: the growing modes, which must all be
         // among those found (a pivot of rounding size may count a neutral mode either way)
-        let growing = joint_inertia
-            .negatives(&joint.values(&k, m, 0.0))
-            .zip(float_negatives)
-            .and_then(|(joint, floats)| joint.checked_sub(floats));
+        let growing = counter.below(0.0);
         if wanted == Some(0) {
             return Ok(Modes {
                 coordinates: self.variables.clone(),
                 modes: Vec::new(),
             });
         }
-
-        // σ just below zero: the low modes have the largest θ = 1/(λ − σ), well separated,
-        // and a neutral mode does not make the operator singular
-        let sigma = -1e-6 * lambda_max;
-        let mut lu = SparseLu::<f64>::new(joint.col_ptr.clone(), joint.row_idx.clone())?;
-        if !lu.factor(&joint.values(&k, m, sigma)) {
-            return Err(DynamicsError::Solver(
-                "K − σM could not be factorised for the shift-invert modes".into(),
-            ));
+        let slices = match wanted {
+            Some(wanted) => plan_slices(&mut counter, lambda_max, wanted),
+            None => vec![Slice {
+                low: f64::NEG_INFINITY,
+                high: lambda_max,
+                count: None,
+            }],
+        };
+        let mut raw = Vec::new();
+        for slice in &slices {
+            raw.extend(self.slice_modes(&joint, &k, &mass, slice, lambda_max)?);
         }
+        let modes = finish(raw, &[(0..nx).collect()], &mass, &self.variables, rounding);
+        // every growing mode the inertia counts is among the modes found (growing, or
+        // neutral within its error); one beyond the shift's resolution is not reported
+        // as a verdict from an incomplete list
+        let found_growing = modes.iter().filter(|m| m.omega_squared <= 0.0).count();
+        if let Some(growing) = growing
+            && found_growing < growing
+        {
+            return Err(DynamicsError::Solver(format!(
+                "shift-invert resolved {found_growing} of the {growing} growing modes the inertia counts"
+            )));
+        }
+        Ok(Modes {
+            coordinates: self.variables.clone(),
+            modes,
+        })
+    }
+}
+
+impl StageModel {
+    /// The modes in one `slice` of the spectrum: block Lanczos with full
+    /// reorthogonalisation on (K − σM)⁻¹M, σ the slice's shift, until as many Ritz pairs
+    /// in the slice as it holds have converged (or the basis spans every variable).
+    #[expect(
+        clippy::too_many_lines,
+        reason = "one shift-invert block Lanczos run: the factorised operator and the basis Q, W, \
+                  MQ are the shared state of the loop that grows the basis and runs Rayleigh–Ritz, \
+                  read in the order the algorithm takes its steps"
+    )]
+    fn slice_modes(
+        &self,
+        joint: &Unknowns,
+        k: &[f64],
+        mass: &SparseColumns,
+        slice: &Slice,
+        lambda_max: f64,
+    ) -> Result<Vec<RawMode>, DynamicsError> {
+        let (nx, nq, _) = self.sizes;
+        let n = nx + nq;
+        let m = &self.mass_on_pattern;
+        let mut lu = SparseLu::<f64>::new(joint.col_ptr.clone(), joint.row_idx.clone())?;
+        // a shift exactly on an eigenvalue leaves K − σM singular: nudged
+        let shift = slice.shift(lambda_max);
+        let sigma = (0..4)
+            .map(|attempt| shift * (1.0 + 1e-9 * attempt as f64))
+            .find(|&sigma| lu.factor(&joint.values(k, m, sigma)))
+            .ok_or_else(|| {
+                DynamicsError::Solver(
+                    "K − σM could not be factorised for the shift-invert modes".into(),
+                )
+            })?;
         let mut rhs = vec![0.0; n];
         let mut op = |v: &[f64]| -> Result<Vec<f64>, DynamicsError> {
             rhs[..nx].copy_from_slice(&mass.times(v));
@@ -320,8 +475,8 @@ impl StageModel {
                 continue;
             }
             // Rayleigh–Ritz every few blocks once enough vectors are in
-            let due =
-                complete || (dim >= wanted.unwrap_or(0) + BLOCK && (dim / BLOCK).is_multiple_of(3));
+            let due = complete
+                || (dim >= slice.count.unwrap_or(0) + BLOCK && (dim / BLOCK).is_multiple_of(3));
             if due {
                 let t = Mat::from_fn(dim, dim, |i, j| {
                     0.5 * (dot(&mq[i], &w[j]) + dot(&mq[j], &w[i]))
@@ -345,7 +500,7 @@ impl StageModel {
                         continue;
                     }
                     let lambda = sigma + 1.0 / th;
-                    if lambda >= lambda_max {
+                    if lambda < slice.low || lambda >= slice.high {
                         continue;
                     }
                     let mut u = vec![0.0; nx];
@@ -364,7 +519,7 @@ impl StageModel {
                         all_converged = false;
                     }
                 }
-                let enough = wanted.is_some_and(|c| found.len() >= c);
+                let enough = slice.count.is_some_and(|c| found.len() >= c);
                 if complete || (enough && all_converged) {
                     break;
                 }
@@ -373,7 +528,7 @@ impl StageModel {
         }
         // a converged Ritz value θ is within TOLERANCE |θ| of an eigenvalue of the operator,
         // so λ = σ + 1/θ within TOLERANCE |λ − σ|
-        let raw = found
+        Ok(found
             .into_iter()
             .map(|(lambda, u, rounding)| RawMode {
                 omega_squared: lambda,
@@ -381,22 +536,6 @@ impl StageModel {
                 vector: u,
                 block: 0,
             })
-            .collect();
-        let modes = finish(raw, &[(0..nx).collect()], &mass, &self.variables, rounding);
-        // every growing mode the inertia counts is among the modes found (growing, or
-        // neutral within its error); one beyond the shift's resolution is not reported
-        // as a verdict from an incomplete list
-        let found_growing = modes.iter().filter(|m| m.omega_squared <= 0.0).count();
-        if let Some(growing) = growing
-            && found_growing < growing
-        {
-            return Err(DynamicsError::Solver(format!(
-                "shift-invert resolved {found_growing} of the {growing} growing modes the inertia counts"
-            )));
-        }
-        Ok(Modes {
-            coordinates: self.variables.clone(),
-            modes,
-        })
+            .collect())
     }
 }
