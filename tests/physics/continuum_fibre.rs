@@ -373,3 +373,50 @@ fn a_slack_or_bent_wire_is_refused_by_name() {
     let e = ContinuumFibre::at(&system, &x, 0).unwrap_err().to_string();
     assert!(e.contains("straight"), "{e}");
 }
+
+#[test]
+fn tapered_static_limit_is_the_effective_wire_up_to_its_neck_error() {
+    // quad-aligo's fibre (docs/quad-aligo.md): 0.59 m, 45 mm necks of 400 µm, 205 µm middle,
+    // at 97.1 N and its nominal length. The static stack models it as one effective wire
+    // whose bending sees the neck alone, exact up to e^(−l_neck/λ) (FibreProfile's own
+    // statement, λ = √(EI_neck/T)); D resolves the profile, so the two must agree to that
+    // order, and stretch and torsion (series sums in both) to rounding.
+    let profile = pendkit_model::FibreProfile::tapered(
+        0.59,
+        (0.045, 400e-6),
+        205e-6,
+        (YOUNG, SHEAR, DENSITY),
+    );
+    let tension = 97.1;
+    let end = |body| WireEnd {
+        body,
+        point: Vector3::zeros(),
+        direction: EndDirection::Auto,
+    };
+    let wire = profile.wire("fibre", [end(0), end(1)], tension, tags());
+    let (mut system, x) = fibre_between(Vector3::new(0.0, 0.0, -0.59), RADIUS, tension);
+    system.wires[0] = wire;
+    let equilibrium = Equilibrium {
+        coords: x.clone(),
+        iterations: 0,
+        max_residual: 0.0,
+        energy: 0.0,
+    };
+    let assembled = assemble_at(&system, Stage::S2, equilibrium).unwrap();
+    let p = &assembled.layout.position;
+    let k = assembled.stiffness();
+    let stack = DMatrix::from_fn(12, 12, |i, j| {
+        k[(p[end_frame_coordinate(i)], p[end_frame_coordinate(j)])]
+    });
+    let fibre = ContinuumFibre::at(&system, &x, 0).unwrap();
+    assert_eq!(fibre.pieces.len(), 3);
+    let d = fibre.dynamic_stiffness(0.0, &Moduli::LOSSLESS);
+    let d = DMatrix::from_fn(12, 12, |i, j| d[(i, j)].re);
+    let neck = (-profile.clamp_length_in_bending_lengths(tension)).exp();
+    assert!(neck > 5e-6 && neck < 2e-5, "e^(-l/λ) = {neck}");
+    assert_close("tapered D(0) vs the effective wire", &d, &stack, 2.0 * neck);
+    // axial (z translations) and twist (z rotations): 1e-12, series sums both ways
+    for (i, j) in [(2, 2), (2, 8), (5, 5), (5, 11)] {
+        assert!((d[(i, j)] / stack[(i, j)] - 1.0).abs() < 1e-12, "({i},{j})");
+    }
+}
