@@ -17,6 +17,9 @@
 //! torsion, bending and extra stretch) in the same end-frame coordinates.
 
 mod piece;
+mod term;
+
+pub use term::{ContinuumTerm, continuum_terms};
 
 use nalgebra::{DMatrix, Matrix3, SMatrix, Vector3};
 use pendkit_energy::{EnergyError, Reference};
@@ -100,6 +103,9 @@ pub struct ContinuumFibre {
     /// The wire's damping tags (which multipliers make its [`Moduli`]).
     pub tags: WireTags,
 }
+
+/// A 12×12 complex dynamic stiffness over the two end frames' displacements.
+pub type Stiffness = SMatrix<C64, 12, 12>;
 
 /// The one-dimensional stiffness matrices of a fibre at one frequency.
 struct Local {
@@ -313,7 +319,16 @@ impl ContinuumFibre {
     /// point (m), small rotation of end 0's frame (rad), the same for end 1), lab axes:
     /// the generalised forces the ends exert on the fibre are D times those displacements.
     /// Entries are infinite at a resonance of the fibre with both ends held.
-    pub fn dynamic_stiffness(&self, frequency: f64, moduli: &Moduli) -> SMatrix<C64, 12, 12> {
+    pub fn dynamic_stiffness(&self, frequency: f64, moduli: &Moduli) -> Stiffness {
+        let [a, b, c] = self.dynamic_stiffness_by_tag(frequency, moduli);
+        a + b + c
+    }
+
+    /// [`ContinuumFibre::dynamic_stiffness`] in its three parts, each depending on one
+    /// multiplier only: stretch (the axial wave), bending (both transverse beams) and
+    /// torsion (the twist wave). Their sum is D; the imaginary part of each is the
+    /// dissipation of that damping tag.
+    pub fn dynamic_stiffness_by_tag(&self, frequency: f64, moduli: &Moduli) -> [Stiffness; 3] {
         let omega = 2.0 * std::f64::consts::PI * frequency;
         let local = self.local(omega, moduli);
         let t = (self.ends[1] - self.ends[0]).normalize();
@@ -322,8 +337,7 @@ impl ContinuumFibre {
         // u = t·d, w_a = e_a·d, w_a′ = (t × e_a)·θ (e2 and −e1), φ = t·θ
         let row =
             |end: usize, rotation: bool, v: Vector3<f64>| (6 * end + 3 * usize::from(rotation), v);
-        let mut out = SMatrix::<C64, 12, 12>::zeros();
-        let mut add = |m: &DMatrix<C64>, rows: &[(usize, Vector3<f64>)]| {
+        let add = |out: &mut Stiffness, m: &DMatrix<C64>, rows: &[(usize, Vector3<f64>)]| {
             for (i, &(oi, vi)) in rows.iter().enumerate() {
                 for (j, &(oj, vj)) in rows.iter().enumerate() {
                     let z = m[(i, j)];
@@ -338,8 +352,17 @@ impl ContinuumFibre {
                 }
             }
         };
-        add(&local.axial, &[row(0, false, t), row(1, false, t)]);
-        add(&local.torsion, &[row(0, true, t), row(1, true, t)]);
+        let mut parts = [Stiffness::zeros(); 3];
+        add(
+            &mut parts[0],
+            &local.axial,
+            &[row(0, false, t), row(1, false, t)],
+        );
+        add(
+            &mut parts[2],
+            &local.torsion,
+            &[row(0, true, t), row(1, true, t)],
+        );
         for (m, e, slope) in [(&local.planes[0], e1, e2), (&local.planes[1], e2, -e1)] {
             let rows = [
                 row(0, false, e),
@@ -347,9 +370,9 @@ impl ContinuumFibre {
                 row(1, false, e),
                 row(1, true, slope),
             ];
-            add(m, &rows);
+            add(&mut parts[1], m, &rows);
         }
-        out
+        parts
     }
 }
 

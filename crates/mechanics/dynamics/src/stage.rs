@@ -62,6 +62,30 @@ pub struct StageModel {
     /// Connected component of each unknown (variables, then floats) in the pattern: the
     /// exactly decoupled blocks.
     pub(crate) blocks: Vec<usize>,
+    /// Terms whose stiffness depends on frequency beyond the damping multipliers (none
+    /// unless a caller adds them: continuum fibres), used by the responses and the noise;
+    /// the modes and the state space keep the static model.
+    pub frequency_terms: Vec<std::sync::Arc<dyn FrequencyTerm>>,
+}
+
+/// A part of the dynamic stiffness that depends on frequency otherwise than through the
+/// damping multipliers: a continuum fibre's D(f) less the static stack the model already
+/// holds for it (docs/continuum-fibres.md). It is added to E(f) over its master rows, on
+/// the static model's pattern (the fibre's static terms put its entries there; entries the
+/// pattern lacks, zero in the static model by symmetry, are left out), and its dissipation
+/// is split among its parts, one per damping tag.
+pub trait FrequencyTerm: Send + Sync + std::fmt::Debug {
+    /// A name for messages (the wire's).
+    fn label(&self) -> &str;
+    /// Master rows of its local matrices (variables, floats, parameters order).
+    fn positions(&self) -> &[usize];
+    /// The damping tag of each part.
+    fn tags(&self) -> &[String];
+    /// At `f_hz` (Hz), with the tags' multipliers ε′ + iε″ `multipliers` (in
+    /// [`FrequencyTerm::tags`] order), writes each part's local matrix (n × n over
+    /// `positions`, row-major, N/m, N/rad, N m/rad) into `parts`, one per tag: the term
+    /// adds their sum to E(f), and the imaginary part of each is that tag's dissipation.
+    fn parts(&self, f_hz: f64, multipliers: &[c64], parts: &mut [Vec<c64>]);
 }
 
 /// A displacement or force input.
@@ -362,7 +386,30 @@ impl StageModel {
             terms: lossy_terms,
             mass: mass.clone(),
             blocks,
+            frequency_terms: Vec::new(),
         }
+    }
+
+    /// The parts of every frequency term at `f_hz` (Hz) with `damping`'s multipliers: per
+    /// term, one local matrix per tag ([`FrequencyTerm::parts`]).
+    pub fn frequency_parts(&self, damping: &Damping, f_hz: f64) -> Vec<Vec<Vec<c64>>> {
+        self.frequency_terms
+            .iter()
+            .map(|t| {
+                let m: Vec<c64> = t
+                    .tags()
+                    .iter()
+                    .map(|tag| {
+                        let (re, im) = damping.at(tag, f_hz);
+                        c64::new(re, im)
+                    })
+                    .collect();
+                let n = t.positions().len();
+                let mut parts = vec![vec![c64::new(0.0, 0.0); n * n]; m.len()];
+                t.parts(f_hz, &m, &mut parts);
+                parts
+            })
+            .collect()
     }
 
     /// Number of unknowns solved for in a response: variables and floats.
@@ -499,9 +546,25 @@ impl StageModel {
     }
 
     /// Complex master matrix P(f) (layout order x, q, s), dense real and imaginary parts.
+    /// With frequency terms ([`StageModel::frequency_terms`]) their parts are added.
     pub fn master(&self, damping: &Damping, f_hz: f64) -> (DMatrix<f64>, DMatrix<f64>) {
         let (re, im) = self.master_values(damping, f_hz);
-        (self.dense_on_pattern(&re), self.dense_on_pattern(&im))
+        let (mut re, mut im) = (self.dense_on_pattern(&re), self.dense_on_pattern(&im));
+        for (term, parts) in self
+            .frequency_terms
+            .iter()
+            .zip(self.frequency_parts(damping, f_hz))
+        {
+            let p = term.positions();
+            let n = p.len();
+            for part in &parts {
+                for (k, z) in part.iter().enumerate() {
+                    re[(p[k / n], p[k % n])] += z.re;
+                    im[(p[k / n], p[k % n])] += z.im;
+                }
+            }
+        }
+        (re, im)
     }
 
     /// Checks that an input and an output have one entry per parameter or variable (or,
