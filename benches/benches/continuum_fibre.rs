@@ -1,6 +1,8 @@
 //! The dynamic stiffness D(f) (12×12) of one continuum fibre per frequency point
 //! (`pendkit-element-continuum-fibre`): quad-aligo's tapered fibre (three pieces) and a
-//! uniform one, at 10 Hz and at 1 kHz (near the first violin mode).
+//! uniform one, at 10 Hz and at 1 kHz (near the first violin mode); and the thermal noise
+//! of `quad-aligo` at `tm_beam` over 1000 log-spaced points from 0.1 Hz to 2 kHz, bead-free
+//! static fibres against continuum fibres (issue 37's targets: ≤ 3× per point, ≤ 5 ms).
 //!
 //!     cargo bench -p pendkit-benches --bench continuum_fibre
 
@@ -47,5 +49,21 @@ fn bench(c: &mut Criterion) {
     }
 }
 
-criterion_group!(benches, bench);
+fn noise(c: &mut Criterion) {
+    let (system, _) = pendkit::Case::model("quad-aligo").unwrap().build().unwrap();
+    let result = pendkit::run_stage(system, pendkit::Stage::S2).unwrap();
+    let freqs = pendkit::log_grid(0.1, 2000.0, 1000).unwrap();
+    let mut group = c.benchmark_group("continuum_fibre/quad-aligo noise 1000 points");
+    group.sample_size(20);
+    group.bench_function("static", |b| {
+        b.iter(|| black_box(result.noise("tm_beam", &freqs).unwrap()))
+    });
+    let continuum = result.with_fibres(&pendkit::Fibres::Continuum).unwrap();
+    group.bench_function("continuum", |b| {
+        b.iter(|| black_box(continuum.noise("tm_beam", &freqs).unwrap()))
+    });
+    group.finish();
+}
+
+criterion_group!(benches, bench, noise);
 criterion_main!(benches);
