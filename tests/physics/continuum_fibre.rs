@@ -73,6 +73,25 @@ fn end_frame_coordinate(i: usize) -> usize {
     6 * body + [0, 1, 2, 5, 4, 3][k]
 }
 
+/// The stage-2 terms of `system` differentiated at `x` (taken as the equilibrium).
+fn stage_2_at(system: &System, x: &[f64]) -> pendkit_assembly::Assembled {
+    let equilibrium = Equilibrium {
+        coords: x.to_vec(),
+        iterations: 0,
+        max_residual: 0.0,
+        energy: 0.0,
+    };
+    assemble_at(system, Stage::S2, equilibrium).unwrap()
+}
+
+/// A master matrix of `assembled` over the 12 end-frame displacements.
+fn end_frames(assembled: &pendkit_assembly::Assembled, m: &DMatrix<f64>) -> DMatrix<f64> {
+    let p = &assembled.layout.position;
+    DMatrix::from_fn(12, 12, |i, j| {
+        m[(p[end_frame_coordinate(i)], p[end_frame_coordinate(j)])]
+    })
+}
+
 /// Entry-wise agreement relative to the diagonal scales: |a − b| ≤ tol √(|s_ii s_jj|).
 fn assert_close(what: &str, a: &DMatrix<f64>, b: &DMatrix<f64>, tol: f64) {
     for i in 0..12 {
@@ -94,19 +113,8 @@ fn static_limit_is_the_stage_2_stack_and_its_tags() {
     // a slanted fibre, so that every lab direction and the rotation into it are exercised
     let offset = Vector3::new(0.08, -0.05, -0.58);
     let (system, x) = fibre_between(offset, RADIUS, TENSION);
-    let equilibrium = Equilibrium {
-        coords: x.clone(),
-        iterations: 0,
-        max_residual: 0.0,
-        energy: 0.0,
-    };
-    let assembled = assemble_at(&system, Stage::S2, equilibrium).unwrap();
-    let pick = |m: &DMatrix<f64>| {
-        let p = &assembled.layout.position;
-        DMatrix::from_fn(12, 12, |i, j| {
-            m[(p[end_frame_coordinate(i)], p[end_frame_coordinate(j)])]
-        })
-    };
+    let assembled = stage_2_at(&system, &x);
+    let pick = |m: &DMatrix<f64>| end_frames(&assembled, m);
     let stack = pick(&assembled.stiffness());
     let fibre = ContinuumFibre::at(&system, &x, 0).unwrap();
     let d = fibre.dynamic_stiffness(0.0, &Moduli::LOSSLESS);
@@ -396,18 +404,8 @@ fn tapered_static_limit_is_the_effective_wire_up_to_its_neck_error() {
     let wire = profile.wire("fibre", [end(0), end(1)], tension, tags());
     let (mut system, x) = fibre_between(Vector3::new(0.0, 0.0, -0.59), RADIUS, tension);
     system.wires[0] = wire;
-    let equilibrium = Equilibrium {
-        coords: x.clone(),
-        iterations: 0,
-        max_residual: 0.0,
-        energy: 0.0,
-    };
-    let assembled = assemble_at(&system, Stage::S2, equilibrium).unwrap();
-    let p = &assembled.layout.position;
-    let k = assembled.stiffness();
-    let stack = DMatrix::from_fn(12, 12, |i, j| {
-        k[(p[end_frame_coordinate(i)], p[end_frame_coordinate(j)])]
-    });
+    let assembled = stage_2_at(&system, &x);
+    let stack = end_frames(&assembled, &assembled.stiffness());
     let fibre = ContinuumFibre::at(&system, &x, 0).unwrap();
     assert_eq!(fibre.pieces.len(), 3);
     let d = fibre.dynamic_stiffness(0.0, &Moduli::LOSSLESS);
