@@ -77,6 +77,10 @@ impl FrequencyTerm for ContinuumTerm {
         &self.positions
     }
 
+    fn jacobian(&self) -> &DMatrix<f64> {
+        &self.jacobian
+    }
+
     fn tags(&self) -> &[String] {
         &self.tags
     }
@@ -89,25 +93,12 @@ impl FrequencyTerm for ContinuumTerm {
             torsion: m(2),
         };
         let d = self.fibre.dynamic_stiffness_by_tag(f_hz, &moduli);
-        let j = &self.jacobian;
-        let n = j.ncols();
         for (t, part) in parts.iter_mut().enumerate().take(3) {
             let (d0, slope) = &self.statics[t];
             let c = d[t] - d0 - slope * (m(t) - C64::new(1.0, 0.0));
-            // Jᵀ C J, J real and sparse (each end's rows touch that end's body only)
-            let cj = DMatrix::from_fn(12, n, |r, col| {
-                (0..12)
-                    .filter(|&k| j[(k, col)] != 0.0)
-                    .map(|k| c[(r, k)] * j[(k, col)])
-                    .sum::<C64>()
-            });
-            for a in 0..n {
-                for b in 0..n {
-                    part[a * n + b] = (0..12)
-                        .filter(|&k| j[(k, a)] != 0.0)
-                        .map(|k| cj[(k, b)] * j[(k, a)])
-                        .sum();
-                }
+            // row-major over the 12 end-frame displacements
+            for (e, v) in part.iter_mut().enumerate() {
+                *v = c[(e / 12, e % 12)];
             }
         }
     }

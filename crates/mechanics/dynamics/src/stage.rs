@@ -77,15 +77,50 @@ pub struct StageModel {
 pub trait FrequencyTerm: Send + Sync + std::fmt::Debug {
     /// A name for messages (the wire's).
     fn label(&self) -> &str;
-    /// Master rows of its local matrices (variables, floats, parameters order).
+    /// Master rows of the term's coordinates (variables, floats, parameters order).
     fn positions(&self) -> &[usize];
+    /// The term's own displacements per unit of each of its coordinates, J (m × n,
+    /// [`FrequencyTerm::positions`] order): a fibre's 12 end-frame displacements.
+    fn jacobian(&self) -> &DMatrix<f64>;
     /// The damping tag of each part.
     fn tags(&self) -> &[String];
     /// At `f_hz` (Hz), with the tags' multipliers ε′ + iε″ `multipliers` (in
-    /// [`FrequencyTerm::tags`] order), writes each part's local matrix (n × n over
-    /// `positions`, row-major, N/m, N/rad, N m/rad) into `parts`, one per tag: the term
-    /// adds their sum to E(f), and the imaginary part of each is that tag's dissipation.
+    /// [`FrequencyTerm::tags`] order), writes each part (m × m over the term's own
+    /// displacements, row-major, N/m, N/rad, N m/rad) into `parts`, one per tag: the term
+    /// adds Jᵀ (Σ parts) J to E(f), and Im of each part is that tag's dissipation.
     fn parts(&self, f_hz: f64, multipliers: &[c64], parts: &mut [Vec<c64>]);
+}
+
+/// Jᵀ S J (n × n, row-major, into `out`) for a real m × n `j` and a complex m × m `s`
+/// (row-major), skipping J's zeros (a fibre's end rows depend on one body each).
+pub fn congruence(j: &DMatrix<f64>, s: &[c64], out: &mut [c64]) {
+    let (m, n) = j.shape();
+    let zero = c64::new(0.0, 0.0);
+    // S J, column by column over J's non-zeros
+    let mut sj = vec![zero; m * n];
+    for c in 0..n {
+        for k in 0..m {
+            let w = j[(k, c)];
+            if w == 0.0 {
+                continue;
+            }
+            for r in 0..m {
+                sj[r * n + c] += s[r * m + k] * w;
+            }
+        }
+    }
+    out.fill(zero);
+    for a in 0..n {
+        for k in 0..m {
+            let w = j[(k, a)];
+            if w == 0.0 {
+                continue;
+            }
+            for b in 0..n {
+                out[a * n + b] += sj[k * n + b] * w;
+            }
+        }
+    }
 }
 
 /// A displacement or force input.
@@ -391,7 +426,7 @@ impl StageModel {
     }
 
     /// The parts of every frequency term at `f_hz` (Hz) with `damping`'s multipliers: per
-    /// term, one local matrix per tag ([`FrequencyTerm::parts`]).
+    /// term, one matrix per tag over its own displacements ([`FrequencyTerm::parts`]).
     pub fn frequency_parts(&self, damping: &Damping, f_hz: f64) -> Vec<Vec<Vec<c64>>> {
         self.frequency_terms
             .iter()
@@ -404,8 +439,8 @@ impl StageModel {
                         c64::new(re, im)
                     })
                     .collect();
-                let n = t.positions().len();
-                let mut parts = vec![vec![c64::new(0.0, 0.0); n * n]; m.len()];
+                let size = t.jacobian().nrows();
+                let mut parts = vec![vec![c64::new(0.0, 0.0); size * size]; m.len()];
                 t.parts(f_hz, &m, &mut parts);
                 parts
             })
@@ -557,11 +592,18 @@ impl StageModel {
         {
             let p = term.positions();
             let n = p.len();
+            let size = term.jacobian().nrows();
+            let mut sum = vec![c64::new(0.0, 0.0); size * size];
             for part in &parts {
-                for (k, z) in part.iter().enumerate() {
-                    re[(p[k / n], p[k % n])] += z.re;
-                    im[(p[k / n], p[k % n])] += z.im;
+                for (s, v) in sum.iter_mut().zip(part) {
+                    *s += v;
                 }
+            }
+            let mut local = vec![c64::new(0.0, 0.0); n * n];
+            congruence(term.jacobian(), &sum, &mut local);
+            for (k, z) in local.iter().enumerate() {
+                re[(p[k / n], p[k % n])] += z.re;
+                im[(p[k / n], p[k % n])] += z.im;
             }
         }
         (re, im)

@@ -177,6 +177,8 @@ struct TermState {
     tags: Vec<Option<usize>>,
     multipliers: Vec<c64>,
     parts: Vec<Vec<c64>>,
+    /// The parts' sum over the term's own displacements, and Jᵀ (that) J over its rows.
+    own: Vec<c64>,
     sum: Vec<c64>,
 }
 
@@ -341,6 +343,7 @@ impl<'m> Sweep<'m> {
                 .iter()
                 .map(|t| {
                     let n = t.positions().len();
+                    let m = t.jacobian().nrows();
                     let tags = t.tags();
                     TermState {
                         tags: tags
@@ -348,7 +351,8 @@ impl<'m> Sweep<'m> {
                             .map(|tag| model.by_tag.iter().position(|(name, _)| name == tag))
                             .collect(),
                         multipliers: vec![c64::new(1.0, 0.0); tags.len()],
-                        parts: vec![vec![c64::new(0.0, 0.0); n * n]; tags.len()],
+                        parts: vec![vec![c64::new(0.0, 0.0); m * m]; tags.len()],
+                        own: vec![c64::new(0.0, 0.0); m * m],
                         sum: vec![c64::new(0.0, 0.0); n * n],
                     }
                 })
@@ -356,25 +360,30 @@ impl<'m> Sweep<'m> {
         })
     }
 
-    /// Per tag of the model (`by_tag` order), the dissipation z̄ᵀ Im(part) z of the
-    /// frequency terms' parts of that tag at the last frequency solved, over the solved
-    /// unknowns (N m per unit response²; the parameters do not move), added to `out`. A
-    /// term's tag the model lacks is left out: the model's tags include every wire's,
-    /// since its static terms are lossy.
+    /// Per tag of the model (`by_tag` order), the dissipation ȳᴴ Im(part) y of the
+    /// frequency terms' parts of that tag at the last frequency solved, y = J z the term's
+    /// own displacements from the response over the solved unknowns (the parameters do not
+    /// move) (N m per unit response²), added to `out`. A term's tag the model lacks is left
+    /// out: the model's tags include every wire's, since its static terms are lossy.
     pub fn add_frequency_dissipation(&self, out: &mut [f64]) {
         for (term, state) in self.model.frequency_terms.iter().zip(&self.terms) {
-            let p = term.positions();
-            let n = p.len();
-            let loc: Vec<Option<usize>> = p.iter().map(|&r| self.local(r)).collect();
+            let j = term.jacobian();
+            let m = j.nrows();
+            let mut y = vec![c64::new(0.0, 0.0); m];
+            for (c, &r) in term.positions().iter().enumerate() {
+                if let Some(l) = self.local(r) {
+                    for (k, yk) in y.iter_mut().enumerate() {
+                        *yk += self.z[l] * j[(k, c)];
+                    }
+                }
+            }
             for (part, tag) in state.parts.iter().zip(&state.tags) {
                 let Some(slot) = tag.and_then(|t| out.get_mut(t)) else {
                     continue;
                 };
-                for (k, v) in part.iter().enumerate() {
-                    if let (Some(i), Some(j)) = (loc[k / n], loc[k % n]) {
-                        let (zi, zj) = (self.z[i], self.z[j]);
-                        *slot += v.im * (zi.re * zj.re + zi.im * zj.im);
-                    }
+                for (e, v) in part.iter().enumerate() {
+                    let (yi, yk) = (y[e / m], y[e % m]);
+                    *slot += v.im * (yi.re * yk.re + yi.im * yk.im);
                 }
             }
         }
@@ -397,12 +406,13 @@ impl<'m> Sweep<'m> {
                 };
             }
             term.parts(f_hz, &state.multipliers, &mut state.parts);
-            state.sum.fill(c64::new(0.0, 0.0));
+            state.own.fill(c64::new(0.0, 0.0));
             for part in &state.parts {
-                for (s, v) in state.sum.iter_mut().zip(part) {
+                for (s, v) in state.own.iter_mut().zip(part) {
                     *s += v;
                 }
             }
+            crate::stage::congruence(term.jacobian(), &state.own, &mut state.sum);
         }
     }
 
