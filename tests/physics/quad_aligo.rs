@@ -203,3 +203,38 @@ fn continuum_fibres_keep_the_low_frequency_noise_and_add_up_by_tag() {
         );
     }
 }
+
+#[test]
+fn continuum_fibres_solve_alike_on_every_path() {
+    // The restricted sparse solve, the full one and the dense reference (which adds the
+    // continuum's terms to its dense matrices instead of the sweep's slots) agree, total
+    // and per tag, to 1e-9 (the reference's own agreement with the fast path on the
+    // static model is of that order: tests/physics/quad.rs).
+    use pendkit::{NoiseOptions, Solver};
+    let freqs = [0.1, 20.0, 505.0, 1500.0];
+    let result = run("quad-aligo", &[], Stage::S2)
+        .with_fibres(&pendkit::Fibres::Continuum)
+        .expect("continuum fibres");
+    let solve = |solver| {
+        let options = NoiseOptions {
+            solver,
+            ..Default::default()
+        };
+        result
+            .noise_with("tm_beam", &freqs, &options)
+            .expect("noise")
+    };
+    let fast = solve(Solver::Restricted);
+    for other in [solve(Solver::Full), solve(Solver::DenseReference)] {
+        for (a, b) in fast.psd().iter().zip(other.psd()) {
+            assert!((a / b - 1.0).abs() < 1e-9, "{a} vs {b}");
+        }
+        for ((tag, a), (_, b)) in fast.psd_by_tag().iter().zip(other.psd_by_tag()) {
+            for (k, (x, y)) in a.iter().zip(b).enumerate() {
+                // a share is compared against the total at its frequency
+                let scale = fast.psd()[k];
+                assert!((x - y).abs() <= 1e-9 * scale, "{tag}: {x} vs {y}");
+            }
+        }
+    }
+}
