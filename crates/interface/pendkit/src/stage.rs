@@ -119,8 +119,8 @@ pub enum Fibres {
     /// The static model: massless wires (and violin beads where the model has them).
     #[default]
     Static,
-    /// The lowest wires (those whose lower body hangs nothing from itself: a quad's
-    /// fibres) as continua, their exact dynamic stiffness D(f) in `tf` and `noise`
+    /// The lowest wires (those ending on the body whose wire ends lie lowest: a quad's
+    /// fibres, a triple's lower wires) as continua, their exact dynamic stiffness D(f) in `tf` and `noise`
     /// (docs/continuum-fibres.md). The modes and the state space keep the static model.
     Continuum,
     /// The named wires as continua.
@@ -137,9 +137,21 @@ impl StageResult {
         let wires: Vec<usize> = match fibres {
             Fibres::Static => return Ok(self),
             Fibres::Continuum => {
-                let hangs = |b: usize| system.wires.iter().any(|w| w.ends[0].body == b);
+                // the wires that end on the body whose wire ends lie lowest (a quad's test
+                // mass): a body hanging nothing from itself is not enough, since blade tips
+                // (their own bodies) carry the next wires down
+                let reference =
+                    pendkit_energy::Reference::new(system, &self.run.assembled.equilibrium.coords);
+                let low = |w: &pendkit_system::Wire| {
+                    reference.wire_points(w).map_or(f64::INFINITY, |p| p[1][2])
+                };
+                let lowest = system
+                    .wires
+                    .iter()
+                    .min_by(|a, b| low(a).total_cmp(&low(b)))
+                    .map(|w| w.ends[1].body);
                 (0..system.wires.len())
-                    .filter(|&w| !hangs(system.wires[w].ends[1].body))
+                    .filter(|&w| Some(system.wires[w].ends[1].body) == lowest)
                     .collect()
             }
             Fibres::ContinuumNamed(names) => names
