@@ -58,7 +58,9 @@ fn noise(c: &mut Criterion) {
     group.bench_function("static", |b| {
         b.iter(|| black_box(result.noise("tm_beam", &freqs).unwrap()))
     });
-    let continuum = result.with_fibres(&pendkit::Fibres::Continuum).unwrap();
+    let continuum = result
+        .with_fibres(&pendkit::stage::Fibres::Continuum)
+        .unwrap();
     group.bench_function("continuum", |b| {
         b.iter(|| black_box(continuum.noise("tm_beam", &freqs).unwrap()))
     });

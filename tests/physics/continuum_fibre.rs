@@ -438,7 +438,7 @@ fn quad_continuum_noise_is_the_limit_of_clamped_beads() {
             .asd()
     };
     let continuum = pendkit_tests::run("quad", &[], Stage::S2)
-        .with_fibres(&pendkit::Fibres::Continuum)
+        .with_fibres(&pendkit::stage::Fibres::Continuum)
         .expect("continuum fibres")
         .noise("x3", &freqs)
         .expect("noise")
@@ -467,7 +467,7 @@ fn quad_continuum_noise_is_the_limit_of_clamped_beads() {
         tf(&pendkit_tests::run("quad", &[set.as_str()], Stage::S2))
     };
     let continuum = tf(&pendkit_tests::run("quad", &[], Stage::S2)
-        .with_fibres(&pendkit::Fibres::Continuum)
+        .with_fibres(&pendkit::stage::Fibres::Continuum)
         .expect("continuum fibres"));
     let (h10, h20) = (beads(10), beads(20));
     for k in 0..tf_freqs.len() {

@@ -182,7 +182,7 @@ fn continuum_fibres_keep_the_low_frequency_noise_and_add_up_by_tag() {
     let result = run("quad-aligo", &[], Stage::S2);
     let static_model = result.noise("tm_beam", &freqs).expect("noise");
     let continuum = result
-        .with_fibres(&pendkit::Fibres::Continuum)
+        .with_fibres(&pendkit::stage::Fibres::Continuum)
         .expect("continuum fibres")
         .noise("tm_beam", &freqs)
         .expect("noise");
@@ -213,7 +213,7 @@ fn continuum_fibres_solve_alike_on_every_path() {
     use pendkit::{NoiseOptions, Solver};
     let freqs = [0.1, 20.0, 505.0, 1500.0];
     let result = run("quad-aligo", &[], Stage::S2)
-        .with_fibres(&pendkit::Fibres::Continuum)
+        .with_fibres(&pendkit::stage::Fibres::Continuum)
         .expect("continuum fibres");
     let solve = |solver| {
         let options = NoiseOptions {

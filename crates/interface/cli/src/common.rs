@@ -195,7 +195,7 @@ impl ModelArgs {
         };
         let mut result = run_stage_with(system, stage, &options, Some(&mut times))?;
         if self.fibres.as_deref() == Some("continuum") {
-            result = result.with_fibres(&pendkit::Fibres::Continuum)?;
+            result = result.with_fibres(&pendkit::stage::Fibres::Continuum)?;
         }
         let scheme = match self.naming.as_deref() {
             None | Some("model") => None,

@@ -108,8 +108,6 @@ use pendkit_element_torsion as _;
 pub use nalgebra;
 pub use pendkit_assembly as assembly;
 pub use pendkit_dynamics as dynamics;
-/// Continuum fibres: a wire's exact dynamic stiffness D(f) (docs/continuum-fibres.md).
-pub use pendkit_element_continuum_fibre as continuum;
 pub use pendkit_energy as energy;
 #[cfg(feature = "export")]
 pub use pendkit_export as export;
@@ -128,7 +126,7 @@ pub use pendkit_dynamics::Solver;
 pub use pendkit_model::Model;
 pub use pendkit_noise::NoiseOptions;
 pub use pendkit_system::Stage;
-pub use stage::{Fibres, StageResult, run_stage};
+pub use stage::{StageResult, run_stage};
 
 /// pendkit's version, recorded in exports and reports.
 pub const VERSION: &str = env!("CARGO_PKG_VERSION");

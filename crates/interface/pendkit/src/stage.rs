@@ -20,6 +20,8 @@ use crate::{Case, Error, VERSION};
 pub use crate::bench::{BenchPhase, BenchReport, MAX_REPEAT, bench};
 pub use crate::state_space::NamedStateSpace;
 pub use pendkit_dynamics::{DENSE_MODES_LIMIT, ModeSelection, RunOptions};
+/// Continuum fibres: a wire's exact dynamic stiffness D(f) (docs/continuum-fibres.md).
+pub use pendkit_element_continuum_fibre as continuum;
 
 /// One parameter of a case as resolved for a run.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
