@@ -127,6 +127,7 @@ fn coincident_attachment_points_are_a_zero_length_wire() {
         stiffness: 1e4,
         unstretched_length: 0.5,
         section: silica(),
+        profile: Vec::new(),
         tags: tags(),
     })
     .unwrap();

@@ -6,6 +6,7 @@
 
 mod beads;
 mod chain;
+mod continuum_fibre;
 mod equilibrium;
 mod modes_blocks;
 mod neutral;

@@ -278,6 +278,7 @@ impl<S: Real> FibreProfile<S> {
             stiffness,
             unstretched_length: length - tension / stiffness,
             section,
+            profile: self.pieces.clone(),
             tags,
         }
     }

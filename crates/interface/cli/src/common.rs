@@ -43,6 +43,12 @@ pub struct ModelArgs {
     /// model declares, e.g. `ligo` (L, T, V, R, P, Y; M0, L1, L2, L3; GND).
     #[arg(long, value_name = "SCHEME")]
     pub naming: Option<String>,
+    /// How the lowest wires (a quad's fibres) move in `tf` and `noise`: `static` (massless,
+    /// or violin beads where the model has them; the default) or `continuum` (their exact
+    /// dynamic stiffness, violin modes included: docs/continuum-fibres.md). The modes and
+    /// the state space keep the static model.
+    #[arg(long, value_name = "MODEL", value_parser = ["static", "continuum"])]
+    pub fibres: Option<String>,
 }
 
 /// One run of a stage, with everything its output needs.
@@ -187,7 +193,10 @@ impl ModelArgs {
             modes,
             ..Default::default()
         };
-        let result = run_stage_with(system, stage, &options, Some(&mut times))?;
+        let mut result = run_stage_with(system, stage, &options, Some(&mut times))?;
+        if self.fibres.as_deref() == Some("continuum") {
+            result = result.with_fibres(&pendkit::stage::Fibres::Continuum)?;
+        }
         let scheme = match self.naming.as_deref() {
             None | Some("model") => None,
             Some(s) => {

@@ -44,6 +44,11 @@ pub struct Args {
 pub fn run(a: Args) -> Result<Output, CliError> {
     check_plot_path(&a.plot)?;
     let selection = a.below.map_or(ModeSelection::All, ModeSelection::Below);
+    if a.args.fibres.as_deref() == Some("continuum") {
+        eprintln!(
+            "note: the modes are those of the static model (massless fibres); --fibres continuum changes tf and noise only (violin modes: --set n_beads=N)"
+        );
+    }
     let run = a.args.run(selection)?;
     run.check_stable(a.args.allow_unstable)?;
     if let Some(path) = &a.plot {

@@ -26,6 +26,11 @@ pub struct Args {
 /// Runs the command and returns what it prints.
 pub fn run(a: Args) -> Result<String, CliError> {
     let _ = a.force;
+    if a.args.fibres.as_deref() == Some("continuum") {
+        eprintln!(
+            "note: a state space needs a finite model: `ss` keeps the static wires (violin beads where the model has them, --set n_beads=N); --fibres continuum changes tf and noise only"
+        );
+    }
     let run = a.args.run_lossy()?;
     let damping_frequency = a.damping_frequency;
     let provenance = run.provenance()?;

@@ -20,6 +20,8 @@ use crate::{Case, Error, VERSION};
 pub use crate::bench::{BenchPhase, BenchReport, MAX_REPEAT, bench};
 pub use crate::state_space::NamedStateSpace;
 pub use pendkit_dynamics::{DENSE_MODES_LIMIT, ModeSelection, RunOptions};
+/// Continuum fibres: a wire's exact dynamic stiffness D(f) (docs/continuum-fibres.md).
+pub use pendkit_element_continuum_fibre as continuum;
 
 /// One parameter of a case as resolved for a run.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
@@ -113,7 +115,84 @@ impl From<StageRun> for StageResult {
     }
 }
 
+/// How the wires' own motion enters responses and noise.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub enum Fibres {
+    /// The static model: massless wires (and violin beads where the model has them).
+    #[default]
+    Static,
+    /// The lowest wires (those ending on the body whose wire ends lie lowest: a quad's
+    /// fibres, a triple's lower wires) as continua, their exact dynamic stiffness D(f) in `tf` and `noise`
+    /// (docs/continuum-fibres.md). The modes and the state space keep the static model.
+    Continuum,
+    /// The named wires as continua.
+    ContinuumNamed(Vec<String>),
+}
+
 impl StageResult {
+    /// This result with `fibres`: for a continuum, the wires' frequency terms join the
+    /// stage model, so that transfer functions and noise see their violin modes and exact
+    /// dilution. Refused: violin beads together with continuum fibres (the beads carry the
+    /// same mass), a name that is no wire, a wire that is not taut and straight.
+    pub fn with_fibres(self, fibres: &Fibres) -> Result<StageResult, Error> {
+        let system = &self.run.system;
+        let wires: Vec<usize> = match fibres {
+            Fibres::Static => return Ok(self),
+            Fibres::Continuum => {
+                // the wires that end on the body whose wire ends lie lowest (a quad's test
+                // mass): a body hanging nothing from itself is not enough, since blade tips
+                // (their own bodies) carry the next wires down
+                let reference =
+                    pendkit_energy::Reference::new(system, &self.run.assembled.equilibrium.coords);
+                let low = |w: &pendkit_system::Wire| {
+                    reference.wire_points(w).map_or(f64::INFINITY, |p| p[1][2])
+                };
+                let lowest = system
+                    .wires
+                    .iter()
+                    .min_by(|a, b| low(a).total_cmp(&low(b)))
+                    .map(|w| w.ends[1].body);
+                (0..system.wires.len())
+                    .filter(|&w| Some(system.wires[w].ends[1].body) == lowest)
+                    .collect()
+            }
+            Fibres::ContinuumNamed(names) => names
+                .iter()
+                .map(|n| {
+                    system
+                        .wires
+                        .iter()
+                        .position(|w| &w.name == n)
+                        .ok_or_else(|| Error::Name {
+                            name: n.clone(),
+                            message: "no wire of the model has this name".into(),
+                        })
+                })
+                .collect::<Result<_, _>>()?,
+        };
+        if let Some(b) = system
+            .bodies
+            .iter()
+            .find(|b| b.mode_family.as_deref() == Some("violin"))
+        {
+            return Err(Error::Name {
+                name: b.name.clone(),
+                message: "continuum fibres replace violin beads: build the model without \
+                          beads (n_beads=0)"
+                    .into(),
+            });
+        }
+        let terms =
+            pendkit_element_continuum_fibre::continuum_terms(system, &self.run.assembled, &wires)
+                .map_err(|e| Error::Name {
+                name: "continuum fibres".into(),
+                message: e.to_string(),
+            })?;
+        let mut run = self.run;
+        run.model.frequency_terms.extend(terms);
+        Ok(StageResult { run })
+    }
+
     /// The dynamics layer's run, for the functions of `pendkit::dynamics` that take one.
     pub fn into_run(self) -> StageRun {
         self.run

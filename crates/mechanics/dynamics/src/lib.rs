@@ -29,7 +29,9 @@ pub use stability::{
     FloatDirections, FloatMap, GrowingMode, InvertedBody, RunawayFloat, Stability, TermRounding,
     Verdict, float_directions, inverted_bodies, runaway_floats,
 };
-pub use stage::{Input, Output, ReducedComplex, StageModel, StateSpace, TermLoss};
+pub use stage::{
+    FrequencyTerm, Input, Output, ReducedComplex, StageModel, StateSpace, TermLoss, congruence,
+};
 pub use sweep::{DENSE_LIMIT, Solver, Sweep, coupled_unknowns};
 
 use faer::c64;

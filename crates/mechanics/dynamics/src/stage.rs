@@ -62,6 +62,65 @@ pub struct StageModel {
     /// Connected component of each unknown (variables, then floats) in the pattern: the
     /// exactly decoupled blocks.
     pub(crate) blocks: Vec<usize>,
+    /// Terms whose stiffness depends on frequency beyond the damping multipliers (none
+    /// unless a caller adds them: continuum fibres), used by the responses and the noise;
+    /// the modes and the state space keep the static model.
+    pub frequency_terms: Vec<std::sync::Arc<dyn FrequencyTerm>>,
+}
+
+/// A part of the dynamic stiffness that depends on frequency otherwise than through the
+/// damping multipliers: a continuum fibre's D(f) less the static stack the model already
+/// holds for it (docs/continuum-fibres.md). It is added to E(f) over its master rows, on
+/// the static model's pattern (the fibre's static terms put its entries there; entries the
+/// pattern lacks, zero in the static model by symmetry, are left out), and its dissipation
+/// is split among its parts, one per damping tag.
+pub trait FrequencyTerm: Send + Sync + std::fmt::Debug {
+    /// A name for messages (the wire's).
+    fn label(&self) -> &str;
+    /// Master rows of the term's coordinates (variables, floats, parameters order).
+    fn positions(&self) -> &[usize];
+    /// The term's own displacements per unit of each of its coordinates, J (m × n,
+    /// [`FrequencyTerm::positions`] order): a fibre's 12 end-frame displacements.
+    fn jacobian(&self) -> &DMatrix<f64>;
+    /// The damping tag of each part.
+    fn tags(&self) -> &[String];
+    /// At `f_hz` (Hz), with the tags' multipliers ε′ + iε″ `multipliers` (in
+    /// [`FrequencyTerm::tags`] order), writes each part (m × m over the term's own
+    /// displacements, row-major, N/m, N/rad, N m/rad) into `parts`, one per tag: the term
+    /// adds Jᵀ (Σ parts) J to E(f), and Im of each part is that tag's dissipation.
+    fn parts(&self, f_hz: f64, multipliers: &[c64], parts: &mut [Vec<c64>]);
+}
+
+/// Jᵀ S J (n × n, row-major, into `out`) for a real m × n `j` and a complex m × m `s`
+/// (row-major), skipping J's zeros (a fibre's end rows depend on one body each).
+pub fn congruence(j: &DMatrix<f64>, s: &[c64], out: &mut [c64]) {
+    let (m, n) = j.shape();
+    let zero = c64::new(0.0, 0.0);
+    // S J, column by column over J's non-zeros
+    let mut sj = vec![zero; m * n];
+    for c in 0..n {
+        for k in 0..m {
+            let w = j[(k, c)];
+            if w == 0.0 {
+                continue;
+            }
+            for r in 0..m {
+                sj[r * n + c] += s[r * m + k] * w;
+            }
+        }
+    }
+    out.fill(zero);
+    for a in 0..n {
+        for k in 0..m {
+            let w = j[(k, a)];
+            if w == 0.0 {
+                continue;
+            }
+            for b in 0..n {
+                out[a * n + b] += sj[k * n + b] * w;
+            }
+        }
+    }
 }
 
 /// A displacement or force input.
@@ -362,7 +421,30 @@ impl StageModel {
             terms: lossy_terms,
             mass: mass.clone(),
             blocks,
+            frequency_terms: Vec::new(),
         }
+    }
+
+    /// The parts of every frequency term at `f_hz` (Hz) with `damping`'s multipliers: per
+    /// term, one matrix per tag over its own displacements ([`FrequencyTerm::parts`]).
+    pub fn frequency_parts(&self, damping: &Damping, f_hz: f64) -> Vec<Vec<Vec<c64>>> {
+        self.frequency_terms
+            .iter()
+            .map(|t| {
+                let m: Vec<c64> = t
+                    .tags()
+                    .iter()
+                    .map(|tag| {
+                        let (re, im) = damping.at(tag, f_hz);
+                        c64::new(re, im)
+                    })
+                    .collect();
+                let size = t.jacobian().nrows();
+                let mut parts = vec![vec![c64::new(0.0, 0.0); size * size]; m.len()];
+                t.parts(f_hz, &m, &mut parts);
+                parts
+            })
+            .collect()
     }
 
     /// Number of unknowns solved for in a response: variables and floats.
@@ -499,9 +581,32 @@ impl StageModel {
     }
 
     /// Complex master matrix P(f) (layout order x, q, s), dense real and imaginary parts.
+    /// With frequency terms ([`StageModel::frequency_terms`]) their parts are added.
     pub fn master(&self, damping: &Damping, f_hz: f64) -> (DMatrix<f64>, DMatrix<f64>) {
         let (re, im) = self.master_values(damping, f_hz);
-        (self.dense_on_pattern(&re), self.dense_on_pattern(&im))
+        let (mut re, mut im) = (self.dense_on_pattern(&re), self.dense_on_pattern(&im));
+        for (term, parts) in self
+            .frequency_terms
+            .iter()
+            .zip(self.frequency_parts(damping, f_hz))
+        {
+            let p = term.positions();
+            let n = p.len();
+            let size = term.jacobian().nrows();
+            let mut sum = vec![c64::new(0.0, 0.0); size * size];
+            for part in &parts {
+                for (s, v) in sum.iter_mut().zip(part) {
+                    *s += v;
+                }
+            }
+            let mut local = vec![c64::new(0.0, 0.0); n * n];
+            congruence(term.jacobian(), &sum, &mut local);
+            for (k, z) in local.iter().enumerate() {
+                re[(p[k / n], p[k % n])] += z.re;
+                im[(p[k / n], p[k % n])] += z.im;
+            }
+        }
+        (re, im)
     }
 
     /// Checks that an input and an output have one entry per parameter or variable (or,

@@ -157,6 +157,31 @@ enum Part {
     Varying(usize),
 }
 
+/// The mass entries and the frequency terms' additions to E, by stored slot.
+type MassAndExtra<'a> = (&'a [(usize, f64)], &'a [(usize, c64)]);
+
+/// Where one entry of a frequency term's local matrix goes (the cases of a stored slot in
+/// [`Fast::new`]): E over the solved unknowns, the right-hand side (times the weight), the
+/// output's weight on the response, or the direct term.
+#[derive(Clone, Copy)]
+enum Dest {
+    Matrix(usize),
+    Rhs(usize, f64),
+    Out(usize, f64),
+    Direct(f64),
+}
+
+/// A frequency term's state in a sweep: its tags' indices among the model's, and its
+/// multipliers, parts and their sum at the current frequency.
+struct TermState {
+    tags: Vec<Option<usize>>,
+    multipliers: Vec<c64>,
+    parts: Vec<Vec<c64>>,
+    /// The parts' sum over the term's own displacements, and Jᵀ (that) J over its rows.
+    own: Vec<c64>,
+    sum: Vec<c64>,
+}
+
 /// The factorisation of E(f) over the solved unknowns: L D Lᵀ by a schedule worked out once
 /// per sweep while no row exchange is needed (E is complex symmetric), a pivoting LU
 /// otherwise.
@@ -206,6 +231,14 @@ struct Fast {
     /// What the last solve left factorised, and its ω² (rad²/s²).
     factored: Factored,
     w2: f64,
+    /// Where each entry of each frequency term goes.
+    term_dest: Vec<Vec<(usize, Dest)>>,
+    /// The frequency terms at the current frequency: additions to E, to the right-hand
+    /// side and to the output's weights, and to the direct term.
+    extra: Vec<(usize, c64)>,
+    extra_rhs: Vec<(usize, c64)>,
+    extra_out: Vec<(usize, c64)>,
+    extra_direct: c64,
 }
 
 /// The reference engine: today's dense algorithm.
@@ -235,6 +268,8 @@ pub struct Sweep<'m> {
     z: Vec<c64>,
     /// The last frequency solved at (Hz).
     last_f: Option<f64>,
+    /// The model's frequency terms ([`StageModel::frequency_terms`]).
+    terms: Vec<TermState>,
 }
 
 impl<'m> Sweep<'m> {
@@ -303,7 +338,82 @@ impl<'m> Sweep<'m> {
             varying,
             engine,
             last_f: None,
+            terms: model
+                .frequency_terms
+                .iter()
+                .map(|t| {
+                    let n = t.positions().len();
+                    let m = t.jacobian().nrows();
+                    let tags = t.tags();
+                    TermState {
+                        tags: tags
+                            .iter()
+                            .map(|tag| model.by_tag.iter().position(|(name, _)| name == tag))
+                            .collect(),
+                        multipliers: vec![c64::new(1.0, 0.0); tags.len()],
+                        parts: vec![vec![c64::new(0.0, 0.0); m * m]; tags.len()],
+                        own: vec![c64::new(0.0, 0.0); m * m],
+                        sum: vec![c64::new(0.0, 0.0); n * n],
+                    }
+                })
+                .collect(),
         })
+    }
+
+    /// Per tag of the model (`by_tag` order), the dissipation ȳᴴ Im(part) y of the
+    /// frequency terms' parts of that tag at the last frequency solved, y = J z the term's
+    /// own displacements from the response over the solved unknowns (the parameters do not
+    /// move) (N m per unit response²), added to `out`. A term's tag the model lacks is left
+    /// out: the model's tags include every wire's, since its static terms are lossy.
+    pub fn add_frequency_dissipation(&self, out: &mut [f64]) {
+        for (term, state) in self.model.frequency_terms.iter().zip(&self.terms) {
+            let j = term.jacobian();
+            let m = j.nrows();
+            let mut y = vec![c64::new(0.0, 0.0); m];
+            for (c, &r) in term.positions().iter().enumerate() {
+                if let Some(l) = self.local(r) {
+                    for (k, yk) in y.iter_mut().enumerate() {
+                        *yk += self.z[l] * j[(k, c)];
+                    }
+                }
+            }
+            for (part, tag) in state.parts.iter().zip(&state.tags) {
+                let Some(slot) = tag.and_then(|t| out.get_mut(t)) else {
+                    continue;
+                };
+                for (e, v) in part.iter().enumerate() {
+                    let (yi, yk) = (y[e / m], y[e % m]);
+                    *slot += v.im * (yi.re * yk.re + yi.im * yk.im);
+                }
+            }
+        }
+    }
+
+    /// The frequency terms' parts and sums at `f_hz` with the current multipliers.
+    fn update_terms(&mut self, f_hz: f64) {
+        for (term, state) in self.model.frequency_terms.iter().zip(&mut self.terms) {
+            for (m, (tag, t)) in state
+                .multipliers
+                .iter_mut()
+                .zip(state.tags.iter().zip(term.tags()))
+            {
+                *m = match tag {
+                    Some(k) => self.now[*k],
+                    None => {
+                        let (re, im) = self.damping.at(t, f_hz);
+                        c64::new(re, im)
+                    }
+                };
+            }
+            term.parts(f_hz, &state.multipliers, &mut state.parts);
+            state.own.fill(c64::new(0.0, 0.0));
+            for part in &state.parts {
+                for (s, v) in state.own.iter_mut().zip(part) {
+                    *s += v;
+                }
+            }
+            crate::stage::congruence(term.jacobian(), &state.own, &mut state.sum);
+        }
     }
 
     /// Master indices (variables, then floats) of the unknowns solved for, ascending.
@@ -421,8 +531,14 @@ impl<'m> Sweep<'m> {
     fn solve(&mut self, f_hz: f64) -> Result<c64, DynamicsError> {
         self.last_f = Some(f_hz);
         let w2 = (TWO_PI * f_hz).powi(2);
+        if !self.terms.is_empty() {
+            self.update_terms(f_hz);
+        }
         let solved = match &mut self.engine {
-            Engine::Fast(fast) => fast.solve(&self.now_varying, w2, &mut self.z),
+            Engine::Fast(fast) => {
+                fast.set_terms(&self.terms);
+                fast.solve(&self.now_varying, w2, &mut self.z)
+            }
             Engine::Reference(r) => r.solve(self.model, self.damping, f_hz, &mut self.z),
         };
         match solved {
@@ -558,6 +674,7 @@ impl Fast {
                 }
             }
         }
+        let term_dest = Self::term_destinations(model, &loc, &index, input, output);
         let mut mass = Vec::new();
         for (slot, &m) in model.mass_on_pattern.iter().enumerate() {
             if m == 0.0 {
@@ -578,6 +695,11 @@ impl Fast {
             for &(k, _) in matrix.parts.iter().flatten().chain(&mass) {
                 stored[k] = true;
             }
+            for &(_, d) in term_dest.iter().flatten() {
+                if let Dest::Matrix(k) = d {
+                    stored[k] = true;
+                }
+            }
             *schedule = lu::Schedule::new(n, &stored);
         }
         Ok(Fast {
@@ -592,7 +714,78 @@ impl Fast {
             out,
             direct,
             factor,
+            term_dest,
+            extra: Vec::new(),
+            extra_rhs: Vec::new(),
+            extra_out: Vec::new(),
+            extra_direct: c64::new(0.0, 0.0),
         })
+    }
+
+    /// Where each entry of each of `model`'s frequency terms goes, as the static parts'
+    /// slots do in [`Fast::new`] (entries outside the solved unknowns' stored slots are left
+    /// out: the static model has them at zero).
+    fn term_destinations(
+        model: &StageModel,
+        loc: &dyn Fn(usize) -> Option<usize>,
+        index: &dyn Fn(usize, usize) -> Option<usize>,
+        input: &Input,
+        output: &Output,
+    ) -> Vec<Vec<(usize, Dest)>> {
+        let (nx, nq, _) = model.sizes;
+        let n_all = nx + nq;
+        model
+            .frequency_terms
+            .iter()
+            .map(|t| {
+                let p = t.positions();
+                let n = p.len();
+                let mut dest = Vec::new();
+                for e in 0..n * n {
+                    let (r, c) = (p[e / n], p[e % n]);
+                    let d = match (r < n_all, c < n_all, input, output) {
+                        (true, true, ..) => loc(r)
+                            .zip(loc(c))
+                            .and_then(|(i, j)| index(i, j))
+                            .map(Dest::Matrix),
+                        (true, false, Input::Displacement(s), _) => {
+                            loc(r).map(|i| Dest::Rhs(i, -s[c - n_all]))
+                        }
+                        (false, true, _, Output::SupportForce(o)) => {
+                            loc(c).map(|j| Dest::Out(j, -o[r - n_all]))
+                        }
+                        (false, false, Input::Displacement(s), Output::SupportForce(o)) => {
+                            Some(Dest::Direct(-o[r - n_all] * s[c - n_all]))
+                        }
+                        _ => None,
+                    };
+                    if let Some(d) = d {
+                        dest.push((e, d));
+                    }
+                }
+                dest
+            })
+            .collect()
+    }
+
+    /// The frequency terms' additions at the current frequency, from their summed local
+    /// matrices.
+    fn set_terms(&mut self, terms: &[TermState]) {
+        self.extra.clear();
+        self.extra_rhs.clear();
+        self.extra_out.clear();
+        self.extra_direct = c64::new(0.0, 0.0);
+        for (dest, state) in self.term_dest.iter().zip(terms) {
+            for &(e, d) in dest {
+                let v = state.sum[e];
+                match d {
+                    Dest::Matrix(k) => self.extra.push((k, v)),
+                    Dest::Rhs(i, w) => self.extra_rhs.push((i, v * w)),
+                    Dest::Out(j, w) => self.extra_out.push((j, v * w)),
+                    Dest::Direct(w) => self.extra_direct += v * w,
+                }
+            }
+        }
     }
 
     /// Solves E x = b in place by the factorisation the last [`Fast::solve`] left (its
@@ -602,6 +795,7 @@ impl Fast {
         let Fast {
             matrix,
             mass,
+            extra,
             values,
             original,
             factor,
@@ -626,7 +820,7 @@ impl Fast {
                 }
                 // as in `solve`: faer's pivoting LU on the matrix afresh, kept from now on
                 b.copy_from_slice(&rhs);
-                Self::assemble(matrix, mass, varying, *w2, values);
+                Self::assemble(matrix, (mass, extra), varying, *w2, values);
                 let ok = s.factor_pivoting(values) && s.solve(values, b);
                 *factored = if ok {
                     Factored::Sparse
@@ -639,10 +833,10 @@ impl Fast {
         }
     }
 
-    /// E(f) = P(f) − ω² M into `values`.
+    /// E(f) = P(f) − ω² M (+ the frequency terms' `extra`) into `values`.
     fn assemble(
         matrix: &Linear,
-        mass: &[(usize, f64)],
+        (mass, extra): MassAndExtra<'_>,
         varying: &[c64],
         w2: f64,
         values: &mut [c64],
@@ -650,6 +844,17 @@ impl Fast {
         matrix.evaluate(varying, values);
         for &(k, m) in mass {
             values[k].re -= w2 * m;
+        }
+        for &(k, v) in extra {
+            values[k] += v;
+        }
+    }
+
+    /// The right-hand side at the current frequency into `z`.
+    fn right_hand_side(rhs: &Linear, extra_rhs: &[(usize, c64)], varying: &[c64], z: &mut [c64]) {
+        rhs.evaluate(varying, z);
+        for &(i, v) in extra_rhs {
+            z[i] += v;
         }
     }
 
@@ -659,6 +864,8 @@ impl Fast {
         let Fast {
             matrix,
             mass,
+            extra,
+            extra_rhs,
             values,
             original,
             factor,
@@ -666,8 +873,8 @@ impl Fast {
             factored,
             ..
         } = self;
-        Self::assemble(matrix, mass, varying, w2, values);
-        rhs.evaluate(varying, z);
+        Self::assemble(matrix, (mass, extra), varying, w2, values);
+        Self::right_hand_side(rhs, extra_rhs, varying, z);
         *factored = match factor {
             Factor::Dense { schedule, pivots } => {
                 if schedule.factor(values) {
@@ -675,7 +882,7 @@ impl Fast {
                     Factored::Schedule
                 } else {
                     // a row exchange is needed: the general LU on the matrix afresh
-                    Self::assemble(matrix, mass, varying, w2, values);
+                    Self::assemble(matrix, (mass, extra), varying, w2, values);
                     let n = schedule.len();
                     if lu::factor(values, n, pivots) {
                         lu::solve(values, n, pivots, z);
@@ -691,15 +898,15 @@ impl Fast {
                     Pivots::Failed => None,
                     Pivots::Exceeded => {
                         // checked against E itself, refined, or refused
-                        Self::assemble(matrix, mass, varying, w2, original);
+                        Self::assemble(matrix, (mass, extra), varying, w2, original);
                         s.solve_refined(values, original, z)
                             .then_some(Factored::Refined)
                     }
                 };
                 solved.unwrap_or_else(|| {
                     // faer's pivoting LU on the matrix afresh
-                    rhs.evaluate(varying, z);
-                    Self::assemble(matrix, mass, varying, w2, values);
+                    Self::right_hand_side(rhs, extra_rhs, varying, z);
+                    Self::assemble(matrix, (mass, extra), varying, w2, values);
                     if s.factor_pivoting(values) && s.solve(values, z) {
                         Factored::Sparse
                     } else {
@@ -712,7 +919,10 @@ impl Fast {
             return None;
         }
         self.direct.evaluate(varying, &mut self.scalar);
-        let mut y = self.scalar[0];
+        let mut y = self.scalar[0] + self.extra_direct;
+        for &(j, v) in &self.extra_out {
+            y += v * z[j];
+        }
         // out·z with the output's parts: constant + Σ varying
         for (&o, &zi) in self.out.constant.iter().zip(z.iter()) {
             y += o * zi;

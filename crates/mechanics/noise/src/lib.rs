@@ -541,6 +541,9 @@ pub fn thermal_noise_with(
     // with one temperature the PSD is 4 k_B T/ω |Im R|, R = vᵀ E⁻¹ v: no sum of shares
     let uniform = tag_sums.temperatures.iter().all(|&t| t == temperature);
     let mut curves = Curves::new(freqs.len(), model.by_tag.len(), term_tags.len());
+    // the frequency terms' dissipation per tag (continuum fibres: docs/continuum-fibres.md)
+    let frequency = !model.frequency_terms.is_empty();
+    let mut dissipation = vec![0.0; model.by_tag.len()];
     sweep.for_each(freqs, |k, response, sweep| {
         let f = freqs[k];
         let scale = 4.0 * BOLTZMANN * temperature / (2.0 * std::f64::consts::PI * f);
@@ -558,6 +561,17 @@ pub fn thermal_noise_with(
         } else {
             for (t, series) in curves.tags.iter_mut().enumerate() {
                 series.push(sum.share(t));
+            }
+        }
+        if frequency {
+            // each tag's share gains 4 k_B T_tag/ω z̄ᵀ Im(C_tag) z, so that the shares
+            // still add up to 4 k_B T/ω |Im R| (Im E = Σ ε″ P_tag + Σ Im C_tag)
+            dissipation.fill(0.0);
+            sweep.add_frequency_dissipation(&mut dissipation);
+            for (t, series) in curves.tags.iter_mut().enumerate() {
+                if let Some(last) = series.last_mut() {
+                    *last += fd_scale(f) * tag_sums.temperatures[t] * dissipation[t];
+                }
             }
         }
         if !uniform {

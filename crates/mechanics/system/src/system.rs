@@ -195,6 +195,11 @@ pub struct Wire<S: Real = f64> {
     pub unstretched_length: S,
     /// Cross-section properties.
     pub section: WireSection<S>,
+    /// The round pieces (length m, radius m) of a fibre whose radius changes along it, from
+    /// end 0, when `section` is the effective section of such a profile (a tapered fibre);
+    /// empty for a uniform wire. The static terms use `section` alone; a continuum fibre
+    /// (`pendkit-element-continuum-fibre`) resolves the profile.
+    pub profile: Vec<(S, S)>,
     /// Damping tags.
     pub tags: WireTags,
 }
@@ -219,7 +224,9 @@ impl<S: pendkit_rotations::Constant> Wire<S> {
             s.polar_moment,
             s.linear_density,
         ];
-        ends || self.stiffness.moves()
+        let profile = self.profile.iter().any(|(l, r)| l.moves() || r.moves());
+        ends || profile
+            || self.stiffness.moves()
             || self.unstretched_length.moves()
             || section.iter().chain(&s.principal_axis).any(|v| v.moves())
     }
@@ -250,6 +257,7 @@ impl<S: Real> Wire<S> {
             stiffness,
             unstretched_length,
             section,
+            profile: Vec::new(),
             tags,
         }
     }
@@ -729,6 +737,11 @@ impl<S: Real> System<S> {
                     stiffness,
                     unstretched_length,
                     section,
+                    profile: w
+                        .profile
+                        .iter()
+                        .map(|&(l, r)| (v.one(l), v.one(r)))
+                        .collect(),
                     tags: w.tags.clone(),
                 }
             })
@@ -841,6 +854,13 @@ impl<S: Real> System<S> {
             f(&sa.torsion_constant, &mut sb.torsion_constant);
             f(&sa.polar_moment, &mut sb.polar_moment);
             f(&sa.linear_density, &mut sb.linear_density);
+            if a.profile.len() != b.profile.len() {
+                return false;
+            }
+            for ((la, ra), (lb, rb)) in a.profile.iter().zip(&mut b.profile) {
+                f(la, lb);
+                f(ra, rb);
+            }
         }
         for (a, b) in self.springs.iter().zip(&mut target.springs) {
             for (ea, eb) in a.ends.iter().zip(&mut b.ends) {

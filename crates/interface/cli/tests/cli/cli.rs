@@ -358,3 +358,47 @@ fn modes_below_a_frequency_are_the_lowest_modes() {
     assert!(!ok && stderr.contains("must be positive"), "{stderr}");
     assert_eq!(stderr.trim_end().lines().count(), 1);
 }
+
+/// `--fibres continuum` reaches `noise` (its answer at 100 Hz is the library's continuum
+/// one, tested against beads in tests/physics/continuum_fibre.rs, and differs from the
+/// static model's by the fibres' mass: several per cent), and `ss` keeps the static model
+/// and says so.
+#[test]
+fn fibres_continuum_changes_the_noise_and_ss_says_it_keeps_beads() {
+    let noise = |extra: &[&str]| {
+        let mut args = vec!["noise", "quad", "--output", "x3", "--freqs", "100", "--csv"];
+        args.extend_from_slice(extra);
+        let (ok, out, err) = pendkit(&args);
+        assert!(ok, "{err}");
+        let value: f64 = out
+            .lines()
+            .nth(1)
+            .unwrap()
+            .split(',')
+            .nth(1)
+            .unwrap()
+            .parse()
+            .unwrap();
+        value
+    };
+    let (plain, continuum) = (noise(&[]), noise(&["--fibres", "continuum"]));
+    assert!(
+        continuum < 0.99 * plain && continuum > 0.9 * plain,
+        "{plain} {continuum}"
+    );
+    let dir = std::env::temp_dir().join(format!("pendkit-fibres-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let out = dir.join("ss.mat");
+    let (ok, _, err) = pendkit(&[
+        "ss",
+        "quad",
+        "--fibres",
+        "continuum",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(ok && err.contains("keeps the static wires"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+    let (ok, _, err) = pendkit(&["noise", "quad", "--fibres", "beads", "--output", "x3"]);
+    assert!(!ok && err.contains("continuum"), "{err}");
+}

@@ -1,0 +1,425 @@
+//! Continuum fibres: the exact dynamic stiffness D(f) of a tensioned fibre between the
+//! attachment frames of its two bodies (docs/continuum-fibres.md).
+//!
+//! A fibre under static tension T is, for small motion about its straight equilibrium, the
+//! Euler–Bernoulli beam under tension in each of its two transverse directions,
+//! EI w⁗ − T w″ − μω² w = 0, the axial wave EA u″ + μω² u = 0 and the torsional wave
+//! (G J_e + T J/A) φ″ + ρJ ω² φ = 0. Over a piecewise-uniform profile (the tapered silica
+//! fibres of `quad-aligo`: thick necks, a thin middle) each piece has a closed-form
+//! dynamic stiffness, and chaining them gives the fibre's 12×12 D(f) over the translation
+//! and small rotation of both end frames, exact at every frequency: the violin modes are
+//! its poles, the dissipation dilution the ratio of its imaginary to its real part.
+//!
+//! Losses enter as complex moduli: EA, EI and G J_e are multiplied by the damping tags'
+//! complex multipliers (stretch, bending and torsion tag of the wire, [`Moduli`]); T and
+//! T J/A stay real (tension stiffening is lossless), as in the static model's dilution.
+//! At f → 0 with real moduli, D is the Hessian of the wire's static stage-2 terms (stretch,
+//! torsion, bending and extra stretch) in the same end-frame coordinates.
+
+mod piece;
+mod term;
+
+pub use term::{ContinuumTerm, continuum_terms};
+
+use nalgebra::{DMatrix, Matrix3, SMatrix, Vector3};
+use pendkit_energy::{EnergyError, Reference};
+use pendkit_system::{System, Wire, WireTags};
+pub use piece::C64;
+
+/// Why a continuum fibre cannot be built.
+#[derive(Debug, thiserror::Error)]
+pub enum FibreError {
+    /// The wire cannot be a continuum fibre (named, with the reason).
+    #[error("continuum fibre '{wire}': {message}")]
+    Invalid {
+        /// The wire's name.
+        wire: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// The wire's geometry could not be evaluated (a body the model lacks).
+    #[error(transparent)]
+    Energy(#[from] EnergyError),
+}
+
+/// The complex multipliers ε′ + iε″ (dimensionless) of a fibre's three elasticities at one
+/// frequency: those of its stretch, bending and torsion damping tags.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Moduli {
+    /// Multiplies E A (the stretch tag).
+    pub stretch: C64,
+    /// Multiplies E I (the bending tag).
+    pub bending: C64,
+    /// Multiplies G J_e (the torsion tag).
+    pub torsion: C64,
+}
+
+impl Moduli {
+    /// All three equal to one: no loss.
+    pub const LOSSLESS: Moduli = Moduli {
+        stretch: C64::new(1.0, 0.0),
+        bending: C64::new(1.0, 0.0),
+        torsion: C64::new(1.0, 0.0),
+    };
+}
+
+/// One uniform piece of a fibre, with its lossless constants.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Piece {
+    /// Length along the stretched fibre (m).
+    pub length: f64,
+    /// Axial stiffness E A (N).
+    pub axial: f64,
+    /// Bending stiffnesses E I (N m²) for displacement along the first principal direction
+    /// and along the second.
+    pub bending: [f64; 2],
+    /// Unloaded twist stiffness G J_e (N m²).
+    pub twist: f64,
+    /// J/A (m²): the tension adds T J/A to the twist stiffness.
+    pub twist_per_tension: f64,
+    /// Linear density μ (kg/m).
+    pub density: f64,
+    /// Polar moment of inertia per length ρ J = μ J/A (kg m).
+    pub twist_inertia: f64,
+}
+
+/// A fibre about its straight equilibrium: its pieces from end 0, static tension and
+/// geometry in lab axes.
+#[derive(Clone, Debug)]
+pub struct ContinuumFibre {
+    /// The wire's name.
+    pub name: String,
+    /// Pieces from end 0 to end 1; their lengths add up to the chord.
+    pub pieces: Vec<Piece>,
+    /// Static tension T (N), k (l − l₀) at the configuration.
+    pub tension: f64,
+    /// Lab positions of the two attachment points (m).
+    pub ends: [Vector3<f64>; 2],
+    /// First principal direction (lab, unit, ⟂ the chord): displacement along it bends
+    /// with `bending[0]`.
+    pub principal: Vector3<f64>,
+    /// Whether each end is hinged (free to turn: no bending moment there).
+    pub hinged: [bool; 2],
+    /// The wire's damping tags (which multipliers make its [`Moduli`]).
+    pub tags: WireTags,
+}
+
+/// A 12×12 complex dynamic stiffness over the two end frames' displacements.
+pub type Stiffness = SMatrix<C64, 12, 12>;
+
+/// The one-dimensional stiffness matrices of a fibre at one frequency.
+struct Local {
+    axial: DMatrix<C64>,
+    planes: [DMatrix<C64>; 2],
+    torsion: DMatrix<C64>,
+}
+
+impl ContinuumFibre {
+    /// Wire `wire` of `system` at coordinates `coords` (the equilibrium): its ends where the
+    /// bodies put them. Errors: an index out of range, a slack or zero-length wire, a wire
+    /// clamped other than straight, non-finite constants.
+    pub fn at(system: &System, coords: &[f64], wire: usize) -> Result<Self, FibreError> {
+        let w = system.wires.get(wire).ok_or_else(|| FibreError::Invalid {
+            wire: format!("#{wire}"),
+            message: format!("no such wire (the model has {})", system.wires.len()),
+        })?;
+        let reference = Reference::new(system, coords);
+        let ends = reference.wire_points(w)?;
+        let bad = |message: String| FibreError::Invalid {
+            wire: w.name.clone(),
+            message,
+        };
+        let chord = ends[1] - ends[0];
+        let length = chord.norm();
+        if !(length.is_finite() && length > 0.0) {
+            return Err(bad(format!("its chord has length {length} m")));
+        }
+        let axis = chord / length;
+        let directions = reference.wire_end_directions(w)?;
+        let mut hinged = [false; 2];
+        for (k, d) in directions.iter().enumerate() {
+            let frame = reference.frame(w.ends[k].body)?;
+            match d {
+                None => hinged[k] = true,
+                Some(d) => {
+                    // the beam is linearised about a straight wire: a clamp must point along it
+                    let lab = frame.rotation * d;
+                    let into = if k == 0 { axis } else { -axis };
+                    let off = lab.normalize().cross(&into).norm();
+                    if off.is_nan() || off > 1e-9 {
+                        return Err(bad(format!(
+                            "end {k} is clamped {off:e} rad off the chord; a continuum fibre \
+                             needs a wire that is straight at equilibrium"
+                        )));
+                    }
+                }
+            }
+        }
+        let rotation0 = reference.frame(w.ends[0].body)?.rotation;
+        let tension = reference.wire_tension(w)?;
+        Self::new(w, ends, &rotation0, hinged, tension)
+    }
+
+    /// The fibre of `wire` with its attachment points at `ends` (lab, m), end 0's body
+    /// turned by `rotation0` (body to lab), hinged ends `hinged` and static tension
+    /// `tension` (N, positive).
+    pub fn new(
+        wire: &Wire,
+        ends: [Vector3<f64>; 2],
+        rotation0: &Matrix3<f64>,
+        hinged: [bool; 2],
+        tension: f64,
+    ) -> Result<Self, FibreError> {
+        let bad = |message: String| FibreError::Invalid {
+            wire: wire.name.clone(),
+            message,
+        };
+        if !(tension.is_finite() && tension > 0.0) {
+            return Err(bad(format!(
+                "its static tension is {tension} N; a continuum fibre needs a taut wire"
+            )));
+        }
+        let chord = ends[1] - ends[0];
+        let length = chord.norm();
+        let axis = chord / length;
+        let p = rotation0 * wire.section.principal_axis;
+        let p = p - axis * axis.dot(&p);
+        if p.norm().is_nan() || p.norm() <= 1e-9 {
+            return Err(bad("its principal axis is parallel to the wire".into()));
+        }
+        let pieces = pieces(wire, length);
+        let finite = pieces.iter().all(|q| {
+            let v = [q.length, q.axial, q.bending[0], q.bending[1], q.twist];
+            v.iter().all(|x| x.is_finite() && *x > 0.0)
+                && [q.twist_per_tension, q.density, q.twist_inertia]
+                    .iter()
+                    .all(|x| x.is_finite() && *x >= 0.0)
+        });
+        if !finite {
+            return Err(bad(
+                "its lengths, moduli, moments and density must be finite and positive".into(),
+            ));
+        }
+        Ok(ContinuumFibre {
+            name: wire.name.clone(),
+            pieces,
+            tension,
+            ends,
+            principal: p.normalize(),
+            hinged,
+            tags: wire.tags.clone(),
+        })
+    }
+
+    /// Chord length (m).
+    pub fn length(&self) -> f64 {
+        (self.ends[1] - self.ends[0]).norm()
+    }
+
+    /// The one-dimensional stiffnesses at angular frequency `omega` (rad/s).
+    fn local(&self, omega: f64, moduli: &Moduli) -> Local {
+        let t = self.tension;
+        let axial = piece::chain(
+            self.pieces
+                .iter()
+                .map(|q| piece::wave_piece(moduli.stretch * q.axial, q.density, omega, q.length)),
+            1,
+        );
+        let torsion = piece::chain(
+            self.pieces.iter().map(|q| {
+                let c = moduli.torsion * q.twist + t * q.twist_per_tension;
+                piece::wave_piece(c, q.twist_inertia, omega, q.length)
+            }),
+            1,
+        );
+        let planes = [0, 1].map(|a| {
+            let d = piece::chain(
+                self.pieces.iter().map(|q| {
+                    piece::beam_piece(moduli.bending * q.bending[a], t, q.density, omega, q.length)
+                }),
+                2,
+            );
+            self.release_hinges(d)
+        });
+        Local {
+            axial,
+            planes,
+            torsion,
+        }
+    }
+
+    /// A transverse matrix over (w₀, w₀′, w₁, w₁′) with the slope of each hinged end
+    /// condensed out (no moment there) and its row and column left zero.
+    fn release_hinges(&self, mut d: DMatrix<C64>) -> DMatrix<C64> {
+        for (end, slope) in [(1, 3), (0, 1)] {
+            if self.hinged[end] {
+                let c = piece::condense(&d, slope);
+                d = DMatrix::from_fn(4, 4, |i, j| {
+                    if i == slope || j == slope {
+                        C64::new(0.0, 0.0)
+                    } else {
+                        let skip = |k: usize| if k > slope { k - 1 } else { k };
+                        c[(skip(i), skip(j))]
+                    }
+                });
+            }
+        }
+        d
+    }
+
+    /// The first `n` transverse resonances (Hz) of the lossless fibre with both ends held
+    /// (in the first principal direction): the poles of D, found as the zeros of
+    /// 1/D(w₀, w₁) (the cross stiffness), bracketed on a grid of 1/64 of the ideal string's
+    /// fundamental √(T/μ̄)/2L from half of it up, and bisected to the last bit. A zero of
+    /// the cross stiffness (a pole of its inverse, where it also changes sign) is told
+    /// apart by the size of 1/D at the bisection's end.
+    pub fn held_resonances(&self, n: usize) -> Vec<f64> {
+        let mass: f64 = self.pieces.iter().map(|q| q.density * q.length).sum();
+        let length = self.length();
+        let string = (self.tension * length / mass).sqrt() / (2.0 * length);
+        let g = |f: f64| {
+            let d = &self
+                .local(2.0 * std::f64::consts::PI * f, &Moduli::LOSSLESS)
+                .planes[0];
+            1.0 / d[(0, 2)].re
+        };
+        let step = string / 64.0;
+        let mut found = Vec::with_capacity(n);
+        let (mut a, mut ga) = (0.5 * string, g(0.5 * string));
+        // at most 64 steps per expected mode and a few hundred more: a fibre has a mode
+        // within each ~string interval
+        for _ in 0..(64 * (n + 4)) {
+            if found.len() == n {
+                break;
+            }
+            let b = a + step;
+            let gb = g(b);
+            if ga * gb < 0.0 {
+                let (mut lo, mut hi, glo) = (a, b, ga);
+                while hi - lo > f64::EPSILON * hi {
+                    let m = 0.5 * (lo + hi);
+                    if g(m) * glo > 0.0 {
+                        lo = m;
+                    } else {
+                        hi = m;
+                    }
+                }
+                let root = 0.5 * (lo + hi);
+                if g(root).abs() < ga.abs().min(gb.abs()) {
+                    found.push(root);
+                }
+            }
+            (a, ga) = (b, gb);
+        }
+        found
+    }
+
+    /// The dynamic stiffness D(f) (12×12, complex) at frequency `frequency` (Hz) with the
+    /// elasticities' complex multipliers `moduli`, over (translation of end 0's attachment
+    /// point (m), small rotation of end 0's frame (rad), the same for end 1), lab axes:
+    /// the generalised forces the ends exert on the fibre are D times those displacements.
+    /// Entries are infinite at a resonance of the fibre with both ends held.
+    pub fn dynamic_stiffness(&self, frequency: f64, moduli: &Moduli) -> Stiffness {
+        let [a, b, c] = self.dynamic_stiffness_by_tag(frequency, moduli);
+        a + b + c
+    }
+
+    /// [`ContinuumFibre::dynamic_stiffness`] in its three parts, each depending on one
+    /// multiplier only: stretch (the axial wave), bending (both transverse beams) and
+    /// torsion (the twist wave). Their sum is D; the imaginary part of each is the
+    /// dissipation of that damping tag.
+    pub fn dynamic_stiffness_by_tag(&self, frequency: f64, moduli: &Moduli) -> [Stiffness; 3] {
+        let omega = 2.0 * std::f64::consts::PI * frequency;
+        let local = self.local(omega, moduli);
+        let t = (self.ends[1] - self.ends[0]).normalize();
+        let (e1, e2) = (self.principal, t.cross(&self.principal));
+        // each local value as a row over the 12 lab displacements: (block offset, direction)
+        // u = t·d, w_a = e_a·d, w_a′ = (t × e_a)·θ (e2 and −e1), φ = t·θ
+        let row =
+            |end: usize, rotation: bool, v: Vector3<f64>| (6 * end + 3 * usize::from(rotation), v);
+        let add = |out: &mut Stiffness, m: &DMatrix<C64>, rows: &[(usize, Vector3<f64>)]| {
+            for (i, &(oi, vi)) in rows.iter().enumerate() {
+                for (j, &(oj, vj)) in rows.iter().enumerate() {
+                    let z = m[(i, j)];
+                    if z == C64::new(0.0, 0.0) {
+                        continue;
+                    }
+                    for a in 0..3 {
+                        for b in 0..3 {
+                            out[(oi + a, oj + b)] += z * (vi[a] * vj[b]);
+                        }
+                    }
+                }
+            }
+        };
+        let mut parts = [Stiffness::zeros(); 3];
+        add(
+            &mut parts[0],
+            &local.axial,
+            &[row(0, false, t), row(1, false, t)],
+        );
+        add(
+            &mut parts[2],
+            &local.torsion,
+            &[row(0, true, t), row(1, true, t)],
+        );
+        for (m, e, slope) in [(&local.planes[0], e1, e2), (&local.planes[1], e2, -e1)] {
+            let rows = [
+                row(0, false, e),
+                row(0, true, slope),
+                row(1, false, e),
+                row(1, true, slope),
+            ];
+            add(&mut parts[1], m, &rows);
+        }
+        parts
+    }
+}
+
+/// The pieces of `wire` stretched to the chord `length` (m): one piece of its section for a
+/// uniform wire, its round pieces for a profile, their lengths scaled to the chord. EA is
+/// set so that the pieces in series have the wire's axial stiffness k (the static model's
+/// k = E A / l_eq), and μ so that the mean is the section's linear density.
+fn pieces(wire: &Wire, length: f64) -> Vec<Piece> {
+    let s = &wire.section;
+    let (e, g) = (s.youngs_modulus, s.shear_modulus);
+    if wire.profile.is_empty() {
+        let j_over_a = s.polar_moment / s.area;
+        return vec![Piece {
+            length,
+            axial: wire.stiffness * length,
+            bending: [e * s.moment_1, e * s.moment_2],
+            twist: g * s.torsion_constant,
+            twist_per_tension: j_over_a,
+            density: s.linear_density,
+            twist_inertia: s.linear_density * j_over_a,
+        }];
+    }
+    let pi = std::f64::consts::PI;
+    let nominal: f64 = wire.profile.iter().map(|p| p.0).sum();
+    let scale = length / nominal;
+    let volume: f64 = wire.profile.iter().map(|&(l, r)| pi * r * r * l).sum();
+    let rho = s.linear_density * nominal / volume;
+    // E A_i c in series gives k: c = k Σ l_i/(E A_i)
+    let compliance: f64 = wire
+        .profile
+        .iter()
+        .map(|&(l, r)| l * scale / (e * pi * r * r))
+        .sum();
+    let c = wire.stiffness * compliance;
+    wire.profile
+        .iter()
+        .map(|&(l, r)| {
+            let (area, i) = (pi * r * r, pi * r.powi(4) / 4.0);
+            Piece {
+                length: l * scale,
+                axial: e * area * c,
+                bending: [e * i, e * i],
+                twist: g * 2.0 * i,
+                twist_per_tension: r * r / 2.0,
+                density: rho * area,
+                twist_inertia: rho * area * r * r / 2.0,
+            }
+        })
+        .collect()
+}

@@ -1,0 +1,151 @@
+//! A continuum fibre in a stage model's responses: the frequency term
+//! Jᵀ [D(f) − D_s(f)] J that turns the fibre's static stack into its continuum
+//! (docs/continuum-fibres.md, "Responses and noise").
+
+use std::sync::Arc;
+
+use nalgebra::{Complex, DMatrix};
+use pendkit_assembly::{Assembled, Layout};
+use pendkit_dynamics::FrequencyTerm;
+use pendkit_system::System;
+
+use crate::{C64, ContinuumFibre, FibreError, Moduli, Stiffness};
+
+/// One fibre's frequency term: over the master rows its end frames depend on, each tag's
+/// part Jᵀ [D_tag(f; m_tag) − D_tag(0; 1) − (m_tag − 1) ∂D_tag(0)/∂m_tag] J. The bracket's
+/// last two terms are the fibre's static stack as the stage model holds it (its tension-on
+/// Hessian with the tag's tension-off part scaled by m_tag), so the term vanishes at f = 0
+/// for multipliers of 1 and the static model's low-frequency answers stand.
+#[derive(Debug)]
+pub struct ContinuumTerm {
+    fibre: ContinuumFibre,
+    label: String,
+    positions: Vec<usize>,
+    tags: Vec<String>,
+    /// ∂(end-frame displacements)/∂(master rows): 12 × positions.
+    jacobian: DMatrix<f64>,
+    /// Per tag (stretch, bending, torsion): D_tag(0; 1) and ∂D_tag(0)/∂m_tag.
+    statics: [(Stiffness, Stiffness); 3],
+}
+
+impl ContinuumTerm {
+    /// The term of `fibre` between the end frames whose displacements are `jacobian`
+    /// (12 × n) times those of the master rows `positions`.
+    pub fn new(fibre: ContinuumFibre, positions: Vec<usize>, jacobian: DMatrix<f64>) -> Self {
+        let at_rest = fibre.dynamic_stiffness_by_tag(0.0, &Moduli::LOSSLESS);
+        // ∂D/∂m by a complex step: D is analytic in each multiplier, so Im D(1 + ih)/h is
+        // the derivative to O(h²), with no cancellation
+        let h = 1e-20;
+        let bump = Complex::new(1.0, h);
+        let stepped = fibre.dynamic_stiffness_by_tag(
+            0.0,
+            &Moduli {
+                stretch: bump,
+                bending: bump,
+                torsion: bump,
+            },
+        );
+        let statics =
+            std::array::from_fn(|t| (at_rest[t], stepped[t].map(|z| C64::new(z.im / h, 0.0))));
+        let tags = vec![
+            fibre.tags.stretch.clone(),
+            fibre.tags.bending.clone(),
+            fibre.tags.torsion.clone(),
+        ];
+        ContinuumTerm {
+            label: format!("continuum:{}", fibre.name),
+            fibre,
+            positions,
+            tags,
+            jacobian,
+            statics,
+        }
+    }
+
+    /// The fibre.
+    pub fn fibre(&self) -> &ContinuumFibre {
+        &self.fibre
+    }
+}
+
+impl FrequencyTerm for ContinuumTerm {
+    fn label(&self) -> &str {
+        &self.label
+    }
+
+    fn positions(&self) -> &[usize] {
+        &self.positions
+    }
+
+    fn jacobian(&self) -> &DMatrix<f64> {
+        &self.jacobian
+    }
+
+    fn tags(&self) -> &[String] {
+        &self.tags
+    }
+
+    fn parts(&self, f_hz: f64, multipliers: &[C64], parts: &mut [Vec<C64>]) {
+        let m = |t: usize| multipliers.get(t).copied().unwrap_or(C64::new(1.0, 0.0));
+        let moduli = Moduli {
+            stretch: m(0),
+            bending: m(1),
+            torsion: m(2),
+        };
+        let d = self.fibre.dynamic_stiffness_by_tag(f_hz, &moduli);
+        for (t, part) in parts.iter_mut().enumerate().take(3) {
+            let (d0, slope) = &self.statics[t];
+            let c = d[t] - d0 - slope * (m(t) - C64::new(1.0, 0.0));
+            // row-major over the 12 end-frame displacements
+            for (e, v) in part.iter_mut().enumerate() {
+                *v = c[(e / 12, e % 12)];
+            }
+        }
+    }
+}
+
+/// The continuum terms of the wires `wires` (indices) of `system` at the equilibrium of
+/// `assembled`: each fibre at its equilibrium ([`ContinuumFibre::at`]) with the Jacobian of
+/// its end frames' displacements (attachment point, lab-axis rotation) over the master
+/// rows. Errors name the wire.
+pub fn continuum_terms(
+    system: &System,
+    assembled: &Assembled,
+    wires: &[usize],
+) -> Result<Vec<Arc<dyn FrequencyTerm>>, FibreError> {
+    let x = &assembled.equilibrium.coords;
+    let layout: &Layout = &assembled.layout;
+    let mut out: Vec<Arc<dyn FrequencyTerm>> = Vec::with_capacity(wires.len());
+    for &w in wires {
+        let fibre = ContinuumFibre::at(system, x, w)?;
+        let wire = &system.wires[w];
+        let mut rows = Vec::with_capacity(4);
+        for end in &wire.ends {
+            let jac = system.bodies[end.body]
+                .frame
+                .try_jacobian(x, &end.point)
+                .map_err(|e| FibreError::Invalid {
+                    wire: wire.name.clone(),
+                    message: e.to_string(),
+                })?;
+            rows.push(jac.position);
+            rows.push(jac.omega_space);
+        }
+        // the master rows any of the 12 depends on
+        let positions: Vec<usize> = (0..x.len())
+            .filter(|&g| {
+                layout.position[g] != Layout::NO_ROW
+                    && rows.iter().any(|r| r.column(g).iter().any(|&v| v != 0.0))
+            })
+            .map(|g| layout.position[g])
+            .collect();
+        let globals: Vec<usize> = (0..x.len())
+            .filter(|&g| {
+                layout.position[g] != Layout::NO_ROW && positions.contains(&layout.position[g])
+            })
+            .collect();
+        let jacobian = DMatrix::from_fn(12, globals.len(), |r, c| rows[r / 3][(r % 3, globals[c])]);
+        out.push(Arc::new(ContinuumTerm::new(fibre, positions, jacobian)));
+    }
+    Ok(out)
+}
