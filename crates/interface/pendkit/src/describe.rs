@@ -237,9 +237,9 @@ impl StageResult {
         }
         let pairs = crate::fit::pair_modes_by_overlap(
             &crate::fit::all_shapes(reference),
-            &reference.assembled.mass,
+            &reference.assembled.mass.to_dense(),
             &crate::fit::all_shapes(self),
-            &self.assembled.mass,
+            &self.assembled.mass.to_dense(),
         )?;
         let mut continued = vec![None; reference.modes.modes.len()];
         for (new, pair) in pairs.into_iter().enumerate() {

@@ -174,7 +174,12 @@ fn dense_modes(
         )
     })?;
     let mut modes = timed(times, "modes", 1, || {
-        normal_modes_with_rounding(&reduced.k_eff, &assembled.mass, &model.variables, rounding)
+        normal_modes_with_rounding(
+            &reduced.k_eff,
+            &assembled.mass.to_dense(),
+            &model.variables,
+            rounding,
+        )
     })?;
     if let Some(hz) = below {
         modes.modes.retain(|m| m.hz < hz);
