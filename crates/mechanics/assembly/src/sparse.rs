@@ -18,8 +18,8 @@ use crate::evaluate::Evaluator;
 /// Largest number of free coordinates whose Newton step uses a dense Hessian and a dense
 /// Cholesky factorisation; larger searches sum the Hessian on the terms' sparsity pattern
 /// and factorise it sparse. Every bundled model at its defaults (84 coordinates at most)
-/// stays dense, with its figures as they were; at 200 coordinates a dense step takes about
-/// a millisecond and the sparse one is as fast.
+/// stays dense, with its figures as they were; at 200 coordinates a dense Cholesky is a few
+/// million operations, under a millisecond.
 pub const DENSE_EQUILIBRIUM_LIMIT: usize = 200;
 
 /// The lower triangle of a symmetric matrix over the free coordinates, in compressed
