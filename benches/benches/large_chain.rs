@@ -5,7 +5,7 @@
 //! frequency that holds 20 of them at every size by shift-invert, stability;
 //! docs/performance.md, "Large models"). The model is built once, outside the timed part.
 //! Sizes past the coordinate, wire and body limits are skipped with a note: run with
-//! `PENDKIT_MAX_COORDINATES=60000 PENDKIT_MAX_WIRES=40000 PENDKIT_MAX_BODIES=10001` for all
+//! `PENDKIT_MAX_COORDINATES=60006 PENDKIT_MAX_WIRES=40000 PENDKIT_MAX_BODIES=10001` for all
 //! of them. Ten samples each (criterion's least): the largest take seconds per run.
 
 use std::path::Path;
