@@ -201,7 +201,14 @@ fn modes(c: &mut Criterion) {
     .expect("floats eliminate")
     .k_eff;
     c.bench_function("modes/quad-beads48", |b| {
-        b.iter(|| normal_modes(black_box(&k), &r.assembled.mass, &r.model.variables).unwrap())
+        b.iter(|| {
+            normal_modes(
+                black_box(&k),
+                &r.assembled.mass.to_dense(),
+                &r.model.variables,
+            )
+            .unwrap()
+        })
     });
     let n = k.nrows();
     let kf = faer::Mat::<f64>::from_fn(n, n, |i, j| k[(i, j)]);

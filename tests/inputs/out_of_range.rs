@@ -133,11 +133,13 @@ fn a_chunk_direction_past_the_chunk_cannot_be_made() {
 
 #[test]
 fn a_generated_chain_is_refused_outside_its_stage_count() {
-    use pendkit::suspension::generate::{MAX_CHAIN_STAGES, chain};
-    for n in [0, MAX_CHAIN_STAGES + 1, usize::MAX] {
+    use pendkit::suspension::generate::{MAX_GENERATED_STAGES, chain};
+    for n in [0, MAX_GENERATED_STAGES + 1, usize::MAX] {
         let e = chain(n).expect_err("refused").to_string();
         assert!(
-            e.contains(&format!("{n} stages: a chain has 1 to {MAX_CHAIN_STAGES}")),
+            e.contains(&format!(
+                "{n} stages: a chain has 1 to {MAX_GENERATED_STAGES}"
+            )),
             "{e}"
         );
     }

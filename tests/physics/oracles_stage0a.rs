@@ -133,7 +133,7 @@ fn rigid_body_yaw_tension_part() {
 #[test]
 fn mode_vectors_are_mass_normalised_and_ascending() {
     let r = run("rigid-body", &[], Stage::S0A);
-    let m = &r.assembled.mass;
+    let m = &r.assembled.mass.to_dense();
     let modes = &r.modes.modes;
     for (i, a) in modes.iter().enumerate() {
         let va = nalgebra::DVector::from_column_slice(&a.vector);

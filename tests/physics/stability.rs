@@ -36,7 +36,7 @@ fn dense_extremes(r: &StageResult) -> (f64, f64) {
         &r.system,
     )
     .expect("floats eliminated");
-    let m: DMatrix<f64> = r.assembled.mass.clone();
+    let m: DMatrix<f64> = r.assembled.mass.to_dense();
     let li = m
         .cholesky()
         .expect("M positive definite")
@@ -62,7 +62,7 @@ fn shifted_lowest(r: &StageResult, sigma: f64) -> f64 {
         &r.system,
     )
     .expect("floats eliminated");
-    let m: DMatrix<f64> = r.assembled.mass.clone();
+    let m: DMatrix<f64> = r.assembled.mass.to_dense();
     let shifted = &reduced.k_eff + &m * sigma;
     let shifted = (&shifted + shifted.transpose()) * 0.5;
     let li = shifted
@@ -615,7 +615,7 @@ fn check_point(model: &str, sets: &[&str], stage: Stage, fd: bool) -> Result<Str
     let (nx, _, _) = r.assembled.layout.sizes();
     let k = summed_stiffness(&r);
     let abs_k = summed_abs_stiffness(&r);
-    let reference = Independent::new(&k, &abs_k, &r.assembled.mass, nx);
+    let reference = Independent::new(&k, &abs_k, &r.assembled.mass.to_dense(), nx);
     let mut wrong = verdict_disagreements(&r, &k, &reference);
     if fd {
         let k_fd = finite_difference_stiffness(&r);
@@ -630,7 +630,7 @@ fn check_point(model: &str, sets: &[&str], stage: Stage, fd: bool) -> Result<Str
         // with the library's as well, at the differences' own accuracy (1e-5 of the
         // largest entry, in place of the summed Hessians' rounding)
         let fd_abs = abs_k.map(|x| x + 1e-5 * scale / (16.0 * f64::EPSILON));
-        let fd_reference = Independent::new(&k_fd, &fd_abs, &r.assembled.mass, nx);
+        let fd_reference = Independent::new(&k_fd, &fd_abs, &r.assembled.mass.to_dense(), nx);
         for w in verdict_disagreements(&r, &k_fd, &fd_reference) {
             wrong.push(format!("by finite differences: {w}"));
         }
@@ -858,7 +858,12 @@ fn check_system(
     };
     let (nx, _, _) = r.assembled.layout.sizes();
     let k = summed_stiffness(&r);
-    let reference = Independent::new(&k, &summed_abs_stiffness(&r), &r.assembled.mass, nx);
+    let reference = Independent::new(
+        &k,
+        &summed_abs_stiffness(&r),
+        &r.assembled.mass.to_dense(),
+        nx,
+    );
     let wrong = verdict_disagreements(&r, &k, &reference);
     let line = format!(
         "{label}: {} | {}",

@@ -31,7 +31,7 @@ fn modes_at(case: &Case, stage: Stage) -> (Vec<f64>, DMatrix<f64>, DMatrix<f64>)
     let n = r.modes.coordinates.len();
     let hz = r.modes.modes.iter().map(|m| m.hz).collect();
     let v = DMatrix::from_fn(n, r.modes.modes.len(), |i, k| r.modes.modes[k].vector[i]);
-    (hz, v, r.assembled.mass.clone())
+    (hz, v, r.assembled.mass.to_dense())
 }
 
 /// Groups of modes whose frequencies are within 1e-6 relative of each other: their

@@ -59,7 +59,7 @@ fn pattern_values_equal_the_dense_scatter() {
             let mass = m.dense(&m.mass_on_pattern).unwrap();
             assert_eq!(
                 mass.view((0, 0), (nx, nx)),
-                r.assembled.mass.view((0, 0), (nx, nx)),
+                r.assembled.mass.to_dense().view((0, 0), (nx, nx)),
                 "{name} {stage}: mass"
             );
             // nothing non-zero outside the pattern

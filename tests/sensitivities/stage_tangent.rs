@@ -49,7 +49,7 @@ fn solved(case: &Case, stage: Stage, name: &str, value: Option<f64>) -> Solved {
     Solved {
         coords: a.equilibrium.coords,
         stiffness: k,
-        mass: a.mass,
+        mass: a.mass.to_dense(),
     }
 }
 

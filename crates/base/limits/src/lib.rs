@@ -102,9 +102,11 @@ pub static COORDINATES: Limit = Limit {
     what: "coordinates in one model",
     variable: "PENDKIT_MAX_COORDINATES",
     default: 10_000,
-    why: "the equilibrium's Hessian and the modes' blocks are dense: 10 000 coordinates are \
-          800 MB in one n x n matrix; the largest bundled model with 200 beads per fibre \
-          (quad-v5, n_beads = 200) has 4 836",
+    why: "a model's floats (their Schur complement) and each block of its modes are \
+          dense: 10 000 coordinates are 800 MB in one n x n matrix; the largest bundled \
+          model with 200 beads per fibre (quad-v5, n_beads = 200) has 4 836. Chains and \
+          trees without floats take sparse paths and run far past it with the limit \
+          raised (a 10 000-stage chain, 60 000 coordinates, in about 1 GB)",
     setting: OnceLock::new(),
 };
 

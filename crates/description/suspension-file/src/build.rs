@@ -24,7 +24,7 @@ use pendkit_system::{
     SpringEnd, Stage, System, WireEnd, WireSection, WireTags,
 };
 
-use crate::damping::{Hanging, blade_tag, find_material};
+use crate::damping::{blade_tag, find_material};
 use crate::read::Ex;
 use crate::signals::{linear_form, point_form};
 use crate::source::{At, Located};
@@ -488,8 +488,6 @@ struct Interpreter<'s, 'c, S: BuildScalar> {
     /// Index of each body in `spec.bodies`.
     index: HashMap<&'s str, usize>,
     plans: Vec<Option<PlannedStage<'s, S>>>,
-    /// Which bodies hang from which.
-    hanging: Hanging<'s>,
 }
 
 impl<'s, 'c, S: BuildScalar> Interpreter<'s, 'c, S> {
@@ -544,7 +542,6 @@ impl<'s, 'c, S: BuildScalar> Interpreter<'s, 'c, S> {
             stage_of,
             index,
             plans: Vec::new(),
-            hanging: Hanging::new(spec),
         })
     }
 
@@ -612,8 +609,9 @@ impl<'s, 'c, S: BuildScalar> Interpreter<'s, 'c, S> {
         }
         // parts, stage by stage in the file's order: blades, then the wires from them
         let plans = std::mem::take(&mut self.plans);
+        let weights = self.hung_weights(&plans);
         for plan in plans.iter().flatten() {
-            self.parts(plan, &plans)?;
+            self.parts(plan, weights[plan.lower])?;
         }
         for stage in &self.spec.stages {
             if let Some(springs) = &stage.springs {
@@ -1181,31 +1179,35 @@ impl<'s, 'c, S: BuildScalar> Interpreter<'s, 'c, S> {
         }
     }
 
-    /// Weight (N) hung from stage `plan`'s wires: the bodies from its hung body down, the
-    /// blade tips on them and the beads below them.
-    fn hung_weight(&self, plan: &PlannedStage<S>, plans: &[Option<PlannedStage<S>>]) -> S {
-        let names = self.hanging.subtree(&plan.stage.body);
-        let hung: std::collections::HashSet<&str> = names.iter().copied().collect();
-        let inside = |b: usize| hung.contains(self.spec.bodies[b].name.as_str());
-        let mut bodies = S::from(0.0);
-        for name in &names {
-            bodies += self.bodies[self.index[name]].2;
+    /// Weight (N) hung from each body's stage wires, by body: the body, the blade tips and
+    /// beads of the stages hung from it, and the same of every body below it. Summed once
+    /// from the bottom up (each body is written below the one it hangs from), so that a
+    /// chain of n stages costs O(n), not a walk of each stage's subtree.
+    fn hung_weights(&self, plans: &[Option<PlannedStage<S>>]) -> Vec<S> {
+        let mut total: Vec<S> = self.bodies.iter().map(|b| b.2).collect();
+        let mut children: Vec<Vec<usize>> = vec![Vec::new(); total.len()];
+        for p in plans.iter().flatten() {
+            if let Some(t) = total.get_mut(p.upper) {
+                *t += p.tips_mass() + p.beads_mass();
+            }
+            if let Some(c) = children.get_mut(p.upper) {
+                c.push(p.lower);
+            }
         }
-        // parts mounted on those bodies (the stages hanging from them): tips, then beads
-        let below: Vec<&PlannedStage<S>> =
-            plans.iter().flatten().filter(|p| inside(p.upper)).collect();
-        let tips: S = below.iter().map(|p| p.tips_mass()).sum();
-        let beads: S = below.iter().map(|p| p.beads_mass()).sum();
-        (bodies + tips + beads) * self.g
+        for b in (0..total.len()).rev() {
+            for &c in &children[b] {
+                // a stage hangs its body below the one it hangs from (checked at the plan)
+                if c > b {
+                    let below = total[c];
+                    total[b] += below;
+                }
+            }
+        }
+        total.into_iter().map(|w| w * self.g).collect()
     }
 
     /// Builds a planned stage's blades and wires.
-    fn parts(
-        &mut self,
-        plan: &PlannedStage<'s, S>,
-        plans: &[Option<PlannedStage<'s, S>>],
-    ) -> Result<(), BuildError> {
-        let weight = self.hung_weight(plan, plans);
+    fn parts(&mut self, plan: &PlannedStage<'s, S>, weight: S) -> Result<(), BuildError> {
         // each wire carries an equal share of the weight vertically
         let share = weight / plan.wire_count() as f64;
         let upper = self.bodies[plan.upper].0;

@@ -209,12 +209,18 @@ const PRINT_ACCURACY_ABOVE: f64 = 1e-6;
 /// A mode's largest kinetic-energy shares (at most three, each at least 1 %), as
 /// "coordinate N%" in the run's naming: the mode table's and the report's last column.
 pub fn top_shares(run: &Run, coordinates: &[String], fractions: &[f64]) -> Vec<String> {
-    let mut shares: Vec<(usize, f64)> = fractions.iter().copied().enumerate().collect();
+    // only shares of 1 % or more are shown, at most a hundred of them: sorting those
+    // (stable, as sorting all would order them) keeps a table of n modes linear in n per mode
+    let mut shares: Vec<(usize, f64)> = fractions
+        .iter()
+        .copied()
+        .enumerate()
+        .filter(|(_, f)| *f >= 0.01)
+        .collect();
     shares.sort_by(|a, b| b.1.total_cmp(&a.1));
     shares
         .iter()
         .take(3)
-        .filter(|(_, f)| *f >= 0.01)
         .map(|(k, f)| {
             format!(
                 "{} {}%",

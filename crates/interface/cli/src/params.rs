@@ -73,13 +73,13 @@ pub fn run(a: Args) -> Result<String, CliError> {
 /// Arguments of `pendkit chain-file`.
 #[derive(clap::Args)]
 pub struct ChainArgs {
-    /// Number of stages (bodies), 1 to 200.
+    /// Number of stages (bodies), 1 to 10 000.
     stages: usize,
 }
 
 /// The text of an N-stage chain suspension file.
 pub fn chain_file(a: ChainArgs) -> Result<String, CliError> {
-    let max = pendkit::suspension::generate::MAX_CHAIN_STAGES;
+    let max = pendkit::suspension::generate::MAX_GENERATED_STAGES;
     let written = pendkit::suspension::generate::chain(a.stages).map_err(|_| {
         CliError::usage(format!("chain-file: {} stages; give 1 to {max}", a.stages))
     })?;

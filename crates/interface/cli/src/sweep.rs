@@ -202,7 +202,7 @@ impl StepModes {
             shapes: DMatrix::from_fn(n, modes.len(), |i, j| {
                 modes[j].vector.get(i).copied().unwrap_or(0.0)
             }),
-            mass: run.result.assembled.mass.clone(),
+            mass: run.result.assembled.mass.to_dense(),
         }
     }
 }

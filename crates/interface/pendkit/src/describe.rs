@@ -9,7 +9,7 @@
 
 use nalgebra::Vector3;
 use pendkit_dynamics::Mode;
-use pendkit_system::{BodyId, CoordId, CoordKind, NameScheme};
+use pendkit_system::{BodyId, CoordKind, NameScheme};
 
 use crate::{Error, StageResult};
 
@@ -47,21 +47,6 @@ pub fn unit_slug(unit: &str) -> String {
         .replace('/', " per ")
         .replace(['(', ')'], " ");
     text.split_whitespace().collect::<Vec<_>>().join("_")
-}
-
-/// The body whose own pose coordinates a coordinate is, and the pose entry.
-fn owner(result: &StageResult, coord: CoordId) -> Option<(BodyId, usize)> {
-    result
-        .system
-        .bodies
-        .iter()
-        .enumerate()
-        .find_map(|(b, body)| {
-            body.pose_coords
-                .iter()
-                .position(|c| *c == Some(coord))
-                .map(|k| (b, k))
-        })
 }
 
 impl StageResult {
@@ -119,7 +104,7 @@ impl StageResult {
     /// coordinate (translation or rotation), `None` otherwise.
     pub fn coordinate_unit(&self, name: &str) -> Option<&'static str> {
         let c = self.system.coord(&self.unalias(name))?;
-        owner(self, c).map(|(_, k)| pose_unit(k))
+        self.owner(c).map(|(_, k)| pose_unit(k))
     }
 
     /// Unit of an input (see [`StageResult::input`]): a support displacement in m or rad,
@@ -196,14 +181,19 @@ impl StageResult {
         // the winner is copied
         let mut shares: Vec<(&str, f64)> = Vec::new();
         for (k, &g) in self.assembled.layout.variables.iter().enumerate() {
-            let family = match owner(self, g) {
+            let share = mode.energy_fractions.get(k).copied().unwrap_or(0.0);
+            // a variable without kinetic energy in the mode adds nothing to any family
+            // (and no family that would win: the largest share is positive)
+            if share == 0.0 && !shares.is_empty() {
+                continue;
+            }
+            let family = match self.owner(g) {
                 Some((b, entry)) => self.system.bodies[b]
                     .mode_family
                     .as_deref()
                     .unwrap_or(DOF_FAMILIES[entry]),
                 None => OTHER_FAMILY,
             };
-            let share = mode.energy_fractions.get(k).copied().unwrap_or(0.0);
             match shares.iter_mut().find(|(f, _)| *f == family) {
                 Some((_, total)) => *total += share,
                 None => shares.push((family, share)),
@@ -237,9 +227,9 @@ impl StageResult {
         }
         let pairs = crate::fit::pair_modes_by_overlap(
             &crate::fit::all_shapes(reference),
-            &reference.assembled.mass,
+            &reference.assembled.mass.to_dense(),
             &crate::fit::all_shapes(self),
-            &self.assembled.mass,
+            &self.assembled.mass.to_dense(),
         )?;
         let mut continued = vec![None; reference.modes.modes.len()];
         for (new, pair) in pairs.into_iter().enumerate() {

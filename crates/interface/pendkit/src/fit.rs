@@ -898,7 +898,7 @@ impl MatchedModes {
             shapes: DMatrix::from_fn(n, indices.len(), |i, j| {
                 modes[indices[j]].vector.get(i).copied().unwrap_or(0.0)
             }),
-            mass: result.assembled.mass.clone(),
+            mass: result.assembled.mass.to_dense(),
             indices,
             overlaps,
         }
@@ -1009,7 +1009,7 @@ impl MatchedModes {
             &self.shapes,
             &self.mass,
             &all_shapes(result),
-            &result.assembled.mass,
+            &result.assembled.mass.to_dense(),
         )?;
         let mut indices = vec![0; self.indices.len()];
         let mut overlaps = vec![0.0; self.indices.len()];

@@ -599,7 +599,7 @@ fn stencil_points(
 /// (step `h`), projected on the nominal modes.
 fn differenced_modes(shared: &Shared, points: &[Point; 4], h: f64) -> Result<Vec<f64>, Error> {
     let dk = difference(points, h, |p| p.k_eff.clone());
-    let dm = difference(points, h, |p| p.result.assembled.mass.clone());
+    let dm = difference(points, h, |p| p.result.assembled.mass.to_dense());
     let vectors = shared.vectors;
     let vk = vectors.transpose() * &dk * vectors;
     let vm = vectors.transpose() * &dm * vectors;

@@ -99,6 +99,10 @@ impl Case {
 /// checked for finite values, the named state space, the modes described.
 pub struct StageResult {
     run: StageRun,
+    /// For each coordinate, the body whose own pose coordinate it is and the pose entry:
+    /// made on first use, once, so that describing every mode of a model is linear in its
+    /// size per mode (a search through the bodies per coordinate made it cubic).
+    owners: std::sync::OnceLock<Vec<Option<(pendkit_system::BodyId, usize)>>>,
 }
 
 impl std::ops::Deref for StageResult {
@@ -111,7 +115,10 @@ impl std::ops::Deref for StageResult {
 
 impl From<StageRun> for StageResult {
     fn from(run: StageRun) -> StageResult {
-        StageResult { run }
+        StageResult {
+            run,
+            owners: std::sync::OnceLock::new(),
+        }
     }
 }
 
@@ -188,9 +195,30 @@ impl StageResult {
                 name: "continuum fibres".into(),
                 message: e.to_string(),
             })?;
-        let mut run = self.run;
-        run.model.frequency_terms.extend(terms);
-        Ok(StageResult { run })
+        let mut result = self;
+        result.run.model.frequency_terms.extend(terms);
+        Ok(result)
+    }
+
+    /// The body whose own pose coordinate `coord` is, and the pose entry (0 to 5: x, y, z,
+    /// yaw, pitch, roll), from an index made once.
+    pub(crate) fn owner(
+        &self,
+        coord: pendkit_system::CoordId,
+    ) -> Option<(pendkit_system::BodyId, usize)> {
+        let owners = self.owners.get_or_init(|| {
+            let mut owners = vec![None; self.run.system.coords.len()];
+            // the first body that has the coordinate, as a search in body order finds it
+            for (b, body) in self.run.system.bodies.iter().enumerate().rev() {
+                for (k, c) in body.pose_coords.iter().enumerate().rev() {
+                    if let Some(slot) = c.and_then(|c| owners.get_mut(c)) {
+                        *slot = Some((b, k));
+                    }
+                }
+            }
+            owners
+        });
+        owners.get(coord).copied().flatten()
     }
 
     /// The dynamics layer's run, for the functions of `pendkit::dynamics` that take one.

@@ -238,7 +238,7 @@ pub fn answer(variant: &Variant, question: &Question, grid: &[f64]) -> Result<An
     Ok(Answer {
         coordinates: run.modes.coordinates,
         modes: run.modes.modes,
-        mass: run.assembled.mass,
+        mass: run.assembled.mass.to_dense(),
         noise_asd: noise.asd(),
         transfer,
     })

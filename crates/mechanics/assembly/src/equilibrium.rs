@@ -14,6 +14,7 @@ use pendkit_system::{CoordKind, System};
 
 use crate::AssemblyError;
 use crate::evaluate::{DerivativePath, Evaluator};
+use crate::sparse::{DENSE_EQUILIBRIUM_LIMIT, SparseHessian};
 
 /// Controls of the equilibrium search.
 #[derive(Clone, Debug)]
@@ -38,6 +39,11 @@ pub struct EquilibriumOptions {
     /// A coordinate moving further than this from its start (m or rad) means the
     /// potential has no minimum nearby (a model without support, a wrong sign).
     pub max_excursion: f64,
+    /// Largest number of free coordinates whose Newton step uses a dense Hessian and a
+    /// dense Cholesky factorisation; larger searches sum the Hessian on the terms' sparsity
+    /// pattern and factorise it sparse (memory and time near-linear in the number of bodies
+    /// for chains and trees). Default [`DENSE_EQUILIBRIUM_LIMIT`].
+    pub dense_limit: usize,
 }
 
 impl Default for EquilibriumOptions {
@@ -49,6 +55,7 @@ impl Default for EquilibriumOptions {
             force_floor: 1e-9,
             rounding_factor: 4.0,
             max_excursion: 100.0,
+            dense_limit: DENSE_EQUILIBRIUM_LIMIT,
         }
     }
 }
@@ -66,24 +73,38 @@ pub struct Equilibrium {
     pub energy: f64,
 }
 
+/// The Hessian of the sum of the terms over the free coordinates: a dense matrix up to
+/// [`EquilibriumOptions::dense_limit`] coordinates, the terms' sparsity pattern above.
+enum Hessian {
+    Dense(DMatrix<f64>),
+    Sparse(SparseHessian),
+}
+
 /// Energy, gradient and Hessian of the sum of the terms over the free coordinates, plus
 /// the largest single-term force (a scale for the convergence test) and, per free
 /// coordinate, the rounding floor of its residual force.
-pub(crate) struct Evaluation {
+struct Evaluation {
     energy: f64,
     gradient: DVector<f64>,
-    pub(crate) hessian: DMatrix<f64>,
+    hessian: Hessian,
     force_scale: f64,
     rounding: DVector<f64>,
 }
 
 impl Evaluation {
-    /// Nothing summed yet, over `n` free coordinates.
-    pub(crate) fn zeros(n: usize) -> Self {
+    /// Nothing summed yet, over the `n` free coordinates of the evaluator's terms (`slot`
+    /// maps a global coordinate to its free index). The Hessian's storage is made here,
+    /// once per search: dense for small models, on the terms' pattern for large ones.
+    fn zeros(ev: &Evaluator, slot: &[Option<usize>], n: usize, dense_limit: usize) -> Self {
+        let hessian = if n <= dense_limit {
+            Hessian::Dense(DMatrix::zeros(n, n))
+        } else {
+            Hessian::Sparse(SparseHessian::new(ev, slot, n))
+        };
         Evaluation {
             energy: 0.0,
             gradient: DVector::zeros(n),
-            hessian: DMatrix::zeros(n, n),
+            hessian,
             force_scale: 0.0,
             rounding: DVector::zeros(n),
         }
@@ -119,19 +140,27 @@ fn gradient_sums(ev: &Evaluator, slot: &[Option<usize>], out: &mut Evaluation) {
     }
 }
 
-/// Sums the per-term tension-on Hessians over the free coordinates.
-pub(crate) fn hessian_sum(ev: &Evaluator, slot: &[Option<usize>], out: &mut Evaluation) {
-    out.hessian.fill(0.0);
+/// Sums the per-term tension-on Hessians over the free coordinates into a dense matrix.
+pub(crate) fn hessian_sum(ev: &Evaluator, slot: &[Option<usize>], out: &mut DMatrix<f64>) {
+    out.fill(0.0);
     for (t, term) in ev.terms().iter().enumerate() {
         let (h, m) = (ev.on(t), term.coords.len());
         for (a, &ga) in term.coords.iter().enumerate() {
             let Some(i) = slot[ga] else { continue };
             for (b, &gb) in term.coords.iter().enumerate() {
                 if let Some(j) = slot[gb] {
-                    out.hessian[(i, j)] += h[a * m + b];
+                    out[(i, j)] += h[a * m + b];
                 }
             }
         }
+    }
+}
+
+/// Sums the per-term tension-on Hessians into the evaluation's storage, dense or sparse.
+fn hessian_sums(ev: &Evaluator, slot: &[Option<usize>], out: &mut Evaluation) {
+    match &mut out.hessian {
+        Hessian::Dense(h) => hessian_sum(ev, slot, h),
+        Hessian::Sparse(h) => h.sum(ev, slot),
     }
 }
 
@@ -146,20 +175,32 @@ fn total_energy(terms: &[Term], x: &[f64]) -> f64 {
 fn descent_step(ev: &Evaluation) -> Option<(DVector<f64>, bool)> {
     let n = ev.gradient.len();
     let scale: DVector<f64> = DVector::from_fn(n, |i, _| {
-        let h = ev.hessian[(i, i)].abs();
+        let h = match &ev.hessian {
+            Hessian::Dense(h) => h[(i, i)],
+            Hessian::Sparse(h) => h.diagonal(i),
+        }
+        .abs();
         if h > 0.0 { h } else { 1.0 }
     });
     let mut mu = 0.0;
     for _ in 0..40 {
-        let mut h = ev.hessian.clone();
-        for i in 0..n {
-            h[(i, i)] += mu * scale[i];
-        }
-        if let Some(chol) = h.cholesky() {
-            let dx = chol.solve(&(-&ev.gradient));
-            if dx.iter().all(|v| v.is_finite()) {
-                return Some((dx, mu == 0.0));
+        let dx = match &ev.hessian {
+            Hessian::Dense(hessian) => {
+                let mut h = hessian.clone();
+                for i in 0..n {
+                    h[(i, i)] += mu * scale[i];
+                }
+                h.cholesky().map(|chol| chol.solve(&(-&ev.gradient)))
             }
+            Hessian::Sparse(h) => {
+                let shift: Vec<f64> = scale.iter().map(|s| mu * s).collect();
+                h.solve_shifted(&shift, &(-&ev.gradient))
+            }
+        };
+        if let Some(dx) = dx
+            && dx.iter().all(|v| v.is_finite())
+        {
+            return Some((dx, mu == 0.0));
         }
         mu = if mu == 0.0 { 1e-8 } else { mu * 10.0 };
     }
@@ -210,7 +251,7 @@ pub(crate) fn newton(
     let n = free.len();
     let mut x = start.to_vec();
     let name = |k: usize| system.coords[free[k]].name.clone();
-    let mut ev = Evaluation::zeros(n);
+    let mut ev = Evaluation::zeros(evaluator, &slot, n, options.dense_limit);
     let mut trial = x.clone();
 
     let mut iteration = 0;
@@ -267,7 +308,7 @@ pub(crate) fn newton(
             });
         }
         evaluator.evaluate(&x, true);
-        hessian_sum(evaluator, &slot, &mut ev);
+        hessian_sums(evaluator, &slot, &mut ev);
         let forces_ok = max_residual <= options.force_tolerance * ev.force_scale;
         let (dx, newton) = descent_step(&ev).ok_or_else(not_converged)?;
         // Converged on forces and on the size of the step that would still be taken.

@@ -13,6 +13,7 @@ mod equilibrium;
 mod evaluate;
 mod parallel;
 mod redundant;
+mod sparse;
 mod tangent;
 mod timing;
 
@@ -31,6 +32,7 @@ pub use parallel::{
     MAX_THREADS_PER_CORE, in_parallel, in_parallel_with, side_by_side, thread_count,
 };
 pub use pendkit_energy::OffHessian;
+pub use sparse::{DENSE_EQUILIBRIUM_LIMIT, MassMatrix};
 pub use tangent::{
     Along, Balance, Motion, Projection, ROUNDING_MARGIN, StageTangent, moves_beyond_rounding,
     stage_tangent,
@@ -258,7 +260,7 @@ pub struct Assembled {
     /// Per-term Hessians.
     pub terms: Vec<TermMatrices>,
     /// Mass matrix over the variables (kg, kg m, kg m^2).
-    pub mass: DMatrix<f64>,
+    pub mass: MassMatrix,
 }
 
 /// A point on a body as the linearised geometry at equilibrium sees it: how far it moves
@@ -697,7 +699,7 @@ pub fn mass_matrix(
     system: &System,
     layout: &Layout,
     x: &[f64],
-) -> Result<DMatrix<f64>, AssemblyError> {
+) -> Result<MassMatrix, AssemblyError> {
     check_length(system, "mass_matrix", "x", x)?;
     system.check_indices()?;
     check_layout("mass_matrix", system, layout)?;
@@ -790,7 +792,7 @@ fn mass_at(
     layout: &Layout,
     evaluator: &mut Evaluator,
     x: &[f64],
-) -> Result<DMatrix<f64>, AssemblyError> {
+) -> Result<MassMatrix, AssemblyError> {
     let reference = evaluator.path() == DerivativePath::Reference;
     mass_from(system, layout, |b, columns| {
         let body = &system.bodies[b];
@@ -818,9 +820,10 @@ fn mass_from(
     system: &System,
     layout: &Layout,
     mut columns: impl FnMut(usize, &mut Vec<[Vector3<f64>; 2]>),
-) -> Result<DMatrix<f64>, AssemblyError> {
+) -> Result<MassMatrix, AssemblyError> {
     let nx = layout.variables.len();
-    let mut m = DMatrix::zeros(nx, nx);
+    // entries in the order a dense scatter adds them (bodies in order): the same sums
+    let mut entries = Vec::new();
     let mut cols = Vec::new();
     for (b, body) in system.bodies.iter().enumerate() {
         if body.mass == 0.0 && body.inertia.iter().all(|&v| v == 0.0) {
@@ -845,9 +848,9 @@ fn mass_from(
                     continue;
                 }
                 let value = body.mass * pi.dot(pj) + wi.dot(&(body.inertia * wj));
-                m[(layout.position[gi], layout.position[gj])] += value;
+                entries.push((layout.position[gi], layout.position[gj], value));
             }
         }
     }
-    Ok(m)
+    Ok(MassMatrix::from_entries(nx, &entries))
 }

@@ -36,7 +36,7 @@ use pendkit_system::{CoordKind, EarlyWireTerms, Stage, System};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
 
-use crate::equilibrium::{Evaluation, free_coordinates, free_slots, hessian_sum};
+use crate::equilibrium::{free_coordinates, free_slots, hessian_sum};
 use crate::evaluate::Evaluator;
 use crate::{AssemblyError, Layout};
 use crate::{DerivativePath, in_parallel};
@@ -254,7 +254,7 @@ impl Balance {
         evaluator.evaluate(equilibrium, true);
         let free = free_coordinates(system);
         let slot = free_slots(system.coords.len(), &free);
-        let mut stiffness = Evaluation::zeros(free.len());
+        let mut stiffness = DMatrix::zeros(free.len(), free.len());
         hessian_sum(&evaluator, &slot, &mut stiffness);
         // the scale of the forces' rounding: per free coordinate, Σ over the terms of |force|
         let mut magnitude = vec![0.0; free.len()];
@@ -282,10 +282,10 @@ impl Balance {
             Ok::<_, EnergyError>((weights, stiffness))
         });
         let [first, second] = checks;
-        let lu = stiffness.hessian.clone().lu();
+        let lu = stiffness.clone().lu();
         let abs_stiffness_and_inverse = lu
             .try_inverse()
-            .map(|inverse| (stiffness.hessian.map(f64::abs), inverse.map(f64::abs)));
+            .map(|inverse| (stiffness.map(f64::abs), inverse.map(f64::abs)));
         Ok(Some(Balance {
             coords: coordinate_names(system),
             free,

@@ -328,7 +328,7 @@ impl StageModel {
         let lambda_max = (TWO_PI * hz).powi(2);
         let k = self.master_values(damping, 0.0).0;
         let m = &self.mass_on_pattern;
-        let mass = SparseColumns::new(nx, |i, j| self.mass[(i, j)]);
+        let mass = SparseColumns::from_mass(&self.mass);
         if (0..nx).any(|i| self.mass[(i, i)] <= 0.0) {
             let weakest = (0..nx)
                 .min_by(|&i, &j| self.mass[(i, i)].total_cmp(&self.mass[(j, j)]))
@@ -443,6 +443,7 @@ impl StageModel {
         let mut block = start_block(nx, BLOCK.min(nx), 1);
         let mut seed = 1;
         let mut found: Vec<(f64, Vec<f64>, f64)> = Vec::new();
+        let mut projected: Vec<Vec<f64>> = Vec::new();
         loop {
             let mut added = 0;
             for mut v in block.drain(..) {
@@ -478,8 +479,21 @@ impl StageModel {
             let due = complete
                 || (dim >= slice.count.unwrap_or(0) + BLOCK && (dim / BLOCK).is_multiple_of(3));
             if due {
+                // the projected operator's lower triangle, extended by the new basis
+                // vectors' rows only (the earlier entries do not change as the basis grows)
+                for i in projected.len()..dim {
+                    projected.push(
+                        (0..=i)
+                            .map(|j| 0.5 * (dot(&mq[i], &w[j]) + dot(&mq[j], &w[i])))
+                            .collect(),
+                    );
+                }
                 let t = Mat::from_fn(dim, dim, |i, j| {
-                    0.5 * (dot(&mq[i], &w[j]) + dot(&mq[j], &w[i]))
+                    if j <= i {
+                        projected[i][j]
+                    } else {
+                        projected[j][i]
+                    }
                 });
                 let evd = t
                     .self_adjoint_eigen(Side::Lower)

@@ -7,10 +7,10 @@ use faer::{Mat, Side};
 use nalgebra::{DMatrix, Vector3};
 use pendkit_assembly::Layout;
 use pendkit_rotations::lab_yaw_pitch_roll;
-use pendkit_system::{CoordKind, System};
+use pendkit_system::{CoordKind, Damping, System};
 
-use crate::DynamicsError;
 use crate::pattern::dense_components;
+use crate::{DynamicsError, StageModel};
 
 /// One normal mode.
 #[derive(Clone, Debug, PartialEq)]
@@ -258,6 +258,19 @@ impl SparseColumns {
                 })
                 .collect(),
         }
+    }
+
+    /// The columns of a mass matrix from its stored entries: the same columns
+    /// [`SparseColumns::new`] reads from its dense form (rows ascending, zeros left out), in
+    /// time linear in its entries.
+    pub(crate) fn from_mass(mass: &pendkit_assembly::MassMatrix) -> Self {
+        let mut entries = vec![Vec::new(); mass.nrows()];
+        for (i, j, v) in mass.entries() {
+            if v != 0.0 {
+                entries[j].push((i, v));
+            }
+        }
+        SparseColumns { entries }
     }
 
     /// A x.
@@ -853,20 +866,43 @@ pub fn normal_modes_with_rounding(
         });
     }
     let (label, count) = dense_components(n, &[k_eff.as_slice(), mass.as_slice()]);
+    let mass_columns = SparseColumns::new(n, |i, j| mass[(i, j)]);
+    modes_of_blocks(
+        &label,
+        count,
+        |i, j| k_eff[(i, j)],
+        |i, j| mass[(i, j)],
+        &mass_columns,
+        names,
+        rounding,
+    )
+}
+
+/// The modes of each exactly decoupled block (`label`: each variable's block, `count`
+/// blocks), K_eff and M read entry by entry: from dense matrices, or from a stage model's
+/// pattern for models too large for dense n × n storage ([`StageModel::modes_by_blocks`]).
+pub(crate) fn modes_of_blocks(
+    label: &[usize],
+    count: usize,
+    k_eff: impl Fn(usize, usize) -> f64,
+    mass: impl Fn(usize, usize) -> f64,
+    mass_columns: &SparseColumns,
+    names: &[String],
+    rounding: &dyn StiffnessRounding,
+) -> Result<Modes, DynamicsError> {
     let mut blocks: Vec<Vec<usize>> = vec![Vec::new(); count];
     for (i, &b) in label.iter().enumerate() {
         blocks[b].push(i);
     }
-    let mass_columns = SparseColumns::new(n, |i, j| mass[(i, j)]);
-    let mut raw: Vec<RawMode> = Vec::with_capacity(n);
+    let mut raw: Vec<RawMode> = Vec::with_capacity(label.len());
     for (b, idx) in blocks.iter().enumerate() {
-        let kb = Mat::from_fn(idx.len(), idx.len(), |i, j| k_eff[(idx[i], idx[j])]);
-        let mb = Mat::from_fn(idx.len(), idx.len(), |i, j| mass[(idx[i], idx[j])]);
+        let kb = Mat::from_fn(idx.len(), idx.len(), |i, j| k_eff(idx[i], idx[j]));
+        let mb = Mat::from_fn(idx.len(), idx.len(), |i, j| mass(idx[i], idx[j]));
         let weakest = || {
             let w = idx
                 .iter()
                 .copied()
-                .min_by(|&i, &j| mass[(i, i)].total_cmp(&mass[(j, j)]))
+                .min_by(|&i, &j| mass(i, i).total_cmp(&mass(j, j)))
                 .unwrap_or(0);
             names.get(w).cloned().unwrap_or_default()
         };
@@ -882,8 +918,55 @@ pub fn normal_modes_with_rounding(
     }
     Ok(Modes {
         coordinates: names.to_vec(),
-        modes: finish(raw, &blocks, &mass_columns, names, rounding),
+        modes: finish(raw, &blocks, mass_columns, names, rounding),
     })
+}
+
+impl StageModel {
+    /// Every mode at f = 0 stiffness (each tag's ε'(0)), block by block as
+    /// [`normal_modes_with_rounding`] solves them, with each block's matrices read from the
+    /// pattern: no dense n × n matrix, so memory and time grow with the blocks' sizes, not
+    /// the square of the model's (10 000 bodies on their own springs are 10 000 blocks of
+    /// one variable). For models without floats (whose elimination needs the dense Schur
+    /// complement); `None` for a model with floats.
+    pub fn modes_by_blocks(
+        &self,
+        damping: &Damping,
+        rounding: &dyn StiffnessRounding,
+    ) -> Option<Result<Modes, DynamicsError>> {
+        let (nx, nq, _) = self.sizes;
+        if nq > 0 {
+            return None;
+        }
+        let k = self.master_values(damping, 0.0).0;
+        if let Some(s) = k.iter().position(|v| !v.is_finite()) {
+            let (row, column) = self.pattern.position(s);
+            return Some(Err(DynamicsError::NotFinite {
+                what: "stiffness matrix",
+                row,
+                column,
+            }));
+        }
+        if let Some((row, column, _)) = self.mass.entries().find(|e| !e.2.is_finite()) {
+            return Some(Err(DynamicsError::NotFinite {
+                what: "mass matrix",
+                row,
+                column,
+            }));
+        }
+        let label = &self.blocks[..nx.min(self.blocks.len())];
+        let count = label.iter().max().map_or(0, |&b| b + 1);
+        let entry = |i: usize, j: usize| self.pattern.slot(i, j).map_or(0.0, |s| k[s]);
+        Some(modes_of_blocks(
+            label,
+            count,
+            entry,
+            |i, j| self.mass.get(i, j),
+            &SparseColumns::from_mass(&self.mass),
+            &self.variables,
+            rounding,
+        ))
+    }
 }
 
 /// Motion of one body in a mode, in lab axes.

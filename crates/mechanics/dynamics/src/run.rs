@@ -166,6 +166,19 @@ fn dense_modes(
     below: Option<f64>,
     times: &mut Option<&mut PhaseTimes>,
 ) -> Result<Modes, DynamicsError> {
+    // a large model without floats: the same block solves from the pattern, without the
+    // dense n × n matrices
+    if model.sizes.0 > DENSE_MODES_LIMIT
+        && let Some(modes) = timed(times, "modes", 1, || {
+            model.modes_by_blocks(&system.damping, rounding)
+        })
+    {
+        let mut modes = modes?;
+        if let Some(hz) = below {
+            modes.modes.retain(|m| m.hz < hz);
+        }
+        return Ok(modes);
+    }
     let reduced = timed(times, "floats", 1, || {
         eliminate_floats(
             &model.real_stiffness(&system.damping),
@@ -174,7 +187,12 @@ fn dense_modes(
         )
     })?;
     let mut modes = timed(times, "modes", 1, || {
-        normal_modes_with_rounding(&reduced.k_eff, &assembled.mass, &model.variables, rounding)
+        normal_modes_with_rounding(
+            &reduced.k_eff,
+            &assembled.mass.to_dense(),
+            &model.variables,
+            rounding,
+        )
     })?;
     if let Some(hz) = below {
         modes.modes.retain(|m| m.hz < hz);

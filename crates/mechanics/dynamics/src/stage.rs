@@ -8,7 +8,7 @@
 
 use faer::{Mat, c64};
 use nalgebra::{DMatrix, DVector};
-use pendkit_assembly::{Assembled, OffHessian};
+use pendkit_assembly::{Assembled, MassMatrix, OffHessian};
 use pendkit_system::{Damping, System};
 
 use crate::DynamicsError;
@@ -56,7 +56,7 @@ pub struct StageModel {
     /// Per-term tension-off Hessians (for the per-term noise breakdown).
     pub terms: Vec<TermLoss>,
     /// Mass matrix over the variables (kg, kg m, kg m²).
-    pub mass: DMatrix<f64>,
+    pub mass: MassMatrix,
     /// The mass matrix on the pattern (zero outside the variables' block).
     pub mass_on_pattern: Vec<f64>,
     /// Connected component of each unknown (variables, then floats) in the pattern: the
@@ -259,15 +259,12 @@ impl StageModel {
             .collect();
         let rows = RowEntries::new(dim, &positions);
         let mass = &assembled.mass;
-        // the columns of each row's mass entries (and of their transposes), from one pass
-        // over the stored values: the mass matrix is dense storage but block-sparse
+        // the columns of each row's mass entries (and of their transposes)
         let mut mass_columns: Vec<Vec<usize>> = vec![Vec::new(); nx];
-        for (j, column) in mass.as_slice().chunks_exact(nx.max(1)).enumerate().take(nx) {
-            for (i, &m) in column.iter().enumerate() {
-                if m != 0.0 {
-                    mass_columns[i].push(j);
-                    mass_columns[j].push(i);
-                }
+        for (i, j, m) in mass.entries() {
+            if m != 0.0 && i < nx && j < nx {
+                mass_columns[i].push(j);
+                mass_columns[j].push(i);
             }
         }
 
@@ -722,7 +719,7 @@ impl StageModel {
         }
         let m_inv = self
             .mass
-            .clone()
+            .to_dense()
             .cholesky()
             .ok_or_else(|| DynamicsError::SingularMass {
                 variable: self.variables.first().cloned().unwrap_or_default(),

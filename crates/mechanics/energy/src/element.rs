@@ -8,6 +8,7 @@
 
 use std::any::{Any, TypeId};
 use std::cell::RefCell;
+use std::collections::HashMap;
 use std::sync::{Arc, OnceLock};
 
 use nalgebra::Vector3;
@@ -253,14 +254,17 @@ pub trait Element: Sync {
 /// from one evaluation of the beam. The assembly passes one `SharedBodies` to every kind
 /// it builds at a reference; a kind asks for a body by type and index (e.g. the wire's) and
 /// gets the one another kind already built, or builds it.
+///
+/// Both are looked up by key (a model with n wires asks n times: a search through a list
+/// made building the terms quadratic in the model's size).
 #[derive(Default)]
 pub struct SharedBodies {
-    bodies: RefCell<Vec<SharedEntry>>,
-    frames: RefCell<Vec<Arc<LocalFrames>>>,
+    bodies: RefCell<HashMap<(TypeId, usize), SharedBody>>,
+    frames: RefCell<HashMap<Vec<BodyId>, Arc<LocalFrames>>>,
 }
 
-/// One shared body: its type, its index among bodies of that type, and the body.
-type SharedEntry = (TypeId, usize, Arc<dyn Any + Send + Sync>);
+/// One shared body, by its type and its index among bodies of that type.
+type SharedBody = Arc<dyn Any + Send + Sync>;
 
 impl SharedBodies {
     /// An empty collection.
@@ -275,7 +279,7 @@ impl SharedBodies {
     pub fn with_frames(frames: impl IntoIterator<Item = Arc<LocalFrames>>) -> Self {
         SharedBodies {
             bodies: RefCell::default(),
-            frames: RefCell::new(frames.into_iter().collect()),
+            frames: RefCell::new(frames.into_iter().map(|f| (f.bodies.clone(), f)).collect()),
         }
     }
 
@@ -287,17 +291,14 @@ impl SharedBodies {
         system: &System<S>,
         bodies: &[BodyId],
     ) -> Result<Arc<LocalFrames>, EnergyError> {
-        let found = self
-            .frames
-            .borrow()
-            .iter()
-            .find(|f| f.bodies == bodies)
-            .cloned();
+        let found = self.frames.borrow().get(bodies).cloned();
         match found {
             Some(frames) => Ok(frames),
             None => {
                 let frames = Arc::new(LocalFrames::new(system, bodies)?);
-                self.frames.borrow_mut().push(frames.clone());
+                self.frames
+                    .borrow_mut()
+                    .insert(bodies.to_vec(), frames.clone());
                 Ok(frames)
             }
         }
@@ -310,17 +311,12 @@ impl SharedBodies {
         make: impl FnOnce() -> Result<T, E>,
     ) -> Result<Arc<T>, E> {
         let key = TypeId::of::<T>();
-        let found = self
-            .bodies
-            .borrow()
-            .iter()
-            .find(|(t, i, _)| *t == key && *i == index)
-            .map(|(_, _, body)| body.clone());
+        let found = self.bodies.borrow().get(&(key, index)).cloned();
         if let Some(body) = found.and_then(|b| b.downcast::<T>().ok()) {
             return Ok(body);
         }
         let body = Arc::new(make()?);
-        self.bodies.borrow_mut().push((key, index, body.clone()));
+        self.bodies.borrow_mut().insert((key, index), body.clone());
         Ok(body)
     }
 }

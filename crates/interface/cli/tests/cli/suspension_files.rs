@@ -97,7 +97,7 @@ fn chain_file_is_the_bundled_chain() {
     }
     let _ = std::fs::remove_dir_all(path.parent().unwrap());
     let (ok, _, stderr) = pendkit(&["chain-file", "0"]);
-    assert!(!ok && stderr.contains("1 to 200"), "{stderr}");
+    assert!(!ok && stderr.contains("1 to 10000"), "{stderr}");
 }
 
 /// A case file names a suspension file (relative to its own folder) and overrides it: the
