@@ -179,7 +179,7 @@ mod tests {
             ]));
             let scale = whole.iter().map(|z| z.norm()).fold(0.0, f64::max);
             assert!(
-                (&whole - &halves).iter().all(|z| z.norm() < 1e-10 * scale),
+                (whole - halves).iter().all(|z| z.norm() < 1e-10 * scale),
                 "{omega}: {whole} {halves}"
             );
             let c = C64::new(7e3, 1e-3);
@@ -189,7 +189,7 @@ mod tests {
                 wave_piece(c, 0.3, omega, 0.3),
             ]));
             assert!(
-                (&whole - &halves)
+                (whole - halves)
                     .iter()
                     .all(|z| z.norm() < 1e-10 * whole[(0, 0)].norm())
             );
