@@ -482,3 +482,58 @@ fn quad_continuum_noise_is_the_limit_of_clamped_beads() {
         );
     }
 }
+
+#[test]
+fn alike_fibres_share_one_stiffness_and_keep_their_numbers() {
+    // quad-aligo's four tapered fibres are turned copies of one another (same pieces,
+    // tension and clamps), so their terms share one cache of the one-dimensional
+    // stiffnesses (`ContinuumTerm::share_with`). Reference: each fibre's own term, unshared,
+    // at the same frequencies and multipliers. The shared path computes the same function
+    // of the same inputs, so 1e-12 of the largest entry is rounding room only. The calls
+    // interleave the fibres and change the multipliers at one frequency, so that a stale
+    // cache entry (wrong fibre, frequency or multipliers) would show.
+    use pendkit_dynamics::FrequencyTerm;
+    use pendkit_element_continuum_fibre::ContinuumTerm;
+    let run = pendkit_tests::run("quad-aligo", &[], Stage::S2).into_run();
+    let x = &run.assembled.equilibrium.coords;
+    let wires: Vec<usize> = (0..run.system.wires.len())
+        .filter(|&w| !run.system.wires[w].profile.is_empty())
+        .collect();
+    assert_eq!(wires.len(), 4, "quad-aligo has four tapered fibres");
+    let term = |w: usize| {
+        let fibre = ContinuumFibre::at(&run.system, x, w).expect("fibre");
+        ContinuumTerm::new(fibre, (0..12).collect(), DMatrix::identity(12, 12))
+    };
+    let alone: Vec<ContinuumTerm> = wires.iter().map(|&w| term(w)).collect();
+    let mut shared: Vec<ContinuumTerm> = wires.iter().map(|&w| term(w)).collect();
+    let (first, rest) = shared.split_at_mut(1);
+    for t in rest {
+        assert!(t.share_with(&first[0]), "{} alike", t.fibre().name);
+    }
+    let lossy = [
+        C64::new(1.0, 1e-4),
+        C64::new(1.0, 4e-10),
+        C64::new(1.0, 1e-6),
+    ];
+    let other = [
+        C64::new(1.0, 2e-4),
+        C64::new(1.0, 3e-9),
+        C64::new(1.0, 1e-6),
+    ];
+    let parts = |t: &ContinuumTerm, f: f64, m: &[C64]| {
+        let mut p = vec![vec![C64::new(0.0, 0.0); 144]; 3];
+        t.parts(f, m, &mut p);
+        p
+    };
+    for f in [0.1, 10.0, 493.0, 1000.0, 2000.0] {
+        for m in [&lossy, &other] {
+            for (s, a) in shared.iter().zip(&alone) {
+                let (got, want) = (parts(s, f, m), parts(a, f, m));
+                let scale = want.iter().flatten().map(|z| z.norm()).fold(0.0, f64::max);
+                for (g, w) in got.iter().flatten().zip(want.iter().flatten()) {
+                    assert!((g - w).norm() <= 1e-12 * scale, "{f} Hz: {g} vs {w}");
+                }
+            }
+        }
+    }
+}

@@ -21,7 +21,7 @@ mod term;
 
 pub use term::{ContinuumTerm, continuum_terms};
 
-use nalgebra::{DMatrix, Matrix3, SMatrix, Vector3};
+use nalgebra::{Matrix2, Matrix3, Matrix4, SMatrix, Vector3};
 use pendkit_energy::{EnergyError, Reference};
 use pendkit_system::{System, Wire, WireTags};
 pub use piece::C64;
@@ -108,10 +108,11 @@ pub struct ContinuumFibre {
 pub type Stiffness = SMatrix<C64, 12, 12>;
 
 /// The one-dimensional stiffness matrices of a fibre at one frequency.
+#[derive(Clone, Copy, Debug)]
 struct Local {
-    axial: DMatrix<C64>,
-    planes: [DMatrix<C64>; 2],
-    torsion: DMatrix<C64>,
+    axial: Matrix2<C64>,
+    planes: [Matrix4<C64>; 2],
+    torsion: Matrix2<C64>,
 }
 
 impl ContinuumFibre {
@@ -219,49 +220,37 @@ impl ContinuumFibre {
     /// The one-dimensional stiffnesses at angular frequency `omega` (rad/s).
     fn local(&self, omega: f64, moduli: &Moduli) -> Local {
         let t = self.tension;
-        let axial = piece::chain(
-            self.pieces
-                .iter()
-                .map(|q| piece::wave_piece(moduli.stretch * q.axial, q.density, omega, q.length)),
-            1,
-        );
-        let torsion = piece::chain(
-            self.pieces.iter().map(|q| {
-                let c = moduli.torsion * q.twist + t * q.twist_per_tension;
-                piece::wave_piece(c, q.twist_inertia, omega, q.length)
-            }),
-            1,
-        );
-        let planes = [0, 1].map(|a| {
-            let d = piece::chain(
-                self.pieces.iter().map(|q| {
-                    piece::beam_piece(moduli.bending * q.bending[a], t, q.density, omega, q.length)
-                }),
-                2,
-            );
-            self.release_hinges(d)
-        });
+        let axial =
+            piece::join_wave(&piece::chain(self.pieces.iter().map(|q| {
+                piece::wave_piece(moduli.stretch * q.axial, q.density, omega, q.length)
+            })));
+        let torsion = piece::join_wave(&piece::chain(self.pieces.iter().map(|q| {
+            let c = moduli.torsion * q.twist + t * q.twist_per_tension;
+            piece::wave_piece(c, q.twist_inertia, omega, q.length)
+        })));
+        let plane = |a: usize| {
+            let d = piece::chain(self.pieces.iter().map(|q| {
+                piece::beam_piece(moduli.bending * q.bending[a], t, q.density, omega, q.length)
+            }));
+            self.release_hinges(piece::join(&d))
+        };
+        let first = plane(0);
+        // a round section bends alike in both planes: the same numbers, computed once
+        let round = self.pieces.iter().all(|q| q.bending[0] == q.bending[1]);
+        let second = if round { first } else { plane(1) };
         Local {
             axial,
-            planes,
+            planes: [first, second],
             torsion,
         }
     }
 
     /// A transverse matrix over (w₀, w₀′, w₁, w₁′) with the slope of each hinged end
     /// condensed out (no moment there) and its row and column left zero.
-    fn release_hinges(&self, mut d: DMatrix<C64>) -> DMatrix<C64> {
+    fn release_hinges(&self, mut d: Matrix4<C64>) -> Matrix4<C64> {
         for (end, slope) in [(1, 3), (0, 1)] {
             if self.hinged[end] {
-                let c = piece::condense(&d, slope);
-                d = DMatrix::from_fn(4, 4, |i, j| {
-                    if i == slope || j == slope {
-                        C64::new(0.0, 0.0)
-                    } else {
-                        let skip = |k: usize| if k > slope { k - 1 } else { k };
-                        c[(skip(i), skip(j))]
-                    }
-                });
+                d = piece::condense(&d, slope);
             }
         }
         d
@@ -330,17 +319,31 @@ impl ContinuumFibre {
     /// dissipation of that damping tag.
     pub fn dynamic_stiffness_by_tag(&self, frequency: f64, moduli: &Moduli) -> [Stiffness; 3] {
         let omega = 2.0 * std::f64::consts::PI * frequency;
-        let local = self.local(omega, moduli);
+        self.in_lab(&self.local(omega, moduli))
+    }
+
+    /// Whether `other` has the same one-dimensional stiffnesses at every frequency: the
+    /// same pieces, tension and hinges (a mirror image or a turned copy of this fibre), so
+    /// that the two differ only in their lab axes.
+    pub fn alike(&self, other: &ContinuumFibre) -> bool {
+        self.pieces == other.pieces && self.tension == other.tension && self.hinged == other.hinged
+    }
+
+    /// The one-dimensional stiffnesses `local` turned into the three tags' 12 × 12 parts
+    /// over the lab displacements of the end frames.
+    fn in_lab(&self, local: &Local) -> [Stiffness; 3] {
         let t = (self.ends[1] - self.ends[0]).normalize();
         let (e1, e2) = (self.principal, t.cross(&self.principal));
         // each local value as a row over the 12 lab displacements: (block offset, direction)
         // u = t·d, w_a = e_a·d, w_a′ = (t × e_a)·θ (e2 and −e1), φ = t·θ
         let row =
             |end: usize, rotation: bool, v: Vector3<f64>| (6 * end + 3 * usize::from(rotation), v);
-        let add = |out: &mut Stiffness, m: &DMatrix<C64>, rows: &[(usize, Vector3<f64>)]| {
+        let add = |out: &mut Stiffness,
+                   m: &dyn Fn(usize, usize) -> C64,
+                   rows: &[(usize, Vector3<f64>)]| {
             for (i, &(oi, vi)) in rows.iter().enumerate() {
                 for (j, &(oj, vj)) in rows.iter().enumerate() {
-                    let z = m[(i, j)];
+                    let z = m(i, j);
                     if z == C64::new(0.0, 0.0) {
                         continue;
                     }
@@ -355,12 +358,12 @@ impl ContinuumFibre {
         let mut parts = [Stiffness::zeros(); 3];
         add(
             &mut parts[0],
-            &local.axial,
+            &|i, j| local.axial[(i, j)],
             &[row(0, false, t), row(1, false, t)],
         );
         add(
             &mut parts[2],
-            &local.torsion,
+            &|i, j| local.torsion[(i, j)],
             &[row(0, true, t), row(1, true, t)],
         );
         for (m, e, slope) in [(&local.planes[0], e1, e2), (&local.planes[1], e2, -e1)] {
@@ -370,7 +373,7 @@ impl ContinuumFibre {
                 row(1, false, e),
                 row(1, true, slope),
             ];
-            add(&mut parts[1], m, &rows);
+            add(&mut parts[1], &|i, j| m[(i, j)], &rows);
         }
         parts
     }

@@ -10,10 +10,14 @@
 //! one and keeps no digit; chaining dynamic stiffnesses by eliminating the joints between
 //! pieces (one small Schur complement per joint) is the same algebra without that growth.
 
-use nalgebra::{Complex, ComplexField, DMatrix, Matrix4, Vector4};
+use nalgebra::{Complex, ComplexField, Const, DimMin, Matrix2, Matrix4, SMatrix, Vector4};
 
 /// A complex number of f64.
 pub type C64 = Complex<f64>;
+
+/// A two-node stiffness in N × N blocks [[D₀₀, D₀₁], [D₁₀, D₁₁]] (N values per node: 1 for
+/// a wave, 2 for a beam): fixed-size, so a piece and a chain allocate nothing per frequency.
+pub(crate) type Blocks<const N: usize> = [[SMatrix<C64, N, N>; 2]; 2];
 
 /// (cos(√z x), sin(√z x)/√z) for complex z: both are entire in z, so near z = 0 (the static
 /// limit) they come from their series instead of dividing by √z.
@@ -35,12 +39,13 @@ pub(crate) fn cos_sinc(z: C64, x: f64) -> (C64, C64) {
 /// (N, or N m² for torsion; complex for loss) and inertia `m` per length (kg/m, or kg m),
 /// at angular frequency `omega` (rad/s): u″ c + m ω² u = 0, over (u(0), u(L)), the
 /// generalised forces on the piece being (−c u′(0), c u′(L)).
-pub(crate) fn wave_piece(c: C64, m: f64, omega: f64, len: f64) -> DMatrix<C64> {
+pub(crate) fn wave_piece(c: C64, m: f64, omega: f64, len: f64) -> Blocks<1> {
     // u = a cos βx + b sin(βx)/β with β² = m ω²/c: a = u0, b = (u1 − u0 cos βL)/S; then
     // D = (c/S) [[cos βL, −1], [−1, cos βL]] (cos² + β² S² = 1 gives the symmetry)
     let (co, s) = cos_sinc(c.powi(-1) * (m * omega * omega), len);
     let f = c / s;
-    DMatrix::from_row_slice(2, 2, &[f * co, -f, -f, f * co])
+    let (diagonal, cross) = (SMatrix::from_element(f * co), SMatrix::from_element(-f));
+    [[diagonal, cross], [cross, diagonal]]
 }
 
 /// Dynamic stiffness of a uniform beam piece of length `len` (m), bending stiffness `ei`
@@ -48,7 +53,7 @@ pub(crate) fn wave_piece(c: C64, m: f64, omega: f64, len: f64) -> DMatrix<C64> {
 /// `mu` (kg/m) at angular frequency `omega` (rad/s), over (w(0), w′(0), w(L), w′(L)):
 /// EI w⁗ − T w″ − μ ω² w = 0, with the generalised forces (work-conjugate to those four)
 /// (EI w‴ − T w′, −EI w″) at 0 and (−EI w‴ + T w′, EI w″) at L.
-pub(crate) fn beam_piece(ei: C64, tension: f64, mu: f64, omega: f64, len: f64) -> DMatrix<C64> {
+pub(crate) fn beam_piece(ei: C64, tension: f64, mu: f64, omega: f64, len: f64) -> Blocks<2> {
     // e^(λx) with EI λ⁴ − T λ² − μω² = 0: λ² = κ² = (T + s)/(2EI) (the boundary layers) or
     // λ² = −k² with k² = (s − T)/(2EI) = 2μω²/(s + T) (the waves; this form has no
     // cancellation at low frequency), s = √(T² + 4 EI μ ω²)
@@ -95,57 +100,64 @@ pub(crate) fn beam_piece(ei: C64, tension: f64, mu: f64, omega: f64, len: f64) -
         Some(dt) => dt.transpose(),
         None => Matrix4::from_element(C64::new(f64::INFINITY, 0.0)),
     };
-    DMatrix::from_iterator(4, 4, d.iter().copied())
+    split(&d)
+}
+
+/// The 2 × 2 blocks of a 4 × 4 beam matrix.
+pub(crate) fn split(d: &Matrix4<C64>) -> Blocks<2> {
+    let b = |i: usize, j: usize| d.fixed_view::<2, 2>(2 * i, 2 * j).into_owned();
+    [[b(0, 0), b(0, 1)], [b(1, 0), b(1, 1)]]
+}
+
+/// The 4 × 4 beam matrix of its 2 × 2 blocks.
+pub(crate) fn join(b: &Blocks<2>) -> Matrix4<C64> {
+    Matrix4::from_fn(|i, j| b[i / 2][j / 2][(i % 2, j % 2)])
+}
+
+/// The 2 × 2 wave matrix of its 1 × 1 blocks.
+pub(crate) fn join_wave(b: &Blocks<1>) -> Matrix2<C64> {
+    Matrix2::from_fn(|i, j| b[i][j][(0, 0)])
 }
 
 /// The dynamic stiffness between the two ends of a chain of pieces, each over
-/// (node values at its start, node values at its end) with `per_node` values per node:
+/// (node values at its start, node values at its end) with N values per node:
 /// the joints between pieces carry no external force, so each is eliminated by a Schur
 /// complement as the chain grows.
-pub(crate) fn chain(
-    pieces: impl IntoIterator<Item = DMatrix<C64>>,
-    per_node: usize,
-) -> DMatrix<C64> {
-    let d = per_node;
+pub(crate) fn chain<const N: usize>(pieces: impl IntoIterator<Item = Blocks<N>>) -> Blocks<N>
+where
+    Const<N>: DimMin<Const<N>, Output = Const<N>>,
+{
     let mut pieces = pieces.into_iter();
     let Some(mut run) = pieces.next() else {
-        return DMatrix::zeros(2 * d, 2 * d);
+        return [[SMatrix::zeros(); 2]; 2];
     };
-    for p in pieces {
+    for [[p00, p01], [p10, p11]] in pieces {
         // nodes: 0 (kept), j (the joint), next (kept)
-        let a00 = run.view((0, 0), (d, d)).clone_owned();
-        let a0j = run.view((0, d), (d, d)).clone_owned();
-        let aj0 = run.view((d, 0), (d, d)).clone_owned();
-        let jj = run.view((d, d), (d, d)) + p.view((0, 0), (d, d));
-        let p01 = p.view((0, d), (d, d)).clone_owned();
-        let p10 = p.view((d, 0), (d, d)).clone_owned();
-        let p11 = p.view((d, d), (d, d)).clone_owned();
-        let lu = jj.lu();
-        let solve = |m: &DMatrix<C64>| {
+        let [[a00, a0j], [aj0, ajj]] = run;
+        let lu = (ajj + p00).lu();
+        let solve = |m: &SMatrix<C64, N, N>| {
             lu.solve(m)
-                .unwrap_or_else(|| DMatrix::from_element(d, d, C64::new(f64::NAN, 0.0)))
+                .unwrap_or_else(|| SMatrix::from_element(C64::new(f64::NAN, 0.0)))
         };
         let (x_a, x_p) = (solve(&aj0), solve(&p01));
-        let mut next = DMatrix::zeros(2 * d, 2 * d);
-        next.view_mut((0, 0), (d, d))
-            .copy_from(&(&a00 - &a0j * &x_a));
-        next.view_mut((0, d), (d, d)).copy_from(&(-&a0j * &x_p));
-        next.view_mut((d, 0), (d, d)).copy_from(&(-&p10 * &x_a));
-        next.view_mut((d, d), (d, d))
-            .copy_from(&(&p11 - &p10 * &x_p));
-        run = next;
+        run = [
+            [a00 - a0j * x_a, -(a0j * x_p)],
+            [-(p10 * x_a), p11 - p10 * x_p],
+        ];
     }
     run
 }
 
-/// `m` with its value `k` eliminated (no external force on it): a hinged end's slope.
-pub(crate) fn condense(m: &DMatrix<C64>, k: usize) -> DMatrix<C64> {
-    let n = m.nrows();
-    let keep: Vec<usize> = (0..n).filter(|&i| i != k).collect();
+/// `m` with its value `k` eliminated (no external force on it) and its row and column left
+/// zero: a hinged end's slope.
+pub(crate) fn condense(m: &Matrix4<C64>, k: usize) -> Matrix4<C64> {
     let pivot = m[(k, k)];
-    DMatrix::from_fn(n - 1, n - 1, |i, j| {
-        let (a, b) = (keep[i], keep[j]);
-        m[(a, b)] - m[(a, k)] * m[(k, b)] / pivot
+    Matrix4::from_fn(|a, b| {
+        if a == k || b == k {
+            C64::new(0.0, 0.0)
+        } else {
+            m[(a, b)] - m[(a, k)] * m[(k, b)] / pivot
+        }
     })
 }
 
@@ -160,30 +172,24 @@ mod tests {
     fn halves_chain_to_the_whole() {
         let (ei, t, mu, l) = (C64::new(1e-4, 1e-8), 100.0, 3e-4, 0.5);
         for omega in [0.0, 300.0, 3000.0, 20000.0] {
-            let whole = beam_piece(ei, t, mu, omega, l);
-            let halves = chain(
-                [
-                    beam_piece(ei, t, mu, omega, l / 2.0),
-                    beam_piece(ei, t, mu, omega, l / 2.0),
-                ],
-                2,
-            );
+            let whole = join(&beam_piece(ei, t, mu, omega, l));
+            let halves = join(&chain([
+                beam_piece(ei, t, mu, omega, l / 2.0),
+                beam_piece(ei, t, mu, omega, l / 2.0),
+            ]));
             let scale = whole.iter().map(|z| z.norm()).fold(0.0, f64::max);
             assert!(
-                (&whole - &halves).iter().all(|z| z.norm() < 1e-10 * scale),
+                (whole - halves).iter().all(|z| z.norm() < 1e-10 * scale),
                 "{omega}: {whole} {halves}"
             );
             let c = C64::new(7e3, 1e-3);
-            let whole = wave_piece(c, 0.3, omega, l);
-            let halves = chain(
-                [
-                    wave_piece(c, 0.3, omega, 0.2),
-                    wave_piece(c, 0.3, omega, 0.3),
-                ],
-                1,
-            );
+            let whole = join_wave(&wave_piece(c, 0.3, omega, l));
+            let halves = join_wave(&chain([
+                wave_piece(c, 0.3, omega, 0.2),
+                wave_piece(c, 0.3, omega, 0.3),
+            ]));
             assert!(
-                (&whole - &halves)
+                (whole - halves)
                     .iter()
                     .all(|z| z.norm() < 1e-10 * whole[(0, 0)].norm())
             );

@@ -2,14 +2,19 @@
 //! Jᵀ [D(f) − D_s(f)] J that turns the fibre's static stack into its continuum
 //! (docs/continuum-fibres.md, "Responses and noise").
 
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
 
 use nalgebra::{Complex, DMatrix};
 use pendkit_assembly::{Assembled, Layout};
 use pendkit_dynamics::FrequencyTerm;
 use pendkit_system::System;
 
-use crate::{C64, ContinuumFibre, FibreError, Moduli, Stiffness};
+use crate::{C64, ContinuumFibre, FibreError, Local, Moduli, Stiffness};
+
+/// The last one-dimensional stiffnesses computed, with the frequency (Hz) and multipliers
+/// they are for: shared by the terms of alike fibres ([`ContinuumFibre::alike`]), which
+/// differ only in their lab axes, so that each frequency's chain runs once for all of them.
+type Cache = Arc<Mutex<Option<(f64, Moduli, Local)>>>;
 
 /// One fibre's frequency term: over the master rows its end frames depend on, each tag's
 /// part Jᵀ [D_tag(f; m_tag) − D_tag(0; 1) − (m_tag − 1) ∂D_tag(0)/∂m_tag] J. The bracket's
@@ -26,6 +31,7 @@ pub struct ContinuumTerm {
     jacobian: DMatrix<f64>,
     /// Per tag (stretch, bending, torsion): D_tag(0; 1) and ∂D_tag(0)/∂m_tag.
     statics: [(Stiffness, Stiffness); 3],
+    cache: Cache,
 }
 
 impl ContinuumTerm {
@@ -59,7 +65,20 @@ impl ContinuumTerm {
             tags,
             jacobian,
             statics,
+            cache: Cache::default(),
         }
+    }
+
+    /// Shares `other`'s stiffness cache if the two fibres are alike
+    /// ([`ContinuumFibre::alike`]: the quad's four fibres), and says whether it did: each
+    /// frequency's one-dimensional stiffnesses are then computed once for both, and every
+    /// number stays what each term computes alone (the same function of the same inputs).
+    pub fn share_with(&mut self, other: &ContinuumTerm) -> bool {
+        let alike = self.fibre.alike(&other.fibre);
+        if alike {
+            self.cache = Arc::clone(&other.cache);
+        }
+        alike
     }
 
     /// The fibre.
@@ -92,13 +111,30 @@ impl FrequencyTerm for ContinuumTerm {
             bending: m(1),
             torsion: m(2),
         };
-        let d = self.fibre.dynamic_stiffness_by_tag(f_hz, &moduli);
+        let local = {
+            // a poisoned lock only means another thread panicked mid-update: the entry is
+            // checked against its key before use either way
+            let mut cache = self
+                .cache
+                .lock()
+                .unwrap_or_else(std::sync::PoisonError::into_inner);
+            match *cache {
+                Some((f, m, local)) if f == f_hz && m == moduli => local,
+                _ => {
+                    let local = self.fibre.local(2.0 * std::f64::consts::PI * f_hz, &moduli);
+                    *cache = Some((f_hz, moduli, local));
+                    local
+                }
+            }
+        };
+        let d = self.fibre.in_lab(&local);
         for (t, part) in parts.iter_mut().enumerate().take(3) {
             let (d0, slope) = &self.statics[t];
-            let c = d[t] - d0 - slope * (m(t) - C64::new(1.0, 0.0));
-            // row-major over the 12 end-frame displacements
-            for (e, v) in part.iter_mut().enumerate() {
-                *v = c[(e / 12, e % 12)];
+            let excess = m(t) - C64::new(1.0, 0.0);
+            // row-major over the 12 end-frame displacements, entry by entry (no temporaries)
+            for (e, v) in part.iter_mut().enumerate().take(144) {
+                let rc = (e / 12, e % 12);
+                *v = d[t][rc] - d0[rc] - slope[rc] * excess;
             }
         }
     }
@@ -107,7 +143,8 @@ impl FrequencyTerm for ContinuumTerm {
 /// The continuum terms of the wires `wires` (indices) of `system` at the equilibrium of
 /// `assembled`: each fibre at its equilibrium ([`ContinuumFibre::at`]) with the Jacobian of
 /// its end frames' displacements (attachment point, lab-axis rotation) over the master
-/// rows. Errors name the wire.
+/// rows. Alike fibres share one stiffness cache ([`ContinuumTerm::share_with`]). Errors
+/// name the wire.
 pub fn continuum_terms(
     system: &System,
     assembled: &Assembled,
@@ -115,7 +152,7 @@ pub fn continuum_terms(
 ) -> Result<Vec<Arc<dyn FrequencyTerm>>, FibreError> {
     let x = &assembled.equilibrium.coords;
     let layout: &Layout = &assembled.layout;
-    let mut out: Vec<Arc<dyn FrequencyTerm>> = Vec::with_capacity(wires.len());
+    let mut built: Vec<ContinuumTerm> = Vec::with_capacity(wires.len());
     for &w in wires {
         let fibre = ContinuumFibre::at(system, x, w)?;
         let wire = &system.wires[w];
@@ -145,7 +182,16 @@ pub fn continuum_terms(
             })
             .collect();
         let jacobian = DMatrix::from_fn(12, globals.len(), |r, c| rows[r / 3][(r % 3, globals[c])]);
-        out.push(Arc::new(ContinuumTerm::new(fibre, positions, jacobian)));
+        let mut term = ContinuumTerm::new(fibre, positions, jacobian);
+        for other in &built {
+            if term.share_with(other) {
+                break;
+            }
+        }
+        built.push(term);
     }
-    Ok(out)
+    Ok(built
+        .into_iter()
+        .map(|t| Arc::new(t) as Arc<dyn FrequencyTerm>)
+        .collect())
 }

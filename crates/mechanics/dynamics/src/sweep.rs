@@ -377,13 +377,17 @@ impl<'m> Sweep<'m> {
                     }
                 }
             }
+            // Re(ȳ_i y_k), row-major: the same for every part of the term
+            let products: Vec<f64> = y
+                .iter()
+                .flat_map(|yi| y.iter().map(move |yk| yi.re * yk.re + yi.im * yk.im))
+                .collect();
             for (part, tag) in state.parts.iter().zip(&state.tags) {
                 let Some(slot) = tag.and_then(|t| out.get_mut(t)) else {
                     continue;
                 };
-                for (e, v) in part.iter().enumerate() {
-                    let (yi, yk) = (y[e / m], y[e % m]);
-                    *slot += v.im * (yi.re * yk.re + yi.im * yk.im);
+                for (v, p) in part.iter().zip(&products) {
+                    *slot += v.im * p;
                 }
             }
         }
