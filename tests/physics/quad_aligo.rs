@@ -110,7 +110,10 @@ fn impossible_fibres_are_named() {
         ("n_beads=0.5", "n_beads"),
         ("l3_neck=0.4", "fibres"),
         // refused by the parameter's declared domain before the fibres read it
-        ("r3_neck=-1e-4", "parameter 'r3_neck' = -0.0001 m: outside its declared domain"),
+        (
+            "r3_neck=-1e-4",
+            "parameter 'r3_neck' = -0.0001 m: outside its declared domain",
+        ),
     ] {
         let case = Case::model("quad-aligo")
             .unwrap()
