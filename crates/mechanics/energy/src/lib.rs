@@ -126,3 +126,17 @@ impl From<IndexError> for EnergyError {
         }
     }
 }
+
+/// `part` of a shared energy body with `parts` parts, as an index error of the term
+/// `label` when the body has no such part (both kinds of term check it alike).
+pub(crate) fn check_part(label: &str, part: usize, parts: usize) -> Result<(), EnergyError> {
+    if part >= parts {
+        return Err(EnergyError::Index {
+            item: format!("term '{label}'"),
+            what: "energy part",
+            index: part,
+            len: parts,
+        });
+    }
+    Ok(())
+}

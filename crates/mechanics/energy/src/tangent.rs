@@ -214,14 +214,7 @@ impl TangentTerm {
         part: usize,
     ) -> Result<Self, EnergyError> {
         let label = label.into();
-        if part >= shared.parts() {
-            return Err(EnergyError::Index {
-                item: format!("term '{label}'"),
-                what: "energy part",
-                index: part,
-                len: shared.parts(),
-            });
-        }
+        crate::check_part(&label, part, shared.parts())?;
         Ok(TangentTerm {
             label,
             kind,

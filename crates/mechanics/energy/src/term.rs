@@ -293,14 +293,7 @@ impl Term {
         off: PartOff,
     ) -> Result<Self, EnergyError> {
         let label = label.into();
-        if part >= shared.parts() {
-            return Err(EnergyError::Index {
-                item: format!("term '{label}'"),
-                what: "energy part",
-                index: part,
-                len: shared.parts(),
-            });
-        }
+        crate::check_part(&label, part, shared.parts())?;
         Ok(Term {
             label,
             kind,
