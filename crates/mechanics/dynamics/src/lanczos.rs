@@ -369,9 +369,11 @@ impl StageModel {
                 count: None,
             }],
         };
+        // one symbolic analysis of the joint pattern; each slice factorises its own shift
+        let mut lu = SparseLu::<f64>::new(joint.col_ptr.clone(), joint.row_idx.clone())?;
         let mut raw = Vec::new();
         for slice in &slices {
-            raw.extend(self.slice_modes(&joint, &k, &mass, slice, lambda_max)?);
+            raw.extend(self.slice_modes(&joint, &mut lu, &k, &mass, slice, lambda_max)?);
         }
         let modes = finish(raw, &[(0..nx).collect()], &mass, &self.variables, rounding);
         // every growing mode the inertia counts is among the modes found (growing, or
@@ -395,7 +397,9 @@ impl StageModel {
 impl StageModel {
     /// The modes in one `slice` of the spectrum: block Lanczos with full
     /// reorthogonalisation on (K − σM)⁻¹M, σ the slice's shift, until as many Ritz pairs
-    /// in the slice as it holds have converged (or the basis spans every variable).
+    /// in the slice as it holds have converged (or the basis spans every variable). `lu`
+    /// holds the joint pattern's symbolic analysis, shared by the slices; it is factorised
+    /// here at the slice's shift.
     #[expect(
         clippy::too_many_lines,
         reason = "one shift-invert block Lanczos run: the factorised operator and the basis Q, W, \
@@ -405,6 +409,7 @@ impl StageModel {
     fn slice_modes(
         &self,
         joint: &Unknowns,
+        lu: &mut SparseLu<f64>,
         k: &[f64],
         mass: &SparseColumns,
         slice: &Slice,
@@ -413,7 +418,6 @@ impl StageModel {
         let (nx, nq, _) = self.sizes;
         let n = nx + nq;
         let m = &self.mass_on_pattern;
-        let mut lu = SparseLu::<f64>::new(joint.col_ptr.clone(), joint.row_idx.clone())?;
         // a shift exactly on an eigenvalue leaves K − σM singular: nudged
         let shift = slice.shift(lambda_max);
         let sigma = (0..4)
