@@ -329,53 +329,93 @@ impl ContinuumFibre {
         self.pieces == other.pieces && self.tension == other.tension && self.hinged == other.hinged
     }
 
-    /// The one-dimensional stiffnesses `local` turned into the three tags' 12 × 12 parts
-    /// over the lab displacements of the end frames.
-    fn in_lab(&self, local: &Local) -> [Stiffness; 3] {
+    /// The fibre's one-dimensional coordinates ([`GROUPS`] order: u₀, u₁; w₀, w₀′, w₁, w₁′
+    /// along the first principal direction, the same along the second; φ₀, φ₁) as rows over
+    /// its 12 end-frame displacements (d₀, θ₀, d₁, θ₁, lab axes), each as (offset of its
+    /// 3-block, direction): u = t·d, w_a = e_a·d, w_a′ = (t × e_a)·θ (e₂ and −e₁), φ = t·θ.
+    pub(crate) fn local_rows(&self) -> [(usize, Vector3<f64>); 12] {
         let t = (self.ends[1] - self.ends[0]).normalize();
         let (e1, e2) = (self.principal, t.cross(&self.principal));
-        // each local value as a row over the 12 lab displacements: (block offset, direction)
-        // u = t·d, w_a = e_a·d, w_a′ = (t × e_a)·θ (e2 and −e1), φ = t·θ
-        let row =
-            |end: usize, rotation: bool, v: Vector3<f64>| (6 * end + 3 * usize::from(rotation), v);
-        let add = |out: &mut Stiffness,
-                   m: &dyn Fn(usize, usize) -> C64,
-                   rows: &[(usize, Vector3<f64>)]| {
-            for (i, &(oi, vi)) in rows.iter().enumerate() {
-                for (j, &(oj, vj)) in rows.iter().enumerate() {
-                    let z = m(i, j);
+        [
+            (0, t),
+            (6, t),
+            (0, e1),
+            (3, e2),
+            (6, e1),
+            (9, e2),
+            (0, e2),
+            (3, -e1),
+            (6, e2),
+            (9, -e1),
+            (3, t),
+            (9, t),
+        ]
+    }
+
+    /// The one-dimensional stiffnesses `local` turned into the three tags' 12 × 12 parts
+    /// over the lab displacements of the end frames: Σ_g R_gᵀ V_g R_g with R the rows of
+    /// [`ContinuumFibre::local_rows`].
+    fn in_lab(&self, local: &Local) -> [Stiffness; 3] {
+        let rows = self.local_rows();
+        let values = local.entries();
+        let mut parts = [Stiffness::zeros(); 3];
+        let mut offset = 0;
+        for (range, part) in GROUPS {
+            let (r0, s) = (range.start, range.len());
+            for i in 0..s {
+                for k in 0..s {
+                    let z = values[offset + i * s + k];
                     if z == C64::new(0.0, 0.0) {
                         continue;
                     }
+                    let ((oi, vi), (ok, vk)) = (rows[r0 + i], rows[r0 + k]);
                     for a in 0..3 {
                         for b in 0..3 {
-                            out[(oi + a, oj + b)] += z * (vi[a] * vj[b]);
+                            parts[part][(oi + a, ok + b)] += z * (vi[a] * vk[b]);
                         }
                     }
                 }
             }
-        };
-        let mut parts = [Stiffness::zeros(); 3];
-        add(
-            &mut parts[0],
-            &|i, j| local.axial[(i, j)],
-            &[row(0, false, t), row(1, false, t)],
-        );
-        add(
-            &mut parts[2],
-            &|i, j| local.torsion[(i, j)],
-            &[row(0, true, t), row(1, true, t)],
-        );
-        for (m, e, slope) in [(&local.planes[0], e1, e2), (&local.planes[1], e2, -e1)] {
-            let rows = [
-                row(0, false, e),
-                row(0, true, slope),
-                row(1, false, e),
-                row(1, true, slope),
-            ];
-            add(&mut parts[1], &|i, j| m[(i, j)], &rows);
+            offset += s * s;
         }
         parts
+    }
+}
+
+/// The groups of a fibre's one-dimensional coordinates ([`ContinuumFibre::local_rows`]),
+/// each with the tag its block belongs to (0 stretch, 1 bending, 2 torsion): the axial wave,
+/// the beam along each principal direction, the twist wave.
+pub(crate) const GROUPS: [(std::ops::Range<usize>, usize); 4] =
+    [(0..2, 0), (2..6, 1), (6..10, 1), (10..12, 2)];
+
+impl Local {
+    /// Number of values of the blocks: 2 × 2 + 4 × 4 + 4 × 4 + 2 × 2.
+    pub(crate) const LEN: usize = 40;
+
+    /// The blocks, row-major, one after the other in [`GROUPS`] order.
+    pub(crate) fn entries(&self) -> [C64; Self::LEN] {
+        let mut out = [C64::new(0.0, 0.0); Self::LEN];
+        let (axial, rest) = out.split_at_mut(4);
+        let (planes, torsion) = rest.split_at_mut(32);
+        for (k, v) in axial.iter_mut().enumerate() {
+            *v = self.axial[(k / 2, k % 2)];
+        }
+        for (k, v) in planes.iter_mut().enumerate() {
+            *v = self.planes[k / 16][((k % 16) / 4, k % 4)];
+        }
+        for (k, v) in torsion.iter_mut().enumerate() {
+            *v = self.torsion[(k / 2, k % 2)];
+        }
+        out
+    }
+
+    /// The tag of value `e` of [`Local::entries`] (0 stretch, 1 bending, 2 torsion).
+    pub(crate) fn tag(e: usize) -> usize {
+        match e {
+            0..4 => 0,
+            4..36 => 1,
+            _ => 2,
+        }
     }
 }
 

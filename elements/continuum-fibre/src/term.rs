@@ -6,10 +6,10 @@ use std::sync::{Arc, Mutex};
 
 use nalgebra::{Complex, DMatrix};
 use pendkit_assembly::{Assembled, Layout};
-use pendkit_dynamics::FrequencyTerm;
+use pendkit_dynamics::{FrequencyTerm, Group};
 use pendkit_system::System;
 
-use crate::{C64, ContinuumFibre, FibreError, Local, Moduli, Stiffness};
+use crate::{C64, ContinuumFibre, FibreError, GROUPS, Local, Moduli};
 
 /// The last one-dimensional stiffnesses computed, with the frequency (Hz) and multipliers
 /// they are for: shared by the terms of alike fibres ([`ContinuumFibre::alike`]), which
@@ -21,38 +21,53 @@ type Cache = Arc<Mutex<Option<(f64, Moduli, Local)>>>;
 /// last two terms are the fibre's static stack as the stage model holds it (its tension-on
 /// Hessian with the tag's tension-off part scaled by m_tag), so the term vanishes at f = 0
 /// for multipliers of 1 and the static model's low-frequency answers stand.
+///
+/// D is block diagonal in the fibre's one-dimensional coordinates (axial, two beams,
+/// twist: [`ContinuumFibre::local_rows`]), and so is the bracket, the static stack being D
+/// at f = 0: the term's own displacements are those 12 coordinates, its blocks the bracket's
+/// 2 × 2, 4 × 4, 4 × 4 and 2 × 2 blocks, and its Jacobian that of the coordinates over the
+/// master rows, made once. A frequency point forms 40 values, no 12 × 12 matrix.
 #[derive(Debug)]
 pub struct ContinuumTerm {
     fibre: ContinuumFibre,
     label: String,
     positions: Vec<usize>,
     tags: Vec<String>,
-    /// ∂(end-frame displacements)/∂(master rows): 12 × positions.
+    /// ∂(one-dimensional coordinates)/∂(master rows): 12 × positions.
     jacobian: DMatrix<f64>,
-    /// Per tag (stretch, bending, torsion): D_tag(0; 1) and ∂D_tag(0)/∂m_tag.
-    statics: [(Stiffness, Stiffness); 3],
+    groups: Vec<Group>,
+    /// The blocks of D(0; 1) and of ∂D(0)/∂m_tag ([`Local::entries`] order).
+    at_rest: [C64; Local::LEN],
+    slope: [f64; Local::LEN],
     cache: Cache,
 }
 
 impl ContinuumTerm {
-    /// The term of `fibre` between the end frames whose displacements are `jacobian`
-    /// (12 × n) times those of the master rows `positions`.
+    /// The term of `fibre` between the end frames whose displacements (d₀, θ₀, d₁, θ₁: the
+    /// attachment points' translations and the frames' small rotations, lab axes) are
+    /// `jacobian` (12 × n) times those of the master rows `positions`.
     pub fn new(fibre: ContinuumFibre, positions: Vec<usize>, jacobian: DMatrix<f64>) -> Self {
-        let at_rest = fibre.dynamic_stiffness_by_tag(0.0, &Moduli::LOSSLESS);
+        let at_rest = fibre.local(0.0, &Moduli::LOSSLESS).entries();
         // ∂D/∂m by a complex step: D is analytic in each multiplier, so Im D(1 + ih)/h is
         // the derivative to O(h²), with no cancellation
         let h = 1e-20;
         let bump = Complex::new(1.0, h);
-        let stepped = fibre.dynamic_stiffness_by_tag(
-            0.0,
-            &Moduli {
-                stretch: bump,
-                bending: bump,
-                torsion: bump,
-            },
-        );
-        let statics =
-            std::array::from_fn(|t| (at_rest[t], stepped[t].map(|z| C64::new(z.im / h, 0.0))));
+        let stepped = fibre
+            .local(
+                0.0,
+                &Moduli {
+                    stretch: bump,
+                    bending: bump,
+                    torsion: bump,
+                },
+            )
+            .entries();
+        let slope = stepped.map(|z| z.im / h);
+        let rows = fibre.local_rows();
+        let local = DMatrix::from_fn(12, jacobian.ncols(), |r, c| {
+            let (offset, v) = rows[r];
+            (0..3).map(|a| v[a] * jacobian[(offset + a, c)]).sum()
+        });
         let tags = vec![
             fibre.tags.stretch.clone(),
             fibre.tags.bending.clone(),
@@ -63,8 +78,10 @@ impl ContinuumTerm {
             fibre,
             positions,
             tags,
-            jacobian,
-            statics,
+            jacobian: local,
+            groups: GROUPS.map(|(rows, part)| Group { rows, part }).to_vec(),
+            at_rest,
+            slope,
             cache: Cache::default(),
         }
     }
@@ -104,7 +121,11 @@ impl FrequencyTerm for ContinuumTerm {
         &self.tags
     }
 
-    fn parts(&self, f_hz: f64, multipliers: &[C64], parts: &mut [Vec<C64>]) {
+    fn groups(&self) -> &[Group] {
+        &self.groups
+    }
+
+    fn parts(&self, f_hz: f64, multipliers: &[C64], values: &mut [C64]) {
         let m = |t: usize| multipliers.get(t).copied().unwrap_or(C64::new(1.0, 0.0));
         let moduli = Moduli {
             stretch: m(0),
@@ -127,15 +148,11 @@ impl FrequencyTerm for ContinuumTerm {
                 }
             }
         };
-        let d = self.fibre.in_lab(&local);
-        for (t, part) in parts.iter_mut().enumerate().take(3) {
-            let (d0, slope) = &self.statics[t];
-            let excess = m(t) - C64::new(1.0, 0.0);
-            // row-major over the 12 end-frame displacements, entry by entry (no temporaries)
-            for (e, v) in part.iter_mut().enumerate().take(144) {
-                let rc = (e / 12, e % 12);
-                *v = d[t][rc] - d0[rc] - slope[rc] * excess;
-            }
+        let d = local.entries();
+        let one = C64::new(1.0, 0.0);
+        let excess = [m(0) - one, m(1) - one, m(2) - one];
+        for (e, v) in values.iter_mut().enumerate().take(Local::LEN) {
+            *v = d[e] - self.at_rest[e] - excess[Local::tag(e)] * self.slope[e];
         }
     }
 }

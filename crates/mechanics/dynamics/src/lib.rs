@@ -30,7 +30,8 @@ pub use stability::{
     Verdict, float_directions, inverted_bodies, runaway_floats,
 };
 pub use stage::{
-    FrequencyTerm, Input, Output, ReducedComplex, StageModel, StateSpace, TermLoss, congruence,
+    FrequencyTerm, Group, Input, Output, ReducedComplex, StageModel, StateSpace, TermLoss,
+    block_len,
 };
 pub use sweep::{DENSE_LIMIT, Solver, Sweep, coupled_unknowns};
 

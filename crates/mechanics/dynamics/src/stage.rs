@@ -74,50 +74,174 @@ pub struct StageModel {
 /// the static model's pattern (the fibre's static terms put its entries there; entries the
 /// pattern lacks, zero in the static model by symmetry, are left out), and its dissipation
 /// is split among its parts, one per damping tag.
+///
+/// The term works in its own displacements y = J x (J: [`FrequencyTerm::jacobian`]), which
+/// fall into groups ([`FrequencyTerm::groups`]): its matrix over y is block diagonal, one
+/// small block per group and each block in one part. A fibre's own displacements are its
+/// one-dimensional coordinates (the axial wave's, the two beams', the twist wave's), so a
+/// frequency point costs a few small blocks and their projection J_gᵀ V_g J_g, no 12 × 12
+/// form over the end frames.
 pub trait FrequencyTerm: Send + Sync + std::fmt::Debug {
     /// A name for messages (the wire's).
     fn label(&self) -> &str;
     /// Master rows of the term's coordinates (variables, floats, parameters order).
     fn positions(&self) -> &[usize];
     /// The term's own displacements per unit of each of its coordinates, J (m × n,
-    /// [`FrequencyTerm::positions`] order): a fibre's 12 end-frame displacements.
+    /// [`FrequencyTerm::positions`] order; m, n, m, m or rad per unit coordinate).
     fn jacobian(&self) -> &DMatrix<f64>;
     /// The damping tag of each part.
     fn tags(&self) -> &[String];
+    /// The groups of the own displacements, in the order [`FrequencyTerm::parts`] writes
+    /// their blocks: rows of J, disjoint, and the part each block belongs to.
+    fn groups(&self) -> &[Group];
     /// At `f_hz` (Hz), with the tags' multipliers ε′ + iε″ `multipliers` (in
-    /// [`FrequencyTerm::tags`] order), writes each part (m × m over the term's own
-    /// displacements, row-major, N/m, N/rad, N m/rad) into `parts`, one per tag: the term
-    /// adds Jᵀ (Σ parts) J to E(f), and Im of each part is that tag's dissipation.
-    fn parts(&self, f_hz: f64, multipliers: &[c64], parts: &mut [Vec<c64>]);
+    /// [`FrequencyTerm::tags`] order), writes each group's block V_g (s × s over the
+    /// group's s own displacements, row-major; N/m, N/rad, N m/rad) into `values`, one after
+    /// the other in group order ([`block_len`] entries in all): the term adds
+    /// Σ_g J_gᵀ V_g J_g to E(f), and Im V_g is the dissipation of the group's part.
+    fn parts(&self, f_hz: f64, multipliers: &[c64], values: &mut [c64]);
 }
 
-/// Jᵀ S J (n × n, row-major, into `out`) for a real m × n `j` and a complex m × m `s`
-/// (row-major), skipping J's zeros (a fibre's end rows depend on one body each).
-pub fn congruence(j: &DMatrix<f64>, s: &[c64], out: &mut [c64]) {
-    let (m, n) = j.shape();
-    let zero = c64::new(0.0, 0.0);
-    // S J, column by column over J's non-zeros
-    let mut sj = vec![zero; m * n];
-    for c in 0..n {
-        for k in 0..m {
-            let w = j[(k, c)];
-            if w == 0.0 {
+/// A group of a frequency term's own displacements: rows `rows` of its Jacobian, whose
+/// block belongs to part `part` (index into [`FrequencyTerm::tags`]).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Group {
+    /// Rows of the Jacobian (own displacements).
+    pub rows: std::ops::Range<usize>,
+    /// The part (tag) the block belongs to.
+    pub part: usize,
+}
+
+/// Number of values a term's blocks take ([`FrequencyTerm::parts`]): Σ_g s_g².
+pub fn block_len(groups: &[Group]) -> usize {
+    groups.iter().map(|g| g.rows.len() * g.rows.len()).sum()
+}
+
+/// A frequency term's Jacobian as the non-zeros of each own displacement's row, worked out
+/// once per term: a fibre's end rows depend on one body each, and the projection skips the
+/// zeros.
+#[derive(Clone, Debug)]
+pub(crate) struct Projection {
+    /// Number of the term's coordinates (n).
+    n: usize,
+    /// Per own displacement, its (coordinate, weight) non-zeros.
+    rows: Vec<Vec<(usize, f64)>>,
+    groups: Vec<Group>,
+}
+
+impl Projection {
+    /// The projection of `term`.
+    pub(crate) fn new(term: &dyn FrequencyTerm) -> Self {
+        let j = term.jacobian();
+        let (m, n) = j.shape();
+        let rows = (0..m)
+            .map(|r| {
+                (0..n)
+                    .filter(|&c| j[(r, c)] != 0.0)
+                    .map(|c| (c, j[(r, c)]))
+                    .collect()
+            })
+            .collect();
+        Projection {
+            n,
+            rows,
+            groups: term.groups().to_vec(),
+        }
+    }
+
+    /// Number of the term's coordinates.
+    pub(crate) fn coordinates(&self) -> usize {
+        self.n
+    }
+
+    /// Number of own displacements.
+    pub(crate) fn own(&self) -> usize {
+        self.rows.len()
+    }
+
+    /// Σ_g J_gᵀ V_g J_g (n × n, row-major) into `out` for the blocks `values`
+    /// ([`FrequencyTerm::parts`]), with `scratch` of n values. The upper triangle is
+    /// formed and mirrored: V is complex symmetric (a stiffness), and so is the sum.
+    pub(crate) fn project(&self, values: &[c64], out: &mut [c64], scratch: &mut [c64]) {
+        let n = self.n;
+        let zero = c64::new(0.0, 0.0);
+        out.fill(zero);
+        let mut offset = 0;
+        for g in &self.groups {
+            let (r0, s) = (g.rows.start, g.rows.len());
+            let Some(block) = values.get(offset..offset + s * s) else {
+                break;
+            };
+            offset += s * s;
+            if g.rows.end > self.rows.len() {
+                // a group outside J's rows (a term breaking its contract) adds nothing
                 continue;
             }
-            for r in 0..m {
-                sj[r * n + c] += s[r * m + k] * w;
+            for i in 0..s {
+                // h = row i of V_g J_g, then out += J_g[i]ᵀ h over the upper triangle
+                scratch.fill(zero);
+                for (k, &v) in block[i * s..(i + 1) * s].iter().enumerate() {
+                    if v == zero {
+                        continue;
+                    }
+                    for &(c, w) in &self.rows[r0 + k] {
+                        scratch[c] += v * w;
+                    }
+                }
+                for &(a, w) in &self.rows[r0 + i] {
+                    let row = &mut out[a * n..(a + 1) * n];
+                    for (o, h) in row[a..].iter_mut().zip(&scratch[a..]) {
+                        *o += h * w;
+                    }
+                }
+            }
+        }
+        for a in 0..n {
+            for b in 0..a {
+                out[a * n + b] = out[b * n + a];
             }
         }
     }
-    out.fill(zero);
-    for a in 0..n {
-        for k in 0..m {
-            let w = j[(k, a)];
-            if w == 0.0 {
+
+    /// Adds, per part, ȳᵀ Im(V_g) y over the part's groups to `out[tag[part]]` (a part
+    /// whose tag is `None` is left out), y = J z the own displacements of the response `z`
+    /// over the term's coordinates (zero where a coordinate does not move); `y` is scratch
+    /// of one value per own displacement.
+    pub(crate) fn dissipation(
+        &self,
+        values: &[c64],
+        z: &[c64],
+        tags: &[Option<usize>],
+        y: &mut [c64],
+        out: &mut [f64],
+    ) {
+        for (yr, row) in y.iter_mut().zip(&self.rows) {
+            *yr = row.iter().map(|&(c, w)| z[c] * w).sum();
+        }
+        let mut offset = 0;
+        for g in &self.groups {
+            let (r0, s) = (g.rows.start, g.rows.len());
+            let Some(block) = values.get(offset..offset + s * s) else {
+                break;
+            };
+            offset += s * s;
+            if g.rows.end > self.rows.len() {
                 continue;
             }
-            for b in 0..n {
-                out[a * n + b] += sj[k * n + b] * w;
+            let Some(slot) = tags
+                .get(g.part)
+                .copied()
+                .flatten()
+                .and_then(|t| out.get_mut(t))
+            else {
+                continue;
+            };
+            let y = &y[r0..r0 + s];
+            for (i, yi) in y.iter().enumerate() {
+                for (k, yk) in y.iter().enumerate() {
+                    // Re(ȳ_i y_k)
+                    *slot += block[i * s + k].im * (yi.re * yk.re + yi.im * yk.im);
+                }
             }
         }
     }
@@ -422,26 +546,20 @@ impl StageModel {
         }
     }
 
-    /// The parts of every frequency term at `f_hz` (Hz) with `damping`'s multipliers: per
-    /// term, one matrix per tag over its own displacements ([`FrequencyTerm::parts`]).
-    pub fn frequency_parts(&self, damping: &Damping, f_hz: f64) -> Vec<Vec<Vec<c64>>> {
-        self.frequency_terms
+    /// The blocks of frequency term `term` at `f_hz` (Hz) with `damping`'s multipliers
+    /// ([`FrequencyTerm::parts`]).
+    pub fn frequency_parts(term: &dyn FrequencyTerm, damping: &Damping, f_hz: f64) -> Vec<c64> {
+        let m: Vec<c64> = term
+            .tags()
             .iter()
-            .map(|t| {
-                let m: Vec<c64> = t
-                    .tags()
-                    .iter()
-                    .map(|tag| {
-                        let (re, im) = damping.at(tag, f_hz);
-                        c64::new(re, im)
-                    })
-                    .collect();
-                let size = t.jacobian().nrows();
-                let mut parts = vec![vec![c64::new(0.0, 0.0); size * size]; m.len()];
-                t.parts(f_hz, &m, &mut parts);
-                parts
+            .map(|tag| {
+                let (re, im) = damping.at(tag, f_hz);
+                c64::new(re, im)
             })
-            .collect()
+            .collect();
+        let mut values = vec![c64::new(0.0, 0.0); block_len(term.groups())];
+        term.parts(f_hz, &m, &mut values);
+        values
     }
 
     /// Number of unknowns solved for in a response: variables and floats.
@@ -582,22 +700,13 @@ impl StageModel {
     pub fn master(&self, damping: &Damping, f_hz: f64) -> (DMatrix<f64>, DMatrix<f64>) {
         let (re, im) = self.master_values(damping, f_hz);
         let (mut re, mut im) = (self.dense_on_pattern(&re), self.dense_on_pattern(&im));
-        for (term, parts) in self
-            .frequency_terms
-            .iter()
-            .zip(self.frequency_parts(damping, f_hz))
-        {
+        for term in &self.frequency_terms {
+            let projection = Projection::new(term.as_ref());
+            let n = projection.coordinates();
             let p = term.positions();
-            let n = p.len();
-            let size = term.jacobian().nrows();
-            let mut sum = vec![c64::new(0.0, 0.0); size * size];
-            for part in &parts {
-                for (s, v) in sum.iter_mut().zip(part) {
-                    *s += v;
-                }
-            }
+            let values = Self::frequency_parts(term.as_ref(), damping, f_hz);
             let mut local = vec![c64::new(0.0, 0.0); n * n];
-            congruence(term.jacobian(), &sum, &mut local);
+            projection.project(&values, &mut local, &mut vec![c64::new(0.0, 0.0); n]);
             for (k, z) in local.iter().enumerate() {
                 re[(p[k / n], p[k % n])] += z.re;
                 im[(p[k / n], p[k % n])] += z.im;

@@ -32,7 +32,7 @@ use pendkit_system::Damping;
 use crate::DynamicsError;
 use crate::lu::{self, Pivots};
 use crate::sparse_lu::SymmetricSparse;
-use crate::stage::{Input, Output, StageModel, TWO_PI};
+use crate::stage::{Input, Output, Projection, StageModel, TWO_PI, block_len};
 
 /// Largest number of unknowns solved by the dense LU; above it the sparse LU is used.
 /// The dense factorisation costs n³/3 complex operations, the sparse one a per-column
@@ -172,14 +172,18 @@ enum Dest {
 }
 
 /// A frequency term's state in a sweep: its tags' indices among the model's, and its
-/// multipliers, parts and their sum at the current frequency.
+/// multipliers, blocks and their projection at the current frequency.
 struct TermState {
     tags: Vec<Option<usize>>,
     multipliers: Vec<c64>,
-    parts: Vec<Vec<c64>>,
-    /// The parts' sum over the term's own displacements, and Jᵀ (that) J over its rows.
-    own: Vec<c64>,
+    projection: Projection,
+    /// The term's blocks ([`FrequencyTerm::parts`]) and Σ_g J_gᵀ V_g J_g over its rows.
+    values: Vec<c64>,
     sum: Vec<c64>,
+    /// Scratch of one value per coordinate, and (taken and put back by the `&self`
+    /// dissipation, so no point allocates) per coordinate and per own displacement.
+    scratch: Vec<c64>,
+    response: std::cell::Cell<(Vec<c64>, Vec<c64>)>,
 }
 
 /// The factorisation of E(f) over the solved unknowns: L D Lᵀ by a schedule worked out once
@@ -342,18 +346,21 @@ impl<'m> Sweep<'m> {
                 .frequency_terms
                 .iter()
                 .map(|t| {
-                    let n = t.positions().len();
-                    let m = t.jacobian().nrows();
+                    let projection = Projection::new(t.as_ref());
+                    let (n, m) = (projection.coordinates(), projection.own());
                     let tags = t.tags();
+                    let zero = c64::new(0.0, 0.0);
                     TermState {
                         tags: tags
                             .iter()
                             .map(|tag| model.by_tag.iter().position(|(name, _)| name == tag))
                             .collect(),
                         multipliers: vec![c64::new(1.0, 0.0); tags.len()],
-                        parts: vec![vec![c64::new(0.0, 0.0); m * m]; tags.len()],
-                        own: vec![c64::new(0.0, 0.0); m * m],
-                        sum: vec![c64::new(0.0, 0.0); n * n],
+                        projection,
+                        values: vec![zero; block_len(t.groups())],
+                        sum: vec![zero; n * n],
+                        scratch: vec![zero; n],
+                        response: std::cell::Cell::new((vec![zero; n], vec![zero; m])),
                     }
                 })
                 .collect(),
@@ -367,33 +374,18 @@ impl<'m> Sweep<'m> {
     /// out: the model's tags include every wire's, since its static terms are lossy.
     pub fn add_frequency_dissipation(&self, out: &mut [f64]) {
         for (term, state) in self.model.frequency_terms.iter().zip(&self.terms) {
-            let j = term.jacobian();
-            let m = j.nrows();
-            let mut y = vec![c64::new(0.0, 0.0); m];
-            for (c, &r) in term.positions().iter().enumerate() {
-                if let Some(l) = self.local(r) {
-                    for (k, yk) in y.iter_mut().enumerate() {
-                        *yk += self.z[l] * j[(k, c)];
-                    }
-                }
+            let (mut z, mut y) = state.response.take();
+            for (zc, &r) in z.iter_mut().zip(term.positions()) {
+                *zc = self.local(r).map_or(c64::new(0.0, 0.0), |l| self.z[l]);
             }
-            // Re(ȳ_i y_k), row-major: the same for every part of the term
-            let products: Vec<f64> = y
-                .iter()
-                .flat_map(|yi| y.iter().map(move |yk| yi.re * yk.re + yi.im * yk.im))
-                .collect();
-            for (part, tag) in state.parts.iter().zip(&state.tags) {
-                let Some(slot) = tag.and_then(|t| out.get_mut(t)) else {
-                    continue;
-                };
-                for (v, p) in part.iter().zip(&products) {
-                    *slot += v.im * p;
-                }
-            }
+            state
+                .projection
+                .dissipation(&state.values, &z, &state.tags, &mut y, out);
+            state.response.set((z, y));
         }
     }
 
-    /// The frequency terms' parts and sums at `f_hz` with the current multipliers.
+    /// The frequency terms' blocks and projections at `f_hz` with the current multipliers.
     fn update_terms(&mut self, f_hz: f64) {
         for (term, state) in self.model.frequency_terms.iter().zip(&mut self.terms) {
             for (m, (tag, t)) in state
@@ -409,14 +401,10 @@ impl<'m> Sweep<'m> {
                     }
                 };
             }
-            term.parts(f_hz, &state.multipliers, &mut state.parts);
-            state.own.fill(c64::new(0.0, 0.0));
-            for part in &state.parts {
-                for (s, v) in state.own.iter_mut().zip(part) {
-                    *s += v;
-                }
-            }
-            crate::stage::congruence(term.jacobian(), &state.own, &mut state.sum);
+            term.parts(f_hz, &state.multipliers, &mut state.values);
+            state
+                .projection
+                .project(&state.values, &mut state.sum, &mut state.scratch);
         }
     }
 
