@@ -191,10 +191,13 @@ struct TermState {
 /// otherwise.
 enum Factor {
     /// Dense column-major n × n (the values array is the matrix), eliminated in the natural
-    /// order; the fallback is the dense pivoting LU.
+    /// order; the fallback is the dense pivoting LU, used straight away while the last
+    /// solve needed a row exchange (neighbouring frequencies usually pivot alike, and a
+    /// refused schedule is work lost). Both make the same numbers where no row is exchanged.
     Dense {
         schedule: lu::Schedule,
         pivots: Vec<usize>,
+        exchanged: bool,
     },
     /// The lower triangle of the matrix permuted to a fill-reducing order, with its fill;
     /// the fallback is faer's sparse LU.
@@ -565,6 +568,7 @@ impl Fast {
             Factor::Dense {
                 schedule: lu::Schedule::new(0, &[]),
                 pivots: vec![0; n],
+                exchanged: false,
             }
         } else {
             let (col_ptr, row_idx) = model.pattern.restricted_columns(unknowns, local);
@@ -800,7 +804,12 @@ impl Fast {
                 schedule.solve(values, b);
                 true
             }
-            (Factor::Dense { schedule, pivots }, Factored::Pivoted) => {
+            (
+                Factor::Dense {
+                    schedule, pivots, ..
+                },
+                Factored::Pivoted,
+            ) => {
                 lu::solve(values, schedule.len(), pivots, b);
                 true
             }
@@ -868,16 +877,24 @@ impl Fast {
         Self::assemble(matrix, (mass, extra), varying, w2, values);
         Self::right_hand_side(rhs, extra_rhs, varying, z);
         *factored = match factor {
-            Factor::Dense { schedule, pivots } => {
-                if schedule.factor(values) {
+            Factor::Dense {
+                schedule,
+                pivots,
+                exchanged,
+            } => {
+                if !*exchanged && schedule.factor(values) {
                     schedule.solve(values, z);
                     Factored::Schedule
                 } else {
-                    // a row exchange is needed: the general LU on the matrix afresh
-                    Self::assemble(matrix, (mass, extra), varying, w2, values);
+                    // a row exchange is needed (or was at the last frequency): the general
+                    // LU, on the matrix afresh if the schedule spoilt it
+                    if !*exchanged {
+                        Self::assemble(matrix, (mass, extra), varying, w2, values);
+                    }
                     let n = schedule.len();
                     if lu::factor(values, n, pivots) {
                         lu::solve(values, n, pivots, z);
+                        *exchanged = pivots.iter().enumerate().any(|(k, &p)| k != p);
                         Factored::Pivoted
                     } else {
                         Factored::Nothing
