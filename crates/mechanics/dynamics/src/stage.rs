@@ -159,6 +159,20 @@ impl Projection {
         self.rows.len()
     }
 
+    /// Each group with its block of `values` ([`FrequencyTerm::parts`]); a group outside J's
+    /// rows or past the values (a term breaking its contract) is left out.
+    fn blocks<'a>(&'a self, values: &'a [c64]) -> impl Iterator<Item = (&'a Group, &'a [c64])> {
+        let mut offset = 0;
+        self.groups.iter().filter_map(move |g| {
+            let s = g.rows.len();
+            let block = values.get(offset..offset + s * s);
+            offset += s * s;
+            block
+                .filter(|_| g.rows.end <= self.rows.len())
+                .map(|b| (g, b))
+        })
+    }
+
     /// Σ_g J_gᵀ V_g J_g (n × n, row-major) into `out` for the blocks `values`
     /// ([`FrequencyTerm::parts`]), with `scratch` of n values. The upper triangle is
     /// formed and mirrored: V is complex symmetric (a stiffness), and so is the sum.
@@ -166,17 +180,8 @@ impl Projection {
         let n = self.n;
         let zero = c64::new(0.0, 0.0);
         out.fill(zero);
-        let mut offset = 0;
-        for g in &self.groups {
+        for (g, block) in self.blocks(values) {
             let (r0, s) = (g.rows.start, g.rows.len());
-            let Some(block) = values.get(offset..offset + s * s) else {
-                break;
-            };
-            offset += s * s;
-            if g.rows.end > self.rows.len() {
-                // a group outside J's rows (a term breaking its contract) adds nothing
-                continue;
-            }
             for i in 0..s {
                 // h = row i of V_g J_g, then out += J_g[i]ᵀ h over the upper triangle
                 scratch.fill(zero);
@@ -218,16 +223,8 @@ impl Projection {
         for (yr, row) in y.iter_mut().zip(&self.rows) {
             *yr = row.iter().map(|&(c, w)| z[c] * w).sum();
         }
-        let mut offset = 0;
-        for g in &self.groups {
+        for (g, block) in self.blocks(values) {
             let (r0, s) = (g.rows.start, g.rows.len());
-            let Some(block) = values.get(offset..offset + s * s) else {
-                break;
-            };
-            offset += s * s;
-            if g.rows.end > self.rows.len() {
-                continue;
-            }
             let Some(slot) = tags
                 .get(g.part)
                 .copied()
