@@ -23,7 +23,7 @@ type Cache = Arc<Mutex<Option<(f64, Moduli, Local)>>>;
 /// for multipliers of 1 and the static model's low-frequency answers stand.
 ///
 /// D is block diagonal in the fibre's one-dimensional coordinates (axial, two beams,
-/// twist: [`ContinuumFibre::local_rows`]), and so is the bracket, the static stack being D
+/// twist: `ContinuumFibre::local_rows`), and so is the bracket, the static stack being D
 /// at f = 0: the term's own displacements are those 12 coordinates, its blocks the bracket's
 /// 2 × 2, 4 × 4, 4 × 4 and 2 × 2 blocks, and its Jacobian that of the coordinates over the
 /// master rows, made once. A frequency point forms 40 values, no 12 × 12 matrix.
