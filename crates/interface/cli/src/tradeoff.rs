@@ -194,9 +194,15 @@ fn table(model: &str, question: &Question, result: &Tradeoff, tolerance: f64) ->
         out,
         "time: minimum of up to 5 runs each from the model's name; * on the Pareto front, = within {tolerance}"
     );
+    // the names' column as wide as the longest (at least 30)
+    let width = result
+        .rows
+        .iter()
+        .map(|r| r.variant.chars().count())
+        .fold(30, usize::max);
     let _ = writeln!(
         out,
-        "{:<30} {:>10} {:>4} {:>10} {:>10} {:>10}",
+        "{:<width$} {:>10} {:>4} {:>10} {:>10} {:>10}",
         "variant", "seconds", "runs", "modes", "noise", "tf"
     );
     let front = pareto_front(&points(result));
@@ -212,7 +218,7 @@ fn table(model: &str, question: &Question, result: &Tradeoff, tolerance: f64) ->
         );
         let _ = writeln!(
             out,
-            "{:<30} {} {:>4} {} {} {} {marks}",
+            "{:<width$} {} {:>4} {} {} {} {marks}",
             r.variant,
             sci(r.seconds, 3, 10),
             r.runs,
