@@ -687,6 +687,26 @@ fn family_of(case: &Case) -> Vec<Case> {
     }
 }
 
+/// `answer` without its violin modes: the modes a continuum model's are measured on (its
+/// violin modes are roots of its frequency-dependent problem, not modes of its static
+/// model).
+fn without_violins(answer: &Answer) -> Answer {
+    Answer {
+        coordinates: answer.coordinates.clone(),
+        modes: answer
+            .modes
+            .iter()
+            .zip(&answer.violin)
+            .filter(|(_, violin)| !**violin)
+            .map(|(m, _)| m.clone())
+            .collect(),
+        violin: Vec::new(),
+        mass: answer.mass.clone(),
+        noise_asd: answer.noise_asd.clone(),
+        transfer: answer.transfer.clone(),
+    }
+}
+
 /// Times `variant`'s answer as [`Timing`] says: (answer of the first run, minimum time in
 /// s, runs).
 fn timed_answer(
@@ -765,22 +785,7 @@ pub fn tradeoff(
     let (finite_name, finite_answer, finite_seconds, finite_runs) =
         measure(finite).map_err(|e| as_reference(finite, e))?;
     let reference = continuum_answer.as_ref().map_or(&finite_answer, |c| &c.1);
-    // a continuum model's violin modes are roots of its frequency-dependent problem, not
-    // modes of its static model: its modes are measured on the others
-    let finite_without_violins = Answer {
-        coordinates: finite_answer.coordinates.clone(),
-        modes: finite_answer
-            .modes
-            .iter()
-            .zip(&finite_answer.violin)
-            .filter(|(_, violin)| !**violin)
-            .map(|(m, _)| m.clone())
-            .collect(),
-        violin: Vec::new(),
-        mass: finite_answer.mass.clone(),
-        noise_asd: finite_answer.noise_asd.clone(),
-        transfer: finite_answer.transfer.clone(),
-    };
+    let finite_without_violins = without_violins(&finite_answer);
     let row = |variant: &Variant, name: String, answer: &Answer, seconds: f64, runs: usize| {
         let modes_reference = if variant.continuum {
             &finite_without_violins
