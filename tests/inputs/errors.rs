@@ -129,6 +129,7 @@ fn coincident_attachment_points_are_a_zero_length_wire() {
         section: silica(),
         profile: Vec::new(),
         tags: tags(),
+        continuum: false,
     })
     .unwrap();
     let e = run_stage(b.build().unwrap(), Stage::S0A)

@@ -474,6 +474,7 @@ fn tradeoff_comparisons_of_answers_that_do_not_fit_are_errors_naming_the_argumen
     let answer = |coordinates: usize, mass: usize, points: usize| Answer {
         coordinates: (0..coordinates).map(|i| format!("x{i}")).collect(),
         modes: Vec::new(),
+        violin: Vec::new(),
         mass: DMatrix::identity(mass, mass),
         noise_asd: vec![1.0; points],
         transfer: None,
@@ -523,6 +524,7 @@ fn a_beaded_fibre_with_more_beads_than_the_limit_is_an_error_not_an_overflow() {
         beads,
         joints: BeadJoints::Clamped,
         profile: None,
+        continuum: false,
     };
     let tags = WireTags {
         stretch: "stretch".into(),

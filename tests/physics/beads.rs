@@ -56,6 +56,7 @@ fn fibre(
             beads,
             joints,
             profile,
+            continuum: false,
         },
         &tags,
     )

@@ -242,3 +242,45 @@ fn continuum_fibres_solve_alike_on_every_path() {
         }
     }
 }
+
+#[test]
+fn a_file_marks_its_fibres_as_continua() {
+    // `continuum = true` on a wire set makes its wires continua in responses and noise by
+    // default: the same numbers, bit for bit, as asking for the continuum explicitly on
+    // the bundled model (the same terms of the same wires), and `Fibres::Static` gives the
+    // bundled model's static numbers back. With beads the file asks for the fibres' mass
+    // twice: refused at build, naming the fibre.
+    use std::path::Path;
+    let marked = "extends = \"quad-aligo\"\n[stages.testmass.fibres]\ncontinuum = true\n";
+    let freqs = [20.0, 493.0];
+    let case = Case::from_text(Path::new("marked.toml"), marked).expect("file");
+    let (system, _) = case.build().expect("build");
+    let from_file = pendkit::run_stage(system, Stage::S2).expect("stage");
+    assert_eq!(from_file.model.frequency_terms.len(), 4);
+    let by_file = from_file.noise("tm_beam", &freqs).expect("noise");
+    let by_flag = run("quad-aligo", &[], Stage::S2)
+        .with_fibres(&pendkit::stage::Fibres::Continuum)
+        .expect("continuum")
+        .noise("tm_beam", &freqs)
+        .expect("noise");
+    assert_eq!(by_file.psd(), by_flag.psd());
+    let unmarked = from_file
+        .with_fibres(&pendkit::stage::Fibres::Static)
+        .expect("static")
+        .noise("tm_beam", &freqs)
+        .expect("noise");
+    let bundled = run("quad-aligo", &[], Stage::S2);
+    assert_eq!(
+        unmarked.psd(),
+        bundled.noise("tm_beam", &freqs).expect("noise").psd()
+    );
+    let beaded = Case::from_text(Path::new("marked.toml"), marked)
+        .and_then(|c| c.with_sets(&["n_beads=3".to_string()]))
+        .and_then(|c| c.build().map(|_| ()))
+        .expect_err("beads on a continuum");
+    let message = beaded.to_string();
+    assert!(
+        message.contains("continuum") && message.contains("beads") && message.contains("f1"),
+        "{message}"
+    );
+}

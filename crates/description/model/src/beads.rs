@@ -89,6 +89,9 @@ pub struct BeadedFibre<'a, S: Real = f64> {
     /// A radius profile along the fibre (tapered fibres): each segment is then the slice of
     /// the profile it spans, and `section` is not used.
     pub profile: Option<&'a FibreProfile<S>>,
+    /// Whether responses and noise take the fibre as a continuum
+    /// ([`pendkit_system::Wire::continuum`]); only without beads, which carry the same mass.
+    pub continuum: bool,
 }
 
 /// Largest number of violin beads per fibre: dense linear algebra, and 200 beads on each
@@ -106,6 +109,15 @@ pub fn add_beaded_fibre<S: Real>(
     f: &BeadedFibre<S>,
     tags: &WireTags,
 ) -> Result<(), BuildError> {
+    if f.continuum && f.beads > 0 {
+        return Err(BuildError::Invalid {
+            item: format!("fibre '{}{}'", f.scope, f.name),
+            message: format!(
+                "a continuum fibre has its own violin modes: give it no beads (it has {})",
+                f.beads
+            ),
+        });
+    }
     if f.beads > MAX_BEADS {
         return Err(BuildError::Invalid {
             item: format!("fibre '{}{}'", f.scope, f.name),
@@ -181,7 +193,10 @@ pub fn add_beaded_fibre<S: Real>(
                 slice.wire_with_section(name, ends, carried, section, tags.clone())
             }
         };
-        b.wire(wire)?;
+        b.wire(pendkit_system::Wire {
+            continuum: f.continuum,
+            ..wire
+        })?;
         above = below;
     }
     Ok(())

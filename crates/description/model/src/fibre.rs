@@ -280,6 +280,7 @@ impl<S: Real> FibreProfile<S> {
             section,
             profile: self.pieces.clone(),
             tags,
+            continuum: false,
         }
     }
 }

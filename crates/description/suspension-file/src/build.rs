@@ -1411,6 +1411,7 @@ impl<'s, 'c, S: BuildScalar> Interpreter<'s, 'c, S> {
                 beads: set.beads,
                 joints: set.set.bead_joints,
                 profile: set.profile.as_ref(),
+                continuum: set.set.continuum,
             },
             tags,
         )

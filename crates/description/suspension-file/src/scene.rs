@@ -525,6 +525,7 @@ impl Prefix<'_> {
             surface_loss: _,
             temperature,
             dilution,
+            continuum: _,
         } = w;
         self.at(at);
         self.points(upper);

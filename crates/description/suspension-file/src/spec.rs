@@ -457,6 +457,9 @@ pub struct WireSet {
     /// A given (measured) dilution factor of the set's bending: the bending loss is scaled
     /// by (computed dilution)/(this).
     pub dilution: Option<Ex>,
+    /// Responses and noise take the set's wires as continua (`continuum = true`;
+    /// docs/continuum-fibres.md), unless the command says otherwise.
+    pub continuum: bool,
 }
 
 /// A tapered fibre's profile: a neck of `neck_length` and `neck_radius` at each end, the
@@ -1251,6 +1254,7 @@ fn wire_set(slot: &'static str, body: &str, node: &Node, at: At) -> Result<WireS
         surface_loss: f.bool("surface_loss")?.is_some_and(|b| b.value),
         temperature: f.expr("temperature")?,
         dilution: f.expr("dilution")?,
+        continuum: f.bool("continuum")?.is_some_and(|b| b.value),
     };
     match (&w.radius, &w.section) {
         (Some(r), Some(_)) => return Err(r.at.error("give `radius` or `section`, not both")),

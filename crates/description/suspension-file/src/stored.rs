@@ -609,6 +609,7 @@ stored_struct! {
     WireSet {
         slot, at, names, upper, lower, length, radius, section, material, youngs_modulus,
         shear_modulus, beads, bead_joints, tags, profile, surface_loss, temperature, dilution,
+        continuum,
     }
     ProfileFile { at, neck_length, neck_radius }
     SectionFile { at, area, moments, torsion_constant, polar_moment, principal_axis }

@@ -43,10 +43,12 @@ pub struct ModelArgs {
     /// model declares, e.g. `ligo` (L, T, V, R, P, Y; M0, L1, L2, L3; GND).
     #[arg(long, value_name = "SCHEME")]
     pub naming: Option<String>,
-    /// How the lowest wires (a quad's fibres) move in `tf` and `noise`: `static` (massless,
-    /// or violin beads where the model has them; the default) or `continuum` (their exact
-    /// dynamic stiffness, violin modes included: docs/continuum-fibres.md). The modes and
-    /// the state space keep the static model.
+    /// How the wires move in `tf` and `noise`: `static` (massless, or violin beads where the
+    /// model has them) or `continuum` (the lowest wires, a quad's fibres, and any the file
+    /// marks `continuum = true`, by their exact dynamic stiffness, violin modes included:
+    /// docs/continuum-fibres.md). Without it, as the model says: the sets its file marks
+    /// `continuum = true` are continua, the rest static. The modes and the state space keep
+    /// the static model.
     #[arg(long, value_name = "MODEL", value_parser = ["static", "continuum"])]
     pub fibres: Option<String>,
 }
@@ -194,8 +196,11 @@ impl ModelArgs {
             ..Default::default()
         };
         let mut result = run_stage_with(system, stage, &options, Some(&mut times))?;
-        if self.fibres.as_deref() == Some("continuum") {
-            result = result.with_fibres(&pendkit::stage::Fibres::Continuum)?;
+        match self.fibres.as_deref() {
+            Some("continuum") => result = result.with_fibres(&pendkit::stage::Fibres::Continuum)?,
+            Some("static") => result = result.with_fibres(&pendkit::stage::Fibres::Static)?,
+            // as the model says (a file's `continuum = true`), which the run has done
+            _ => {}
         }
         let scheme = match self.naming.as_deref() {
             None | Some("model") => None,

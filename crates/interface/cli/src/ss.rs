@@ -26,12 +26,13 @@ pub struct Args {
 /// Runs the command and returns what it prints.
 pub fn run(a: Args) -> Result<String, CliError> {
     let _ = a.force;
-    if a.args.fibres.as_deref() == Some("continuum") {
+    let run = a.args.run_lossy()?;
+    // continuum fibres asked for, or marked in the model's file
+    if !run.result.model.frequency_terms.is_empty() {
         eprintln!(
-            "note: a state space needs a finite model: `ss` keeps the static wires (violin beads where the model has them, --set n_beads=N); --fibres continuum changes tf and noise only"
+            "note: a state space needs a finite model: `ss` keeps the static wires (violin beads where the model has them, --set n_beads=N); continuum fibres change tf and noise only"
         );
     }
-    let run = a.args.run_lossy()?;
     let damping_frequency = a.damping_frequency;
     let provenance = run.provenance()?;
     crate::output::clean_up_on_interrupt();

@@ -39,6 +39,10 @@ pub struct Args {
     /// Violin beads per fibre to try, comma-separated (models with n_beads only).
     #[arg(long, value_name = "N,...", default_value = "0,1,2,5,10,20,40")]
     beads: String,
+    /// Leave out the continuum-fibre variants: the reference is then the richest finite
+    /// variant (most beads) for the noise and transfer function too.
+    #[arg(long)]
+    no_continuum: bool,
     /// Time spent repeating each variant (s): the minimum of up to 5 runs within it is
     /// reported (the first run always completes).
     #[arg(long, value_name = "S", default_value_t = 0.5, value_parser = crate::common::number, allow_hyphen_values = true)]
@@ -107,6 +111,7 @@ pub fn run(a: Args) -> Result<String, CliError> {
     question.grid()?;
     let ladder = Ladder {
         beads: beads(&a.beads)?,
+        continuum: !a.no_continuum,
         ..Ladder::default()
     };
     let timing = Timing {
@@ -167,6 +172,10 @@ fn points(result: &Tradeoff) -> Vec<TradeoffPoint> {
 fn table(model: &str, question: &Question, result: &Tradeoff, tolerance: f64) -> String {
     let mut out = String::new();
     let reference = result.reference().map_or("", |r| r.variant.as_str());
+    let reference = match &result.modes_reference {
+        Some(modes) => format!("{reference} (modes: {modes})"),
+        None => reference.to_string(),
+    };
     let _ = writeln!(
         out,
         "{model}: modes below {} Hz, noise at {}{} over {}–{} Hz ({} points); errors against {reference}",
@@ -185,9 +194,15 @@ fn table(model: &str, question: &Question, result: &Tradeoff, tolerance: f64) ->
         out,
         "time: minimum of up to 5 runs each from the model's name; * on the Pareto front, = within {tolerance}"
     );
+    // the names' column as wide as the longest (at least 30)
+    let width = result
+        .rows
+        .iter()
+        .map(|r| r.variant.chars().count())
+        .fold(30, usize::max);
     let _ = writeln!(
         out,
-        "{:<30} {:>10} {:>4} {:>10} {:>10} {:>10}",
+        "{:<width$} {:>10} {:>4} {:>10} {:>10} {:>10}",
         "variant", "seconds", "runs", "modes", "noise", "tf"
     );
     let front = pareto_front(&points(result));
@@ -203,7 +218,7 @@ fn table(model: &str, question: &Question, result: &Tradeoff, tolerance: f64) ->
         );
         let _ = writeln!(
             out,
-            "{:<30} {} {:>4} {} {} {} {marks}",
+            "{:<width$} {} {:>4} {} {} {} {marks}",
             r.variant,
             sci(r.seconds, 3, 10),
             r.runs,

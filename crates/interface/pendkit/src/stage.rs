@@ -122,29 +122,45 @@ impl From<StageRun> for StageResult {
     }
 }
 
-/// How the wires' own motion enters responses and noise.
+/// How the wires' own motion enters responses and noise. A stage result starts as the
+/// model says ([`Fibres::AsModelled`]: the wires its file marks `continuum = true`, none in
+/// the bundled models); [`StageResult::with_fibres`] chooses otherwise.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub enum Fibres {
     /// The static model: massless wires (and violin beads where the model has them).
-    #[default]
     Static,
+    /// The wires the model marks as continua ([`pendkit_system::Wire::continuum`]); the
+    /// static model when it marks none.
+    #[default]
+    AsModelled,
     /// The lowest wires (those ending on the body whose wire ends lie lowest: a quad's
-    /// fibres, a triple's lower wires) as continua, their exact dynamic stiffness D(f) in `tf` and `noise`
-    /// (docs/continuum-fibres.md). The modes and the state space keep the static model.
+    /// fibres, a triple's lower wires) and any the model marks, as continua: their exact
+    /// dynamic stiffness D(f) in `tf` and `noise` (docs/continuum-fibres.md). The modes
+    /// and the state space keep the static model.
     Continuum,
     /// The named wires as continua.
     ContinuumNamed(Vec<String>),
 }
 
 impl StageResult {
-    /// This result with `fibres`: for a continuum, the wires' frequency terms join the
-    /// stage model, so that transfer functions and noise see their violin modes and exact
-    /// dilution. Refused: violin beads together with continuum fibres (the beads carry the
-    /// same mass), a name that is no wire, a wire that is not taut and straight.
-    pub fn with_fibres(self, fibres: &Fibres) -> Result<StageResult, Error> {
+    /// This result with `fibres` in place of the wires it took as continua before: for a
+    /// continuum, the wires' frequency terms join the stage model, so that transfer
+    /// functions and noise see their violin modes and exact dilution. Refused: violin beads
+    /// together with continuum fibres (the beads carry the same mass), a name that is no
+    /// wire, a wire that is not taut and straight.
+    pub fn with_fibres(mut self, fibres: &Fibres) -> Result<StageResult, Error> {
+        self.run.model.frequency_terms.clear();
         let system = &self.run.system;
+        let marked = || (0..system.wires.len()).filter(|&w| system.wires[w].continuum);
         let wires: Vec<usize> = match fibres {
             Fibres::Static => return Ok(self),
+            Fibres::AsModelled => {
+                let wires: Vec<usize> = marked().collect();
+                if wires.is_empty() {
+                    return Ok(self);
+                }
+                wires
+            }
             Fibres::Continuum => {
                 // the wires that end on the body whose wire ends lie lowest (a quad's test
                 // mass): a body hanging nothing from itself is not enough, since blade tips
@@ -161,6 +177,9 @@ impl StageResult {
                     .map(|w| w.ends[1].body);
                 (0..system.wires.len())
                     .filter(|&w| Some(system.wires[w].ends[1].body) == lowest)
+                    .chain(marked())
+                    .collect::<std::collections::BTreeSet<usize>>()
+                    .into_iter()
                     .collect()
             }
             Fibres::ContinuumNamed(names) => names
@@ -234,14 +253,20 @@ pub fn run_stage(system: System, stage: Stage) -> Result<StageResult, Error> {
 }
 
 /// [`run_stage`] with options, recording the time of each phase into `times` when given
-/// (the phases are listed at [`StageRun::new`], which runs them).
+/// (the phases are listed at [`StageRun::new`], which runs them). The wires the model
+/// marks as continua are taken as such ([`Fibres::AsModelled`]).
 pub fn run_stage_with(
     system: System,
     stage: Stage,
     options: &RunOptions,
     times: Option<&mut PhaseTimes>,
 ) -> Result<StageResult, Error> {
-    Ok(StageRun::new(system, stage, options, times)?.into())
+    let result = StageResult::from(StageRun::new(system, stage, options, times)?);
+    if result.run.system.wires.iter().any(|w| w.continuum) {
+        result.with_fibres(&Fibres::AsModelled)
+    } else {
+        Ok(result)
+    }
 }
 
 impl StageResult {

@@ -19,12 +19,18 @@
 //!   because they act on different parts (blade tips move the pitch modes, beads carry
 //!   the fibres' mass) and a question may need some of each;
 //! - the base solved over every variable and float ([`Solver::Full`]) instead of only the
-//!   blocks the output couples to.
+//!   blocks the output couples to;
+//! - at stage 2, every blade-tip variant with continuum fibres (no beads; the lowest wires'
+//!   exact dynamic stiffness, docs/continuum-fibres.md), where [`Ladder::continuum`] asks.
 //!
-//! The *reference* is the richest of everything: the last family member, stage 2, the most
-//! beads of the ladder, the full solve. Every variant's errors are measured against it, so
-//! a row's error is the whole error of that simplification of the question, not of one
-//! step.
+//! The *reference* is the richest of everything: the last family member, stage 2, the full
+//! solve, with continuum fibres (exact at every frequency, violin modes included), or,
+//! without them, the most beads of the ladder. Every variant's noise and transfer function
+//! are measured against it, so a row's error is the whole error of that simplification of
+//! the question, not of one step. The modes are measured against the richest finite
+//! variant (the same, with the most beads): a continuum model's modes are its static
+//! model's (`modes` and `ss` need a finite model), so the continuum rows carry the modes
+//! error of leaving the fibres' mass out, and the bead rows are not charged for having it.
 //!
 //! # Errors
 //!
@@ -52,7 +58,7 @@ use pendkit_dynamics::Mode;
 use pendkit_model::BuildError;
 
 use crate::catalogue::find_model;
-use crate::stage::{ModeSelection, RunOptions, run_stage_with};
+use crate::stage::{Fibres, ModeSelection, RunOptions, run_stage_with};
 use crate::{Case, Error, NoiseOptions, Solver, Stage, log_grid};
 
 /// Modes are computed below the band's top times this, so that a reference mode just under
@@ -99,6 +105,9 @@ pub struct Ladder {
     pub family: bool,
     /// Whether to try the full solve next to the restricted one.
     pub solvers: bool,
+    /// Whether to try continuum fibres and take them as the reference of the noise and
+    /// transfer function (the richest finite variant stays the modes' reference).
+    pub continuum: bool,
 }
 
 impl Default for Ladder {
@@ -108,6 +117,7 @@ impl Default for Ladder {
             beads: DEFAULT_BEADS.to_vec(),
             family: true,
             solvers: true,
+            continuum: true,
         }
     }
 }
@@ -138,17 +148,23 @@ pub struct Variant {
     pub case: Case,
     /// Stage.
     pub stage: Stage,
-    /// Violin beads per fibre, for models with `n_beads`.
+    /// Violin beads per fibre, for models with `n_beads` (0 with continuum fibres).
     pub beads: Option<usize>,
     /// How responses are solved.
     pub solver: Solver,
+    /// Whether the lowest wires are continua ([`crate::stage::Fibres::Continuum`]) in the
+    /// noise and transfer function; static wires (and `beads`) otherwise.
+    pub continuum: bool,
 }
 
 impl Variant {
-    /// `<model> s<stage> [b<beads>] [full-solve]`, e.g. `quad-full s2 b40 full-solve`.
+    /// `<model> s<stage> [b<beads> | continuum] [full-solve]`, e.g.
+    /// `quad-full s2 b40 full-solve`, `quad-aligo s2 continuum`.
     pub fn name(&self) -> String {
         let mut name = format!("{} s{}", self.case.model.name(), self.stage);
-        if let Some(beads) = self.beads {
+        if self.continuum {
+            name += " continuum";
+        } else if let Some(beads) = self.beads {
             name += &format!(" b{beads}");
         }
         if self.solver == Solver::Full {
@@ -157,12 +173,13 @@ impl Variant {
         name
     }
 
-    fn key(&self) -> (&str, Stage, Option<usize>, bool) {
+    fn key(&self) -> (&str, Stage, Option<usize>, bool, bool) {
         (
             self.case.model.name(),
             self.stage,
             self.beads,
             self.solver == Solver::Full,
+            self.continuum,
         )
     }
 
@@ -184,6 +201,8 @@ pub struct Answer {
     pub coordinates: Vec<String>,
     /// Modes below the band's top times [`MODE_SEARCH_MARGIN`], ascending.
     pub modes: Vec<Mode>,
+    /// Whether each mode is a violin mode (its largest motion in violin beads).
+    pub violin: Vec<bool>,
     /// Mass matrix over the variables (kg, kg m, kg m²).
     pub mass: DMatrix<f64>,
     /// Noise ASD at the output over the grid (m/√Hz or rad/√Hz).
@@ -220,7 +239,12 @@ pub fn answer(variant: &Variant, question: &Question, grid: &[f64]) -> Result<An
         modes: ModeSelection::Below(question.band_hz.1 * MODE_SEARCH_MARGIN),
         ..Default::default()
     };
-    let result = run_stage_with(system, variant.stage, &options, None)?;
+    let fibres = if variant.continuum {
+        Fibres::Continuum
+    } else {
+        Fibres::Static
+    };
+    let result = run_stage_with(system, variant.stage, &options, None)?.with_fibres(&fibres)?;
     result.stability()?;
     let noise = result.noise_with(
         &question.output,
@@ -234,10 +258,17 @@ pub fn answer(variant: &Variant, question: &Question, grid: &[f64]) -> Result<An
         Some(input) => Some(result.transfer_with(input, &question.output, grid, variant.solver)?),
         None => None,
     };
+    let violin = result
+        .modes
+        .modes
+        .iter()
+        .map(|m| result.mode_family(m) == "violin")
+        .collect();
     let run = result.into_run();
     Ok(Answer {
         coordinates: run.modes.coordinates,
         modes: run.modes.modes,
+        violin,
         mass: run.assembled.mass.to_dense(),
         noise_asd: noise.asd(),
         transfer,
@@ -375,6 +406,18 @@ pub fn match_modes(
 /// finite, curves over different numbers of points, a mass matrix that does not fit the
 /// coordinates).
 pub fn compare(reference: &Answer, variant: &Answer, top_hz: f64) -> Result<Errors, String> {
+    compare_with(reference, reference, variant, top_hz)
+}
+
+/// [`compare`] with the modes measured against `modes_reference` and the noise and
+/// transfer function against `reference` (a continuum model, whose modes are its static
+/// model's: see the module's doc).
+pub fn compare_with(
+    modes_reference: &Answer,
+    reference: &Answer,
+    variant: &Answer,
+    top_hz: f64,
+) -> Result<Errors, String> {
     let same_length = |what: &str, r: usize, v: usize| {
         if r == v {
             Ok(())
@@ -393,8 +436,8 @@ pub fn compare(reference: &Answer, variant: &Answer, top_hz: f64) -> Result<Erro
         same_length("transfer", r.len(), v.len())?;
     }
     let mut modes: f64 = 0.0;
-    for (i, j, _) in match_modes(reference, variant, top_hz)? {
-        let f_ref = reference.modes[i].hz;
+    for (i, j, _) in match_modes(modes_reference, variant, top_hz)? {
+        let f_ref = modes_reference.modes[i].hz;
         modes = modes.max((variant.modes[j].hz - f_ref).abs() / f_ref.abs());
     }
     let noise = max_ratio_error(&reference.noise_asd, &variant.noise_asd, "noise ASD")?;
@@ -475,8 +518,12 @@ pub struct Skipped {
 /// The measured ladder.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Tradeoff {
-    /// The rows, the reference first (zero errors), then the ladder's order.
+    /// The rows, the reference first (zero noise and transfer-function errors), then the
+    /// ladder's order.
     pub rows: Vec<Row>,
+    /// The variant the modes are measured against when it is not the reference (a
+    /// continuum reference's modes are its static model's: see the module's doc).
+    pub modes_reference: Option<String>,
     /// Variants that could not answer.
     pub skipped: Vec<Skipped>,
     /// Whether the question has a transfer function.
@@ -519,7 +566,8 @@ impl Tradeoff {
 }
 
 /// The variants of `case`'s ladder: the reference first, then the others (see the module's
-/// doc), without repeats.
+/// doc), without repeats. With continuum fibres the reference is the continuum one and the
+/// second the richest finite variant, the modes' reference.
 pub fn ladder(case: &Case, ladder: &Ladder) -> Result<Vec<Variant>, Error> {
     let has_beads = pendkit_model::Defaults::of(&*case.model)?
         .params
@@ -540,6 +588,7 @@ pub fn ladder(case: &Case, ladder: &Ladder) -> Result<Vec<Variant>, Error> {
         stage: Stage::S2,
         beads: base_beads,
         solver: Solver::Restricted,
+        continuum: false,
     };
     let family = if ladder.family {
         family_of(case)
@@ -547,7 +596,7 @@ pub fn ladder(case: &Case, ladder: &Ladder) -> Result<Vec<Variant>, Error> {
         vec![case.clone()]
     };
     let richest = family.last().cloned().unwrap_or_else(|| case.clone());
-    let reference = Variant {
+    let finite_reference = Variant {
         case: richest,
         stage: ladder.stages.iter().copied().max().unwrap_or(Stage::S2),
         beads: base_beads.map(|b| ladder.beads.iter().copied().max().unwrap_or(b)),
@@ -556,8 +605,20 @@ pub fn ladder(case: &Case, ladder: &Ladder) -> Result<Vec<Variant>, Error> {
         } else {
             Solver::Restricted
         },
+        continuum: false,
     };
-    let mut variants = vec![reference];
+    // continuum fibres carry no beads (the beads would be their mass a second time)
+    let continuum_of = |v: &Variant| Variant {
+        beads: v.beads.map(|_| 0),
+        continuum: true,
+        stage: Stage::S2,
+        ..v.clone()
+    };
+    let mut variants = Vec::new();
+    if ladder.continuum {
+        variants.push(continuum_of(&finite_reference));
+    }
+    variants.push(finite_reference);
     let mut push = |v: Variant| {
         if !variants.iter().any(|w| w.key() == v.key()) {
             variants.push(v);
@@ -583,6 +644,12 @@ pub fn ladder(case: &Case, ladder: &Ladder) -> Result<Vec<Variant>, Error> {
                 beads,
                 ..base.clone()
             });
+        }
+        if ladder.continuum {
+            push(continuum_of(&Variant {
+                case: member.clone(),
+                ..base.clone()
+            }));
         }
     }
     if ladder.solvers {
@@ -617,6 +684,26 @@ fn family_of(case: &Case) -> Vec<Case> {
         members
     } else {
         vec![case.clone()]
+    }
+}
+
+/// `answer` without its violin modes: the modes a continuum model's are measured on (its
+/// violin modes are roots of its frequency-dependent problem, not modes of its static
+/// model).
+fn without_violins(answer: &Answer) -> Answer {
+    Answer {
+        coordinates: answer.coordinates.clone(),
+        modes: answer
+            .modes
+            .iter()
+            .zip(&answer.violin)
+            .filter(|(_, violin)| !**violin)
+            .map(|(m, _)| m.clone())
+            .collect(),
+        violin: Vec::new(),
+        mass: answer.mass.clone(),
+        noise_asd: answer.noise_asd.clone(),
+        transfer: answer.transfer.clone(),
     }
 }
 
@@ -661,45 +748,90 @@ pub fn tradeoff(
     let variants = ladder(case, ladder_spec)?;
     let mut rows = Vec::with_capacity(variants.len());
     let mut skipped = Vec::new();
-    let mut reference: Option<Answer> = None;
     let top = question.band_hz.1;
-    for variant in &variants {
+    let mut measure = |variant: &Variant| {
         let name = variant.name();
         progress(&name);
-        let outcome = timed_answer(variant, question, &grid, timing);
-        let Some(reference_answer) = &reference else {
-            let (answer, seconds, runs) = outcome.map_err(|e| Error::Reference {
-                variant: name.clone(),
-                message: e.to_string(),
-            })?;
-            rows.push(Row {
-                variant: name,
-                seconds,
-                runs,
-                errors: Errors::zero(question.input.is_some()),
-                neutral_modes: neutral_modes(&answer),
+        timed_answer(variant, question, &grid, timing).map(|(a, s, n)| (name, a, s, n))
+    };
+    let as_reference = |variant: &Variant, e: Error| Error::Reference {
+        variant: variant.name(),
+        message: e.to_string(),
+    };
+    // the references: the continuum one (when the ladder has it and it can answer) for the
+    // responses, the richest finite one for the modes (and for everything without the
+    // continuum)
+    let (continuum, rest) = match variants.split_first() {
+        Some((first, rest)) if first.continuum => (Some(first), rest),
+        _ => (None, &variants[..]),
+    };
+    let Some((finite, others)) = rest.split_first() else {
+        return Err(Error::Reference {
+            variant: case.name.clone(),
+            message: "the ladder has no variant".into(),
+        });
+    };
+    let continuum_answer = match continuum.map(|v| (v, measure(v))) {
+        Some((_, Ok(answer))) => Some(answer),
+        Some((v, Err(e))) => {
+            skipped.push(Skipped {
+                variant: v.name(),
+                reason: e.to_string(),
             });
-            reference = Some(answer);
-            continue;
+            None
+        }
+        None => None,
+    };
+    let (finite_name, finite_answer, finite_seconds, finite_runs) =
+        measure(finite).map_err(|e| as_reference(finite, e))?;
+    let reference = continuum_answer.as_ref().map_or(&finite_answer, |c| &c.1);
+    let finite_without_violins = without_violins(&finite_answer);
+    let row = |variant: &Variant, name: String, answer: &Answer, seconds: f64, runs: usize| {
+        let modes_reference = if variant.continuum {
+            &finite_without_violins
+        } else {
+            &finite_answer
         };
-        match outcome.map_err(|e| e.to_string()).and_then(|(a, s, n)| {
-            Ok((compare(reference_answer, &a, top)?, s, n, neutral_modes(&a)))
-        }) {
-            Ok((errors, seconds, runs, neutral_modes)) => rows.push(Row {
-                variant: name,
-                seconds,
-                runs,
-                errors,
-                neutral_modes,
-            }),
+        let errors = compare_with(modes_reference, reference, answer, top).map_err(|message| {
+            Error::Reference {
+                variant: name.clone(),
+                message,
+            }
+        })?;
+        Ok::<Row, Error>(Row {
+            variant: name,
+            seconds,
+            runs,
+            errors,
+            neutral_modes: neutral_modes(answer),
+        })
+    };
+    if let (Some(variant), Some((name, answer, seconds, runs))) = (continuum, &continuum_answer) {
+        rows.push(row(variant, name.clone(), answer, *seconds, *runs)?);
+    }
+    rows.push(row(
+        finite,
+        finite_name.clone(),
+        &finite_answer,
+        finite_seconds,
+        finite_runs,
+    )?);
+    for variant in others {
+        match measure(variant).map_err(|e| e.to_string()).and_then(
+            |(name, answer, seconds, runs)| {
+                row(variant, name, &answer, seconds, runs).map_err(|e| e.to_string())
+            },
+        ) {
+            Ok(r) => rows.push(r),
             Err(reason) => skipped.push(Skipped {
-                variant: name,
+                variant: variant.name(),
                 reason,
             }),
         }
     }
     Ok(Tradeoff {
         rows,
+        modes_reference: continuum_answer.is_some().then_some(finite_name),
         skipped,
         with_transfer: question.input.is_some(),
     })

@@ -20,7 +20,7 @@ use pendkit::Override;
 use pendkit::params::Resolved;
 use pendkit::stage::NamedStateSpace;
 use pendkit::stage::RunOptions;
-use pendkit::stage::run_stage_with;
+use pendkit::stage::{Fibres, run_stage_with};
 use pendkit::{Case, Error, NoiseOptions, Stage, StageResult};
 use pyo3::create_exception;
 use pyo3::exceptions::{PyTypeError, PyValueError};
@@ -297,6 +297,40 @@ fn stage_or_complete(stage: Option<&Bound<'_, PyAny>>) -> PyResult<Stage> {
             text.parse::<Stage>().map_err(error)
         }
     }
+}
+
+/// The `fibres` argument of `Model.run`: `None` (as the model says: the wire sets its file
+/// marks `continuum = true`), `"static"`, `"continuum"` or a sequence of wire names.
+fn fibres_choice(fibres: Option<&Bound<'_, PyAny>>) -> PyResult<Fibres> {
+    let Some(f) = fibres.filter(|f| !f.is_none()) else {
+        return Ok(Fibres::AsModelled);
+    };
+    if f.is_instance_of::<PyString>() {
+        return match f.extract::<String>()?.as_str() {
+            "static" => Ok(Fibres::Static),
+            "continuum" => Ok(Fibres::Continuum),
+            other => Err(PyValueError::new_err(format!(
+                "fibres: expected \"static\", \"continuum\" or a list of wire names, got {other:?}"
+            ))),
+        };
+    }
+    let names: Vec<String> = f.extract().map_err(|_| {
+        type_error(format!(
+            "fibres: expected \"static\", \"continuum\" or a list of wire names, got {}",
+            type_name(f)
+        ))
+    })?;
+    Ok(Fibres::ContinuumNamed(names))
+}
+
+/// The `fibres` argument that gives `choice` back (pickle).
+fn fibres_argument<'py>(py: Python<'py>, choice: &Fibres) -> PyResult<Bound<'py, PyAny>> {
+    Ok(match choice {
+        Fibres::AsModelled => py.None().into_bound(py),
+        Fibres::Static => PyString::new(py, "static").into_any(),
+        Fibres::Continuum => PyString::new(py, "continuum").into_any(),
+        Fibres::ContinuumNamed(names) => pyo3::types::PyList::new(py, names)?.into_any(),
+    })
 }
 
 /// A path given as a str or an os.PathLike; `place` names the argument in the error.
@@ -599,21 +633,35 @@ impl Model {
 
     /// Builds the model and runs `stage` (`"0a"`, `"0b"`, `"1a"`, `"1b"` or `"2"`; default
     /// `"2"`, the complete model, as the command line): equilibrium, matrices and every
-    /// normal mode. Returns a `Result`.
-    #[pyo3(signature = (stage = None))]
-    fn run(slf: &Bound<'_, Self>, stage: Option<&Bound<'_, PyAny>>) -> PyResult<StageRun> {
+    /// normal mode. Returns a `Result`. `fibres` chooses how wires move in its `tf` and
+    /// `noise`, as the command line's `--fibres`: `"static"`, `"continuum"` (the lowest
+    /// wires and any the file marks, by their exact dynamic stiffness with the violin
+    /// modes: docs/continuum-fibres.md), a list of wire names to take as continua, or
+    /// `None` (the default: as the model's file says). The modes and the state space keep
+    /// the static model.
+    #[pyo3(signature = (stage = None, fibres = None))]
+    fn run(
+        slf: &Bound<'_, Self>,
+        stage: Option<&Bound<'_, PyAny>>,
+        fibres: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<StageRun> {
         let py = slf.py();
         let stage = stage_or_complete(stage)?;
+        let fibres = fibres_choice(fibres)?;
         let case = slf.get().case.clone();
         let run = py
             .detach(move || -> std::result::Result<Run, Error> {
                 let (system, resolved) = case.build()?;
-                let result = run_stage_with(system, stage, &RunOptions::default(), None)?;
+                let mut result = run_stage_with(system, stage, &RunOptions::default(), None)?;
+                if fibres != Fibres::AsModelled {
+                    result = result.with_fibres(&fibres)?;
+                }
                 Ok(Run {
                     case,
                     stage,
                     resolved,
                     result,
+                    fibres,
                 })
             })
             .map_err(error)?;
@@ -755,6 +803,8 @@ struct Run {
     stage: Stage,
     resolved: Resolved,
     result: StageResult,
+    /// How the wires move in responses and noise, as asked.
+    fibres: Fibres,
 }
 
 impl Run {
@@ -842,9 +892,9 @@ fn frequencies(freqs: &Bound<'_, PyAny>) -> PyResult<Vec<f64>> {
 /// The result of running one stage of a model: equilibrium, matrices and normal modes, from
 /// which transfer functions, thermal noise and the state space are computed.
 ///
-/// A result pickles as its model and stage, and is computed again when unpickled (pendkit
-/// is deterministic: the same numbers); two results are equal when their models and stages
-/// are.
+/// A result pickles as its model, stage and fibres, and is computed again when unpickled
+/// (pendkit is deterministic: the same numbers); two results are equal when their models,
+/// stages and fibres are.
 #[pyclass(module = "pendkit._pendkit", name = "Result", frozen)]
 struct StageRun {
     run: Arc<Run>,
@@ -854,23 +904,37 @@ struct StageRun {
 
 #[pymethods]
 impl StageRun {
-    /// `Model.run` of the model, with the stage: what rebuilds this result (pickle).
-    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, (&'static str,))> {
+    /// `Model.run` of the model, with the stage and the fibres: what rebuilds this result
+    /// (pickle).
+    #[allow(clippy::type_complexity)]
+    fn __reduce__<'py>(
+        &self,
+        py: Python<'py>,
+    ) -> PyResult<(Bound<'py, PyAny>, (&'static str, Bound<'py, PyAny>))> {
         Ok((
             self.model.bind(py).getattr("run")?,
-            (self.run.stage.name(),),
+            (
+                self.run.stage.name(),
+                fibres_argument(py, &self.run.fibres)?,
+            ),
         ))
     }
 
     fn __eq__(&self, other: &Self) -> bool {
         self.run.stage == other.run.stage
+            && self.run.fibres == other.run.fibres
             && self.model.get().identity() == other.model.get().identity()
     }
 
     fn __hash__(&self) -> u64 {
         use std::hash::{Hash, Hasher};
         let mut hasher = std::collections::hash_map::DefaultHasher::new();
-        (self.run.stage.name(), self.model.get().identity()).hash(&mut hasher);
+        (
+            self.run.stage.name(),
+            format!("{:?}", self.run.fibres),
+            self.model.get().identity(),
+        )
+            .hash(&mut hasher);
         hasher.finish()
     }
 

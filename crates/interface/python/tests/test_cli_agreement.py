@@ -131,3 +131,43 @@ def test_parameters_list_what_the_model_resolves(cli):
     assert not params["g"].overridden
     # the resolved values the state-space export records as provenance
     assert [p.name for p in m.run().parameters()] == list(params)
+
+
+def test_fibres_choice_equals_the_command_line(cli, tmp_path):
+    # `Model.run(fibres=...)` against `noise --fibres ...`, and a file's `continuum = true`
+    # without a flag against both: the same terms of the same wires, so the same digits.
+    # The continuum's violin peak at 493 Hz and the static model's no peak make the cases
+    # far apart, so an ignored choice cannot pass.
+    freqs = [100.0, 493.0]
+    marked = tmp_path / "marked.toml"
+    marked.write_text('extends = "quad-aligo"\n[stages.testmass.fibres]\ncontinuum = true\n')
+
+    def command_line(spec, *flag):
+        _, columns = parse_csv(cli("noise", spec, "--output", "tm_beam", "--csv",
+                                   "--freqs", "100,493", *flag))
+        return columns[1]
+
+    continuum = command_line("quad-aligo", "--fibres", "continuum")
+    static = command_line("quad-aligo")
+    assert continuum[1] > 100 * static[1]
+    cases = [
+        (pendkit.Model("quad-aligo").run(fibres="continuum"), continuum),
+        (pendkit.Model("quad-aligo").run(fibres=["f1", "f2", "f3", "f4"]), continuum),
+        (pendkit.Model("quad-aligo").run(), static),
+        (pendkit.Model(str(marked)).run(), continuum),
+        (pendkit.Model(str(marked)).run(fibres="static"), static),
+    ]
+    for result, expected in cases:
+        assert result.noise("tm_beam", freqs).asd.tolist() == expected
+    assert command_line(str(marked)) == continuum
+    # a result pickles with its fibres
+    import pickle
+    again = pickle.loads(pickle.dumps(cases[0][0]))
+    assert again == cases[0][0] and again != cases[2][0]
+    assert again.noise("tm_beam", freqs).asd.tolist() == continuum
+    with pytest.raises(ValueError, match="fibres"):
+        pendkit.Model("quad-aligo").run(fibres="beads")
+    with pytest.raises(TypeError, match="fibres"):
+        pendkit.Model("quad-aligo").run(fibres=3)
+    with pytest.raises(pendkit.PendkitError, match="no wire"):
+        pendkit.Model("quad-aligo").run(fibres=["nowire"])

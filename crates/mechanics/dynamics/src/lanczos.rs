@@ -499,10 +499,7 @@ impl StageModel {
                         projected[j][i]
                     }
                 });
-                let evd = t
-                    .self_adjoint_eigen(Side::Lower)
-                    .map_err(|e| DynamicsError::Eigen(format!("{e:?}")))?;
-                let (theta, y) = (evd.S().column_vector(), evd.U());
+                let (theta, y) = crate::modes::symmetric_eigen(&t)?;
                 found.clear();
                 let mut all_converged = true;
                 // the Rayleigh–Ritz values carry an absolute error of a few ulps of the

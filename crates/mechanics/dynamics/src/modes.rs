@@ -443,16 +443,48 @@ fn reduced_eigen(
             "the reduced matrix is not finite (stiffness or mass out of range)".into(),
         ));
     }
-    let evd = c
-        .self_adjoint_eigen(Side::Lower)
-        .map_err(|e| DynamicsError::Eigen(format!("{e:?}")))?;
-    let mut v = evd.U().to_owned();
+    let (values, mut v) = symmetric_eigen(&c)?;
     if narrow {
         envelope.solve_upper_transposed(&mut v);
     } else {
         l.transpose().solve_upper_triangular_in_place(v.as_mut());
     }
-    Ok(((0..n).map(|i| evd.S().column_vector()[i]).collect(), v))
+    Ok((values, v))
+}
+
+/// Eigenvalues (ascending) and orthonormal eigenvectors of the symmetric `c`, by faer's
+/// divide and conquer on `c` scaled by a power of two to a largest entry in [1, 2).
+///
+/// Why the scaling: faer merges two eigenvalues of a divide-and-conquer step into one when
+/// they differ by less than 8ε max(max |d|, max |z|), and the rank-one vector z is a unit
+/// vector whatever the matrix's size: for a matrix whose entries are far below 1 (the
+/// reduced matrices of the modes, μ = 1/ω² ~ 1e-7 s² at the violin modes) that is an
+/// absolute tolerance far above ε‖C‖, and nearly degenerate eigenvalues come back exactly
+/// equal (quad-aligo's violin pairs, 5e-9 apart, were). LAPACK scales the matrix to unit
+/// norm first for the same reason. A power of two keeps the scaling and its undoing exact.
+pub(crate) fn symmetric_eigen(c: &Mat<f64>) -> Result<(Vec<f64>, Mat<f64>), DynamicsError> {
+    let n = c.nrows();
+    let largest = (0..n)
+        .flat_map(|j| (0..n).map(move |i| (i, j)))
+        .map(|(i, j)| c[(i, j)].abs())
+        .fold(0.0, f64::max);
+    let exponent = if largest > 0.0 && largest.is_finite() {
+        // largest = m 2^e with m in [1, 2): multiply by 2^−e
+        // (within ±1000, where both 2^e and 2^−e are normal numbers)
+        (largest.log2().floor() as i32).clamp(-1000, 1000)
+    } else {
+        0
+    };
+    let scale = 2f64.powi(-exponent);
+    let unscale = 2f64.powi(exponent);
+    let scaled = Mat::from_fn(n, n, |i, j| c[(i, j)] * scale);
+    let evd = scaled
+        .self_adjoint_eigen(Side::Lower)
+        .map_err(|e| DynamicsError::Eigen(format!("{e:?}")))?;
+    let values = (0..n)
+        .map(|i| evd.S().column_vector()[i] * unscale)
+        .collect();
+    Ok((values, evd.U().to_owned()))
 }
 
 /// Backward error of the symmetric eigensolver on an n × n reduced matrix, in units of ε

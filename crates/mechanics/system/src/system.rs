@@ -202,6 +202,11 @@ pub struct Wire<S: Real = f64> {
     pub profile: Vec<(S, S)>,
     /// Damping tags.
     pub tags: WireTags,
+    /// Whether responses and noise take this wire as a continuum (its exact dynamic
+    /// stiffness D(f), `pendkit-element-continuum-fibre`) unless told otherwise: a
+    /// suspension file's `continuum = true` on the wire's set. The equilibrium, the modes
+    /// and the state space use the static terms either way.
+    pub continuum: bool,
 }
 
 impl<S: pendkit_rotations::Constant> Wire<S> {
@@ -259,6 +264,7 @@ impl<S: Real> Wire<S> {
             section,
             profile: Vec::new(),
             tags,
+            continuum: false,
         }
     }
 }
@@ -743,6 +749,7 @@ impl<S: Real> System<S> {
                         .map(|&(l, r)| (v.one(l), v.one(r)))
                         .collect(),
                     tags: w.tags.clone(),
+                    continuum: w.continuum,
                 }
             })
             .collect();

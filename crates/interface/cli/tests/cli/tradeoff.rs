@@ -97,6 +97,7 @@ fn pendulum_ladder_matches_the_library_and_names_the_cheapest_within_tolerance()
         "1e-3",
         "--budget",
         "0.02",
+        "--no-continuum",
         "--out",
         dir.to_str().unwrap(),
     ]);
@@ -104,7 +105,9 @@ fn pendulum_ladder_matches_the_library_and_names_the_cheapest_within_tolerance()
     let rows = read_csv(&dir);
 
     // The pendulum has no beads and no blade-tip family: the stages 0B..2 restricted, the
-    // full solve at stage 2 as the reference; 0A cannot answer a noise question.
+    // full solve at stage 2 as the reference (continuum fibres left out here; see
+    // `continuum_fibres_are_the_reference_the_beads_converge_to`); 0A cannot answer a
+    // noise question.
     let names: Vec<&str> = rows.iter().map(|r| r.variant.as_str()).collect();
     assert_eq!(
         names,
@@ -236,6 +239,7 @@ fn quad_bead_ladder_converges_to_the_reference() {
         "1,2,5",
         "--budget",
         "0",
+        "--no-continuum",
         "--out",
         dir.to_str().unwrap(),
     ]);
@@ -253,6 +257,97 @@ fn quad_bead_ladder_converges_to_the_reference() {
         assert!(coarse.tf.unwrap() > fine.tf.unwrap(), "{coarse:?} {fine:?}");
     }
     assert!(ladder[2].max() <= 1e-10, "{:?}", ladder[2]);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn continuum_fibres_are_the_reference_the_beads_converge_to() {
+    // With continuum fibres in the ladder (the default) the reference of the noise and the
+    // transfer function is the richest family member with continuum fibres, full solve;
+    // the modes are measured against the richest finite variant (5 beads), whose name the
+    // table gives. Second route, as in the pendulum's test: the library's continuum noise
+    // and |TF| (quad-full, stage 2, full solve) against its 2-bead ones, compared here, must
+    // equal the 2-bead row's errors to rounding; and the beads' noise errors must fall
+    // from 1 to 2 to 5 beads, towards the continuum (their limit: tests/physics).
+    let dir = scratch("continuum");
+    let (ok, stdout, stderr) = pendkit(&[
+        "tradeoff",
+        "quad",
+        "--output",
+        "x3",
+        "--input",
+        "x00",
+        "--band",
+        "10:100",
+        "--points",
+        "30",
+        "--beads",
+        "1,2,5",
+        "--budget",
+        "0",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(ok, "{stderr}");
+    let rows = read_csv(&dir);
+    assert_eq!(
+        rows[0].variant, "quad-full s2 continuum full-solve",
+        "{stdout}"
+    );
+    assert_eq!((rows[0].noise, rows[0].tf), (0.0, Some(0.0)));
+    assert!(
+        stdout.contains(
+            "errors against quad-full s2 continuum full-solve (modes: quad-full s2 b5 full-solve)"
+        ),
+        "{stdout}"
+    );
+    for member in ["quad", "quad-lite", "quad-lateral", "quad-full"] {
+        row(&rows, &format!("{member} s2 continuum"));
+    }
+    let beads: Vec<&Row> = ["quad-full s2 b1", "quad-full s2 b2", "quad-full s2 b5"]
+        .iter()
+        .map(|n| row(&rows, n))
+        .collect();
+    for pair in beads.windows(2) {
+        assert!(pair[0].noise > pair[1].noise, "{:?} {:?}", pair[0], pair[1]);
+    }
+    let grid = log_grid(10.0, 100.0, 30).unwrap();
+    let full = NoiseOptions {
+        solver: Solver::Full,
+        per_term: false,
+    };
+    let continuum = stage_of("quad-full", Stage::S2)
+        .with_fibres(&pendkit::stage::Fibres::Continuum)
+        .unwrap();
+    let case = Case::open("quad-full")
+        .unwrap()
+        .with_sets(&["n_beads=2".to_string()])
+        .unwrap();
+    let two = run_stage(case.build().unwrap().0, Stage::S2).unwrap();
+    let expected_noise = max_rel(
+        &continuum.noise_with("x3", &grid, &full).unwrap().asd(),
+        &two.noise("x3", &grid).unwrap().asd(),
+    );
+    let tf = |run: &StageResult, solver| -> Vec<f64> {
+        run.transfer_with("x00", "x3", &grid, solver)
+            .unwrap()
+            .iter()
+            .map(|h| h.norm())
+            .collect()
+    };
+    let expected_tf = max_rel(&tf(&continuum, Solver::Full), &tf(&two, Solver::Restricted));
+    let b2 = row(&rows, "quad-full s2 b2");
+    assert!(expected_noise > 1e-6, "{expected_noise}");
+    assert!(
+        (b2.noise - expected_noise).abs() <= 1e-12 * expected_noise,
+        "{} vs {expected_noise}",
+        b2.noise
+    );
+    let b2_tf = b2.tf.unwrap();
+    assert!(
+        (b2_tf - expected_tf).abs() <= 1e-12 * expected_tf,
+        "{b2_tf} vs {expected_tf}"
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }
 

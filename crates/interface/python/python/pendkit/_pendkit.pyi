@@ -98,8 +98,14 @@ class Model:
         """Fits the `free` parameters to measured modes (a CSV path or (label, hz,
         sigma_hz[, shape]) tuples), as `pendkit fit` (`starts`, `more_starts` as
         `--starts`, `--more-starts`); a dict of the result."""
-    def run(self, stage: _Stage = None) -> "Result":
-        """Builds the model and runs a stage ("0a", "0b", "1a", "1b", "2"; default "2")."""
+    def run(
+        self,
+        stage: _Stage = None,
+        fibres: Union[Literal["static", "continuum"], Sequence[str], None] = None,
+    ) -> "Result":
+        """Builds the model and runs a stage ("0a", "0b", "1a", "1b", "2"; default "2");
+        ``fibres`` as the command line's ``--fibres`` ("static", "continuum", wire names;
+        ``None``: as the model's file says)."""
     def sensitivities(
         self,
         stage: _Stage = None,
