@@ -63,6 +63,10 @@ struct Problem<'a> {
     size: usize,
     nx: usize,
     mass: DMatrix<f64>,
+    /// The first frequency (Hz) at which E was not finite (a damping multiplier that is
+    /// NaN there, a frequency exactly at a held resonance): the search then reports it
+    /// instead of its roots, and the eigensolver never sees a NaN.
+    not_finite: std::cell::Cell<Option<f64>>,
 }
 
 /// The count at one frequency: negative eigenvalues of E over the variables and floats,
@@ -90,13 +94,28 @@ impl Problem<'_> {
         let w2 = (TWO_PI * f).powi(2);
         let mut block = e.view_mut((0, 0), (self.nx, self.nx));
         block -= &self.mass * w2;
-        e
+        if e.iter().all(|v| v.is_finite()) {
+            e
+        } else {
+            if self.not_finite.get().is_none() {
+                self.not_finite.set(Some(f));
+            }
+            DMatrix::zeros(self.size, self.size)
+        }
     }
 
     /// Im E(f) with the model's multipliers, over the variables and floats.
     fn imag(&self, f: f64) -> DMatrix<f64> {
         let (_, im) = self.model.master(self.damping, f);
-        im.view((0, 0), (self.size, self.size)).into_owned()
+        let im = im.view((0, 0), (self.size, self.size)).into_owned();
+        if im.iter().all(|v| v.is_finite()) {
+            im
+        } else {
+            if self.not_finite.get().is_none() {
+                self.not_finite.set(Some(f));
+            }
+            DMatrix::zeros(self.size, self.size)
+        }
     }
 
     fn count(&self, f: f64) -> Count {
@@ -186,6 +205,7 @@ impl StageModel {
             size: nx + nq,
             nx,
             mass: self.mass.to_dense(),
+            not_finite: std::cell::Cell::new(None),
         };
         let mut roots = Vec::new();
         for (set, harmonic, lo, hi) in bands {
@@ -199,7 +219,15 @@ impl StageModel {
                 .iter()
                 .map(|&t| self.frequency_terms[t].label().to_string())
                 .collect();
-            for (frequency_hz, q, accuracy_hz, held) in problem.band(lo, hi) {
+            let found = problem.band(lo, hi);
+            if let Some(f) = problem.not_finite.get() {
+                return Err(DynamicsError::Violin(format!(
+                    "the dynamic stiffness is not finite at {} Hz (a damping multiplier \
+                     there, or a frequency at a fibre's held resonance)",
+                    pendkit_expr::number_text(f)
+                )));
+            }
+            for (frequency_hz, q, accuracy_hz, held) in found {
                 roots.push(ViolinRoot {
                     terms: terms.clone(),
                     harmonic,
@@ -423,7 +451,9 @@ impl Problem<'_> {
     /// first order. With r = zᵀRz (R from E on either side of f_p), u = f_p − f,
     /// a′ = zᵀA′z and a_i = zᵀ Im A z, the root of zᵀE z = 0 moves by
     ///
-    ///     x = i (a_i u² − r δ_p) / (−r − a′u² − i a′ δ_p u),
+    /// ```text
+    /// x = i (a_i u² − r δ_p) / (−r − a′u² − i a′ δ_p u),
+    /// ```
     ///
     /// linear in the losses but not in δ_p/u: a root nearer the resonance than its width
     /// (a fibre hanging an almost still body) takes the fibre's own loss, x → iδ_p, where
