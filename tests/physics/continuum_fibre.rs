@@ -20,12 +20,12 @@ use std::f64::consts::PI;
 
 /// The REF fibre of docs/reference-values.md §0: silica, r = 0.2 mm, E = 72 GPa,
 /// ν = 0.17, ρ = 2200 kg/m³, 0.6 m, 98.1 N.
-const RADIUS: f64 = 2e-4;
-const YOUNG: f64 = 7.2e10;
+pub(crate) const RADIUS: f64 = 2e-4;
+pub(crate) const YOUNG: f64 = 7.2e10;
 const SHEAR: f64 = YOUNG / (2.0 * 1.17);
-const DENSITY: f64 = 2200.0;
-const LENGTH: f64 = 0.6;
-const TENSION: f64 = 98.1;
+pub(crate) const DENSITY: f64 = 2200.0;
+pub(crate) const LENGTH: f64 = 0.6;
+pub(crate) const TENSION: f64 = 98.1;
 
 fn tags() -> WireTags {
     WireTags {
@@ -38,7 +38,7 @@ fn tags() -> WireTags {
 /// A support (parameters) and a free body, the fibre from the support's origin to the
 /// body's origin at `offset` (m), both ends clamped along the chord (auto), at `tension`
 /// (N); the coordinates with both bodies unturned.
-fn fibre_between(offset: Vector3<f64>, radius: f64, tension: f64) -> (System, Vec<f64>) {
+pub(crate) fn fibre_between(offset: Vector3<f64>, radius: f64, tension: f64) -> (System, Vec<f64>) {
     let end = |body| WireEnd {
         body,
         point: Vector3::zeros(),
@@ -158,7 +158,7 @@ fn static_limit_is_the_stage_2_stack_and_its_tags() {
 }
 
 /// EI (N m²) and μ (kg/m) of a round fibre of radius `r`.
-fn beam_constants(r: f64) -> (f64, f64) {
+pub(crate) fn beam_constants(r: f64) -> (f64, f64) {
     (YOUNG * PI * r.powi(4) / 4.0, DENSITY * PI * r * r)
 }
 
@@ -166,7 +166,7 @@ fn beam_constants(r: f64) -> (f64, f64) {
 /// divided by cosh κL so that nothing overflows:
 /// 2 k κ (sech κL − cos kL) + (κ² − k²) sin kL tanh κL, with
 /// k² = (−T + s)/(2EI), κ² = (T + s)/(2EI), s = √(T² + 4 EI μ ω²).
-fn clamped_clamped(f: f64, ei: f64, mu: f64, t: f64, l: f64) -> f64 {
+pub(crate) fn clamped_clamped(f: f64, ei: f64, mu: f64, t: f64, l: f64) -> f64 {
     let w = 2.0 * PI * f;
     let s = (t * t + 4.0 * ei * mu * w * w).sqrt();
     let k = ((s - t) / (2.0 * ei)).sqrt();
@@ -176,7 +176,7 @@ fn clamped_clamped(f: f64, ei: f64, mu: f64, t: f64, l: f64) -> f64 {
 }
 
 /// A root of `g` in [a, b] (a sign change) by bisection to the last bit.
-fn bisect(g: impl Fn(f64) -> f64, mut a: f64, mut b: f64) -> f64 {
+pub(crate) fn bisect(g: impl Fn(f64) -> f64, mut a: f64, mut b: f64) -> f64 {
     let ga = g(a);
     assert!(ga * g(b) < 0.0, "no sign change in [{a}, {b}]");
     for _ in 0..200 {

@@ -21,3 +21,4 @@ mod registry;
 mod scenes;
 mod stability;
 mod triple;
+mod violin_modes;

@@ -18,6 +18,7 @@
 
 mod piece;
 mod term;
+mod violin;
 
 pub use term::{ContinuumTerm, continuum_terms};
 
@@ -263,43 +264,23 @@ impl ContinuumFibre {
     /// the cross stiffness (a pole of its inverse, where it also changes sign) is told
     /// apart by the size of 1/D at the bisection's end.
     pub fn held_resonances(&self, n: usize) -> Vec<f64> {
-        let mass: f64 = self.pieces.iter().map(|q| q.density * q.length).sum();
-        let length = self.length();
-        let string = (self.tension * length / mass).sqrt() / (2.0 * length);
-        let g = |f: f64| {
-            let d = &self
-                .local(2.0 * std::f64::consts::PI * f, &Moduli::LOSSLESS)
-                .planes[0];
-            1.0 / d[(0, 2)].re
-        };
-        let step = string / 64.0;
         let mut found = Vec::with_capacity(n);
-        let (mut a, mut ga) = (0.5 * string, g(0.5 * string));
+        if n == 0 {
+            return found;
+        }
         // at most 64 steps per expected mode and a few hundred more: a fibre has a mode
         // within each ~string interval
-        for _ in 0..(64 * (n + 4)) {
-            if found.len() == n {
-                break;
-            }
-            let b = a + step;
-            let gb = g(b);
-            if ga * gb < 0.0 {
-                let (mut lo, mut hi, glo) = (a, b, ga);
-                while hi - lo > f64::EPSILON * hi {
-                    let m = 0.5 * (lo + hi);
-                    if g(m) * glo > 0.0 {
-                        lo = m;
-                    } else {
-                        hi = m;
-                    }
+        self.scan_held(
+            0.5 * self.string_fundamental(),
+            64 * (n + 4),
+            &|_| Moduli::LOSSLESS,
+            &mut |motion, f| {
+                if motion == 0 {
+                    found.push(f);
                 }
-                let root = 0.5 * (lo + hi);
-                if g(root).abs() < ga.abs().min(gb.abs()) {
-                    found.push(root);
-                }
-            }
-            (a, ga) = (b, gb);
-        }
+                found.len() < n
+            },
+        );
         found
     }
 

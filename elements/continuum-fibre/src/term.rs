@@ -6,7 +6,7 @@ use std::sync::{Arc, Mutex};
 
 use nalgebra::{Complex, DMatrix};
 use pendkit_assembly::{Assembled, Layout};
-use pendkit_dynamics::{FrequencyTerm, Group};
+use pendkit_dynamics::{FrequencyTerm, Group, HeldResonance};
 use pendkit_system::System;
 
 use crate::{C64, ContinuumFibre, FibreError, GROUPS, Local, Moduli};
@@ -125,13 +125,23 @@ impl FrequencyTerm for ContinuumTerm {
         &self.groups
     }
 
+    fn held_resonances(
+        &self,
+        lo_hz: f64,
+        hi_hz: f64,
+        multipliers: &dyn Fn(f64) -> Vec<C64>,
+    ) -> Vec<HeldResonance> {
+        self.fibre
+            .held_in(lo_hz, hi_hz, &|f| moduli_of(&multipliers(f)))
+    }
+
+    fn harmonics(&self, n: usize) -> Vec<f64> {
+        self.fibre.held_resonances(n)
+    }
+
     fn parts(&self, f_hz: f64, multipliers: &[C64], values: &mut [C64]) {
         let m = |t: usize| multipliers.get(t).copied().unwrap_or(C64::new(1.0, 0.0));
-        let moduli = Moduli {
-            stretch: m(0),
-            bending: m(1),
-            torsion: m(2),
-        };
+        let moduli = moduli_of(multipliers);
         let local = {
             // a poisoned lock only means another thread panicked mid-update: the entry is
             // checked against its key before use either way
@@ -154,6 +164,17 @@ impl FrequencyTerm for ContinuumTerm {
         for (e, v) in values.iter_mut().enumerate().take(Local::LEN) {
             *v = d[e] - self.at_rest[e] - excess[Local::tag(e)] * self.slope[e];
         }
+    }
+}
+
+/// The fibre's [`Moduli`] from its tags' multipliers (stretch, bending, torsion order; one
+/// for a multiplier not given).
+fn moduli_of(multipliers: &[C64]) -> Moduli {
+    let m = |t: usize| multipliers.get(t).copied().unwrap_or(C64::new(1.0, 0.0));
+    Moduli {
+        stretch: m(0),
+        bending: m(1),
+        torsion: m(2),
     }
 }
 

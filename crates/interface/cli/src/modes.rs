@@ -6,7 +6,7 @@ use std::fmt::Write as _;
 use std::path::PathBuf;
 
 use pendkit::dynamics::lab_motion;
-use pendkit::stage::ModeSelection;
+use pendkit::stage::{MAX_VIOLIN_HARMONICS, ModeSelection, ViolinMode};
 use serde::Serialize;
 
 use crate::common::{ModelArgs, Run, check_plot_path};
@@ -38,19 +38,50 @@ pub struct Args {
     /// the chart.
     #[arg(long, value_name = "N", requires = "plot")]
     shape: Option<usize>,
+    /// Also list the first N violin modes of each set of alike fibres: the roots of the
+    /// model with its lowest wires as continuum fibres (their exact D(f)), each with its
+    /// quality factor and accuracy (docs/continuum-fibres.md). The rigid-body table keeps
+    /// the static model.
+    #[arg(long, value_name = "N")]
+    violin: Option<usize>,
+}
+
+/// The violin modes of a run (`--violin N`): refused for N out of range, static fibres
+/// asked for, and a model with no wires to take as continuum fibres.
+fn violin_modes(run: &Run, n: usize) -> Result<Vec<ViolinMode>, CliError> {
+    if run.result.model.frequency_terms.is_empty() {
+        return Err(CliError::usage(
+            "--violin: the model has no wires to take as continuum fibres",
+        ));
+    }
+    Ok(run.result.violin_modes(n)?)
 }
 
 /// Runs the command and returns what it prints.
 pub fn run(a: Args) -> Result<Output, CliError> {
     check_plot_path(&a.plot)?;
     let selection = a.below.map_or(ModeSelection::All, ModeSelection::Below);
-    if a.args.fibres.as_deref() == Some("continuum") {
+    let mut a = a;
+    if let Some(n) = a.violin {
+        if n == 0 || n > MAX_VIOLIN_HARMONICS {
+            return Err(CliError::usage(format!(
+                "--violin: the number of harmonics must be 1 to {MAX_VIOLIN_HARMONICS} (got {n})"
+            )));
+        }
+        if a.args.fibres.as_deref() == Some("static") {
+            return Err(CliError::usage(
+                "--violin needs continuum fibres: drop --fibres static",
+            ));
+        }
+        a.args.fibres = Some("continuum".into());
+    } else if a.args.fibres.as_deref() == Some("continuum") {
         eprintln!(
-            "note: the modes are those of the static model (massless fibres); --fibres continuum changes tf and noise only (violin modes: --set n_beads=N)"
+            "note: the modes are those of the static model (massless fibres); --fibres continuum changes tf and noise only (violin modes: --violin N)"
         );
     }
     let run = a.args.run(selection)?;
     run.check_stable(a.args.allow_unstable)?;
+    let violin = a.violin.map(|n| violin_modes(&run, n)).transpose()?;
     if let Some(path) = &a.plot {
         match a.shape {
             Some(n) => plotting::save(&plotting::mode_shape(&run, n)?, path)?,
@@ -58,10 +89,53 @@ pub fn run(a: Args) -> Result<Output, CliError> {
         }
     }
     if a.json {
-        Ok(modes_json(run))
+        Ok(modes_json(run, violin))
     } else {
-        Ok(modes_table(&run, a.lab)?.into())
+        let mut table = modes_table(&run, a.lab)?;
+        if let Some(v) = &violin {
+            table += &violin_table(v);
+        }
+        Ok(table.into())
     }
+}
+
+/// The violin table: one row per root, grouped by fibre set and harmonic.
+fn violin_table(modes: &[ViolinMode]) -> String {
+    let mut out = String::new();
+    let mut set: Option<&[String]> = None;
+    for m in modes {
+        if set != Some(m.wires.as_slice()) {
+            set = Some(&m.wires);
+            let _ = writeln!(
+                out,
+                "violin modes of fibres {} (continuum; the rigid-body modes above are the static model's)",
+                m.wires.join(" ")
+            );
+            let _ = writeln!(
+                out,
+                "{:>8}  {:>16}  {:>10}  {:>11}  motion",
+                "harmonic", "frequency_hz", "q", "accuracy_hz"
+            );
+        }
+        let motion = match &m.held {
+            Some(h) => format!("fibres only ({h}), bodies still"),
+            None => "bodies move".to_string(),
+        };
+        let q = if m.q.is_finite() {
+            sci(m.q, 4, 10)
+        } else {
+            format!("{:>10}", "inf")
+        };
+        let _ = writeln!(
+            out,
+            "{:>8}  {}  {}  {}  {motion}",
+            m.harmonic,
+            fixed(m.frequency_hz, 9, 16),
+            q,
+            sci(m.accuracy_hz, 1, 11),
+        );
+    }
+    out
 }
 
 /// The bodies' lab-frame motion in mode `m` of the run.
@@ -87,7 +161,7 @@ fn lab(
 /// The document is byte for byte what the earlier `json!` form printed: the keys of every
 /// object in alphabetical order (the order of serde_json's `Map`, a `BTreeMap`), hence the
 /// field order of the structs below, which is not their reading order.
-fn modes_json(run: Run) -> Output {
+fn modes_json(run: Run, violin: Option<Vec<ViolinMode>>) -> Output {
     Output::Stream(Box::new(move |w| {
         let document = ModesDocument {
             case: &run.case.name,
@@ -117,6 +191,19 @@ fn modes_json(run: Run) -> Output {
             modes: ModesJson(&run),
             naming: run.scheme.as_deref().unwrap_or("model"),
             stage: run.stage.name(),
+            violin: violin.as_ref().map(|v| {
+                v.iter()
+                    .map(|m| ViolinJson {
+                        accuracy_hz: m.accuracy_hz,
+                        frequency_hz: m.frequency_hz,
+                        harmonic: m.harmonic,
+                        held: m.held.as_deref(),
+                        // null when infinite (no loss)
+                        q: Some(m.q).filter(|q| q.is_finite()),
+                        wires: &m.wires,
+                    })
+                    .collect()
+            }),
         };
         serde_json::to_writer_pretty(&mut *w, &document)
             .and_then(|()| w.write_all(b"\n").map_err(serde_json::Error::io))
@@ -142,6 +229,20 @@ struct ModesDocument<'a> {
     modes: ModesJson<'a>,
     naming: &'a str,
     stage: &'a str,
+    /// With `--violin N` only, so that the document without it is unchanged.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    violin: Option<Vec<ViolinJson<'a>>>,
+}
+
+/// One violin mode in `modes --json` (keys in alphabetical order).
+#[derive(Serialize)]
+struct ViolinJson<'a> {
+    accuracy_hz: f64,
+    frequency_hz: f64,
+    harmonic: usize,
+    held: Option<&'a str>,
+    q: Option<f64>,
+    wires: &'a [String],
 }
 
 /// The modes of a run, each formatted (with its lab-frame motion) only when written.

@@ -19,7 +19,7 @@ use crate::{Case, Error, VERSION};
 
 pub use crate::bench::{BenchPhase, BenchReport, MAX_REPEAT, bench};
 pub use crate::state_space::NamedStateSpace;
-pub use pendkit_dynamics::{DENSE_MODES_LIMIT, ModeSelection, RunOptions};
+pub use pendkit_dynamics::{DENSE_MODES_LIMIT, MAX_VIOLIN_HARMONICS, ModeSelection, RunOptions};
 /// Continuum fibres: a wire's exact dynamic stiffness D(f) (docs/continuum-fibres.md).
 pub use pendkit_element_continuum_fibre as continuum;
 
@@ -122,6 +122,26 @@ impl From<StageRun> for StageResult {
     }
 }
 
+/// One violin mode of a model with continuum fibres ([`StageResult::violin_modes`]).
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct ViolinMode {
+    /// The wires of the fibre set whose harmonic this is (alike fibres: the same
+    /// harmonics).
+    pub wires: Vec<String>,
+    /// The harmonic (1 for the fundamental): the mode lies in the band around it.
+    pub harmonic: usize,
+    /// Frequency (Hz).
+    pub frequency_hz: f64,
+    /// Quality factor (dimensionless) f/(2 Im f), Im f to first order in the loss;
+    /// infinite without loss (null in JSON).
+    pub q: f64,
+    /// Bound on the frequency's numerical error (Hz).
+    pub accuracy_hz: f64,
+    /// When every body is still in this mode (the fibres' end forces cancel on them): the
+    /// motion of the fibres' held resonance it sits at ("transverse", "axial", "torsion").
+    pub held: Option<String>,
+}
+
 /// How the wires' own motion enters responses and noise. A stage result starts as the
 /// model says ([`Fibres::AsModelled`]: the wires its file marks `continuum = true`, none in
 /// the bundled models); [`StageResult::with_fibres`] chooses otherwise.
@@ -217,6 +237,42 @@ impl StageResult {
         let mut result = self;
         result.run.model.frequency_terms.extend(terms);
         Ok(result)
+    }
+
+    /// The first `harmonics` violin modes of each set of alike continuum fibres (a quad's
+    /// four), as roots of the whole model's frequency-dependent problem with the fibres'
+    /// exact D(f) (docs/continuum-fibres.md, "Violin modes"): each harmonic's cluster,
+    /// frequency, quality factor and accuracy. Needs continuum fibres
+    /// ([`StageResult::with_fibres`]); refused: `harmonics` outside
+    /// 1..=[`MAX_VIOLIN_HARMONICS`], a model without them.
+    pub fn violin_modes(&self, harmonics: usize) -> Result<Vec<ViolinMode>, Error> {
+        if self.run.model.frequency_terms.is_empty() {
+            return Err(Error::Name {
+                name: "violin modes".into(),
+                message: "they need continuum fibres (Fibres::Continuum): this result has \
+                          the static wires"
+                    .into(),
+            });
+        }
+        let roots = self
+            .run
+            .model
+            .violin_modes(&self.run.system.damping, harmonics)?;
+        Ok(roots
+            .into_iter()
+            .map(|r| ViolinMode {
+                wires: r
+                    .terms
+                    .iter()
+                    .map(|t| t.strip_prefix("continuum:").unwrap_or(t).to_string())
+                    .collect(),
+                harmonic: r.harmonic,
+                frequency_hz: r.frequency_hz,
+                q: r.q,
+                accuracy_hz: r.accuracy_hz,
+                held: r.held.map(str::to_string),
+            })
+            .collect())
     }
 
     /// The body whose own pose coordinate `coord` is, and the pose entry (0 to 5: x, y, z,

@@ -18,6 +18,7 @@ mod stability;
 mod stage;
 mod sweep;
 pub mod validate;
+mod violin;
 
 pub use modes::{
     BodyMotion, EntryRounding, Mode, Modes, REFINE_ABOVE, StiffnessRounding, lab_motion,
@@ -30,10 +31,11 @@ pub use stability::{
     Verdict, float_directions, inverted_bodies, runaway_floats,
 };
 pub use stage::{
-    FrequencyTerm, Group, Input, Output, ReducedComplex, StageModel, StateSpace, TermLoss,
-    block_len,
+    FrequencyTerm, Group, HeldResonance, Input, Multiplier, Output, ReducedComplex, StageModel,
+    StateSpace, TermLoss, block_len,
 };
 pub use sweep::{DENSE_LIMIT, Solver, Sweep, coupled_unknowns};
+pub use violin::{MAX_VIOLIN_HARMONICS, ViolinRoot};
 
 use faer::c64;
 use nalgebra::DMatrix;
@@ -98,6 +100,9 @@ pub enum DynamicsError {
         /// k l0 / |T| = l0 / |l − l0|.
         ratio: f64,
     },
+    /// A violin-mode search that cannot run (one line: why).
+    #[error("violin modes: {0}")]
+    Violin(String),
     /// A frequency grid with more points than [`pendkit_limits::FREQUENCY_POINTS`] allows
     /// (or that limit's variable set wrongly).
     #[error("frequency grid: {0}")]

@@ -68,6 +68,23 @@ pub struct StageModel {
     pub frequency_terms: Vec<std::sync::Arc<dyn FrequencyTerm>>,
 }
 
+/// A damping multiplier as a function of (tag, frequency in Hz): (ε', ε'').
+pub type Multiplier<'a> = dyn Fn(&str, f64) -> (f64, f64) + 'a;
+
+/// A resonance of a frequency term's own interior with its end frames held (a fibre's
+/// clamped–clamped modes): its parts are infinite there, and a mode of the whole model sits
+/// there whenever the term's end forces in that resonance cancel on the bodies.
+#[derive(Clone, Debug, PartialEq)]
+pub struct HeldResonance {
+    /// Frequency (Hz) of the lossless resonance (multipliers ε' + 0i).
+    pub frequency_hz: f64,
+    /// Its imaginary part (Hz) with the loss, to first order in ε'': the resonance decays
+    /// as e^{−2π Im f t}, so its quality factor is f/(2 Im f).
+    pub imag_hz: f64,
+    /// The motion that resonates (for messages: "transverse", "axial", "torsion").
+    pub motion: &'static str,
+}
+
 /// A part of the dynamic stiffness that depends on frequency otherwise than through the
 /// damping multipliers: a continuum fibre's D(f) less the static stack the model already
 /// holds for it (docs/continuum-fibres.md). It is added to E(f) over its master rows, on
@@ -100,6 +117,24 @@ pub trait FrequencyTerm: Send + Sync + std::fmt::Debug {
     /// the other in group order ([`block_len`] entries in all): the term adds
     /// Σ_g J_gᵀ V_g J_g to E(f), and Im V_g is the dissipation of the group's part.
     fn parts(&self, f_hz: f64, multipliers: &[c64], values: &mut [c64]);
+    /// The term's held resonances ([`HeldResonance`]) in [`lo_hz`, `hi_hz`], each once per
+    /// independent motion (a round fibre's two transverse planes: twice), with the tags'
+    /// multipliers at each frequency given by `multipliers(f_hz)` ([`FrequencyTerm::tags`]
+    /// order). None by default: a term whose parts are finite at every frequency.
+    fn held_resonances(
+        &self,
+        _lo_hz: f64,
+        _hi_hz: f64,
+        _multipliers: &dyn Fn(f64) -> Vec<c64>,
+    ) -> Vec<HeldResonance> {
+        Vec::new()
+    }
+    /// The frequencies (Hz) of the term's first `n` violin harmonics (a fibre's transverse
+    /// held resonances, lossless), around which `StageModel::violin_modes` looks for the
+    /// whole model's roots. None by default.
+    fn harmonics(&self, _n: usize) -> Vec<f64> {
+        Vec::new()
+    }
 }
 
 /// A group of a frequency term's own displacements: rows `rows` of its Jacobian, whose
@@ -546,11 +581,21 @@ impl StageModel {
     /// The blocks of frequency term `term` at `f_hz` (Hz) with `damping`'s multipliers
     /// ([`FrequencyTerm::parts`]).
     pub fn frequency_parts(term: &dyn FrequencyTerm, damping: &Damping, f_hz: f64) -> Vec<c64> {
+        Self::frequency_parts_with(term, f_hz, &|tag, f| damping.at(tag, f))
+    }
+
+    /// [`StageModel::frequency_parts`] with the multiplier (ε', ε'') of each tag given by
+    /// `multiplier(tag, f_hz)`.
+    fn frequency_parts_with(
+        term: &dyn FrequencyTerm,
+        f_hz: f64,
+        multiplier: &Multiplier<'_>,
+    ) -> Vec<c64> {
         let m: Vec<c64> = term
             .tags()
             .iter()
             .map(|tag| {
-                let (re, im) = damping.at(tag, f_hz);
+                let (re, im) = multiplier(tag, f_hz);
                 c64::new(re, im)
             })
             .collect();
@@ -566,10 +611,15 @@ impl StageModel {
 
     /// The real and imaginary parts of P(f) on the pattern, tags added in name order.
     pub fn master_values(&self, damping: &Damping, f_hz: f64) -> (Vec<f64>, Vec<f64>) {
+        self.master_values_with(f_hz, &|tag, f| damping.at(tag, f))
+    }
+
+    /// [`StageModel::master_values`] with the multipliers of `multiplier(tag, f_hz)`.
+    fn master_values_with(&self, f_hz: f64, multiplier: &Multiplier<'_>) -> (Vec<f64>, Vec<f64>) {
         let mut re = self.lossless.clone();
         let mut im = vec![0.0; re.len()];
         for (tag, p) in &self.by_tag {
-            let (mr, mi) = damping.at(tag, f_hz);
+            let (mr, mi) = multiplier(tag, f_hz);
             for ((r, i), &v) in re.iter_mut().zip(im.iter_mut()).zip(p) {
                 *r += v * mr;
                 if mi != 0.0 {
@@ -695,13 +745,24 @@ impl StageModel {
     /// Complex master matrix P(f) (layout order x, q, s), dense real and imaginary parts.
     /// With frequency terms ([`StageModel::frequency_terms`]) their parts are added.
     pub fn master(&self, damping: &Damping, f_hz: f64) -> (DMatrix<f64>, DMatrix<f64>) {
-        let (re, im) = self.master_values(damping, f_hz);
+        self.master_with(f_hz, &|tag, f| damping.at(tag, f))
+    }
+
+    /// [`StageModel::master`] with the multiplier (ε', ε'') of each tag given by
+    /// `multiplier(tag, f_hz)`: the violin-mode search evaluates the model with the loss
+    /// set aside (ε'' = 0) and with it.
+    pub fn master_with(
+        &self,
+        f_hz: f64,
+        multiplier: &Multiplier<'_>,
+    ) -> (DMatrix<f64>, DMatrix<f64>) {
+        let (re, im) = self.master_values_with(f_hz, multiplier);
         let (mut re, mut im) = (self.dense_on_pattern(&re), self.dense_on_pattern(&im));
         for term in &self.frequency_terms {
             let projection = Projection::new(term.as_ref());
             let n = projection.coordinates();
             let p = term.positions();
-            let values = Self::frequency_parts(term.as_ref(), damping, f_hz);
+            let values = Self::frequency_parts_with(term.as_ref(), f_hz, multiplier);
             let mut local = vec![c64::new(0.0, 0.0); n * n];
             projection.project(&values, &mut local, &mut vec![c64::new(0.0, 0.0); n]);
             for (k, z) in local.iter().enumerate() {

@@ -359,6 +359,61 @@ fn modes_below_a_frequency_are_the_lowest_modes() {
     assert_eq!(stderr.trim_end().lines().count(), 1);
 }
 
+/// `modes --violin N` prints the rigid-body table as before and then the violin table (the
+/// library's roots, tested against closed forms and beads in tests/physics/violin_modes.rs),
+/// `--json` carries them, and N out of range, static fibres, a model with beads or without
+/// wires are each refused with one line.
+#[test]
+fn modes_violin_lists_the_violin_modes_after_the_rigid_body_ones() {
+    let (ok, plain, err) = pendkit(&["modes", "quad"]);
+    assert!(ok, "{err}");
+    let (ok, out, err) = pendkit(&["modes", "quad", "--violin", "2"]);
+    assert!(ok, "{err}");
+    assert!(
+        out.starts_with(&plain),
+        "the rigid-body table changed:\n{out}"
+    );
+    let violin: Vec<&str> = out[plain.len()..].lines().collect();
+    assert!(violin[0].contains("violin modes of fibres"), "{out}");
+    // two harmonics of 4 fibres × 2 planes, after the heading and column lines
+    assert_eq!(violin.len(), 2 + 16, "{out}");
+    assert_eq!(
+        violin.iter().filter(|l| l.contains("bodies still")).count(),
+        10,
+        "{out}"
+    );
+    let (ok, json, err) = pendkit(&["modes", "quad", "--violin", "1", "--json"]);
+    assert!(ok, "{err}");
+    let doc: serde_json::Value = serde_json::from_str(&json).unwrap();
+    let roots = doc["violin"].as_array().unwrap();
+    assert_eq!(roots.len(), 8);
+    let first = &roots[0];
+    let hz = first["frequency_hz"].as_f64().unwrap();
+    assert!((hz - 495.4957).abs() < 1e-3, "{first}");
+    assert!(first["q"].as_f64().unwrap() > 1e8, "{first}");
+    assert_eq!(first["harmonic"], 1);
+    // without --violin the document has no such key
+    let (_, json, _) = pendkit(&["modes", "quad", "--json"]);
+    assert!(!json.contains("\"violin\""));
+    for (args, expected) in [
+        (&["modes", "quad", "--violin", "0"][..], "must be 1 to 50"),
+        (&["modes", "quad", "--violin", "51"][..], "must be 1 to 50"),
+        (
+            &["modes", "quad", "--violin", "1", "--fibres", "static"][..],
+            "needs continuum fibres",
+        ),
+        (
+            &["modes", "quad", "--violin", "1", "--set", "n_beads=2"][..],
+            "continuum fibres replace violin beads",
+        ),
+        (&["modes", "toy", "--violin", "1"][..], "no wires"),
+    ] {
+        let (ok, _, err) = pendkit(args);
+        assert!(!ok && err.contains(expected), "{args:?}: {err}");
+        assert_eq!(err.trim_end().lines().count(), 1, "{args:?}: {err}");
+    }
+}
+
 /// `--fibres continuum` reaches `noise` (its answer at 100 Hz is the library's continuum
 /// one, tested against beads in tests/physics/continuum_fibre.rs, and differs from the
 /// static model's by the fibres' mass: several per cent), and `ss` keeps the static model

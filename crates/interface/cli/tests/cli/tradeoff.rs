@@ -75,12 +75,52 @@ fn stage_of(model: &str, stage: Stage) -> StageResult {
     run_stage(system, stage).unwrap()
 }
 
+/// The second route of a row's noise and |TF| errors: the library's answers of the
+/// reference (full solve) and of the variant (restricted) on `grid`, compared here, for the
+/// noise of `output` and the transfer function `input` → `output`. Both routes run the same
+/// deterministic arithmetic, and the CSV prints every digit ({:e}), so the row must carry
+/// these values to rounding (1e-12 relative); each is also checked to be a real, visible
+/// difference.
+fn assert_row_is_the_second_route(
+    row: &Row,
+    reference: &StageResult,
+    variant: &StageResult,
+    (input, output): (&str, &str),
+    grid: &[f64],
+) {
+    let full = NoiseOptions {
+        solver: Solver::Full,
+        per_term: false,
+    };
+    let expected_noise = max_rel(
+        &reference.noise_with(output, grid, &full).unwrap().asd(),
+        &variant.noise(output, grid).unwrap().asd(),
+    );
+    let tf = |run: &StageResult, solver| -> Vec<f64> {
+        run.transfer_with(input, output, grid, solver)
+            .unwrap()
+            .iter()
+            .map(|h| h.norm())
+            .collect()
+    };
+    let expected_tf = max_rel(
+        &tf(reference, Solver::Full),
+        &tf(variant, Solver::Restricted),
+    );
+    assert!(expected_noise > 1e-6 && expected_tf > 1e-9);
+    assert!(
+        (row.noise - expected_noise).abs() <= 1e-12 * expected_noise,
+        "{} vs {expected_noise}",
+        row.noise
+    );
+    let row_tf = row.tf.unwrap();
+    assert!(
+        (row_tf - expected_tf).abs() <= 1e-12 * expected_tf,
+        "{row_tf} vs {expected_tf}"
+    );
+}
+
 #[test]
-#[expect(
-    clippy::too_many_lines,
-    reason = "one scenario: the CLI's ladder CSV for the pendulum checked against the library's \
-              own runs on the same grid, then its verdict; every step reads the same rows"
-)]
 fn pendulum_ladder_matches_the_library_and_names_the_cheapest_within_tolerance() {
     let dir = scratch("pendulum");
     let tolerance = 1e-3;
@@ -128,43 +168,12 @@ fn pendulum_ladder_matches_the_library_and_names_the_cheapest_within_tolerance()
     assert!(rows.iter().all(|r| r.seconds > 0.0));
 
     // Second route: the library's noise and transfer function of stage 1B (restricted) and
-    // of the reference (stage 2, full solve) on the same grid, compared here. The CSV
-    // prints every digit of an f64 ({:e}), and both routes run the same deterministic
-    // arithmetic, so they agree to rounding (1e-12 relative of the error).
+    // of the reference (stage 2, full solve); stage 1B lacks only the extra stretch.
     let grid = log_grid(1.0, 100.0, 200).unwrap();
     let reference_run = stage_of("pendulum", Stage::S2);
     let variant_run = stage_of("pendulum", Stage::S1B);
-    let full = NoiseOptions {
-        solver: Solver::Full,
-        per_term: false,
-    };
-    let noise_ref = reference_run.noise_with("x1", &grid, &full).unwrap().asd();
-    let noise_var = variant_run.noise("x1", &grid).unwrap().asd();
-    let expected_noise = max_rel(&noise_ref, &noise_var);
-    let tf = |run: &StageResult, solver| -> Vec<f64> {
-        run.transfer_with("x00", "x1", &grid, solver)
-            .unwrap()
-            .iter()
-            .map(|h| h.norm())
-            .collect()
-    };
-    let expected_tf = max_rel(
-        &tf(&reference_run, Solver::Full),
-        &tf(&variant_run, Solver::Restricted),
-    );
     let s1b = row(&rows, "pendulum s1B");
-    // stage 1B lacks only the extra stretch: a real, visible difference
-    assert!(expected_noise > 1e-6 && expected_tf > 1e-9);
-    assert!(
-        (s1b.noise - expected_noise).abs() <= 1e-12 * expected_noise,
-        "{} vs {expected_noise}",
-        s1b.noise
-    );
-    let s1b_tf = s1b.tf.unwrap();
-    assert!(
-        (s1b_tf - expected_tf).abs() <= 1e-12 * expected_tf,
-        "{s1b_tf} vs {expected_tf}"
-    );
+    assert_row_is_the_second_route(s1b, &reference_run, &variant_run, ("x00", "x1"), &grid);
     // Modes by label (the pendulum's three modes are each on one coordinate): the largest
     // relative difference of x1, y1, z1 between stage 1B and stage 2 (all below 100 Hz).
     let by_label = |run: &StageResult, label: &str| {
@@ -312,10 +321,6 @@ fn continuum_fibres_are_the_reference_the_beads_converge_to() {
         assert!(pair[0].noise > pair[1].noise, "{:?} {:?}", pair[0], pair[1]);
     }
     let grid = log_grid(10.0, 100.0, 30).unwrap();
-    let full = NoiseOptions {
-        solver: Solver::Full,
-        per_term: false,
-    };
     let continuum = stage_of("quad-full", Stage::S2)
         .with_fibres(&pendkit::stage::Fibres::Continuum)
         .unwrap();
@@ -324,30 +329,8 @@ fn continuum_fibres_are_the_reference_the_beads_converge_to() {
         .with_sets(&["n_beads=2".to_string()])
         .unwrap();
     let two = run_stage(case.build().unwrap().0, Stage::S2).unwrap();
-    let expected_noise = max_rel(
-        &continuum.noise_with("x3", &grid, &full).unwrap().asd(),
-        &two.noise("x3", &grid).unwrap().asd(),
-    );
-    let tf = |run: &StageResult, solver| -> Vec<f64> {
-        run.transfer_with("x00", "x3", &grid, solver)
-            .unwrap()
-            .iter()
-            .map(|h| h.norm())
-            .collect()
-    };
-    let expected_tf = max_rel(&tf(&continuum, Solver::Full), &tf(&two, Solver::Restricted));
     let b2 = row(&rows, "quad-full s2 b2");
-    assert!(expected_noise > 1e-6, "{expected_noise}");
-    assert!(
-        (b2.noise - expected_noise).abs() <= 1e-12 * expected_noise,
-        "{} vs {expected_noise}",
-        b2.noise
-    );
-    let b2_tf = b2.tf.unwrap();
-    assert!(
-        (b2_tf - expected_tf).abs() <= 1e-12 * expected_tf,
-        "{b2_tf} vs {expected_tf}"
-    );
+    assert_row_is_the_second_route(b2, &continuum, &two, ("x00", "x3"), &grid);
     let _ = std::fs::remove_dir_all(&dir);
 }
 
