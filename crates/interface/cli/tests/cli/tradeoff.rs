@@ -235,38 +235,44 @@ fn quad_bead_ladder_converges_to_the_reference() {
     // for the different order of the sums). 0 beads is a different model (massless
     // fibres), not a step of the discretisation, so it is left out of the ladder here.
     let dir = scratch("quad");
-    let (ok, stdout, stderr) = pendkit(&[
-        "tradeoff",
-        "quad-full",
-        "--output",
-        "x3",
-        "--input",
-        "x00",
-        "--band",
-        "10:100",
-        "--beads",
-        "1,2,5",
-        "--budget",
-        "0",
-        "--no-continuum",
-        "--out",
-        dir.to_str().unwrap(),
-    ]);
-    assert!(ok, "{stderr}");
-    let rows = read_csv(&dir);
+    let (rows, stdout) = quad_x3_ladder("quad-full", &["--no-continuum"], &dir);
     assert_eq!(rows[0].variant, "quad-full s2 b5 full-solve", "{stdout}");
-    let ladder: Vec<&Row> = ["quad-full s2 b1", "quad-full s2 b2", "quad-full s2 b5"]
-        .iter()
-        .map(|n| row(&rows, n))
-        .collect();
+    let ladder = quad_full_beads(&rows);
     for pair in ladder.windows(2) {
         let (coarse, fine) = (pair[0], pair[1]);
-        assert!(coarse.noise > fine.noise, "{coarse:?} {fine:?}");
         assert!(coarse.modes > fine.modes, "{coarse:?} {fine:?}");
         assert!(coarse.tf.unwrap() > fine.tf.unwrap(), "{coarse:?} {fine:?}");
     }
     assert!(ladder[2].max() <= 1e-10, "{:?}", ladder[2]);
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// `tradeoff MODEL --output x3 --input x00 --band 10:100 --beads 1,2,5` (30 points, no
+/// repeats) with `extra` arguments, into `dir`: its rows and what it printed.
+fn quad_x3_ladder(model: &str, extra: &[&str], dir: &Path) -> (Vec<Row>, String) {
+    let mut args = vec![
+        "tradeoff", model, "--output", "x3", "--input", "x00", "--band", "10:100", "--points",
+        "30", "--beads", "1,2,5", "--budget", "0",
+    ];
+    args.extend_from_slice(extra);
+    let out = dir.to_str().unwrap().to_string();
+    args.extend_from_slice(&["--out", &out]);
+    let (ok, stdout, stderr) = pendkit(&args);
+    assert!(ok, "{stderr}");
+    (read_csv(dir), stdout)
+}
+
+/// `quad-full`'s rows with 1, 2 and 5 beads, whose noise errors must fall in that order:
+/// the beads converge (to the continuum, tests/physics), whichever is the reference.
+fn quad_full_beads(rows: &[Row]) -> Vec<&Row> {
+    let ladder: Vec<&Row> = ["quad-full s2 b1", "quad-full s2 b2", "quad-full s2 b5"]
+        .iter()
+        .map(|n| row(rows, n))
+        .collect();
+    for pair in ladder.windows(2) {
+        assert!(pair[0].noise > pair[1].noise, "{:?} {:?}", pair[0], pair[1]);
+    }
+    ladder
 }
 
 #[test]
@@ -279,26 +285,7 @@ fn continuum_fibres_are_the_reference_the_beads_converge_to() {
     // equal the 2-bead row's errors to rounding; and the beads' noise errors must fall
     // from 1 to 2 to 5 beads, towards the continuum (their limit: tests/physics).
     let dir = scratch("continuum");
-    let (ok, stdout, stderr) = pendkit(&[
-        "tradeoff",
-        "quad",
-        "--output",
-        "x3",
-        "--input",
-        "x00",
-        "--band",
-        "10:100",
-        "--points",
-        "30",
-        "--beads",
-        "1,2,5",
-        "--budget",
-        "0",
-        "--out",
-        dir.to_str().unwrap(),
-    ]);
-    assert!(ok, "{stderr}");
-    let rows = read_csv(&dir);
+    let (rows, stdout) = quad_x3_ladder("quad", &[], &dir);
     assert_eq!(
         rows[0].variant, "quad-full s2 continuum full-solve",
         "{stdout}"
@@ -313,13 +300,7 @@ fn continuum_fibres_are_the_reference_the_beads_converge_to() {
     for member in ["quad", "quad-lite", "quad-lateral", "quad-full"] {
         row(&rows, &format!("{member} s2 continuum"));
     }
-    let beads: Vec<&Row> = ["quad-full s2 b1", "quad-full s2 b2", "quad-full s2 b5"]
-        .iter()
-        .map(|n| row(&rows, n))
-        .collect();
-    for pair in beads.windows(2) {
-        assert!(pair[0].noise > pair[1].noise, "{:?} {:?}", pair[0], pair[1]);
-    }
+    quad_full_beads(&rows);
     let grid = log_grid(10.0, 100.0, 30).unwrap();
     let continuum = stage_of("quad-full", Stage::S2)
         .with_fibres(&pendkit::stage::Fibres::Continuum)
