@@ -264,6 +264,14 @@ fn a_file_marks_its_fibres_as_continua() {
         .noise("tm_beam", &freqs)
         .expect("noise");
     assert_eq!(by_file.psd(), by_flag.psd());
+    // the same wires by name, one of them twice: each wire's term counts once
+    let named = ["f1", "f2", "f3", "f4", "f2"].map(String::from).to_vec();
+    let by_name = run("quad-aligo", &[], Stage::S2)
+        .with_fibres(&pendkit::stage::Fibres::ContinuumNamed(named))
+        .expect("named")
+        .noise("tm_beam", &freqs)
+        .expect("noise");
+    assert_eq!(by_name.psd(), by_flag.psd());
     let unmarked = from_file
         .with_fibres(&pendkit::stage::Fibres::Static)
         .expect("static")

@@ -214,7 +214,10 @@ impl StageResult {
                             message: "no wire of the model has this name".into(),
                         })
                 })
-                .collect::<Result<_, _>>()?,
+                // a name given twice is one wire, whose term counts once
+                .collect::<Result<std::collections::BTreeSet<usize>, _>>()?
+                .into_iter()
+                .collect(),
         };
         if let Some(b) = system
             .bodies
