@@ -5,7 +5,7 @@ use std::fmt::Write as _;
 use pendkit::Error;
 use pendkit::system::Stage;
 
-/// Arguments of `pendkit bench`.
+// Arguments of `pendkit bench` (a plain comment: see `Command` on why clap must not read it).
 #[derive(clap::Args)]
 pub struct Args {
     /// Bundled model name or path to a case file (.toml).

@@ -22,7 +22,8 @@ use crate::progress::Progress;
 /// `noise`, `ss`, `sweep` and `report` describe the same physics by default.
 pub const DEFAULT_STAGE: Stage = Stage::S2;
 
-/// The model or case, stage, parameter overrides and names every calculation takes.
+// The model or case, stage, parameter overrides and names every calculation takes (a plain
+// comment: see `Command` in lib.rs on why clap must not read it).
 #[derive(clap::Args, Clone)]
 pub struct ModelArgs {
     /// Bundled model name, or path to a case file or a suspension file (.toml).
@@ -237,7 +238,8 @@ impl ModelArgs {
     }
 }
 
-/// The frequencies of a response: a log-spaced grid, or a list given explicitly.
+// The frequencies of a response: a log-spaced grid, or a list given explicitly (a plain
+// comment: see `Command` in lib.rs).
 #[derive(clap::Args, Clone)]
 pub struct GridArgs {
     /// First frequency of the log-spaced grid (Hz).

@@ -19,7 +19,7 @@ use crate::common::DEFAULT_STAGE;
 use crate::error::CliError;
 use crate::format::{fixed, sci};
 
-/// Arguments of `pendkit fit`.
+// Arguments of `pendkit fit` (a plain comment: see `Command` on why clap must not read it).
 #[derive(clap::Args)]
 pub struct Args {
     /// Bundled model name, or path to a case file or a suspension file (.toml): the start.

@@ -48,7 +48,12 @@ struct Cli {
     command: Command,
 }
 
+// Deferred: clap builds the arguments of the one subcommand given, not of all sixteen (a
+// third of the instructions of `pendkit --version`). A deferred subcommand's arguments are
+// added after its description, so an arguments struct's doc comment would replace the
+// description in its `--help`: those structs carry plain comments instead.
 #[derive(Subcommand)]
+#[command(defer = true)]
 enum Command {
     /// Equilibrium and normal modes of a model or case file.
     Modes(modes::Args),
@@ -97,7 +102,7 @@ enum Command {
     ModelFile(params::ModelFileArgs),
 }
 
-/// `pendkit elements [KIND]`.
+// `pendkit elements [KIND]` (a plain comment: see `Command`).
 #[derive(clap::Args, Debug)]
 struct ElementsArgs {
     /// A registered kind: print its instance schema and a `[[element]]` snippet.

@@ -15,7 +15,7 @@ use crate::format::{fixed, sci};
 use crate::output::Output;
 use crate::plotting;
 
-/// Arguments of `pendkit modes`.
+// Arguments of `pendkit modes` (a plain comment: see `Command` on why clap must not read it).
 #[derive(clap::Args)]
 pub struct Args {
     #[command(flatten)]

@@ -12,7 +12,7 @@ use crate::error::CliError;
 use crate::format::{csv, sci};
 use crate::plotting;
 
-/// Arguments of `pendkit noise`.
+// Arguments of `pendkit noise` (a plain comment: see `Command` on why clap must not read it).
 #[derive(clap::Args)]
 pub struct Args {
     #[command(flatten)]

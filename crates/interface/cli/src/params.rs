@@ -11,7 +11,7 @@ use pendkit::describe::parameter_table;
 use crate::error::CliError;
 use crate::format::sci;
 
-/// Arguments of `pendkit params`.
+// Arguments of `pendkit params` (a plain comment: see `Command` on why clap must not read it).
 #[derive(clap::Args)]
 pub struct Args {
     /// Bundled model name, or path to a case file or a suspension file (.toml).
@@ -70,7 +70,7 @@ pub fn run(a: Args) -> Result<String, CliError> {
     Ok(out)
 }
 
-/// Arguments of `pendkit chain-file`.
+// Arguments of `pendkit chain-file` (a plain comment: see `Command` on why clap must not read it).
 #[derive(clap::Args)]
 pub struct ChainArgs {
     /// Number of stages (bodies), 1 to 10 000.
@@ -86,7 +86,7 @@ pub fn chain_file(a: ChainArgs) -> Result<String, CliError> {
     Ok(written.source.text.clone())
 }
 
-/// Arguments of `pendkit model-file`.
+// Arguments of `pendkit model-file` (a plain comment: see `Command` on why clap must not read it).
 #[derive(clap::Args)]
 pub struct ModelFileArgs {
     /// Bundled model name (`pendkit models` lists them), or a file a bundled model extends

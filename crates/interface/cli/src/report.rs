@@ -22,7 +22,7 @@ use crate::output::{OutputDir, write_file};
 use crate::plotting::{self, Response};
 use crate::progress::Progress;
 
-/// Arguments of `pendkit report`.
+// Arguments of `pendkit report` (a plain comment: see `Command` on why clap must not read it).
 #[derive(clap::Args)]
 pub struct Args {
     #[command(flatten)]

@@ -15,7 +15,7 @@ use crate::common::{DEFAULT_STAGE, GridArgs};
 use crate::error::CliError;
 use crate::format::sci;
 
-/// Arguments of `pendkit sensitivity`.
+// Arguments of `pendkit sensitivity` (a plain comment: see `Command` on why clap must not read it).
 #[derive(clap::Args)]
 pub struct Args {
     /// Bundled model name, or path to a case file or a suspension file (.toml).

@@ -6,7 +6,7 @@ use std::fmt::Write as _;
 use crate::common::ModelArgs;
 use crate::error::CliError;
 
-/// Arguments of `pendkit ss`.
+// Arguments of `pendkit ss` (a plain comment: see `Command` on why clap must not read it).
 #[derive(clap::Args)]
 pub struct Args {
     #[command(flatten)]

@@ -18,7 +18,7 @@ use crate::error::CliError;
 use crate::format::{csv, fixed};
 use crate::progress::Progress;
 
-/// Arguments of `pendkit sweep`.
+// Arguments of `pendkit sweep` (a plain comment: see `Command` on why clap must not read it).
 #[derive(clap::Args)]
 #[command(group(clap::ArgGroup::new("result").required(true).args(["modes", "noise", "tf"])))]
 pub struct Args {

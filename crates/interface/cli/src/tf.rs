@@ -11,7 +11,7 @@ use crate::error::CliError;
 use crate::format::{csv, fixed, sci};
 use crate::plotting::{self, Response};
 
-/// Arguments of `pendkit tf`.
+// Arguments of `pendkit tf` (a plain comment: see `Command` on why clap must not read it).
 #[derive(clap::Args)]
 pub struct Args {
     #[command(flatten)]

@@ -15,7 +15,7 @@ use crate::format::sci;
 use crate::output::{OutputDir, write_file};
 use crate::progress::Progress;
 
-/// Arguments of `pendkit tradeoff`.
+// Arguments of `pendkit tradeoff` (a plain comment: see `Command` on why clap must not read it).
 #[derive(clap::Args)]
 pub struct Args {
     /// Bundled model name or path to a case file (.toml): the base of the ladder.
