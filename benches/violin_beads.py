@@ -5,7 +5,7 @@ ends, modelled here independently of pendkit, both ways.
 
     python3 benches/violin_beads.py [--max-beads 2560]
 
-Needs numpy, scipy and mpmath. Takes about three minutes (the 2560-bead chains are dense
+Needs numpy, scipy and mpmath. Takes about a minute (the 2560-bead chains are dense
 eigenproblems, which round to ~1e-8 of a frequency).
 
 - The continuum: (EI w'')'' - (T w')' = mu w_tt, clamped at both ends, over the fibre's
