@@ -3,7 +3,10 @@
 //!
 //! A fibre with N beads is N + 1 straight segments (tensioned beams, the wire elements)
 //! with a point mass at each joint: the lumped-mass discretisation of the continuum, whose
-//! violin modes converge to the continuum's as 1/N². The beads' translations are variables
+//! violin modes converge to the continuum's, as 1/N² once the segments are much shorter
+//! than the bending length √(EI/T). Each segment carries the weight of the beads below it,
+//! so the limit is a fibre carrying its own weight, which continuum fibres leave out (a few
+//! 1e-6 higher: docs/performance.md, "Violin modes"). The beads' translations are variables
 //! (they carry the lumped mass); how the segments join at a bead is [`BeadJoints`]:
 //!
 //! - [`BeadJoints::Clamped`] (the default): each bead has a massless joint body at the
