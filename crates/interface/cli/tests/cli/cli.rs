@@ -457,3 +457,33 @@ fn fibres_continuum_changes_the_noise_and_ss_says_it_keeps_beads() {
     let (ok, _, err) = pendkit(&["noise", "quad", "--fibres", "beads", "--output", "x3"]);
     assert!(!ok && err.contains("continuum"), "{err}");
 }
+
+#[test]
+fn each_subcommand_help_opens_with_its_description() {
+    // Subcommands are built lazily (clap's `defer`), and a deferred subcommand takes the
+    // description of its arguments struct over its own: each `--help` must open with the
+    // line `pendkit --help` lists for it (the variant's doc comment), not with an
+    // arguments struct's or a flattened struct's doc comment.
+    let (ok, top, stderr) = pendkit(&["--help"]);
+    assert!(ok, "{stderr}");
+    let listed: Vec<(String, String)> = top
+        .lines()
+        .skip_while(|l| !l.starts_with("Commands:"))
+        .skip(1)
+        .take_while(|l| l.starts_with("  "))
+        .filter_map(|l| {
+            let (name, about) = l.trim().split_once(' ')?;
+            Some((name.to_string(), about.trim().to_string()))
+        })
+        .filter(|(name, _)| name != "help")
+        .collect();
+    assert_eq!(listed.len(), 15, "{top}");
+    for (name, about) in &listed {
+        for flag in ["--help", "-h"] {
+            let (ok, help, stderr) = pendkit(&[name, flag]);
+            assert!(ok, "{name} {flag}: {stderr}");
+            let first = help.lines().next().unwrap_or_default();
+            assert_eq!(first, about, "pendkit {name} {flag} opens with {first:?}");
+        }
+    }
+}
