@@ -7,9 +7,11 @@ use faer::c64;
 
 /// Factorises the n × n matrix stored column-major in `a` in place (L below the diagonal
 /// with unit diagonal, U on and above it), recording in `pivots[k]` the row swapped with
-/// row k. Returns false if a pivot is exactly zero (the matrix is singular).
-pub(crate) fn factor(a: &mut [c64], n: usize, pivots: &mut [usize]) -> bool {
+/// row k; `rows` is scratch (its allocation is kept for the next call). Returns false if a
+/// pivot is exactly zero (the matrix is singular).
+pub(crate) fn factor(a: &mut [c64], n: usize, pivots: &mut [usize], rows: &mut Vec<usize>) -> bool {
     debug_assert!(a.len() >= n * n && pivots.len() >= n);
+    let zero = c64::new(0.0, 0.0);
     for k in 0..n {
         // pivot: the largest |a_ik| in column k at or below the diagonal
         let column = &a[k * n..(k + 1) * n];
@@ -31,28 +33,29 @@ pub(crate) fn factor(a: &mut [c64], n: usize, pivots: &mut [usize]) -> bool {
                 a.swap(j * n + k, j * n + p);
             }
         }
-        // the multipliers l_ik end at the column's last non-zero: a suspension's blocks are
-        // banded (each stage couples to its neighbours), and skipping exact zeros changes
-        // no value, only the work (about n b² instead of n³/3 for bandwidth b)
-        let below = &a[k * n + k + 1..(k + 1) * n];
-        let rows = below
-            .iter()
-            .rposition(|x| *x != c64::new(0.0, 0.0))
-            .map_or(0, |last| last + 1);
+        // the multipliers l_ik, only where they are not exact zeros: a suspension's blocks
+        // are sparse (each stage couples to its neighbours, the floats to a few rows), and
+        // an update by a zero l_ik leaves its entry as it was, so skipping those changes no
+        // value, only the work (the rows that are left stay in ascending order, so every
+        // entry sees the same operations in the same order as a dense elimination)
         let inv = a[k * n + k].inv();
-        for x in &mut a[k * n + k + 1..k * n + k + 1 + rows] {
-            *x *= inv;
+        rows.clear();
+        for (i, x) in a[k * n..(k + 1) * n].iter_mut().enumerate().skip(k + 1) {
+            if *x != zero {
+                *x *= inv;
+                rows.push(i);
+            }
         }
         // trailing update, column by column: a_ij −= l_ik u_kj
         let (left, right) = a.split_at_mut((k + 1) * n);
-        let l = &left[k * n + k + 1..k * n + k + 1 + rows];
+        let l = &left[k * n..(k + 1) * n];
         for column in right.chunks_exact_mut(n) {
             let u_kj = column[k];
-            if u_kj == c64::new(0.0, 0.0) {
+            if u_kj == zero {
                 continue;
             }
-            for (x, &l_ik) in column[k + 1..].iter_mut().zip(l) {
-                *x -= l_ik * u_kj;
+            for &i in rows.iter() {
+                column[i] -= l[i] * u_kj;
             }
         }
     }
@@ -64,25 +67,31 @@ pub(crate) fn solve(a: &[c64], n: usize, pivots: &[usize], b: &mut [c64]) {
     for (k, &p) in pivots.iter().enumerate().take(n) {
         b.swap(k, p);
     }
-    // L y = P b (unit lower triangular), column-oriented
+    // L y = P b (unit lower triangular), column-oriented; a zero l_ik or u_ik changes
+    // nothing ([`factor`] leaves most of them zero), so it is skipped
+    let zero = c64::new(0.0, 0.0);
     for k in 0..n {
         let y = b[k];
-        if y == c64::new(0.0, 0.0) {
+        if y == zero {
             continue;
         }
         for (x, &l) in b[k + 1..n].iter_mut().zip(&a[k * n + k + 1..(k + 1) * n]) {
-            *x -= l * y;
+            if l != zero {
+                *x -= l * y;
+            }
         }
     }
     // U x = y, column-oriented from the last column
     for k in (0..n).rev() {
         b[k] /= a[k * n + k];
         let x_k = b[k];
-        if x_k == c64::new(0.0, 0.0) {
+        if x_k == zero {
             continue;
         }
         for (x, &u) in b[..k].iter_mut().zip(&a[k * n..k * n + k]) {
-            *x -= u * x_k;
+            if u != zero {
+                *x -= u * x_k;
+            }
         }
     }
 }
@@ -567,7 +576,7 @@ mod tests {
             .collect();
         let mut a: Vec<c64> = (0..n * n).map(|k| rows[k % n][k / n]).collect();
         let mut pivots = [0; 3];
-        assert!(factor(&mut a, n, &mut pivots));
+        assert!(factor(&mut a, n, &mut pivots, &mut Vec::new()));
         solve(&a, n, &pivots, &mut b);
         for (got, want) in b.iter().zip(&x) {
             assert!((got - want).norm() < 1e-14, "{got} vs {want}");
@@ -604,7 +613,7 @@ mod tests {
         let schedule = Schedule::new(n, &stored);
         let (mut dense, mut scheduled) = (a.clone(), a.clone());
         let mut pivots = vec![0; n];
-        assert!(factor(&mut dense, n, &mut pivots));
+        assert!(factor(&mut dense, n, &mut pivots, &mut Vec::new()));
         assert!(pivots.iter().enumerate().all(|(k, &p)| k == p));
         assert!(schedule.factor(&mut scheduled));
         assert_eq!(dense, scheduled);
@@ -625,8 +634,91 @@ mod tests {
         assert!(!schedule.factor(&mut a.clone()));
         let mut pivots = vec![0; n];
         let mut f = a.clone();
-        assert!(factor(&mut f, n, &mut pivots));
+        assert!(factor(&mut f, n, &mut pivots, &mut Vec::new()));
         assert_eq!(pivots[0], 1);
+    }
+
+    /// The textbook partial-pivoting LU, every entry updated (zeros too): the reference
+    /// that [`factor`], which skips the updates by exact zeros, must equal bit for bit.
+    fn textbook_lu(a: &mut [c64], n: usize) -> Vec<usize> {
+        let mut pivots = vec![0; n];
+        for k in 0..n {
+            let p = (k..n)
+                .reduce(|p, i| {
+                    if a[i + k * n].norm_sqr() > a[p + k * n].norm_sqr() {
+                        i
+                    } else {
+                        p
+                    }
+                })
+                .unwrap();
+            pivots[k] = p;
+            for j in 0..n {
+                a.swap(k + j * n, p + j * n);
+            }
+            let inv = a[k + k * n].inv();
+            for i in k + 1..n {
+                a[i + k * n] *= inv;
+            }
+            for j in k + 1..n {
+                for i in k + 1..n {
+                    let update = a[i + k * n] * a[k + j * n];
+                    a[i + j * n] -= update;
+                }
+            }
+        }
+        pivots
+    }
+
+    #[test]
+    fn skipping_exact_zeros_changes_no_number() {
+        // a banded matrix with a dominant off-band row (row exchanges at the first steps)
+        // and a dense last row and column (a float coupled to everything, as in the quad):
+        // factors, pivots and solution equal the textbook LU's bit for bit (tolerance zero;
+        // an update by an exact zero leaves its entry as it was, so only the work differs)
+        let n = 12;
+        let (mut a, _) = banded(n, true);
+        for k in 0..n - 1 {
+            let v = c64::new(0.3 + 0.1 * k as f64, -0.02 * k as f64);
+            a[(n - 1) + k * n] = v;
+            a[k + (n - 1) * n] = v;
+        }
+        a[3 + 5 * n] = c64::new(80.0, -2.0);
+        let (mut skipped, mut textbook) = (a.clone(), a);
+        let mut pivots = vec![0; n];
+        assert!(factor(&mut skipped, n, &mut pivots, &mut Vec::new()));
+        let reference = textbook_lu(&mut textbook, n);
+        assert_eq!(pivots, reference);
+        assert!(pivots.iter().enumerate().any(|(k, &p)| k != p));
+        let same = |x: &c64, y: &c64| x.re.to_bits() == y.re.to_bits() || x == y;
+        assert!(
+            skipped
+                .iter()
+                .zip(&textbook)
+                .all(|(x, y)| same(x, y) && same(&c64::new(x.im, 0.0), &c64::new(y.im, 0.0)))
+        );
+        let rhs: Vec<c64> = (0..n).map(|i| c64::new(1.0 - i as f64, 0.5)).collect();
+        let mut x = rhs.clone();
+        solve(&skipped, n, &pivots, &mut x);
+        // the textbook substitutions, every entry
+        let mut y = rhs;
+        for (k, &p) in reference.iter().enumerate() {
+            y.swap(k, p);
+        }
+        for k in 0..n {
+            for i in k + 1..n {
+                let update = textbook[i + k * n] * y[k];
+                y[i] -= update;
+            }
+        }
+        for k in (0..n).rev() {
+            y[k] /= textbook[k + k * n];
+            for i in 0..k {
+                let update = textbook[i + k * n] * y[k];
+                y[i] -= update;
+            }
+        }
+        assert_eq!(x, y);
     }
 
     #[test]
@@ -652,6 +744,6 @@ mod tests {
             c64::new(2.0, 0.0),
             c64::new(4.0, 0.0),
         ];
-        assert!(!factor(&mut a, 2, &mut [0; 2]));
+        assert!(!factor(&mut a, 2, &mut [0; 2], &mut Vec::new()));
     }
 }

@@ -343,7 +343,7 @@ mod tests {
         let mut pivoted = b.clone();
         assert!(s.solve(&a, &mut pivoted));
         let (mut lu, mut pivots, mut dense_lu) = (dense, vec![0; n], b);
-        assert!(crate::lu::factor(&mut lu, n, &mut pivots));
+        assert!(crate::lu::factor(&mut lu, n, &mut pivots, &mut Vec::new()));
         crate::lu::solve(&lu, n, &pivots, &mut dense_lu);
         for (k, x) in x.iter().enumerate() {
             for (how, got) in [

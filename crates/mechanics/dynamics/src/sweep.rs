@@ -197,6 +197,8 @@ enum Factor {
     Dense {
         schedule: lu::Schedule,
         pivots: Vec<usize>,
+        /// The pivoting LU's scratch.
+        rows: Vec<usize>,
         exchanged: bool,
     },
     /// The lower triangle of the matrix permuted to a fill-reducing order, with its fill;
@@ -568,6 +570,7 @@ impl Fast {
             Factor::Dense {
                 schedule: lu::Schedule::new(0, &[]),
                 pivots: vec![0; n],
+                rows: Vec::with_capacity(n),
                 exchanged: false,
             }
         } else {
@@ -880,6 +883,7 @@ impl Fast {
             Factor::Dense {
                 schedule,
                 pivots,
+                rows,
                 exchanged,
             } => {
                 if !*exchanged && schedule.factor(values) {
@@ -892,7 +896,7 @@ impl Fast {
                         Self::assemble(matrix, (mass, extra), varying, w2, values);
                     }
                     let n = schedule.len();
-                    if lu::factor(values, n, pivots) {
+                    if lu::factor(values, n, pivots, rows) {
                         lu::solve(values, n, pivots, z);
                         *exchanged = pivots.iter().enumerate().any(|(k, &p)| k != p);
                         Factored::Pivoted
