@@ -240,7 +240,9 @@ struct Fast {
     /// What the last solve left factorised, and its ω² (rad²/s²).
     factored: Factored,
     w2: f64,
-    /// Where each entry of each frequency term goes.
+    /// Per frequency term: (entry, slot of E) of its entries that go into E, and where
+    /// each of the others goes (none for a force input and a displacement output).
+    term_matrix: Vec<Vec<(usize, usize)>>,
     term_dest: Vec<Vec<(usize, Dest)>>,
     /// The frequency terms at the current frequency: additions to E, to the right-hand
     /// side and to the output's weights, and to the direct term.
@@ -701,6 +703,23 @@ impl Fast {
             }
             *schedule = lu::Schedule::new(n, &stored);
         }
+        // the entries into E apart: a point copies them in one pass, without a match each
+        let (term_matrix, term_dest) = term_dest
+            .into_iter()
+            .map(|dest| {
+                let (matrix, other): (Vec<_>, Vec<_>) = dest
+                    .into_iter()
+                    .partition(|(_, d)| matches!(d, Dest::Matrix(_)));
+                let matrix = matrix
+                    .into_iter()
+                    .filter_map(|(e, d)| match d {
+                        Dest::Matrix(k) => Some((e, k)),
+                        _ => None,
+                    })
+                    .collect();
+                (matrix, other)
+            })
+            .unzip();
         Ok(Fast {
             values: vec![c64::new(0.0, 0.0); len],
             original: vec![c64::new(0.0, 0.0); len],
@@ -713,6 +732,7 @@ impl Fast {
             out,
             direct,
             factor,
+            term_matrix,
             term_dest,
             extra: Vec::new(),
             extra_rhs: Vec::new(),
@@ -774,7 +794,9 @@ impl Fast {
         self.extra_rhs.clear();
         self.extra_out.clear();
         self.extra_direct = c64::new(0.0, 0.0);
-        for (dest, state) in self.term_dest.iter().zip(terms) {
+        for ((matrix, dest), state) in self.term_matrix.iter().zip(&self.term_dest).zip(terms) {
+            self.extra
+                .extend(matrix.iter().map(|&(e, k)| (k, state.sum[e])));
             for &(e, d) in dest {
                 let v = state.sum[e];
                 match d {
