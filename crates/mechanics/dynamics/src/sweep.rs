@@ -224,6 +224,19 @@ enum Factored {
     Refined,
 }
 
+/// A frequency term's destinations split into its entries into E, as (entry, slot of E),
+/// and the others.
+fn split_matrix(dest: Vec<(usize, Dest)>) -> (Vec<(usize, usize)>, Vec<(usize, Dest)>) {
+    let (mut matrix, mut other) = (Vec::new(), Vec::new());
+    for (e, d) in dest {
+        match d {
+            Dest::Matrix(k) => matrix.push((e, k)),
+            _ => other.push((e, d)),
+        }
+    }
+    (matrix, other)
+}
+
 /// The fixed-pattern engine: parts prepared once, assembled and solved per frequency.
 struct Fast {
     matrix: Linear,
@@ -704,22 +717,7 @@ impl Fast {
             *schedule = lu::Schedule::new(n, &stored);
         }
         // the entries into E apart: a point copies them in one pass, without a match each
-        let (term_matrix, term_dest) = term_dest
-            .into_iter()
-            .map(|dest| {
-                let (matrix, other): (Vec<_>, Vec<_>) = dest
-                    .into_iter()
-                    .partition(|(_, d)| matches!(d, Dest::Matrix(_)));
-                let matrix = matrix
-                    .into_iter()
-                    .filter_map(|(e, d)| match d {
-                        Dest::Matrix(k) => Some((e, k)),
-                        _ => None,
-                    })
-                    .collect();
-                (matrix, other)
-            })
-            .unzip();
+        let (term_matrix, term_dest) = term_dest.into_iter().map(split_matrix).unzip();
         Ok(Fast {
             values: vec![c64::new(0.0, 0.0); len],
             original: vec![c64::new(0.0, 0.0); len],
@@ -800,7 +798,8 @@ impl Fast {
             for &(e, d) in dest {
                 let v = state.sum[e];
                 match d {
-                    Dest::Matrix(k) => self.extra.push((k, v)),
+                    // in `term_matrix` (`split_matrix`)
+                    Dest::Matrix(_) => {}
                     Dest::Rhs(i, w) => self.extra_rhs.push((i, v * w)),
                     Dest::Out(j, w) => self.extra_out.push((j, v * w)),
                     Dest::Direct(w) => self.extra_direct += v * w,
