@@ -97,11 +97,12 @@ pub(crate) fn solve(a: &[c64], n: usize, pivots: &[usize], b: &mut [c64]) {
 }
 
 /// The elimination of one fixed sparsity pattern without row exchanges, worked out once:
-/// for each step k the stored entries below the diagonal (the multipliers l_ik), the
-/// trailing updates a_ij −= l_ik u_kj that are not exactly zero by structure (the fill
-/// included), and for the back substitution the entries above the diagonal. A sweep solves
-/// the same pattern at every frequency, so the per-point factorisation only walks these
-/// lists instead of testing every entry of the dense block for zero.
+/// for each step k the stored entries below the diagonal (the multipliers l_ik) and the
+/// columns of the stored entries u_kj right of it, whose products are the trailing updates
+/// a_ij −= l_ik u_kj that are not exactly zero by structure (the fill included), and for
+/// the back substitution the entries above the diagonal. A sweep solves the same pattern
+/// at every frequency, so the per-point factorisation only walks these lists instead of
+/// testing every entry of the dense block for zero.
 ///
 /// [`Schedule::factor`] performs exactly the operations of [`factor`], in the same order per
 /// entry, whenever partial pivoting would keep every diagonal pivot (it checks that, on the
@@ -111,12 +112,13 @@ pub(crate) fn solve(a: &[c64], n: usize, pivots: &[usize], b: &mut [c64]) {
 #[derive(Clone, Debug)]
 pub(crate) struct Schedule {
     n: usize,
-    /// Per step k: its range in `below` and in `updates`.
+    /// Per step k: its range in `below` and in `columns`.
     steps: Vec<(std::ops::Range<usize>, std::ops::Range<usize>)>,
     /// (row i, index of l_ik) of the stored entries below the diagonal, step by step.
     below: Vec<(usize, usize)>,
-    /// (index of a_ij, index of l_ik, index of u_kj), step by step.
-    updates: Vec<(usize, usize, usize)>,
+    /// The columns j > k of the stored entries u_kj, step by step: step k updates
+    /// a_ij −= l_ik u_kj for each of them and each row i of its `below`, in that order.
+    columns: Vec<usize>,
     /// Per column k: (row i, index of u_ik) of the stored entries above the diagonal.
     above: Vec<Vec<(usize, usize)>>,
 }
@@ -128,19 +130,20 @@ impl Schedule {
         let mut s: Vec<bool> = (0..n * n)
             .map(|idx| stored.get(idx).copied().unwrap_or(false) || idx % n == idx / n)
             .collect();
-        let (mut steps, mut below, mut updates) = (Vec::new(), Vec::new(), Vec::new());
+        let (mut steps, mut below, mut columns) = (Vec::new(), Vec::new(), Vec::new());
         for k in 0..n {
             let rows: Vec<usize> = (k + 1..n).filter(|&i| s[i + k * n]).collect();
             let cols: Vec<usize> = (k + 1..n).filter(|&j| s[k + j * n]).collect();
-            let (b0, u0) = (below.len(), updates.len());
+            let (b0, c0) = (below.len(), columns.len());
             below.extend(rows.iter().map(|&i| (i, i + k * n)));
+            // the fill: the entries this step updates are stored from now on
             for &j in &cols {
                 for &i in &rows {
                     s[i + j * n] = true;
-                    updates.push((i + j * n, i + k * n, k + j * n));
                 }
             }
-            steps.push((b0..below.len(), u0..updates.len()));
+            columns.extend_from_slice(&cols);
+            steps.push((b0..below.len(), c0..columns.len()));
         }
         let above = (0..n)
             .map(|k| {
@@ -154,7 +157,7 @@ impl Schedule {
             n,
             steps,
             below,
-            updates,
+            columns,
             above,
         }
     }
@@ -169,7 +172,7 @@ impl Schedule {
     /// with [`factor`], which also reports a singular matrix).
     pub(crate) fn factor(&self, a: &mut [c64]) -> bool {
         let n = self.n;
-        for (k, (below, updates)) in self.steps.iter().enumerate() {
+        for (k, (below, columns)) in self.steps.iter().enumerate() {
             let pivot = a[k * n + k];
             let size = pivot.norm_sqr();
             if size == 0.0 || !size.is_finite() {
@@ -183,9 +186,15 @@ impl Schedule {
             for &(_, idx) in below {
                 a[idx] *= inv;
             }
-            for &(target, l, u) in &self.updates[updates.clone()] {
-                let update = a[l] * a[u];
-                a[target] -= update;
+            // column by column (u_kj is in a row step k does not change), the rows as stored
+            let (left, right) = a.split_at_mut((k + 1) * n);
+            let l = &left[k * n..];
+            for &j in &self.columns[columns.clone()] {
+                let column = &mut right[(j - k - 1) * n..(j - k) * n];
+                let u_kj = column[k];
+                for &(i, _) in below {
+                    column[i] -= l[i] * u_kj;
+                }
             }
         }
         true
