@@ -224,9 +224,11 @@ enum Factored {
     Refined,
 }
 
-/// A frequency term's destinations split into its entries into E, as (entry, slot of E),
-/// and the others.
-fn split_matrix(dest: Vec<(usize, Dest)>) -> (Vec<(usize, usize)>, Vec<(usize, Dest)>) {
+/// A frequency term's entries into E, as (entry, slot of E).
+type MatrixEntries = Vec<(usize, usize)>;
+
+/// A frequency term's destinations split into its entries into E and the others.
+fn split_matrix(dest: Vec<(usize, Dest)>) -> (MatrixEntries, Vec<(usize, Dest)>) {
     let (mut matrix, mut other) = (Vec::new(), Vec::new());
     for (e, d) in dest {
         match d {
@@ -255,7 +257,7 @@ struct Fast {
     w2: f64,
     /// Per frequency term: (entry, slot of E) of its entries that go into E, and where
     /// each of the others goes (none for a force input and a displacement output).
-    term_matrix: Vec<Vec<(usize, usize)>>,
+    term_matrix: Vec<MatrixEntries>,
     term_dest: Vec<Vec<(usize, Dest)>>,
     /// The frequency terms at the current frequency: additions to E, to the right-hand
     /// side and to the output's weights, and to the direct term.
