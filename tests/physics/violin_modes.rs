@@ -286,11 +286,21 @@ fn quad_beads(n: usize) -> &'static [f64] {
     })
 }
 
-/// The 2005 quad's fibre as models/ligo/quad.toml gives it: length l3 (m), EI = Y3 π r3⁴/4
-/// (N m²), μ = silica_rho π r3² (kg/m), the bottom tension m3 g/4 (N: four vertical
-/// fibres share the test mass's weight) and g (m/s²).
+/// The 2005 quad's fibre, from the model's own parameters (models/ligo/quad.toml): length
+/// l3 (m), EI = Y3 π r3⁴/4 (N m²), μ = silica_rho π r3² (kg/m), the bottom tension m3 g/4
+/// (N: four vertical fibres share the test mass's weight) and g (m/s²).
 fn quad_fibre() -> (f64, f64, f64, f64, f64) {
-    let (length, radius, young, density, mass, g) = (0.6, 2e-4f64, 7e10, 2200.0, 39.6, 9.81);
+    let case = pendkit::Case::model("quad").expect("the bundled quad");
+    let table = pendkit::describe::parameter_table(&case).expect("its parameters");
+    let value = |name: &str| {
+        table
+            .iter()
+            .find(|row| row.name == name)
+            .unwrap_or_else(|| panic!("quad has no parameter {name}"))
+            .value
+    };
+    let (length, radius, young) = (value("l3"), value("r3"), value("Y3"));
+    let (density, mass, g) = (value("silica_rho"), value("m3"), value("g"));
     let ei = young * PI * radius.powi(4) / 4.0;
     (
         length,
